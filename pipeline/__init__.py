@@ -1,0 +1,1 @@
+"""cdpr-studies: feasible workspace and actuator choice for cable-driven parallel robots."""

@@ -1,0 +1,128 @@
+"""Actuator catalogue (motor + gearbox + winch) and the actuator model of eqs. (21)-(22), (30)-(34).
+
+The catalogue is a CSV file with units in the column names (Table 1 of Filipovic & Kevac 2018 is
+shipped as ``pipeline/data/actuators_table1.csv``). :func:`actuator_model` is the only place where
+catalogue units become SI and where the model constants and limits are derived.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from pipeline.errors import ConfigError
+
+TABLE1 = resources.files("pipeline") / "data" / "actuators_table1.csv"
+
+# column -> (lower bound, bound is inclusive); every numeric column must be finite
+NUMERIC_COLUMNS: dict[str, tuple[float, bool]] = {
+    "power_W": (0.0, False),
+    "voltage_V": (0.0, False),
+    "speed_rpm": (0.0, False),
+    "torque_Nm": (0.0, False),
+    "back_emf_V_per_rad_s": (0.0, False),
+    "torque_constant_Nm_per_A": (0.0, False),
+    "viscous_friction_Nm_per_rad_s": (0.0, True),
+    "resistance_ohm": (0.0, False),
+    "inertia_g_cm2": (0.0, False),
+    "gear_ratio": (0.0, False),
+    "efficiency": (0.0, False),
+    "winch_radius_m": (0.0, False),
+}
+G_CM2_TO_KG_M2 = 1e-7
+RPM_TO_RAD_S = np.pi / 30.0  # the paper's 1/9.5493 in eq. (30)
+
+
+@dataclass(frozen=True)
+class ActuatorModel:
+    """One catalogue actuator in SI units, seen behind the gearbox (output shaft).
+
+    Model constants of eq. (22): ``G_v`` (V s^2/rad), ``L_v`` (V s/rad), ``S_v`` (V/(N m)), with
+    u = G_v * theta_ddot + L_v * theta_dot + S_v * M (eq. 21). Limits: ``speed_limit`` (rad/s,
+    eq. 30), ``torque_limit`` (N m, eq. 32), ``accel_limit`` (rad/s^2, eq. 33), ``voltage_limit``
+    (V, eq. 34). ``winch_radius`` R_i (m) of eq. (18).
+    """
+
+    id: int
+    name: str
+    power: float
+    G_v: float
+    L_v: float
+    S_v: float
+    speed_limit: float
+    torque_limit: float
+    accel_limit: float
+    voltage_limit: float
+    winch_radius: float
+
+
+def load_catalogue(path: str | Path | None = None) -> pd.DataFrame:
+    """Read and validate a catalogue; ``None`` is the shipped Table 1. Indexed by integer ``id``."""
+    source = TABLE1 if path is None else Path(path)
+    try:
+        with source.open("r") as handle:
+            table = pd.read_csv(handle, dtype=str, keep_default_na=False)
+    except OSError as exc:
+        raise ConfigError(f"catalogue={path}: cannot read ({exc.strerror})") from exc
+    missing = [c for c in ("id", "name", *NUMERIC_COLUMNS) if c not in table.columns]
+    if missing:
+        raise ConfigError(f"catalogue={source}: missing column(s) {', '.join(missing)}")
+    ids = []
+    for row, text in enumerate(table["id"], start=2):
+        if not text.strip().isdigit():
+            raise ConfigError(f"catalogue={source}: row {row}, column id: {text!r} is not an integer")
+        ids.append(int(text))
+    duplicated = pd.Series(ids).duplicated()
+    if duplicated.any():
+        row = int(np.flatnonzero(duplicated)[0]) + 2
+        raise ConfigError(f"catalogue={source}: row {row}, column id: duplicate id {ids[row - 2]}")
+    out = pd.DataFrame({"id": ids, "name": table["name"].astype(str)})
+    for column, (bound, inclusive) in NUMERIC_COLUMNS.items():
+        values = pd.to_numeric(table[column], errors="coerce")
+        for row, (text, value) in enumerate(zip(table[column], values), start=2):
+            if not np.isfinite(value):
+                raise ConfigError(
+                    f"catalogue={source}: row {row}, column {column}: {text!r} is not a number"
+                )
+            if value < bound or (value == bound and not inclusive):
+                rule = ">= 0" if inclusive else "> 0"
+                raise ConfigError(
+                    f"catalogue={source}: row {row}, column {column}: {value:g} must be {rule}"
+                )
+        out[column] = values.astype(float)
+    return out.set_index("id")
+
+
+def actuator_model(
+    row: pd.Series, winch_radius: float | None = None, xi_in_torque_limit: bool = True
+) -> ActuatorModel:
+    """Turn one catalogue row into SI model constants and limits (section 3, eqs. 22, 30-34).
+
+    N_M = N_V xi; C_E = C_e N_V; C_M = C_m N_M; B_C = B_c N_V N_M; J_r = J_M N_V N_M.
+    ``xi_in_torque_limit=False`` reads eq. (32) with the gear ratio N_V instead of N_M.
+    """
+    n_v = row["gear_ratio"]
+    n_m = n_v * row["efficiency"]
+    c_e = row["back_emf_V_per_rad_s"] * n_v
+    c_m = row["torque_constant_Nm_per_A"] * n_m
+    b_c = row["viscous_friction_Nm_per_rad_s"] * n_v * n_m
+    j_r = row["inertia_g_cm2"] * G_CM2_TO_KG_M2 * n_v * n_m
+    r_r = row["resistance_ohm"]
+    torque_limit = row["torque_Nm"] * (n_m if xi_in_torque_limit else n_v)
+    return ActuatorModel(
+        id=int(row.name),
+        name=str(row["name"]),
+        power=float(row["power_W"]),
+        G_v=j_r * r_r / c_m,
+        L_v=b_c * r_r / c_m + c_e,
+        S_v=r_r / c_m,
+        speed_limit=row["speed_rpm"] * RPM_TO_RAD_S / n_v,
+        torque_limit=torque_limit,
+        accel_limit=row["torque_Nm"] * n_m / j_r,
+        voltage_limit=float(row["voltage_V"]),
+        winch_radius=float(row["winch_radius_m"] if winch_radius is None else winch_radius),
+    )

@@ -1,0 +1,226 @@
+"""Structured configuration (Hydra + OmegaConf dataclasses) and its semantic validation.
+
+The dataclasses give every key a type, so a wrong key or a non-numeric value fails while the
+config is composed. :func:`validate` then checks values against the physics (positive masses,
+a carrier that fits in its frame, a catalogue id that exists) and raises :class:`ConfigError`
+naming the offending key and value.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import Enum
+from typing import Any, Optional
+
+from hydra.core.config_store import ConfigStore
+from omegaconf import MISSING, DictConfig, OmegaConf
+
+from pipeline.errors import ConfigError
+
+
+class PinvColumns(Enum):
+    """Which columns of J enter the pseudo-inverse of eq. (20); see docs/model.md."""
+
+    translational = "translational"
+    full = "full"
+
+
+class VelocityBoundary(Enum):
+    """Whether grid velocities with |v| = V_cmax exactly belong to the set of eq. (26)."""
+
+    exclude = "exclude"
+    include = "include"
+
+
+class AccelerationSet(Enum):
+    """Reading of eqs. (27)-(29): box corners, or MATLAB's literal colon with step 1."""
+
+    corners = "corners"
+    colon = "colon"
+
+
+class Spacing(Enum):
+    """Where the N grid points of an axis sit in the geometric workspace."""
+
+    linspace = "linspace"
+    centred = "centred"
+
+
+@dataclass
+class FrameConfig:
+    """Frame d * s * v (m): the theoretical workspace of Fig. 2."""
+
+    d: float = MISSING
+    s: float = MISSING
+    v: float = MISSING
+
+
+@dataclass
+class CarrierConfig:
+    """Load carrier l * w * h_o (m), eqs. (1)-(8)."""
+
+    l: float = MISSING
+    w: float = MISSING
+    h: float = MISSING
+
+
+@dataclass
+class Cpr8Config:
+    """CPR-8 robot (Fig. 1). ``lower_anchor_drop``: depth of O', F', G', H' below O, F, G, H
+    (null = h_o as eqs. 14-17). ``winch_radius``: R_i for all cables (null = catalogue value)."""
+
+    name: str = "cpr8"
+    frame: FrameConfig = field(default_factory=FrameConfig)
+    carrier: CarrierConfig = field(default_factory=CarrierConfig)
+    lower_anchor_drop: Optional[float] = None
+    winch_radius: Optional[float] = None
+
+
+@dataclass
+class OrientationConfig:
+    """Constant carrier orientation, Euler angles of eq. (9) in rad."""
+
+    psi: float = 0.0
+    theta: float = 0.0
+    phi: float = 0.0
+
+
+@dataclass
+class GridConfig:
+    """N points per axis of the geometric workspace (section 3; the paper uses N = 6). ``n`` also
+    sets the velocity grid of eqs. (23)-(25), as in the paper."""
+
+    n: int = 6
+    spacing: Spacing = Spacing.linspace
+
+
+@dataclass
+class MotionConfig:
+    """Trapezoidal reference motion: V_cmax (m/s), t_acc and t_dec (s)."""
+
+    v_max: float = 1.3
+    t_acc: float = 1.82
+    t_dec: float = 1.82
+
+
+@dataclass
+class LoadConfig:
+    """Load mass m (kg) of eq. (31) and gravitational acceleration g (m/s^2)."""
+
+    mass: float = 2.0
+    gravity: float = 9.81
+
+
+@dataclass
+class ModelConfig:
+    """Readings of the ambiguous equations (docs/model.md gives each one's numbers)."""
+
+    pinv_columns: PinvColumns = PinvColumns.translational
+    velocity_boundary: VelocityBoundary = VelocityBoundary.exclude
+    acceleration_set: AccelerationSet = AccelerationSet.corners
+    jdot: bool = False
+    xi_in_torque_limit: bool = True
+    rank_rtol: float = 1e-9
+
+
+@dataclass
+class ComputeConfig:
+    """Parallel execution: joblib backend, workers, poses per chunk."""
+
+    n_jobs: int = 2
+    backend: str = "loky"
+    chunk_size: int = 20_000
+
+
+@dataclass
+class Config:
+    """Root config. ``actuator`` is the integer id of a catalogue row; ``catalogue`` a CSV path
+    (null = the shipped Table 1 of the CPR-8 paper)."""
+
+    robot: Any = MISSING
+    actuator: int = 1
+    catalogue: Optional[str] = None
+    orientation: OrientationConfig = field(default_factory=OrientationConfig)
+    grid: GridConfig = field(default_factory=GridConfig)
+    motion: MotionConfig = field(default_factory=MotionConfig)
+    load: LoadConfig = field(default_factory=LoadConfig)
+    model: ModelConfig = field(default_factory=ModelConfig)
+    compute: ComputeConfig = field(default_factory=ComputeConfig)
+
+
+def register() -> None:
+    """Register the schemas with Hydra's ConfigStore (the YAML files in conf/ extend them)."""
+    store = ConfigStore.instance()
+    store.store(name="schema", node=Config)
+    store.store(group="robot", name="cpr8_schema", node=Cpr8Config)
+    OmegaConf.register_new_resolver("cdpr.jobdir", job_dir_name, replace=True)
+
+
+def job_dir_name(override_dirname: str, job_num: int) -> str:
+    """A sweep job's folder: its overrides (``actuator=3``), or ``job<N>`` when it has none."""
+    return override_dirname.replace("/", "_") or f"job{job_num}"
+
+
+POSITIVE = (
+    "load.mass",
+    "load.gravity",
+    "motion.v_max",
+    "motion.t_acc",
+    "motion.t_dec",
+    "robot.frame.d",
+    "robot.frame.s",
+    "robot.frame.v",
+    "robot.carrier.l",
+    "robot.carrier.w",
+    "robot.carrier.h",
+    "robot.winch_radius",
+    "model.rank_rtol",
+    "compute.chunk_size",
+)
+JOBLIB_BACKENDS = ("loky", "threading", "multiprocessing", "sequential")
+
+
+def validate(cfg: DictConfig, catalogue_ids) -> None:
+    """Raise ConfigError on the first value the model cannot use: '<key>=<value>: <rule>'."""
+    for key in POSITIVE:
+        value = _select(cfg, key)
+        if value is not None and not value > 0:
+            raise ConfigError(f"{key}={value}: must be > 0")
+    if cfg.grid.n < 2:
+        raise ConfigError(f"grid.n={cfg.grid.n}: must be >= 2")
+    if cfg.compute.n_jobs == 0:
+        raise ConfigError("compute.n_jobs=0: must be a positive count or negative (joblib style)")
+    if cfg.compute.backend not in JOBLIB_BACKENDS:
+        raise ConfigError(
+            f"compute.backend={cfg.compute.backend}: must be one of {', '.join(JOBLIB_BACKENDS)}"
+        )
+    if cfg.actuator not in set(catalogue_ids):
+        ids = ", ".join(str(i) for i in sorted(catalogue_ids))
+        raise ConfigError(f"actuator={cfg.actuator}: no such id in the catalogue (ids: {ids})")
+    _validate_cpr8(cfg.robot)
+
+
+def _validate_cpr8(robot: DictConfig) -> None:
+    from pipeline.robots import carrier_half_diagonal
+
+    de = carrier_half_diagonal(robot.carrier.l, robot.carrier.w, robot.carrier.h)
+    for axis in ("d", "s", "v"):
+        size = robot.frame[axis]
+        if size <= 2 * de:
+            raise ConfigError(
+                f"robot.frame.{axis}={size}: carrier does not fit "
+                f"(needs > 2 d_e = {2 * de:.4g} m for carrier {robot.carrier.l} x "
+                f"{robot.carrier.w} x {robot.carrier.h} m)"
+            )
+    drop = robot.lower_anchor_drop
+    if drop is not None and drop < 0:
+        raise ConfigError(f"robot.lower_anchor_drop={drop}: must be >= 0")
+
+
+def _select(cfg: DictConfig, dotted: str):
+    node = cfg
+    for part in dotted.split("."):
+        if part not in node:
+            return None
+        node = node[part]
+    return node

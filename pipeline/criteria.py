@@ -1,0 +1,63 @@
+"""Workspace criteria: each maps a chunk of poses to a relative margin per pose.
+
+margin = 1 - (worst value over cables and the velocity/acceleration set) / limit, so a pose
+satisfies a criterion when its margin is >= 0, and margins of different criteria are comparable.
+Criteria are independent functions; a study composes them by name (``CRITERIA``).
+"""
+
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+
+from pipeline.actuators import ActuatorModel
+from pipeline.dynamics import PoseDynamics
+
+Criterion = Callable[[PoseDynamics, ActuatorModel], np.ndarray]
+
+
+def max_abs_sum(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """max over (j, k) of |a[..., j] + b[..., k]| without forming the j x k product.
+
+    Identity: max_{j,k} |a_j + b_k| = max(max_j a_j + max_k b_k, -(min_j a_j + min_k b_k)),
+    because |x| = max(x, -x) and a maximum of a sum of independent terms is the sum of maxima.
+    """
+    return np.maximum(a.max(axis=-1) + b.max(axis=-1), -(a.min(axis=-1) + b.min(axis=-1)))
+
+
+def _margin(worst: np.ndarray, limit: float) -> np.ndarray:
+    """Worst (n, m) value per cable -> (n,) relative margin."""
+    return 1.0 - worst.max(axis=1) / limit
+
+
+def speed(dyn: PoseDynamics, act: ActuatorModel) -> np.ndarray:
+    """Eq. (30): |theta_dot_i| <= omega_mot / (9.5493 N_V) for every velocity of the set."""
+    return _margin(np.abs(dyn.shaft_speed).max(axis=2), act.speed_limit)
+
+
+def torque(dyn: PoseDynamics, act: ActuatorModel) -> np.ndarray:
+    """Eq. (32): |M_i| <= M_mot N_M for every acceleration of the set, M from eq. (20)."""
+    return _margin(np.abs(dyn.shaft_torque).max(axis=2), act.torque_limit)
+
+
+def acceleration(dyn: PoseDynamics, act: ActuatorModel) -> np.ndarray:
+    """Eq. (33): |theta_ddot_i| <= M_mot N_M / J_r over every (velocity, acceleration) pair."""
+    worst = max_abs_sum(dyn.shaft_accel_from_velocity, dyn.shaft_accel_from_acceleration)
+    return _margin(worst, act.accel_limit)
+
+
+def voltage(dyn: PoseDynamics, act: ActuatorModel) -> np.ndarray:
+    """Eq. (34) with u of eq. (21): |G_v theta_ddot + L_v theta_dot + S_v M| <= U_mot over every
+    (velocity, acceleration) pair; the velocity part and the acceleration part are separable."""
+    from_velocity = act.L_v * dyn.shaft_speed + act.G_v * dyn.shaft_accel_from_velocity
+    from_acceleration = act.G_v * dyn.shaft_accel_from_acceleration + act.S_v * dyn.shaft_torque
+    return _margin(max_abs_sum(from_velocity, from_acceleration), act.voltage_limit)
+
+
+CRITERIA: dict[str, Criterion] = {
+    "speed": speed,
+    "torque": torque,
+    "acceleration": acceleration,
+    "voltage": voltage,
+}

@@ -1,0 +1,140 @@
+"""Per-chunk kinematic and dynamic quantities of CPR-WWA, computed once and only when asked for.
+
+A :class:`PoseDynamics` holds one chunk of n positions at one constant orientation. Each property
+is an array over (pose, cable[, velocity | acceleration]) built with numpy batched operations: no
+Python loop over poses. Criteria (``pipeline.criteria``) read the properties they need.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from pipeline.geometry import (
+    CableRobot,
+    cable_vectors,
+    length_jacobian,
+    rotation_matrix,
+    rotation_partials,
+)
+
+
+@dataclass(frozen=True)
+class MotionSpec:
+    """What the carrier must do at every pose: velocity set, acceleration set, load, model options.
+
+    ``pinv_columns``: ``"translational"`` solves eq. (20) with the three position columns of J
+    (orientation held constant, no moment balance); ``"full"`` uses all six columns of eq. (19).
+    ``rank_rtol``: singular values below ``rank_rtol * sigma_max`` are treated as zero in the
+    pseudo-inverse (the CPR-8 Jacobian has rank 5 at zero orientation).
+    ``jdot``: add the centripetal term (J-dot p-dot) of the shaft acceleration.
+    """
+
+    velocities: np.ndarray
+    accelerations: np.ndarray
+    mass: float
+    gravity: float
+    winch_radius: np.ndarray
+    pinv_columns: str = "translational"
+    rank_rtol: float = 1e-9
+    jdot: bool = False
+
+
+class PoseDynamics:
+    """Lazily evaluated model quantities for positions (n, 3) at orientation (psi, theta, phi)."""
+
+    def __init__(self, robot: CableRobot, positions: np.ndarray, orientation, motion: MotionSpec):
+        self.robot = robot
+        self.positions = np.asarray(positions, dtype=float)
+        self.orientation = tuple(float(a) for a in orientation)
+        self.motion = motion
+
+    @cached_property
+    def rotation(self) -> np.ndarray:
+        return rotation_matrix(*self.orientation)
+
+    @cached_property
+    def vectors(self) -> np.ndarray:
+        """(n, m, 3) cable vectors anchor -> attachment point (eqs. 1-17)."""
+        return cable_vectors(self.robot, self.positions, self.rotation)
+
+    @cached_property
+    def lengths(self) -> np.ndarray:
+        """(n, m) cable lengths k, h, m, n, k', h', m', n' (eqs. 10-17)."""
+        return np.linalg.norm(self.vectors, axis=2)
+
+    @cached_property
+    def unit(self) -> np.ndarray:
+        """(n, m, 3) unit cable directions; zero where a cable has zero length."""
+        lengths = self.lengths[..., None]
+        return np.divide(self.vectors, lengths, out=np.zeros_like(self.vectors), where=lengths > 0)
+
+    @cached_property
+    def jacobian(self) -> np.ndarray:
+        """(n, m, 6) shaft Jacobian J of eq. (19): theta_dot = J p_dot, rows divided by R_i (18)."""
+        dl_dp = length_jacobian(self.robot, self.unit, rotation_partials(*self.orientation))
+        return dl_dp / self.motion.winch_radius[None, :, None]
+
+    @cached_property
+    def shaft_speed(self) -> np.ndarray:
+        """(n, m, k_v) theta_dot for every velocity of the set, Euler rates zero (eq. 19)."""
+        return np.einsum("nmj,vj->nmv", self.jacobian[:, :, :3], self.motion.velocities)
+
+    @cached_property
+    def shaft_accel_from_acceleration(self) -> np.ndarray:
+        """(n, m, k_a) J p_ddot: the part of theta_ddot linear in the carrier acceleration."""
+        return np.einsum("nmj,aj->nma", self.jacobian[:, :, :3], self.motion.accelerations)
+
+    @cached_property
+    def shaft_accel_from_velocity(self) -> np.ndarray:
+        """(n, m, k_v) J-dot p_dot = (|v|^2 - (u.v)^2) / (l R) at constant orientation; zeros
+        unless ``motion.jdot``."""
+        v = self.motion.velocities
+        if not self.motion.jdot:
+            return np.zeros(self.shaft_speed.shape)
+        along = np.einsum("nmj,vj->nmv", self.unit, v)
+        speed2 = np.einsum("vj,vj->v", v, v)
+        denom = self.lengths[..., None] * self.motion.winch_radius[None, :, None]
+        return (speed2[None, None, :] - along**2) / denom
+
+    @cached_property
+    def wrenches(self) -> np.ndarray:
+        """(k_a, 6) F = [m xdd, m ydd, m (zdd - g), 0, 0, 0] for every acceleration (eq. 31)."""
+        m, g = self.motion.mass, self.motion.gravity
+        acc = self.motion.accelerations
+        forces = m * (acc - np.array([0.0, 0.0, g]))
+        return np.hstack([forces, np.zeros_like(forces)])
+
+    @cached_property
+    def _wrench_pinv(self) -> tuple[np.ndarray, np.ndarray]:
+        columns = 3 if self.motion.pinv_columns == "translational" else 6
+        transposed = np.transpose(self.jacobian[:, :, :columns], (0, 2, 1))  # (n, c, m)
+        return batched_pinv(transposed, self.motion.rank_rtol)
+
+    @cached_property
+    def jacobian_rank(self) -> np.ndarray:
+        """(n,) numerical rank of the J^T used in eq. (20)."""
+        return self._wrench_pinv[1]
+
+    @cached_property
+    def shaft_torque(self) -> np.ndarray:
+        """(n, m, k_a) load torques M = (J^T)^+ F behind the gearbox (eq. 20)."""
+        pinv = self._wrench_pinv[0]
+        columns = pinv.shape[2]
+        return np.einsum("nmc,ac->nma", pinv, self.wrenches[:, :columns])
+
+
+def batched_pinv(matrices: np.ndarray, rtol: float) -> tuple[np.ndarray, np.ndarray]:
+    """Moore-Penrose pseudo-inverse of a stack (n, r, c) and the numerical rank of each matrix.
+
+    Singular values at or below ``rtol * sigma_max`` are dropped, so a rank-deficient matrix gives
+    the minimum-norm least-squares inverse of its well-conditioned part, never inf or NaN.
+    """
+    u, sigma, vt = np.linalg.svd(matrices, full_matrices=False)
+    cutoff = rtol * sigma[:, :1]
+    keep = sigma > cutoff
+    inverse = np.divide(1.0, sigma, out=np.zeros_like(sigma), where=keep)
+    pinv = np.einsum("nki,nk,njk->nij", vt, inverse, u)
+    return pinv, keep.sum(axis=1)

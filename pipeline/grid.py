@@ -1,0 +1,39 @@
+"""Position grids over a robot's search box (section 3: N * N * N points of the geometric workspace)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Grid:
+    """Positions (n, 3), ordered x-major then y then z, and the volume each point stands for."""
+
+    positions: np.ndarray
+    cell_volume: float
+
+    @property
+    def n_points(self) -> int:
+        return self.positions.shape[0]
+
+
+def box_grid(lo: np.ndarray, hi: np.ndarray, n: int, spacing: str = "linspace") -> Grid:
+    """n points per axis over the box [lo, hi].
+
+    ``"linspace"``: both box faces included, step (hi - lo)/(n - 1).
+    ``"centred"``: the centres of n equal cells, step (hi - lo)/n, faces excluded.
+    Each point stands for (box volume)/n^3, so n_feasible * cell_volume is the feasible share of
+    the box volume in m^3.
+    """
+    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+    if spacing == "linspace":
+        axes = [np.linspace(a, b, n) for a, b in zip(lo, hi)]
+    elif spacing == "centred":
+        axes = [a + (b - a) * (np.arange(n) + 0.5) / n for a, b in zip(lo, hi)]
+    else:
+        raise ValueError(f"unknown grid spacing {spacing!r}")
+    mesh = np.meshgrid(*axes, indexing="ij")
+    positions = np.column_stack([m.ravel() for m in mesh])
+    return Grid(positions=positions, cell_volume=float(np.prod(hi - lo)) / n**3)

@@ -1,0 +1,37 @@
+"""The Hydra task: one CPR-WWA job writes points.parquet and summary.parquet in its folder."""
+
+from __future__ import annotations
+
+import logging
+from pathlib import Path
+
+import pandas as pd
+from hydra.core.hydra_config import HydraConfig
+from omegaconf import DictConfig, OmegaConf
+
+from pipeline.actuators import load_catalogue
+from pipeline.config import validate
+from pipeline.results import write_parquet
+from pipeline.workspace import compute_workspace
+
+log = logging.getLogger("pipeline")
+
+
+def run_job(cfg: DictConfig) -> dict:
+    """Validate, compute the feasible workspace, write both Parquet files; returns the summary."""
+    catalogue = load_catalogue(cfg.catalogue)
+    validate(cfg, catalogue.index)
+    points, summary = compute_workspace(cfg, catalogue)
+    out = Path(HydraConfig.get().runtime.output_dir)
+    config_yaml = OmegaConf.to_yaml(cfg, resolve=True)
+    write_parquet(points, out / "points.parquet", config_yaml)
+    write_parquet(pd.DataFrame([summary]), out / "summary.parquet", config_yaml)
+    lost = ", ".join(
+        f"{name} {summary[f'lost_{name}']}" for name in ("speed", "torque", "acceleration", "voltage")
+    )
+    log.info(
+        "actuator %s (%s): %d/%d feasible = %.2f%% (%.4f m^3); lost to %s",
+        cfg.actuator, summary["actuator_name"], summary["n_feasible"], summary["n_points"],
+        summary["feasible_pct"], summary["volume_m3"], lost,
+    )
+    return summary

@@ -1,0 +1,48 @@
+"""Velocity and acceleration sets of CPR-WWA, eqs. (23)-(29) of Filipovic & Kevac (2018)."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+
+BOUNDARY_TOL = 1e-9  # relative; decides which grid velocities lie *on* the sphere |v| = V_cmax
+
+
+def velocity_set(v_max: float, n: int, boundary: str = "exclude") -> np.ndarray:
+    """(k, 3) carrier velocities: each axis on {-V : 2V/n : +V} (eqs. 23-25, n+1 values), kept
+    where v_c <= V (eq. 26).
+
+    ``boundary`` says what happens to grid velocities lying exactly on |v| = V (e.g. the axis
+    velocities and the (2, 2, 1) V/3 family for n = 6): ``"include"`` keeps them (eq. 26 read
+    literally), ``"exclude"`` keeps only |v| < V. The comparison uses a relative tolerance so the
+    choice does not depend on floating-point rounding (plain ``<=`` keeps 24 of the 30 on-sphere
+    velocities for n = 6, asymmetrically).
+    """
+    axis = np.linspace(-v_max, v_max, n + 1)
+    candidates = np.array(list(itertools.product(axis, axis, axis)))
+    speed = np.linalg.norm(candidates, axis=1)
+    if boundary == "include":
+        keep = speed <= v_max * (1 + BOUNDARY_TOL)
+    elif boundary == "exclude":
+        keep = speed < v_max * (1 - BOUNDARY_TOL)
+    else:
+        raise ValueError(f"unknown velocity boundary {boundary!r}")
+    return candidates[keep]
+
+
+def acceleration_set(v_max: float, t_acc: float, t_dec: float, kind: str = "corners") -> np.ndarray:
+    """(k, 3) carrier accelerations of eqs. (27)-(29), each axis in [-V/t_dec, +V/t_acc].
+
+    ``"corners"``: the 8 vertices of that box. Every CPR-WWA check is a maximum of |terms linear
+    in the acceleration|, so the vertices give the same result as any finer grid of the box.
+    ``"colon"``: MATLAB's literal ``-V/t_dec : V/t_acc`` with its default step of 1 m/s^2.
+    """
+    lo, hi = -v_max / t_dec, v_max / t_acc
+    if kind == "corners":
+        axis = np.array([lo, hi])
+    elif kind == "colon":
+        axis = np.arange(lo, hi + 1e-12, 1.0)
+    else:
+        raise ValueError(f"unknown acceleration set {kind!r}")
+    return np.array(list(itertools.product(axis, axis, axis)))

@@ -1,0 +1,100 @@
+"""CPR-WWA as a function of a composed config: build the problem, run the kernel, tabulate."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+from omegaconf import DictConfig, OmegaConf
+
+from pipeline.actuators import actuator_model
+from pipeline.dynamics import MotionSpec
+from pipeline.grid import Grid, box_grid
+from pipeline.kernel import WorkspaceProblem, classify, evaluate_chunk
+from pipeline.motion import acceleration_set, velocity_set
+from pipeline.parallel import map_chunks
+from pipeline.robots import cpr8
+
+CPR_WWA_CRITERIA = ("speed", "torque", "acceleration", "voltage")  # eqs. (30), (32), (33), (34)
+
+
+def build_problem(cfg: DictConfig, catalogue: pd.DataFrame) -> tuple[WorkspaceProblem, Grid]:
+    """The CPR-WWA problem of section 3 for the configured robot, actuator and readings."""
+    rc = cfg.robot
+    robot = cpr8(
+        rc.frame.d, rc.frame.s, rc.frame.v, rc.carrier.l, rc.carrier.w, rc.carrier.h,
+        lower_anchor_drop=rc.lower_anchor_drop,
+    )
+    actuator = actuator_model(
+        catalogue.loc[cfg.actuator], rc.winch_radius, cfg.model.xi_in_torque_limit
+    )
+    model = cfg.model
+    motion = MotionSpec(
+        velocities=velocity_set(cfg.motion.v_max, cfg.grid.n, _name(model.velocity_boundary)),
+        accelerations=acceleration_set(
+            cfg.motion.v_max, cfg.motion.t_acc, cfg.motion.t_dec, _name(model.acceleration_set)
+        ),
+        mass=cfg.load.mass,
+        gravity=cfg.load.gravity,
+        winch_radius=np.full(robot.n_cables, actuator.winch_radius),
+        pinv_columns=_name(model.pinv_columns),
+        rank_rtol=model.rank_rtol,
+        jdot=model.jdot,
+    )
+    orientation = (cfg.orientation.psi, cfg.orientation.theta, cfg.orientation.phi)
+    problem = WorkspaceProblem(robot, orientation, motion, actuator, CPR_WWA_CRITERIA)
+    grid = box_grid(robot.box_lo, robot.box_hi, cfg.grid.n, _name(cfg.grid.spacing))
+    return problem, grid
+
+
+def compute_workspace(cfg: DictConfig, catalogue: pd.DataFrame) -> tuple[pd.DataFrame, dict]:
+    """Points table (one row per grid pose) and the one-row summary of section 3 / Table 2."""
+    problem, grid = build_problem(cfg, catalogue)
+    raw = map_chunks(
+        evaluate_chunk, problem, grid.positions,
+        n_jobs=cfg.compute.n_jobs, backend=cfg.compute.backend, chunk_size=cfg.compute.chunk_size,
+    )
+    margins = {name: raw[f"margin_{name}"] for name in problem.criteria}
+    feasible, limiting = classify(margins)
+    points = pd.DataFrame(grid.positions, columns=["x", "y", "z"])
+    for name, value in zip(("psi", "theta", "phi"), problem.orientation):
+        points[name] = value
+    points["feasible"] = feasible
+    points["limiting"] = pd.Categorical(limiting, categories=list(problem.criteria))
+    for name, margin in margins.items():
+        points[f"margin_{name}"] = margin
+    points["jacobian_rank"] = raw["jacobian_rank"]
+    return points, summarize(cfg, points, grid.cell_volume, problem)
+
+
+def summarize(cfg: DictConfig, points: pd.DataFrame, cell_volume: float, problem) -> dict:
+    """Flattened config (every swept key is a column) plus counts, percentage and volume."""
+    n_points, n_feasible = len(points), int(points["feasible"].sum())
+    row = flatten(OmegaConf.to_container(cfg, resolve=True, enum_to_str=True))
+    row["actuator_name"] = problem.actuator.name
+    row["actuator_power_W"] = problem.actuator.power
+    row.update(
+        n_points=n_points,
+        n_feasible=n_feasible,
+        feasible_pct=100.0 * n_feasible / n_points,
+        volume_m3=n_feasible * cell_volume,
+    )
+    lost = points.loc[~points["feasible"], "limiting"].value_counts()
+    for name in problem.criteria:
+        row[f"lost_{name}"] = int(lost.get(name, 0))
+    return row
+
+
+def flatten(tree: dict, prefix: str = "") -> dict:
+    """{'a': {'b': 1}} -> {'a.b': 1}; lists are kept as their string form."""
+    flat = {}
+    for key, value in tree.items():
+        name = f"{prefix}{key}"
+        if isinstance(value, dict):
+            flat.update(flatten(value, f"{name}."))
+        else:
+            flat[name] = str(value) if isinstance(value, list) else value
+    return flat
+
+
+def _name(value) -> str:
+    return value.name if hasattr(value, "name") else str(value)

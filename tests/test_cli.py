@@ -1,0 +1,73 @@
+"""The command line as a user types it: `python -m pipeline ...` in a fresh working directory."""
+
+import subprocess
+import sys
+
+import pandas as pd
+import pytest
+
+from pipeline.results import read_metadata
+
+pytestmark = pytest.mark.slow
+
+
+def run(cwd, *args):
+    return subprocess.run([sys.executable, "-m", "pipeline", *args], cwd=cwd,
+                          capture_output=True, text=True, timeout=300)
+
+
+def test_main_job_writes_points_summaries_and_sweep_summary(tmp_path):
+    proc = run(tmp_path, "-m", "actuator=1,2,3,4,5")
+    assert proc.returncode == 0, proc.stderr
+    (sweep,) = (tmp_path / "outputs" / "sweeps").iterdir()
+    summary = pd.read_parquet(sweep / "summary.parquet")
+    assert summary["actuator"].tolist() == [1, 2, 3, 4, 5]
+    assert summary["n_feasible"].tolist() == [216, 208, 184, 184, 24]
+    for actuator in range(1, 6):
+        job = sweep / f"actuator={actuator}"
+        points = pd.read_parquet(job / "points.parquet")
+        assert len(points) == 216
+        assert {"x", "y", "z", "psi", "theta", "phi", "feasible", "limiting", "margin_speed",
+                "margin_torque", "margin_acceleration", "margin_voltage"} <= set(points.columns)
+        assert not points.isna().any().any()
+        meta = read_metadata(job / "points.parquet")
+        assert f"actuator: {actuator}" in meta["cdpr.config"]
+        assert meta["cdpr.version"].startswith("0.1.0")
+        assert read_metadata(job / "summary.parquet")["cdpr.config"] == meta["cdpr.config"]
+    assert "feasible = 85.19%" in (sweep / "actuator=3" / "pipeline.log").read_text()
+
+
+def test_single_run_with_parallel_chunks(tmp_path):
+    proc = run(tmp_path, "grid.n=12", "compute.chunk_size=500", "actuator=4")
+    assert proc.returncode == 0, proc.stderr
+    (job,) = (tmp_path / "outputs" / "runs").iterdir()
+    assert len(pd.read_parquet(job / "points.parquet")) == 12**3
+    log = (job / "pipeline.log").read_text()
+    assert "chunk 4/4 done (100%)" in log
+    assert "actuator 4" in log
+
+
+@pytest.mark.parametrize(
+    "args, key",
+    [
+        (("actuator=9",), "actuator=9"),
+        (("-m", "actuator=1,2,9"), "actuator=9"),
+        (("load.mass=0",), "load.mass=0"),
+        (("load.mass=-2",), "load.mass=-2"),
+        (("robot.winch_radius=-0.1",), "robot.winch_radius=-0.1"),
+        (("grid.n=0",), "grid.n=0"),
+        (("motion.v_max=0",), "motion.v_max=0"),
+        (("motion.v_max=-1.3",), "motion.v_max=-1.3"),
+        (("robot.carrier.l=4",), "robot.frame.d=3.2"),
+        (("grid.n=six",), "grid.n=six"),
+        (("load.mass=abc",), "load.mass=abc"),
+        (("no_such_key=1",), "no_such_key"),
+        (("model.acceleration_set=sphere",), "model.acceleration_set=sphere"),
+    ],
+)
+def test_bad_input_one_line_error_nonzero_exit_no_files(tmp_path, args, key):
+    proc = run(tmp_path, *args)
+    assert proc.returncode == 2
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: ") and key in lines[0], proc.stderr
+    assert list(tmp_path.iterdir()) == []

@@ -1,0 +1,52 @@
+"""Table 2 of Filipovic & Kevac (2018): feasible share of the geometric workspace per actuator,
+psi = theta = phi = 0, N = 6 (216 grid points), default readings of docs/model.md."""
+
+import pytest
+
+from pipeline.workspace import compute_workspace
+
+PAPER = {1: 100.0, 2: 96.3, 3: 85.19, 4: 87.04, 5: 7.41}
+OURS = {1: 216, 2: 208, 3: 184, 4: 184, 5: 24}  # feasible grid points out of 216
+TOLERANCE_PP = 4.0
+
+
+@pytest.fixture(scope="module")
+def results(make_cfg, catalogue):
+    return {a: compute_workspace(make_cfg(f"actuator={a}"), catalogue) for a in PAPER}
+
+
+@pytest.fixture(scope="module")
+def table2(results):
+    return {a: summary for a, (_, summary) in results.items()}
+
+
+@pytest.mark.parametrize("actuator", sorted(PAPER))
+def test_feasible_pct_within_4_points_of_table2(table2, actuator):
+    row = table2[actuator]
+    assert row["n_points"] == 216
+    assert row["n_feasible"] == OURS[actuator]
+    assert row["feasible_pct"] == pytest.approx(PAPER[actuator], abs=TOLERANCE_PP)
+
+
+def test_actuators_1_2_3_match_table2_to_its_printed_digits(table2):
+    for actuator in (1, 2, 3):
+        assert round(table2[actuator]["feasible_pct"], 2) == pytest.approx(PAPER[actuator], abs=0.01)
+
+
+def test_catalogue_power_is_not_the_criterion(table2):
+    """Actuator 4 (20 W) is not below actuator 3 (50 W), the paper's 'illogical' result."""
+    assert table2[4]["feasible_pct"] >= table2[3]["feasible_pct"]
+    assert table2[3]["actuator_power_W"] > table2[4]["actuator_power_W"]
+
+
+def test_each_lost_point_is_attributed_to_one_constraint(table2):
+    for row in table2.values():
+        lost = sum(row[f"lost_{c}"] for c in ("speed", "torque", "acceleration", "voltage"))
+        assert lost == row["n_points"] - row["n_feasible"]
+    assert table2[3]["lost_torque"] == 32 and table2[4]["lost_voltage"] == 32
+
+
+def test_shaft_acceleration_limit_never_binds_for_table1(results):
+    """Eq. (33): smallest margins over the grid, as stated in docs/model.md."""
+    smallest = [results[a][0]["margin_acceleration"].min() for a in sorted(PAPER)]
+    assert smallest == pytest.approx([0.7233, 0.8534, 0.9444, 0.9901, 0.9876], abs=1e-4)
