@@ -87,10 +87,12 @@ class OrientationConfig:
 
 @dataclass
 class GridConfig:
-    """N points per axis of the geometric workspace (section 3; the paper uses N = 6). ``n`` also
-    sets the velocity grid of eqs. (23)-(25), as in the paper."""
+    """N points per axis of the geometric workspace (section 3; the paper uses N = 6).
+    ``n_vel``: N of the velocity grid of eqs. (23)-(25); null ties it to ``n`` as in the paper.
+    Set it for dense position grids: n_vel = n = 40 would test 33 371 velocities per pose."""
 
     n: int = 6
+    n_vel: Optional[int] = None
     spacing: Spacing = Spacing.linspace
 
 
@@ -188,6 +190,8 @@ def validate(cfg: DictConfig, catalogue_ids) -> None:
             raise ConfigError(f"{key}={value}: must be > 0")
     if cfg.grid.n < 2:
         raise ConfigError(f"grid.n={cfg.grid.n}: must be >= 2")
+    if cfg.grid.n_vel is not None and cfg.grid.n_vel < 1:
+        raise ConfigError(f"grid.n_vel={cfg.grid.n_vel}: must be >= 1")
     if cfg.compute.n_jobs == 0:
         raise ConfigError("compute.n_jobs=0: must be a positive count or negative (joblib style)")
     if cfg.compute.backend not in JOBLIB_BACKENDS:

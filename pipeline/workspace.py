@@ -15,6 +15,7 @@ from pipeline.parallel import map_chunks
 from pipeline.robots import cpr8
 
 CPR_WWA_CRITERIA = ("speed", "torque", "acceleration", "voltage")  # eqs. (30), (32), (33), (34)
+CHUNK_BUDGET_FLOATS = 4_000_000  # largest (poses x cables x set size) array of one chunk: 32 MB
 
 
 def build_problem(cfg: DictConfig, catalogue: pd.DataFrame) -> tuple[WorkspaceProblem, Grid]:
@@ -29,7 +30,9 @@ def build_problem(cfg: DictConfig, catalogue: pd.DataFrame) -> tuple[WorkspacePr
     )
     model = cfg.model
     motion = MotionSpec(
-        velocities=velocity_set(cfg.motion.v_max, cfg.grid.n, _name(model.velocity_boundary)),
+        velocities=velocity_set(
+            cfg.motion.v_max, cfg.grid.n_vel or cfg.grid.n, _name(model.velocity_boundary)
+        ),
         accelerations=acceleration_set(
             cfg.motion.v_max, cfg.motion.t_acc, cfg.motion.t_dec, _name(model.acceleration_set)
         ),
@@ -51,7 +54,8 @@ def compute_workspace(cfg: DictConfig, catalogue: pd.DataFrame) -> tuple[pd.Data
     problem, grid = build_problem(cfg, catalogue)
     raw = map_chunks(
         evaluate_chunk, problem, grid.positions,
-        n_jobs=cfg.compute.n_jobs, backend=cfg.compute.backend, chunk_size=cfg.compute.chunk_size,
+        n_jobs=cfg.compute.n_jobs, backend=cfg.compute.backend,
+        chunk_size=bounded_chunk_size(problem, cfg.compute.chunk_size),
     )
     margins = {name: raw[f"margin_{name}"] for name in problem.criteria}
     feasible, limiting = classify(margins)
@@ -64,6 +68,14 @@ def compute_workspace(cfg: DictConfig, catalogue: pd.DataFrame) -> tuple[pd.Data
         points[f"margin_{name}"] = margin
     points["jacobian_rank"] = raw["jacobian_rank"]
     return points, summarize(cfg, points, grid.cell_volume, problem)
+
+
+def bounded_chunk_size(problem: WorkspaceProblem, requested: int) -> int:
+    """Poses per chunk: the requested size, lowered so that a chunk's largest intermediate
+    array (poses x cables x velocity or acceleration set) stays within CHUNK_BUDGET_FLOATS."""
+    motion = problem.motion
+    per_pose = problem.robot.n_cables * max(len(motion.velocities), len(motion.accelerations))
+    return max(1, min(requested, CHUNK_BUDGET_FLOATS // per_pose))
 
 
 def summarize(cfg: DictConfig, points: pd.DataFrame, cell_volume: float, problem) -> dict:

@@ -56,6 +56,7 @@ def test_single_run_with_parallel_chunks(tmp_path):
         (("load.mass=-2",), "load.mass=-2"),
         (("robot.winch_radius=-0.1",), "robot.winch_radius=-0.1"),
         (("grid.n=0",), "grid.n=0"),
+        (("grid.n_vel=0",), "grid.n_vel=0"),
         (("motion.v_max=0",), "motion.v_max=0"),
         (("motion.v_max=-1.3",), "motion.v_max=-1.3"),
         (("robot.carrier.l=4",), "robot.frame.d=3.2"),

@@ -25,3 +25,25 @@ def test_acceleration_corners_and_colon():
     np.testing.assert_allclose(np.unique(corners), [-1.3 / 1.82, 1.3 / 1.82])
     colon = acceleration_set(1.3, 1.82, 1.82, "colon")
     np.testing.assert_allclose(np.unique(colon), [-1.3 / 1.82, -1.3 / 1.82 + 1.0])
+
+
+def test_velocity_grid_decoupled_from_position_grid(make_cfg, catalogue):
+    from pipeline.workspace import bounded_chunk_size, build_problem
+
+    problem, grid = build_problem(make_cfg("grid.n=12", "grid.n_vel=6"), catalogue)
+    assert grid.n_points == 12**3 and len(problem.motion.velocities) == 93
+    tied, _ = build_problem(make_cfg("grid.n=12"), catalogue)
+    assert len(tied.motion.velocities) == len(velocity_set(1.3, 12, "exclude"))
+
+
+def test_chunk_size_bounded_by_memory_budget(make_cfg, catalogue):
+    """grid.n=40 with the velocity grid tied to it tests 41^3 candidates (33 371 kept) per pose;
+    chunks shrink so one chunk's largest array stays within 4e6 floats."""
+    from pipeline.workspace import CHUNK_BUDGET_FLOATS, bounded_chunk_size, build_problem
+
+    dense, _ = build_problem(make_cfg("grid.n=40"), catalogue)
+    size = bounded_chunk_size(dense, 20_000)
+    assert size * 8 * len(dense.motion.velocities) <= CHUNK_BUDGET_FLOATS
+    assert size == 4_000_000 // (8 * len(dense.motion.velocities))
+    paper, _ = build_problem(make_cfg(), catalogue)
+    assert bounded_chunk_size(paper, 20_000) == 4_000_000 // (8 * 93)
