@@ -1,0 +1,83 @@
+"""Throughput of the CPR-WWA kernel against the literal per-pose reference, in one run.
+
+    python benchmarks/bench_kernel.py          # reference on 6^3, kernel on 6^3 and 40^3
+    python benchmarks/bench_kernel.py --full   # also 100^3 on 2 workers
+
+Paper's sets: 93 velocities (7 per axis, |v| < V) and 8 acceleration corners, actuator 2,
+psi = theta = phi = 0.5 rad (rank-6 Jacobian). Ratios are against the reference's poses/s measured
+here, in the same process. Peak memory is this process's maximum resident set size.
+"""
+
+from __future__ import annotations
+
+import argparse
+import resource
+import time
+
+from hydra import compose, initialize_config_dir
+
+from pipeline.actuators import load_catalogue
+from pipeline.config import register
+from pipeline.kernel import evaluate_chunk
+from pipeline.parallel import map_chunks
+from pipeline.preflight import CONF_DIR
+from pipeline.reference import literal_margins
+from pipeline.workspace import bounded_chunk_size, build_problem
+
+
+def problem_for(n: int):
+    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
+        cfg = compose("config", overrides=[
+            f"grid.n={n}", "grid.n_vel=6", "actuator=2",
+            "orientation.psi=0.5", "orientation.theta=0.5", "orientation.phi=0.5",
+        ])
+    return build_problem(cfg, load_catalogue())
+
+
+def timed(function) -> float:
+    start = time.perf_counter()
+    function()
+    return time.perf_counter() - start
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--full", action="store_true", help="include the 100^3 grid")
+    args = parser.parse_args()
+    register()
+    rows = []
+
+    problem, grid = problem_for(6)
+    seconds = timed(lambda: literal_margins(problem.robot, grid.positions, problem.orientation,
+                                            problem.motion, problem.actuator))
+    reference = grid.n_points / seconds
+    rows.append(("literal reference, 1 core", grid.n_points, seconds))
+
+    for n in (6, 40):
+        problem, grid = problem_for(n)
+        size = bounded_chunk_size(problem, 20_000)
+
+        def serial():
+            for start in range(0, grid.n_points, size):
+                evaluate_chunk(problem, grid.positions[start:start + size])
+
+        evaluate_chunk(problem, grid.positions[:size])  # warm-up (imports, BLAS threads)
+        rows.append((f"kernel {n}^3, 1 core", grid.n_points, timed(serial)))
+    sizes = (40, 100) if args.full else (40,)
+    for n in sizes:
+        problem, grid = problem_for(n)
+        size = bounded_chunk_size(problem, 20_000)
+        run = lambda: map_chunks(evaluate_chunk, problem, grid.positions, n_jobs=2, chunk_size=size)
+        run() if n == 40 else None  # start the worker pool once before timing
+        rows.append((f"kernel {n}^3, 2 workers (loky)", grid.n_points, timed(run)))
+
+    print(f"{'case':34s} {'poses':>9s} {'seconds':>9s} {'poses/s':>11s} {'x reference':>12s}")
+    for name, poses, secs in rows:
+        rate = poses / secs
+        print(f"{name:34s} {poses:9d} {secs:9.3f} {rate:11,.0f} {rate / reference:12,.0f}")
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    print(f"peak resident memory of this process: {peak:.0f} MiB")
+
+
+if __name__ == "__main__":
+    main()
