@@ -28,7 +28,7 @@ def test_acceleration_corners_and_colon():
 
 
 def test_velocity_grid_decoupled_from_position_grid(make_cfg, catalogue):
-    from pipeline.workspace import bounded_chunk_size, build_problem
+    from pipeline.workspace import build_problem
 
     problem, grid = build_problem(make_cfg("grid.n=12", "grid.n_vel=6"), catalogue)
     assert grid.n_points == 12**3 and len(problem.motion.velocities) == 93
