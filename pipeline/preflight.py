@@ -2,18 +2,26 @@
 
 Hydra makes the run (or sweep) folder before the task function starts, so a bad value found
 inside a job would leave folders behind. The preflight expands the command's sweep exactly as
-Hydra's basic sweeper does, composes each job's config, validates it, and stops at the first
+Hydra's basic sweeper does, builds each job's config, validates it, and stops at the first
 problem with a one-line message naming the key and value.
+
+Composing a config costs about 80 ms, so a sweep of a thousand jobs is not composed a thousand
+times: jobs that share their structural overrides (config groups, ``+``/``~``, ``hydra.*``) share
+one composition, and each job's plain ``key=value`` overrides are applied to a copy of it with
+the same typed merge Hydra uses (the dataclass schema still rejects a bad key or type).
 """
 
 from __future__ import annotations
 
+import copy
 import re
 from pathlib import Path
 
 from hydra import compose, initialize_config_dir
 from hydra._internal.core_plugins.basic_sweeper import BasicSweeper
 from hydra.core.override_parser.overrides_parser import OverridesParser
+from hydra.core.override_parser.types import Override
+from omegaconf import DictConfig, OmegaConf
 
 from pipeline.actuators import load_catalogue
 from pipeline.config import validate
@@ -29,6 +37,14 @@ _NOISE = re.compile(r"^\s*(full_key|reference_type|object_type|object_type=).*$"
 
 def job_overrides(argv: list[str]) -> list[list[str]] | None:
     """The override list of every job the command would launch; None when it launches none."""
+    overrides = _overrides(argv)
+    if overrides is None or not _is_multirun(argv):
+        return None if overrides is None else [overrides]
+    parsed = OverridesParser.create().parse_overrides(overrides)
+    return BasicSweeper.split_arguments(parsed, max_batch_size=None)[0]
+
+
+def _overrides(argv: list[str]) -> list[str] | None:
     overrides, skip = [], False
     for arg in argv:
         if skip:
@@ -39,30 +55,75 @@ def job_overrides(argv: list[str]) -> list[list[str]] | None:
             skip = True
         elif not arg.startswith("-"):
             overrides.append(arg)
-    if not ("-m" in argv or "--multirun" in argv):
-        return [overrides]
-    parsed = OverridesParser.create().parse_overrides(overrides)
-    return BasicSweeper.split_arguments(parsed, max_batch_size=None)[0]
+    return overrides
+
+
+def _is_multirun(argv: list[str]) -> bool:
+    return "-m" in argv or "--multirun" in argv
+
+
+def _multirun_base(argv: list[str]) -> list[str] | None:
+    """A multirun's non-sweep overrides, in order: Hydra applies them all (a repeated key
+    included) when it composes the sweep config, before the jobs."""
+    if not _is_multirun(argv):
+        return None
+    parsed = OverridesParser.create().parse_overrides(_overrides(argv))
+    return [o.input_line for o in parsed if not o.is_sweep_override()]
 
 
 def check(argv: list[str]) -> None:
     """Raise ConfigError for the first job whose config cannot be composed or is invalid."""
     try:
         jobs = job_overrides(argv)
+        multirun_base = _multirun_base(argv) if jobs is not None else None
     except Exception as exc:  # Hydra's override grammar errors have several types
         raise ConfigError(one_line(exc)) from exc
     if jobs is None:
         return
+    parser = OverridesParser.create()
+    composed: dict[tuple[str, ...], DictConfig] = {}
     catalogues = {}
-    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3", job_name="preflight"):
-        for overrides in jobs:
+
+    def build(overrides: list[str]) -> DictConfig:
+        parsed = parser.parse_overrides(overrides)
+        structural = tuple(o.input_line for o in parsed if _structural(o))
+        if structural not in composed:
             try:
-                cfg = compose(config_name="config", overrides=overrides)
+                composed[structural] = compose(config_name="config", overrides=list(structural))
             except Exception as exc:  # composition errors come as Hydra and OmegaConf types
                 raise ConfigError(one_line(exc)) from exc
+        cfg = copy.deepcopy(composed[structural])
+        for override in parsed:
+            if not _structural(override):
+                _apply(cfg, override)
+        return cfg
+
+    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3", job_name="preflight"):
+        if multirun_base is not None:
+            build(multirun_base)  # Hydra composes the sweep's own config from these first
+        for overrides in jobs:
+            cfg = build(overrides)
             if cfg.catalogue not in catalogues:
                 catalogues[cfg.catalogue] = load_catalogue(cfg.catalogue)
             validate(cfg, catalogues[cfg.catalogue].index)
+
+
+def _structural(override: Override) -> bool:
+    """Overrides that change which config files are composed, or that Hydra must interpret."""
+    key = override.key_or_group
+    return (
+        override.is_add() or override.is_delete() or override.is_force_add()
+        or override.is_sweep_override() or override.package is not None
+        or re.split(r"[./]", key)[0] == "hydra" or (CONF_DIR / key).is_dir()
+    )
+
+
+def _apply(cfg: DictConfig, override: Override) -> None:
+    """``key=value`` merged into the typed config, as Hydra's own override does."""
+    try:
+        OmegaConf.update(cfg, override.key_or_group, override.value(), merge=True)
+    except Exception as exc:  # OmegaConf raises key, type and validation errors
+        raise ConfigError(f"{override.input_line}: {one_line(exc)}") from exc
 
 
 def one_line(exc: BaseException) -> str:

@@ -1,0 +1,1 @@
+"""Hydra sweeper plugin of cdpr-studies (discovered by Hydra in the ``hydra_plugins`` namespace)."""
