@@ -33,6 +33,19 @@ NUMERIC_COLUMNS: dict[str, tuple[float, bool]] = {
     "efficiency": (0.0, False),
     "winch_radius_m": (0.0, False),
 }
+# column -> physical quantity its name starts with (the rest of the name is the unit)
+QUANTITY = {
+    "power_W": "power",
+    "voltage_V": "voltage",
+    "speed_rpm": "speed",
+    "torque_Nm": "torque",
+    "back_emf_V_per_rad_s": "back_emf",
+    "torque_constant_Nm_per_A": "torque_constant",
+    "viscous_friction_Nm_per_rad_s": "viscous_friction",
+    "resistance_ohm": "resistance",
+    "inertia_g_cm2": "inertia",
+    "winch_radius_m": "winch_radius",
+}
 G_CM2_TO_KG_M2 = 1e-7
 RPM_TO_RAD_S = np.pi / 30.0  # the paper's 1/9.5493 in eq. (30)
 
@@ -61,16 +74,13 @@ class ActuatorModel:
 
 
 def load_catalogue(path: str | Path | None = None) -> pd.DataFrame:
-    """Read and validate a catalogue; ``None`` is the shipped Table 1. Indexed by integer ``id``."""
+    """Read and validate a catalogue (CSV, or Parquet by its ``.parquet`` suffix); ``None`` is the
+    shipped Table 1. Indexed by integer ``id``. Raises ConfigError naming the row and column."""
     source = TABLE1 if path is None else Path(path)
-    try:
-        with source.open("r") as handle:
-            table = pd.read_csv(handle, dtype=str, keep_default_na=False)
-    except OSError as exc:
-        raise ConfigError(f"catalogue={path}: cannot read ({exc.strerror})") from exc
-    missing = [c for c in ("id", "name", *NUMERIC_COLUMNS) if c not in table.columns]
-    if missing:
-        raise ConfigError(f"catalogue={source}: missing column(s) {', '.join(missing)}")
+    table = _read_as_text(source, path)
+    _check_columns(table, source)
+    if table.empty:
+        raise ConfigError(f"catalogue={source}: no actuator rows")
     ids = []
     for row, text in enumerate(table["id"], start=2):
         if not text.strip().isdigit():
@@ -97,15 +107,55 @@ def load_catalogue(path: str | Path | None = None) -> pd.DataFrame:
     return out.set_index("id")
 
 
+def _read_as_text(source, path) -> pd.DataFrame:
+    """Every cell as text, so that validation sees exactly what the user wrote. Rows are
+    numbered as in a CSV file (header = row 1) for both formats."""
+    try:
+        if str(source).endswith(".parquet"):
+            return pd.read_parquet(source).astype(str)
+        with source.open("r") as handle:
+            return pd.read_csv(handle, dtype=str, keep_default_na=False)
+    except OSError as exc:
+        raise ConfigError(f"catalogue={path}: cannot read ({exc.strerror or exc})") from exc
+    except (ValueError, pd.errors.ParserError) as exc:
+        raise ConfigError(f"catalogue={path}: not a readable table ({exc})") from exc
+
+
+def _check_columns(table: pd.DataFrame, source) -> None:
+    """Missing columns; a known quantity in another unit (``power_kW``) is named as such."""
+    missing = [c for c in ("id", "name", *NUMERIC_COLUMNS) if c not in table.columns]
+    if not missing:
+        return
+    for column in missing:
+        quantity = QUANTITY.get(column)
+        for other in table.columns:
+            if quantity and other.startswith(f"{quantity}_") and _quantity(other) == quantity:
+                raise ConfigError(
+                    f"catalogue={source}: column {other}: unit {other[len(quantity) + 1:]!r} is "
+                    f"not supported, give {quantity} as column {column}"
+                )
+    raise ConfigError(f"catalogue={source}: missing column(s) {', '.join(missing)}")
+
+
+def _quantity(column: str) -> str | None:
+    """The longest known quantity name that ``column`` starts with."""
+    matches = [q for q in QUANTITY.values() if q and column.startswith(f"{q}_")]
+    return max(matches, key=len) if matches else None
+
+
 def actuator_model(
-    row: pd.Series, winch_radius: float | None = None, xi_in_torque_limit: bool = True
+    row: pd.Series,
+    winch_radius: float | None = None,
+    gear_ratio: float | None = None,
+    xi_in_torque_limit: bool = True,
 ) -> ActuatorModel:
     """Turn one catalogue row into SI model constants and limits (section 3, eqs. 22, 30-34).
 
     N_M = N_V xi; C_E = C_e N_V; C_M = C_m N_M; B_C = B_c N_V N_M; J_r = J_M N_V N_M.
+    ``winch_radius`` and ``gear_ratio`` replace the catalogue's R_i and N_V when given.
     ``xi_in_torque_limit=False`` reads eq. (32) with the gear ratio N_V instead of N_M.
     """
-    n_v = row["gear_ratio"]
+    n_v = row["gear_ratio"] if gear_ratio is None else gear_ratio
     n_m = n_v * row["efficiency"]
     c_e = row["back_emf_V_per_rad_s"] * n_v
     c_m = row["torque_constant_Nm_per_A"] * n_m

@@ -16,17 +16,31 @@ REPORTED = ["n_points", "n_feasible", "feasible_pct", "volume_m3"]
 
 
 class SweepSummary(Callback):
-    """Concatenate every job's summary.parquet into <sweep dir>/summary.parquet."""
+    """Concatenate the summary.parquet of every job of this sweep into <sweep dir>/summary.parquet,
+    with a ``job`` column naming each job's folder. Folders left by an earlier, different sweep
+    into the same directory are not included."""
+
+    def __init__(self) -> None:
+        self.job_dirs: list[Path] = []
+
+    def on_job_end(self, config: DictConfig, **kwargs) -> None:
+        self.job_dirs.append(Path(config.hydra.runtime.output_dir))
 
     def on_multirun_end(self, config: DictConfig, **kwargs) -> None:
         sweep_dir = Path(config.hydra.sweep.dir)
-        rows = [pd.read_parquet(path) for path in sorted(sweep_dir.glob("*/summary.parquet"))]
+        rows = []
+        for job_dir in self.job_dirs:
+            if (job_dir / "summary.parquet").exists():
+                row = pd.read_parquet(job_dir / "summary.parquet")
+                row.insert(0, "job", job_dir.name)
+                rows.append(row)
         if not rows:
             return
         table = pd.concat(rows, ignore_index=True)
         varying = [
             c for c in table.columns
-            if c not in REPORTED and table[c].astype(str).nunique() > 1 and not c.startswith("lost_")
+            if c not in REPORTED and c != "job" and table[c].astype(str).nunique() > 1
+            and not c.startswith("lost_")
         ]
         table = table.sort_values(varying, kind="stable").reset_index(drop=True) if varying else table
         sweep_yaml = OmegaConf.to_yaml(

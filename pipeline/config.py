@@ -67,13 +67,12 @@ class CarrierConfig:
 @dataclass
 class Cpr8Config:
     """CPR-8 robot (Fig. 1). ``lower_anchor_drop``: depth of O', F', G', H' below O, F, G, H
-    (null = h_o as eqs. 14-17). ``winch_radius``: R_i for all cables (null = catalogue value)."""
+    (null = h_o as eqs. 14-17)."""
 
     name: str = "cpr8"
     frame: FrameConfig = field(default_factory=FrameConfig)
     carrier: CarrierConfig = field(default_factory=CarrierConfig)
     lower_anchor_drop: Optional[float] = None
-    winch_radius: Optional[float] = None
 
 
 @dataclass
@@ -114,6 +113,22 @@ class LoadConfig:
 
 
 @dataclass
+class DriveConfig:
+    """Design overrides of the catalogue's drive train, for every cable: winch radius R_i (m) and
+    gear ratio N_V. null keeps each actuator's catalogue value."""
+
+    winch_radius: Optional[float] = None
+    gear_ratio: Optional[float] = None
+
+
+@dataclass
+class ChoiceConfig:
+    """CPR-ACM (section 4): an actuator is accepted when its feasible share x(i_a) >= required_pct."""
+
+    required_pct: float = 90.0
+
+
+@dataclass
 class ModelConfig:
     """Readings of the ambiguous equations (docs/model.md gives each one's numbers)."""
 
@@ -146,6 +161,8 @@ class Config:
     grid: GridConfig = field(default_factory=GridConfig)
     motion: MotionConfig = field(default_factory=MotionConfig)
     load: LoadConfig = field(default_factory=LoadConfig)
+    drive: DriveConfig = field(default_factory=DriveConfig)
+    choice: ChoiceConfig = field(default_factory=ChoiceConfig)
     model: ModelConfig = field(default_factory=ModelConfig)
     compute: ComputeConfig = field(default_factory=ComputeConfig)
 
@@ -175,7 +192,8 @@ POSITIVE = (
     "robot.carrier.l",
     "robot.carrier.w",
     "robot.carrier.h",
-    "robot.winch_radius",
+    "drive.winch_radius",
+    "drive.gear_ratio",
     "model.rank_rtol",
     "compute.chunk_size",
 )
@@ -188,6 +206,8 @@ def validate(cfg: DictConfig, catalogue_ids) -> None:
         value = _select(cfg, key)
         if value is not None and not value > 0:
             raise ConfigError(f"{key}={value}: must be > 0")
+    if not 0 < cfg.choice.required_pct <= 100:
+        raise ConfigError(f"choice.required_pct={cfg.choice.required_pct}: must be in (0, 100]")
     if cfg.grid.n < 2:
         raise ConfigError(f"grid.n={cfg.grid.n}: must be >= 2")
     if cfg.grid.n_vel is not None and cfg.grid.n_vel < 1:

@@ -26,7 +26,8 @@ def build_problem(cfg: DictConfig, catalogue: pd.DataFrame) -> tuple[WorkspacePr
         lower_anchor_drop=rc.lower_anchor_drop,
     )
     actuator = actuator_model(
-        catalogue.loc[cfg.actuator], rc.winch_radius, cfg.model.xi_in_torque_limit
+        catalogue.loc[cfg.actuator], cfg.drive.winch_radius, cfg.drive.gear_ratio,
+        cfg.model.xi_in_torque_limit,
     )
     model = cfg.model
     motion = MotionSpec(
@@ -84,6 +85,8 @@ def summarize(cfg: DictConfig, points: pd.DataFrame, cell_volume: float, problem
     row = flatten(OmegaConf.to_container(cfg, resolve=True, enum_to_str=True))
     row["actuator_name"] = problem.actuator.name
     row["actuator_power_W"] = problem.actuator.power
+    for axis, lo, hi in zip("xyz", problem.robot.box_lo, problem.robot.box_hi):
+        row[f"box.{axis}_min"], row[f"box.{axis}_max"] = float(lo), float(hi)
     row.update(
         n_points=n_points,
         n_feasible=n_feasible,

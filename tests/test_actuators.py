@@ -1,4 +1,5 @@
 import numpy as np
+import pandas as pd
 import pytest
 
 from pipeline.actuators import actuator_model, load_catalogue
@@ -23,8 +24,11 @@ def test_torque_limit_reading_without_efficiency(catalogue):
     assert actuator_model(catalogue.loc[5], xi_in_torque_limit=False).torque_limit == pytest.approx(0.03 * 26)
 
 
-def test_winch_radius_override(catalogue):
+def test_drive_overrides(catalogue):
     assert actuator_model(catalogue.loc[2], winch_radius=0.05).winch_radius == 0.05
+    base, geared = actuator_model(catalogue.loc[2]), actuator_model(catalogue.loc[2], gear_ratio=50)
+    assert geared.speed_limit == pytest.approx(base.speed_limit * 25 / 50)
+    assert geared.torque_limit == pytest.approx(base.torque_limit * 50 / 25)
 
 
 def _write(tmp_path, text):
@@ -46,6 +50,11 @@ ROW = "1,a,300,48,4700,0.6,0.0945,0.095,0,0.369,3579,30,0.6,0.08\n"
         (HEADER + ROW.replace("0.369", "abc"), "row 2, column resistance_ohm: 'abc' is not a number"),
         (HEADER + ROW + ROW, "row 3, column id: duplicate id 1"),
         (HEADER + ROW.replace("1,a", "x,a"), "row 2, column id: 'x' is not an integer"),
+        (HEADER.replace("power_W", "power_kW") + ROW, "column power_kW: unit 'kW' is not supported"),
+        (HEADER.replace("torque_constant_Nm_per_A", "torque_constant_mNm_per_A") + ROW,
+         "column torque_constant_mNm_per_A: unit 'mNm_per_A'"),
+        (HEADER, "no actuator rows"),
+        (HEADER + ROW.replace(",0.6,0.08", ",0.6,"), "row 2, column winch_radius_m: '' is not a number"),
     ],
 )
 def test_malformed_catalogue_names_row_and_column(tmp_path, text, expected):
@@ -58,3 +67,9 @@ def test_user_catalogue_loads(tmp_path):
     table = load_catalogue(_write(tmp_path, HEADER + ROW))
     assert list(table.index) == [1]
     assert np.isclose(table.loc[1, "inertia_g_cm2"], 3579)
+
+
+def test_parquet_catalogue_equals_csv(tmp_path, catalogue):
+    path = tmp_path / "cat.parquet"
+    catalogue.reset_index().to_parquet(path)
+    pd.testing.assert_frame_equal(load_catalogue(path), catalogue)

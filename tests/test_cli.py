@@ -54,7 +54,7 @@ def test_single_run_with_parallel_chunks(tmp_path):
         (("-m", "actuator=1,2,9"), "actuator=9"),
         (("load.mass=0",), "load.mass=0"),
         (("load.mass=-2",), "load.mass=-2"),
-        (("robot.winch_radius=-0.1",), "robot.winch_radius=-0.1"),
+        (("drive.winch_radius=-0.1",), "drive.winch_radius=-0.1"),
         (("grid.n=0",), "grid.n=0"),
         (("grid.n_vel=0",), "grid.n_vel=0"),
         (("motion.v_max=0",), "motion.v_max=0"),

@@ -1,0 +1,237 @@
+"""Report figures, drawn only from a study's Parquet results (never from the kernels).
+
+Each figure kind is a function ``(spec, results, out_dir) -> [paths]`` registered in ``KINDS``;
+a study declares its figures as :class:`FigureSpec` entries (``studies/*.yaml``). Every figure
+uses the shipped style ``pipeline.styles.paper`` and the Agg backend, so reruns give identical
+PNG files.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Optional
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+import seaborn as sns  # noqa: E402
+
+STYLE = "pipeline.styles.paper"
+CONSTRAINT_COLOURS = {  # one colour per limiting constraint, the same in every figure
+    "speed": "#0072B2", "torque": "#D55E00", "acceleration": "#CC79A7", "voltage": "#E69F00",
+    "tension_min": "#D55E00", "tension_max": "#0072B2", "length": "#CC79A7",
+    "singular": "#000000",
+}
+FEASIBLE_COLOUR = "#009E73"
+
+
+@dataclass
+class FigureSpec:
+    """One declared figure. ``file`` may hold ``{column}`` fields (dots written as ``_``) for
+    kinds that draw one file per job; ``x``, ``y``, ``value`` are summary columns or pandas
+    expressions over them (dotted names in backticks); ``select`` keeps the jobs whose columns
+    take the listed values; ``hline`` is a number or a summary column."""
+
+    kind: str
+    file: str
+    title: Optional[str] = None
+    x: Optional[str] = None
+    y: Optional[str] = None
+    value: Optional[str] = None
+    hue: Optional[str] = None
+    facet: Optional[str] = None
+    hline: Optional[Any] = None
+    xlabel: Optional[str] = None
+    ylabel: Optional[str] = None
+    select: dict[str, Any] = field(default_factory=dict)
+
+
+class StudyResults:
+    """Read access to one study's outputs: the sweep summary, analysis tables, job points."""
+
+    def __init__(self, directory: Path):
+        self.directory = Path(directory)
+
+    @property
+    def summary(self) -> pd.DataFrame:
+        return pd.read_parquet(self.directory / "jobs" / "summary.parquet")
+
+    def table(self, name: str) -> pd.DataFrame:
+        return pd.read_parquet(self.directory / f"{name}.parquet")
+
+    def points(self, job: str) -> pd.DataFrame:
+        return pd.read_parquet(self.directory / "jobs" / job / "points.parquet")
+
+
+def render(spec: FigureSpec, results: StudyResults, out_dir: Path) -> list[Path]:
+    """Draw one declared figure into ``out_dir``; returns the files written."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    with plt.style.context(STYLE):
+        return KINDS[spec.kind](spec, results, out_dir)
+
+
+def choice_bar(spec: FigureSpec, results: StudyResults, out_dir: Path) -> list[Path]:
+    """Fig. 9: feasible share per actuator, accepted ones shaded as in Table 2, x % as a line."""
+    choice = results.table("choice").sort_values("actuator")
+    fig, ax = plt.subplots()
+    colours = ["0.45" if ok else "0.82" for ok in choice["accepted"]]
+    labels = [f"{a}\n{p:g} W" for a, p in zip(choice["actuator"], choice["actuator_power_W"])]
+    at = np.arange(len(choice))
+    bars = ax.bar(at, choice["feasible_pct"], color=colours, edgecolor="black", linewidth=0.6)
+    ax.set_xticks(at, labels)
+    ax.bar_label(bars, fmt="%.2f", padding=2, fontsize=8)
+    required = float(choice["required_pct"].iloc[0])
+    ax.axhline(required, color="#D55E00", linestyle="--", label=f"required x = {required:g} %")
+    ax.set_ylim(0, 110)
+    _labels(ax, spec, "actuator (catalogue power)", "feasible workspace x(i_a) (%)")
+    ax.legend(loc="upper right")
+    return [_save(fig, out_dir / spec.file)]
+
+
+def limiting_bar(spec: FigureSpec, results: StudyResults, out_dir: Path) -> list[Path]:
+    """Share of the grid that is feasible and lost to each constraint, stacked per actuator."""
+    choice = results.table("choice").sort_values("actuator")
+    lost = [c for c in choice.columns if c.startswith("lost_") and c.endswith("_pct")]
+    fig, ax = plt.subplots()
+    labels = np.arange(len(choice))
+    ax.set_xticks(labels, choice["actuator"].astype(str))
+    bottom = choice["feasible_pct"].to_numpy()
+    ax.bar(labels, bottom, color=FEASIBLE_COLOUR, label="feasible", edgecolor="black", lw=0.4)
+    for column in lost:
+        name = column[len("lost_"):-len("_pct")]
+        share = choice[column].to_numpy()
+        if share.any():
+            ax.bar(labels, share, bottom=bottom, color=CONSTRAINT_COLOURS.get(name),
+                   label=f"lost to {name}", edgecolor="black", lw=0.4)
+        bottom = bottom + share
+    ax.set_ylim(0, 100)
+    _labels(ax, spec, "actuator", "share of the geometric workspace grid (%)")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.0, 1.0))
+    return [_save(fig, out_dir / spec.file)]
+
+
+def cloud(spec: FigureSpec, results: StudyResults, out_dir: Path) -> list[Path]:
+    """Figs. 4a, 8 (CPR-8) and 5-12 (IRPM): one 3D picture per selected job; feasible points
+    as dots, infeasible ones as crosses coloured by their limiting constraint, the searched
+    box outlined."""
+    written = []
+    for _, job in _select(results.summary, spec.select).iterrows():
+        points = results.points(job["job"])
+        fig = plt.figure(figsize=(5.6, 4.6))
+        ax = fig.add_subplot(projection="3d")
+        feasible = points["feasible"].to_numpy()
+        ax.scatter(*(points.loc[feasible, c] for c in "xyz"), s=6, c=FEASIBLE_COLOUR,
+                   depthshade=False, label=f"feasible ({feasible.sum()})")
+        infeasible = points.loc[~feasible]
+        if len(infeasible) <= 5000:  # dense grids: draw the feasible set only
+            for name, group in infeasible.groupby("limiting", observed=True):
+                ax.scatter(*(group[c] for c in "xyz"), s=10, marker="x", linewidths=0.7,
+                           c=CONSTRAINT_COLOURS.get(name, "0.5"), depthshade=False,
+                           label=f"{name} ({len(group)})")
+        _box(ax, job)
+        ax.set_xlabel("x (m)")
+        ax.set_ylabel("y (m)")
+        ax.set_zlabel("z (m)")
+        ax.set_title(_fill(spec.title or "", job), fontsize=9)
+        ax.legend(loc="upper left", fontsize=7, bbox_to_anchor=(0.0, 1.0))
+        written.append(_save(fig, out_dir / _fill(spec.file, job)))
+    return written
+
+
+def curve(spec: FigureSpec, results: StudyResults, out_dir: Path) -> list[Path]:
+    """Volume (or share) versus a swept parameter, one line per ``hue`` value (Figs. 13-15)."""
+    table = _select(results.summary, spec.select)
+    data = pd.DataFrame({"x": _column(table, spec.x), "y": _column(table, spec.y)})
+    fig, ax = plt.subplots()
+    if spec.hue:  # colour and marker both vary, so coinciding lines stay distinguishable
+        data[spec.hue] = table[spec.hue].astype(str).to_numpy()
+        sns.lineplot(data=data, x="x", y="y", hue=spec.hue, style=spec.hue, markers=True,
+                     dashes=False, ax=ax, errorbar=None)
+    else:
+        sns.lineplot(data=data, x="x", y="y", marker="o", ax=ax, errorbar=None)
+    if spec.hline is not None:
+        level = float(table[spec.hline].iloc[0]) if isinstance(spec.hline, str) else spec.hline
+        ax.axhline(level, color="0.3", linestyle="--", lw=1, label=f"required {level:g}")
+    if spec.hue or spec.hline is not None:
+        ax.legend(title=spec.hue)
+    _labels(ax, spec, spec.x, spec.y)
+    return [_save(fig, out_dir / spec.file)]
+
+
+def heatmap(spec: FigureSpec, results: StudyResults, out_dir: Path) -> list[Path]:
+    """``value`` over two swept keys ``x`` and ``y``, one panel per ``facet`` value (Figs. 16-29)."""
+    table = _select(results.summary, spec.select)
+    facets = sorted(table[spec.facet].unique()) if spec.facet else [None]
+    fig, axes = plt.subplots(1, len(facets), figsize=(2.6 * len(facets) + 0.8, 2.9),
+                             squeeze=False, sharey=True)
+    values = _column(table, spec.value)
+    vmin, vmax = float(values.min()), float(values.max())
+    for ax, facet in zip(axes[0], facets):
+        part = table if facet is None else table[table[spec.facet] == facet]
+        grid = pd.DataFrame({"x": _column(part, spec.x), "y": _column(part, spec.y),
+                             "v": _column(part, spec.value)}).pivot_table(
+            index="y", columns="x", values="v", aggfunc="first").sort_index(ascending=False)
+        sns.heatmap(grid, ax=ax, vmin=vmin, vmax=vmax, cmap="viridis", annot=True, fmt=".0f",
+                    annot_kws={"fontsize": 6}, cbar=ax is axes[0][-1], square=False)
+        ax.set_title("" if facet is None else f"{spec.facet} = {facet:g}", fontsize=8)
+        ax.set_xlabel(spec.xlabel or spec.x)
+        ax.set_ylabel(spec.ylabel or spec.y if ax is axes[0][0] else "")
+    if spec.title:
+        fig.suptitle(spec.title, fontsize=10)
+    return [_save(fig, out_dir / spec.file)]
+
+
+KINDS: dict[str, Callable[[FigureSpec, StudyResults, Path], list[Path]]] = {
+    "choice_bar": choice_bar,
+    "limiting_bar": limiting_bar,
+    "cloud": cloud,
+    "curve": curve,
+    "heatmap": heatmap,
+}
+
+
+def _column(table: pd.DataFrame, expression: str) -> pd.Series:
+    return table[expression] if expression in table.columns else table.eval(expression)
+
+
+def _select(table: pd.DataFrame, select: dict[str, Any]) -> pd.DataFrame:
+    keep = np.ones(len(table), dtype=bool)
+    for key, wanted in select.items():
+        wanted = wanted if isinstance(wanted, (list, tuple)) else [wanted]
+        keep &= np.isin(table[key].to_numpy(), wanted)
+    return table[keep]
+
+
+def _fill(pattern: str, row: pd.Series) -> str:
+    return pattern.format(**{str(k).replace(".", "_"): v for k, v in row.items()})
+
+
+def _labels(ax, spec: FigureSpec, xlabel: str | None, ylabel: str | None) -> None:
+    ax.set_xlabel(spec.xlabel or xlabel or "")
+    ax.set_ylabel(spec.ylabel or ylabel or "")
+    if spec.title:
+        ax.set_title(spec.title)
+
+
+def _box(ax, row: pd.Series) -> None:
+    """Outline the searched box (the geometric workspace) from the summary's box.* columns."""
+    lo = np.array([row[f"box.{a}_min"] for a in "xyz"])
+    hi = np.array([row[f"box.{a}_max"] for a in "xyz"])
+    corners = np.array([[lo[0] if i & 1 == 0 else hi[0], lo[1] if i & 2 == 0 else hi[1],
+                         lo[2] if i & 4 == 0 else hi[2]] for i in range(8)])
+    for i in range(8):
+        for bit in (1, 2, 4):
+            if not i & bit:
+                edge = corners[[i, i | bit]]
+                ax.plot(*edge.T, color="0.4", lw=0.6)
+
+
+def _save(fig, path: Path) -> Path:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, metadata={"Software": None})
+    plt.close(fig)
+    return path

@@ -1,0 +1,172 @@
+"""Declared studies: ``python -m pipeline.study NAME [key=value ...]``.
+
+A study (one paper figure or table) is a YAML file ``studies/NAME.yaml`` holding only data:
+fixed overrides, the swept keys, the analyses that turn the sweep summary into tables, and the
+figures. Running it is always the same three steps:
+
+1. the sweep, as one ``python -m pipeline -m`` command (Hydra, the preflight, joblib chunks)
+   into ``outputs/studies/NAME/jobs/``;
+2. the analyses (``ANALYSES``), each written as ``outputs/studies/NAME/<analysis>.parquet``;
+3. the figures (``pipeline.figures``), drawn from those Parquet files only, into
+   ``outputs/studies/NAME/figures/``.
+
+``--figures-only`` repeats steps 2-3 from the existing Parquet files. Extra ``key=value``
+arguments are appended to every job (e.g. ``catalogue=my_motors.csv``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import subprocess
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable, Optional
+
+import pandas as pd
+from omegaconf import OmegaConf
+
+from pipeline.actuators import load_catalogue
+from pipeline.choice import acceptance, choose
+from pipeline.errors import ConfigError
+from pipeline.figures import FigureSpec, StudyResults, render
+from pipeline.preflight import CONF_DIR, one_line
+from pipeline.results import write_parquet
+
+STUDIES_DIR = CONF_DIR.parent / "studies"
+OUTPUT_DIR = Path("outputs") / "studies"
+ALWAYS_EXCLUDED = ["compute.n_jobs", "compute.backend", "compute.chunk_size"]
+ANALYSES: dict[str, Callable[[pd.DataFrame], pd.DataFrame]] = {
+    "choice": choose,
+    "acceptance": acceptance,
+}
+log = logging.getLogger("pipeline.study")
+
+
+@dataclass
+class StudySpec:
+    """A study file. ``sweep`` maps a key to Hydra sweep values (``"0,15,30,45"``,
+    ``"range(1,6)"``); the value ``catalogue`` sweeps ``actuator`` over every id of the
+    configured catalogue."""
+
+    title: str
+    source: str
+    overrides: list[str] = field(default_factory=list)
+    sweep: dict[str, str] = field(default_factory=dict)
+    analyses: list[str] = field(default_factory=list)
+    figures: list[FigureSpec] = field(default_factory=list)
+    name: Optional[str] = None
+
+
+def available() -> list[str]:
+    return sorted(path.stem for path in STUDIES_DIR.glob("*.yaml"))
+
+
+def load_study(name: str, directory: Path = STUDIES_DIR) -> StudySpec:
+    """Read and check ``studies/NAME.yaml``; unknown keys, analyses or figure kinds fail here."""
+    from pipeline.figures import KINDS
+
+    path = directory / f"{name}.yaml"
+    if not path.exists():
+        raise ConfigError(f"study {name!r} not found (available: {', '.join(available())})")
+    try:
+        spec = OmegaConf.merge(OmegaConf.structured(StudySpec), OmegaConf.load(path))
+    except Exception as exc:  # OmegaConf key and type errors
+        raise ConfigError(f"{path}: {one_line(exc)}") from exc
+    study: StudySpec = OmegaConf.to_object(spec)
+    study.name = name
+    for analysis in study.analyses:
+        if analysis not in ANALYSES:
+            raise ConfigError(f"{path}: analyses: unknown {analysis!r} (known: {', '.join(ANALYSES)})")
+    for figure in study.figures:
+        if figure.kind not in KINDS:
+            raise ConfigError(f"{path}: figures: unknown kind {figure.kind!r} (known: {', '.join(KINDS)})")
+    return study
+
+
+def sweep_command(study: StudySpec, extra: list[str], jobs_dir: Path) -> list[str]:
+    """The ``python -m pipeline`` arguments of a study's sweep. Job folders are named by the
+    swept keys only (fixed and extra overrides are excluded from the folder name)."""
+    fixed = [*study.overrides, *extra]
+    swept = [f"{key}={_sweep_values(key, values, fixed)}" for key, values in study.sweep.items()]
+    excluded = ALWAYS_EXCLUDED + [_key(o) for o in fixed if _key(o) not in study.sweep]
+    return [
+        "-m", f"hydra.sweep.dir={jobs_dir}",
+        f"hydra.job.config.override_dirname.exclude_keys=[{','.join(excluded)}]",
+        *study.overrides, *swept, *extra,
+    ]
+
+
+def run_study(name: str, extra: list[str], out_root: Path = OUTPUT_DIR,
+              figures_only: bool = False) -> list[Path]:
+    """Sweep (unless ``figures_only``), analyses and figures of one study; returns the files."""
+    study = load_study(name)
+    out = out_root / name
+    if not figures_only:
+        command = [sys.executable, "-m", "pipeline", *sweep_command(study, extra, out / "jobs")]
+        log.info("study %s: %s", name, study.title)
+        done = subprocess.run(command)
+        if done.returncode != 0:
+            raise SystemExit(done.returncode)
+    results = StudyResults(out)
+    try:
+        summary = results.summary
+    except FileNotFoundError:
+        raise ConfigError(f"study {name}: no results in {out / 'jobs'}; run it without --figures-only")
+    written = []
+    provenance = OmegaConf.to_yaml({"study": name, "extra_overrides": extra})
+    for analysis in study.analyses:
+        path = out / f"{analysis}.parquet"
+        write_parquet(ANALYSES[analysis](summary), path, provenance)
+        written.append(path)
+    for figure in study.figures:
+        written.extend(render(figure, results, out / "figures"))
+    return written
+
+
+def _sweep_values(key: str, values: str, fixed: list[str]) -> str:
+    if values != "catalogue":
+        return values
+    if key != "actuator":
+        raise ConfigError(f"sweep {key}=catalogue: only 'actuator' can sweep the catalogue")
+    paths = [o.split("=", 1)[1] for o in fixed if _key(o) == "catalogue"]
+    path = paths[-1] if paths and paths[-1] not in ("null", "") else None
+    return ",".join(str(i) for i in load_catalogue(path).index)
+
+
+def _key(override: str) -> str:
+    return override.split("=", 1)[0].lstrip("+~")
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(prog="python -m pipeline.study", description=__doc__.split("\n\n")[0])
+    parser.add_argument("items", nargs="*", help="study names, then key=value overrides for every job")
+    parser.add_argument("--all", action="store_true", help="run every study in studies/")
+    parser.add_argument("--list", action="store_true", help="list the studies and exit")
+    parser.add_argument("--figures-only", action="store_true", help="redo analyses and figures from Parquet")
+    parser.add_argument("--out", type=Path, default=OUTPUT_DIR, help="output root (default outputs/studies)")
+    args = parser.parse_args(argv)
+    logging.basicConfig(level=logging.INFO, format="[%(name)s] %(message)s")
+    if args.list:
+        for name in available():
+            print(f"{name}: {load_study(name).title}")
+        return
+    names = [i for i in args.items if "=" not in i]
+    extra = [i for i in args.items if "=" in i]
+    names = available() if args.all else names
+    try:
+        if not names:
+            raise ConfigError("no study given (use --all or --list)")
+        for name in names:
+            load_study(name)
+        for name in names:
+            for path in run_study(name, extra, args.out, args.figures_only):
+                log.info("wrote %s", path)
+    except ConfigError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        raise SystemExit(2) from None
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,1 @@
+"""Matplotlib styles shipped with the package: ``plt.style.use("pipeline.styles.paper")``."""

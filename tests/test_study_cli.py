@@ -1,0 +1,132 @@
+"""Declared studies through their command line: `python -m pipeline.study NAME`."""
+
+import subprocess
+import sys
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from pipeline.actuators import load_catalogue
+from pipeline.errors import ConfigError
+from pipeline.study import StudySpec, available, load_study, run_study
+
+pytestmark = pytest.mark.slow
+
+
+def study(cwd, *args):
+    return subprocess.run([sys.executable, "-m", "pipeline.study", *args], cwd=cwd,
+                          capture_output=True, text=True, timeout=600)
+
+
+@pytest.fixture(scope="module")
+def choice_run(tmp_path_factory):
+    cwd = tmp_path_factory.mktemp("choice")
+    proc = study(cwd, "actuator_choice")
+    assert proc.returncode == 0, proc.stderr
+    return cwd / "outputs" / "studies" / "actuator_choice"
+
+
+def test_choice_command_accepts_actuators_1_and_2_and_draws_every_figure(choice_run):
+    choice = pd.read_parquet(choice_run / "choice.parquet")
+    assert sorted(choice.loc[choice["accepted"], "actuator"]) == [1, 2]
+    assert (choice[[c for c in choice if c.startswith("lost_") and not c.endswith("_pct")]]
+            .sum(axis=1) == choice["n_points"] - choice["n_feasible"]).all()
+    figures = sorted(p.name for p in (choice_run / "figures").iterdir())
+    assert figures == sorted(
+        ["fig9_feasible_share_by_actuator.png", "limiting_constraints_by_actuator.png"]
+        + [f"fig8_workspace_actuator{a}.png" for a in range(1, 6)]
+    )
+
+
+def test_figures_are_drawn_from_the_parquet_results(choice_run, monkeypatch):
+    """Block the kernel, redraw from Parquet: identical bytes; edit the Parquet: the figure follows."""
+    import pipeline.kernel
+    import pipeline.workspace
+
+    def blocked(*args, **kwargs):
+        raise AssertionError("figures must not recompute the workspace")
+
+    monkeypatch.setattr(pipeline.kernel, "evaluate_chunk", blocked)
+    monkeypatch.setattr(pipeline.workspace, "compute_workspace", blocked)
+    figures = choice_run / "figures"
+    before = {p.name: p.read_bytes() for p in figures.iterdir()}
+    out_root = choice_run.parent
+    run_study("actuator_choice", [], out_root, figures_only=True)
+    assert {p.name: p.read_bytes() for p in figures.iterdir()} == before
+
+    summary_path = choice_run / "jobs" / "summary.parquet"
+    summary = pd.read_parquet(summary_path)
+    edited = summary.copy()
+    edited.loc[edited["actuator"] == 3, "feasible_pct"] = 42.0
+    edited.to_parquet(summary_path)
+    points_path = choice_run / "jobs" / "actuator=4" / "points.parquet"
+    points = pd.read_parquet(points_path)
+    points.assign(feasible=True).to_parquet(points_path)
+    try:
+        run_study("actuator_choice", [], out_root, figures_only=True)
+        after = {p.name: p.read_bytes() for p in figures.iterdir()}
+        assert pd.read_parquet(choice_run / "choice.parquet").set_index("actuator").loc[
+            3, "feasible_pct"] == 42.0
+        changed = {name for name in before if after[name] != before[name]}
+        assert changed == {"fig9_feasible_share_by_actuator.png",
+                           "limiting_constraints_by_actuator.png", "fig8_workspace_actuator4.png"}
+    finally:
+        summary.to_parquet(summary_path)
+        points.to_parquet(points_path)
+
+
+def test_user_catalogue_of_20_synthetic_actuators(tmp_path):
+    table1 = load_catalogue().reset_index()
+    rng = np.random.default_rng(7)
+    rows = table1.iloc[np.arange(20) % 5].copy()
+    for column in ("torque_Nm", "speed_rpm", "resistance_ohm", "inertia_g_cm2", "gear_ratio"):
+        rows[column] = rows[column].to_numpy() * rng.uniform(0.7, 1.3, 20)
+    rows["id"] = np.arange(101, 121)
+    rows["name"] = [f"synthetic {i}" for i in rows["id"]]
+    rows.to_csv(tmp_path / "motors.csv", index=False)
+    proc = study(tmp_path, "actuator_choice", "catalogue=motors.csv")
+    assert proc.returncode == 0, proc.stderr
+    out = tmp_path / "outputs" / "studies" / "actuator_choice"
+    choice = pd.read_parquet(out / "choice.parquet")
+    assert sorted(choice["actuator"]) == list(range(101, 121))
+    assert (choice["accepted"] == (choice["feasible_pct"] >= 90.0)).all()
+    assert choice["feasible_pct"].is_monotonic_decreasing
+    assert len(list((out / "figures").glob("fig8_workspace_actuator*.png"))) == 20
+
+
+@pytest.mark.parametrize(
+    "edit, expected",
+    [
+        (lambda t: t.drop(columns="efficiency"), "missing column(s) efficiency"),
+        (lambda t: t.assign(inertia_g_cm2=t["inertia_g_cm2"].where(t["id"] != 3, -181)),
+         "row 4, column inertia_g_cm2: -181 must be > 0"),
+        (lambda t: t.astype({"resistance_ohm": str}).assign(
+            resistance_ohm=lambda d: d["resistance_ohm"].where(d["id"] != 2, "1.1 ohm")),
+         "row 3, column resistance_ohm: '1.1 ohm' is not a number"),
+        (lambda t: t.assign(id=[1, 2, 3, 3, 5]), "row 5, column id: duplicate id 3"),
+    ],
+)
+def test_malformed_catalogue_fails_before_any_computation(tmp_path, edit, expected):
+    edit(load_catalogue().reset_index()).to_csv(tmp_path / "bad.csv", index=False)
+    proc = study(tmp_path, "actuator_choice", "catalogue=bad.csv")
+    assert proc.returncode == 2
+    assert proc.stderr.strip().splitlines() == [f"error: catalogue=bad.csv: {expected}"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.csv"]
+
+
+def test_unknown_study_and_unknown_key_in_a_study_file(tmp_path):
+    proc = study(tmp_path, "no_such_study")
+    assert proc.returncode == 2 and "study 'no_such_study' not found" in proc.stderr
+    assert list(tmp_path.iterdir()) == []
+    (tmp_path / "typo.yaml").write_text("title: t\nsource: s\nfigures:\n  - {kind: curve, file: a.png, colour: red}\n")
+    with pytest.raises(ConfigError, match="colour"):
+        load_study("typo", tmp_path)
+    (tmp_path / "kind.yaml").write_text("title: t\nsource: s\nfigures:\n  - {kind: pie, file: a.png}\n")
+    with pytest.raises(ConfigError, match="unknown kind 'pie'"):
+        load_study("kind", tmp_path)
+
+
+def test_every_declared_study_parses():
+    for name in available():
+        assert isinstance(load_study(name), StudySpec)
