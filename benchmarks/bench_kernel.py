@@ -49,7 +49,7 @@ def main() -> None:
 
     problem, grid = problem_for(6)
     seconds = timed(lambda: literal_margins(problem.robot, grid.positions, problem.orientation,
-                                            problem.motion, problem.actuator))
+                                            problem.spec, problem.limits))
     reference = grid.n_points / seconds
     rows.append(("literal reference, 1 core", grid.n_points, seconds))
 

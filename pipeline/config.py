@@ -39,6 +39,20 @@ class AccelerationSet(Enum):
     colon = "colon"
 
 
+class MomentArm(Enum):
+    """Moment arm of eq. (8) of the IRPM paper: R d_i (about O_M) or r + R d_i (eq. 9 literal)."""
+
+    platform = "platform"
+    base = "base"
+
+
+class Analysis(Enum):
+    """Which workspace: CPR-WWA (dynamics, actuator limits) or statics (wrench, tensions)."""
+
+    cpr_wwa = "cpr_wwa"
+    statics = "statics"
+
+
 class Spacing(Enum):
     """Where the N grid points of an axis sit in the geometric workspace."""
 
@@ -76,12 +90,65 @@ class Cpr8Config:
 
 
 @dataclass
+class SearchConfig:
+    """Searched box (m) and grid step (m): points lo + k step up to hi on every axis."""
+
+    lo: list[float] = MISSING
+    hi: list[float] = MISSING
+    step: float = MISSING
+
+
+@dataclass
+class Irpm6Config:
+    """6-cable IRPM (Hamed & Zohoor, Figs. 1-4): base and platform radii (m), pair angle gamma
+    (deg), longest cable l_max (m), the search box of section III."""
+
+    name: str = "irpm6"
+    r_base: float = 6.0
+    r_end: float = 1.2
+    gamma_deg: float = 0.0
+    l_max: float = 15.0
+    search: SearchConfig = field(default_factory=SearchConfig)
+
+
+@dataclass
+class TotalOrientationConfig:
+    """Total-orientation workspace: every orientation (psi, theta, phi) + offsets, with the
+    offsets on a grid of ``n`` values per angle in [-bound, bound] rad (n = 1: constant
+    orientation)."""
+
+    bound: float = 0.0
+    n: int = 1
+
+
+@dataclass
 class OrientationConfig:
-    """Constant carrier orientation, Euler angles of eq. (9) in rad."""
+    """Carrier orientation, Euler angles of eq. (9) in rad; ``total`` widens it to the
+    total-orientation workspace around it."""
 
     psi: float = 0.0
     theta: float = 0.0
     phi: float = 0.0
+    total: TotalOrientationConfig = field(default_factory=TotalOrientationConfig)
+
+
+@dataclass
+class WrenchConfig:
+    """Applied wrench f_ext of eq. (11) of the IRPM paper, N and N m (the paper gives kN)."""
+
+    fx: float = 0.0
+    fy: float = 0.0
+    fz: float = 100_000.0
+    mx: float = 0.0
+    my: float = 0.0
+    mz: float = 0.0
+
+
+@dataclass
+class LimitsConfig:
+    """Largest sustainable cable tension s_max (N) of eq. (10)."""
+
+    s_max: float = 55_000.0
 
 
 @dataclass
@@ -135,6 +202,7 @@ class ModelConfig:
     pinv_columns: PinvColumns = PinvColumns.translational
     velocity_boundary: VelocityBoundary = VelocityBoundary.exclude
     acceleration_set: AccelerationSet = AccelerationSet.corners
+    moment_arm: MomentArm = MomentArm.platform
     jdot: bool = False
     xi_in_torque_limit: bool = True
     rank_rtol: float = 1e-9
@@ -151,16 +219,20 @@ class ComputeConfig:
 
 @dataclass
 class Config:
-    """Root config. ``actuator`` is the integer id of a catalogue row; ``catalogue`` a CSV path
+    """Root config. ``analysis`` null = the robot's own (cpr8: cpr_wwa, irpm6: statics).
+    ``actuator`` is the integer id of a catalogue row; ``catalogue`` a CSV or Parquet path
     (null = the shipped Table 1 of the CPR-8 paper)."""
 
     robot: Any = MISSING
+    analysis: Optional[Analysis] = None
     actuator: int = 1
     catalogue: Optional[str] = None
     orientation: OrientationConfig = field(default_factory=OrientationConfig)
     grid: GridConfig = field(default_factory=GridConfig)
     motion: MotionConfig = field(default_factory=MotionConfig)
     load: LoadConfig = field(default_factory=LoadConfig)
+    wrench: WrenchConfig = field(default_factory=WrenchConfig)
+    limits: LimitsConfig = field(default_factory=LimitsConfig)
     drive: DriveConfig = field(default_factory=DriveConfig)
     choice: ChoiceConfig = field(default_factory=ChoiceConfig)
     model: ModelConfig = field(default_factory=ModelConfig)
@@ -172,6 +244,7 @@ def register() -> None:
     store = ConfigStore.instance()
     store.store(name="schema", node=Config)
     store.store(group="robot", name="cpr8_schema", node=Cpr8Config)
+    store.store(group="robot", name="irpm6_schema", node=Irpm6Config)
     OmegaConf.register_new_resolver("cdpr.jobdir", job_dir_name, replace=True)
 
 
@@ -194,6 +267,11 @@ POSITIVE = (
     "robot.carrier.h",
     "drive.winch_radius",
     "drive.gear_ratio",
+    "limits.s_max",
+    "robot.r_base",
+    "robot.r_end",
+    "robot.l_max",
+    "robot.search.step",
     "model.rank_rtol",
     "compute.chunk_size",
 )
@@ -221,7 +299,12 @@ def validate(cfg: DictConfig, catalogue_ids) -> None:
     if cfg.actuator not in set(catalogue_ids):
         ids = ", ".join(str(i) for i in sorted(catalogue_ids))
         raise ConfigError(f"actuator={cfg.actuator}: no such id in the catalogue (ids: {ids})")
-    _validate_cpr8(cfg.robot)
+    total = cfg.orientation.total
+    if total.n < 1 or total.bound < 0:
+        raise ConfigError(f"orientation.total={OmegaConf.to_container(total)}: needs n >= 1, bound >= 0")
+    if cfg.robot.name not in ROBOT_VALIDATORS:
+        raise ConfigError(f"robot.name={cfg.robot.name}: unknown robot ({', '.join(ROBOT_VALIDATORS)})")
+    ROBOT_VALIDATORS[cfg.robot.name](cfg.robot)
 
 
 def _validate_cpr8(robot: DictConfig) -> None:
@@ -239,6 +322,21 @@ def _validate_cpr8(robot: DictConfig) -> None:
     drop = robot.lower_anchor_drop
     if drop is not None and drop < 0:
         raise ConfigError(f"robot.lower_anchor_drop={drop}: must be >= 0")
+
+
+def _validate_irpm6(robot: DictConfig) -> None:
+    if not 0 <= robot.gamma_deg < 120:
+        raise ConfigError(f"robot.gamma_deg={robot.gamma_deg}: must be in [0, 120) (pairs would overlap)")
+    search = robot.search
+    for key in ("lo", "hi"):
+        if len(search[key]) != 3:
+            raise ConfigError(f"robot.search.{key}={list(search[key])}: needs 3 values (x, y, z)")
+    for axis, lo, hi in zip("xyz", search.lo, search.hi):
+        if not lo <= hi:
+            raise ConfigError(f"robot.search: {axis} from {lo} to {hi}: lo must be <= hi")
+
+
+ROBOT_VALIDATORS = {"cpr8": _validate_cpr8, "irpm6": _validate_irpm6}
 
 
 def _select(cfg: DictConfig, dotted: str):

@@ -2,19 +2,33 @@
 
 margin = 1 - (worst value over cables and the velocity/acceleration set) / limit, so a pose
 satisfies a criterion when its margin is >= 0, and margins of different criteria are comparable.
-Criteria are independent functions; a study composes them by name (``CRITERIA``).
+Criteria are independent functions ``(state, limits) -> (n,) margins``; an analysis composes
+them by name (``CRITERIA``). CPR-WWA criteria read a :class:`PoseDynamics` and an
+:class:`ActuatorModel`; static criteria read a :class:`PoseStatics` and :class:`StaticLimits`.
 """
 
 from __future__ import annotations
 
-from typing import Callable
+from dataclasses import dataclass
+from typing import Any, Callable
 
 import numpy as np
 
 from pipeline.actuators import ActuatorModel
 from pipeline.dynamics import PoseDynamics
+from pipeline.statics import PoseStatics
 
-Criterion = Callable[[PoseDynamics, ActuatorModel], np.ndarray]
+Criterion = Callable[[Any, Any], np.ndarray]
+
+
+@dataclass(frozen=True)
+class StaticLimits:
+    """Eq. (10) of the IRPM paper: tensions in [0, s_max] (N), lengths <= l_max (m); a pose is
+    singular when the gram ratio of the structure matrix is below ``rank_rtol``."""
+
+    s_max: float
+    l_max: float
+    rank_rtol: float
 
 
 def max_abs_sum(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -55,9 +69,34 @@ def voltage(dyn: PoseDynamics, act: ActuatorModel) -> np.ndarray:
     return _margin(max_abs_sum(from_velocity, from_acceleration), act.voltage_limit)
 
 
+def singular(st: PoseStatics, lim: StaticLimits) -> np.ndarray:
+    """The structure matrix must have full rank: margin (g - rtol) / (1 - rtol) in [-rtol, 1]
+    with g its gram ratio; a singular pose has no tensions to check (``kernel.GATES``)."""
+    return (st.gram_ratio - lim.rank_rtol) / (1.0 - lim.rank_rtol)
+
+
+def tension_min(st: PoseStatics, lim: StaticLimits) -> np.ndarray:
+    """Eq. (10): s_i >= 0, a cable can only pull. Margin min_i s_i / s_max."""
+    return st.tensions.min(axis=1) / lim.s_max
+
+
+def tension_max(st: PoseStatics, lim: StaticLimits) -> np.ndarray:
+    """Eq. (10): s_i <= s_max."""
+    return _margin(st.tensions, lim.s_max)
+
+
+def length(st: PoseStatics, lim: StaticLimits) -> np.ndarray:
+    """Eq. (10): l_i <= l_max."""
+    return _margin(st.lengths, lim.l_max)
+
+
 CRITERIA: dict[str, Criterion] = {
     "speed": speed,
     "torque": torque,
     "acceleration": acceleration,
     "voltage": voltage,
+    "singular": singular,
+    "tension_min": tension_min,
+    "tension_max": tension_max,
+    "length": length,
 }

@@ -2,7 +2,8 @@
 
 A :class:`PoseDynamics` holds one chunk of n positions at one constant orientation. Each property
 is an array over (pose, cable[, velocity | acceleration]) built with numpy batched operations: no
-Python loop over poses. Criteria (``pipeline.criteria``) read the properties they need.
+Python loop over poses. Criteria (``pipeline.criteria``) read the properties they need. The
+geometric part (:class:`PoseGeometry`) is shared with the statics of ``pipeline.statics``.
 """
 
 from __future__ import annotations
@@ -41,15 +42,21 @@ class MotionSpec:
     rank_rtol: float = 1e-9
     jdot: bool = False
 
+    def state(self, robot: CableRobot, positions: np.ndarray, orientation) -> "PoseDynamics":
+        return PoseDynamics(robot, positions, orientation, self)
 
-class PoseDynamics:
-    """Lazily evaluated model quantities for positions (n, 3) at orientation (psi, theta, phi)."""
+    def set_size(self) -> int:
+        """Largest per-pose, per-cable set a criterion holds in memory."""
+        return max(len(self.velocities), len(self.accelerations))
 
-    def __init__(self, robot: CableRobot, positions: np.ndarray, orientation, motion: MotionSpec):
+
+class PoseGeometry:
+    """Cable vectors, lengths and directions for positions (n, 3) at one orientation."""
+
+    def __init__(self, robot: CableRobot, positions: np.ndarray, orientation):
         self.robot = robot
         self.positions = np.asarray(positions, dtype=float)
         self.orientation = tuple(float(a) for a in orientation)
-        self.motion = motion
 
     @cached_property
     def rotation(self) -> np.ndarray:
@@ -70,6 +77,14 @@ class PoseDynamics:
         """(n, m, 3) unit cable directions; zero where a cable has zero length."""
         lengths = self.lengths[..., None]
         return np.divide(self.vectors, lengths, out=np.zeros_like(self.vectors), where=lengths > 0)
+
+
+class PoseDynamics(PoseGeometry):
+    """Lazily evaluated CPR-WWA quantities (eqs. 18-22) for a chunk of poses."""
+
+    def __init__(self, robot: CableRobot, positions: np.ndarray, orientation, motion: MotionSpec):
+        super().__init__(robot, positions, orientation)
+        self.motion = motion
 
     @cached_property
     def jacobian(self) -> np.ndarray:
@@ -116,7 +131,8 @@ class PoseDynamics:
     @cached_property
     def jacobian_rank(self) -> np.ndarray:
         """(n,) numerical rank of the J^T used in eq. (20)."""
-        return self._wrench_pinv[1]
+        sigma = self._wrench_pinv[1]
+        return (sigma > self.motion.rank_rtol * sigma[:, :1]).sum(axis=1)
 
     @cached_property
     def shaft_torque(self) -> np.ndarray:
@@ -127,7 +143,8 @@ class PoseDynamics:
 
 
 def batched_pinv(matrices: np.ndarray, rtol: float) -> tuple[np.ndarray, np.ndarray]:
-    """Moore-Penrose pseudo-inverse of a stack (n, r, c) and the numerical rank of each matrix.
+    """Moore-Penrose pseudo-inverse of a stack (n, r, c) and the singular values (n, k),
+    largest first, of each matrix.
 
     Singular values at or below ``rtol * sigma_max`` are dropped, so a rank-deficient matrix gives
     the minimum-norm least-squares inverse of its well-conditioned part, never inf or NaN.
@@ -137,4 +154,4 @@ def batched_pinv(matrices: np.ndarray, rtol: float) -> tuple[np.ndarray, np.ndar
     keep = sigma > cutoff
     inverse = np.divide(1.0, sigma, out=np.zeros_like(sigma), where=keep)
     pinv = np.einsum("nki,nk,njk->nij", vt, inverse, u)
-    return pinv, keep.sum(axis=1)
+    return pinv, sigma

@@ -31,10 +31,11 @@ FEASIBLE_COLOUR = "#009E73"
 
 @dataclass
 class FigureSpec:
-    """One declared figure. ``file`` may hold ``{column}`` fields (dots written as ``_``) for
-    kinds that draw one file per job; ``x``, ``y``, ``value`` are summary columns or pandas
-    expressions over them (dotted names in backticks); ``select`` keeps the jobs whose columns
-    take the listed values; ``hline`` is a number or a summary column."""
+    """One declared figure. ``file`` and ``title`` may hold ``{column}`` fields (dots written as
+    ``_``); ``per`` draws one file per value of a summary column (e.g. ``case``), ``cloud`` one
+    per job. ``x``, ``y``, ``value`` are summary columns or pandas expressions over them (dotted
+    names in backticks); ``select`` keeps the jobs whose columns take the listed values;
+    ``hline`` is a number or a summary column; ``invert_z`` draws z downwards."""
 
     kind: str
     file: str
@@ -47,18 +48,20 @@ class FigureSpec:
     hline: Optional[Any] = None
     xlabel: Optional[str] = None
     ylabel: Optional[str] = None
+    per: Optional[str] = None
+    invert_z: bool = False
     select: dict[str, Any] = field(default_factory=dict)
 
 
 class StudyResults:
-    """Read access to one study's outputs: the sweep summary, analysis tables, job points."""
+    """Read access to one study's outputs: the summary, analysis tables, job points."""
 
     def __init__(self, directory: Path):
         self.directory = Path(directory)
 
     @property
     def summary(self) -> pd.DataFrame:
-        return pd.read_parquet(self.directory / "jobs" / "summary.parquet")
+        return pd.read_parquet(self.directory / "summary.parquet")
 
     def table(self, name: str) -> pd.DataFrame:
         return pd.read_parquet(self.directory / f"{name}.parquet")
@@ -68,13 +71,18 @@ class StudyResults:
 
 
 def render(spec: FigureSpec, results: StudyResults, out_dir: Path) -> list[Path]:
-    """Draw one declared figure into ``out_dir``; returns the files written."""
+    """Draw one declared figure (one file per ``per`` value) into ``out_dir``; returns the files."""
     out_dir.mkdir(parents=True, exist_ok=True)
+    table = _select(results.summary, spec.select)
+    groups = table.groupby(spec.per, sort=True) if spec.per else [(None, table)]
+    written = []
     with plt.style.context(STYLE):
-        return KINDS[spec.kind](spec, results, out_dir)
+        for _, part in groups:
+            written.extend(KINDS[spec.kind](spec, part, results, out_dir))
+    return written
 
 
-def choice_bar(spec: FigureSpec, results: StudyResults, out_dir: Path) -> list[Path]:
+def choice_bar(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
     """Fig. 9: feasible share per actuator, accepted ones shaded as in Table 2, x % as a line."""
     choice = results.table("choice").sort_values("actuator")
     fig, ax = plt.subplots()
@@ -92,7 +100,7 @@ def choice_bar(spec: FigureSpec, results: StudyResults, out_dir: Path) -> list[P
     return [_save(fig, out_dir / spec.file)]
 
 
-def limiting_bar(spec: FigureSpec, results: StudyResults, out_dir: Path) -> list[Path]:
+def limiting_bar(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
     """Share of the grid that is feasible and lost to each constraint, stacked per actuator."""
     choice = results.table("choice").sort_values("actuator")
     lost = [c for c in choice.columns if c.startswith("lost_") and c.endswith("_pct")]
@@ -114,12 +122,12 @@ def limiting_bar(spec: FigureSpec, results: StudyResults, out_dir: Path) -> list
     return [_save(fig, out_dir / spec.file)]
 
 
-def cloud(spec: FigureSpec, results: StudyResults, out_dir: Path) -> list[Path]:
+def cloud(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
     """Figs. 4a, 8 (CPR-8) and 5-12 (IRPM): one 3D picture per selected job; feasible points
     as dots, infeasible ones as crosses coloured by their limiting constraint, the searched
     box outlined."""
     written = []
-    for _, job in _select(results.summary, spec.select).iterrows():
+    for _, job in table.iterrows():
         points = results.points(job["job"])
         fig = plt.figure(figsize=(5.6, 4.6))
         ax = fig.add_subplot(projection="3d")
@@ -133,6 +141,8 @@ def cloud(spec: FigureSpec, results: StudyResults, out_dir: Path) -> list[Path]:
                            c=CONSTRAINT_COLOURS.get(name, "0.5"), depthshade=False,
                            label=f"{name} ({len(group)})")
         _box(ax, job)
+        if spec.invert_z:
+            ax.invert_zaxis()
         ax.set_xlabel("x (m)")
         ax.set_ylabel("y (m)")
         ax.set_zlabel("z (m)")
@@ -142,9 +152,8 @@ def cloud(spec: FigureSpec, results: StudyResults, out_dir: Path) -> list[Path]:
     return written
 
 
-def curve(spec: FigureSpec, results: StudyResults, out_dir: Path) -> list[Path]:
+def curve(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
     """Volume (or share) versus a swept parameter, one line per ``hue`` value (Figs. 13-15)."""
-    table = _select(results.summary, spec.select)
     data = pd.DataFrame({"x": _column(table, spec.x), "y": _column(table, spec.y)})
     fig, ax = plt.subplots()
     if spec.hue:  # colour and marker both vary, so coinciding lines stay distinguishable
@@ -158,13 +167,12 @@ def curve(spec: FigureSpec, results: StudyResults, out_dir: Path) -> list[Path]:
         ax.axhline(level, color="0.3", linestyle="--", lw=1, label=f"required {level:g}")
     if spec.hue or spec.hline is not None:
         ax.legend(title=spec.hue)
-    _labels(ax, spec, spec.x, spec.y)
-    return [_save(fig, out_dir / spec.file)]
+    _labels(ax, spec, spec.x, spec.y, table.iloc[0])
+    return [_save(fig, out_dir / _fill(spec.file, table.iloc[0]))]
 
 
-def heatmap(spec: FigureSpec, results: StudyResults, out_dir: Path) -> list[Path]:
+def heatmap(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
     """``value`` over two swept keys ``x`` and ``y``, one panel per ``facet`` value (Figs. 16-29)."""
-    table = _select(results.summary, spec.select)
     facets = sorted(table[spec.facet].unique()) if spec.facet else [None]
     fig, axes = plt.subplots(1, len(facets), figsize=(2.6 * len(facets) + 0.8, 2.9),
                              squeeze=False, sharey=True)
@@ -181,11 +189,11 @@ def heatmap(spec: FigureSpec, results: StudyResults, out_dir: Path) -> list[Path
         ax.set_xlabel(spec.xlabel or spec.x)
         ax.set_ylabel(spec.ylabel or spec.y if ax is axes[0][0] else "")
     if spec.title:
-        fig.suptitle(spec.title, fontsize=10)
-    return [_save(fig, out_dir / spec.file)]
+        fig.suptitle(_fill(spec.title, table.iloc[0]), fontsize=10)
+    return [_save(fig, out_dir / _fill(spec.file, table.iloc[0]))]
 
 
-KINDS: dict[str, Callable[[FigureSpec, StudyResults, Path], list[Path]]] = {
+KINDS: dict[str, Callable[[FigureSpec, pd.DataFrame, StudyResults, Path], list[Path]]] = {
     "choice_bar": choice_bar,
     "limiting_bar": limiting_bar,
     "cloud": cloud,
@@ -210,11 +218,11 @@ def _fill(pattern: str, row: pd.Series) -> str:
     return pattern.format(**{str(k).replace(".", "_"): v for k, v in row.items()})
 
 
-def _labels(ax, spec: FigureSpec, xlabel: str | None, ylabel: str | None) -> None:
+def _labels(ax, spec: FigureSpec, xlabel: str | None, ylabel: str | None, row=None) -> None:
     ax.set_xlabel(spec.xlabel or xlabel or "")
     ax.set_ylabel(spec.ylabel or ylabel or "")
     if spec.title:
-        ax.set_title(spec.title)
+        ax.set_title(spec.title if row is None else _fill(spec.title, row))
 
 
 def _box(ax, row: pd.Series) -> None:

@@ -37,3 +37,15 @@ def box_grid(lo: np.ndarray, hi: np.ndarray, n: int, spacing: str = "linspace") 
     mesh = np.meshgrid(*axes, indexing="ij")
     positions = np.column_stack([m.ravel() for m in mesh])
     return Grid(positions=positions, cell_volume=float(np.prod(hi - lo)) / n**3)
+
+
+def step_grid(lo: np.ndarray, hi: np.ndarray, step: float) -> Grid:
+    """Points lo + k * step on every axis up to hi inclusive (IRPM paper, section III: the box
+    [-6, 6]^2 x [0, 10] m with step 0.4 m gives 31 x 31 x 26 points). Each point stands for a
+    cube of side ``step``, so the volume is n_feasible * step^3."""
+    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+    counts = np.floor((hi - lo) / step + 1e-9).astype(int) + 1
+    axes = [a + step * np.arange(k) for a, k in zip(lo, counts)]
+    mesh = np.meshgrid(*axes, indexing="ij")
+    positions = np.column_stack([m.ravel() for m in mesh])
+    return Grid(positions=positions, cell_volume=float(step) ** 3)

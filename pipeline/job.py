@@ -27,11 +27,13 @@ def run_job(cfg: DictConfig) -> dict:
     write_parquet(points, out / "points.parquet", config_yaml)
     write_parquet(pd.DataFrame([summary]), out / "summary.parquet", config_yaml)
     lost = ", ".join(
-        f"{name} {summary[f'lost_{name}']}" for name in ("speed", "torque", "acceleration", "voltage")
+        f"{key[len('lost_'):]} {value}" for key, value in summary.items() if key.startswith("lost_")
     )
+    subject = (f"actuator {cfg.actuator} ({summary['actuator_name']})"
+               if "actuator_name" in summary else f"{cfg.robot.name} {summary['analysis']}")
     log.info(
-        "actuator %s (%s): %d/%d feasible = %.2f%% (%.4f m^3); lost to %s",
-        cfg.actuator, summary["actuator_name"], summary["n_feasible"], summary["n_points"],
-        summary["feasible_pct"], summary["volume_m3"], lost,
+        "%s: %d/%d feasible = %.2f%% (%.4f m^3); lost to %s", subject,
+        summary["n_feasible"], summary["n_points"], summary["feasible_pct"], summary["volume_m3"],
+        lost,
     )
     return summary

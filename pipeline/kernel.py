@@ -3,31 +3,50 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
-from pipeline.actuators import ActuatorModel
 from pipeline.criteria import CRITERIA
-from pipeline.dynamics import MotionSpec, PoseDynamics
 from pipeline.geometry import CableRobot
+
+GATES = ("singular",)  # criteria that, when violated, make the others meaningless
 
 
 @dataclass(frozen=True)
 class WorkspaceProblem:
-    """Everything a worker needs, as plain arrays and numbers (no config objects)."""
+    """Everything a worker needs, as plain arrays and numbers (no config objects).
+
+    ``spec`` builds the per-chunk state (``MotionSpec`` -> CPR-WWA dynamics, ``StaticsSpec`` ->
+    statics); ``limits`` is what the criteria compare against (an ``ActuatorModel`` or
+    ``StaticLimits``). ``orientations`` (k, 3): the pose must satisfy every criterion at every
+    one of them (k = 1: constant-orientation workspace; k > 1: total-orientation workspace).
+    """
 
     robot: CableRobot
-    orientation: tuple[float, float, float]
-    motion: MotionSpec
-    actuator: ActuatorModel
+    orientations: np.ndarray
+    spec: Any
+    limits: Any
     criteria: tuple[str, ...]
+
+    @property
+    def orientation(self) -> tuple[float, float, float]:
+        """The nominal (first) orientation, reported with every pose."""
+        return tuple(float(a) for a in self.orientations[0])
 
 
 def evaluate_chunk(problem: WorkspaceProblem, positions: np.ndarray) -> dict[str, np.ndarray]:
-    """Margins ``margin_<criterion>`` (n,) and ``jacobian_rank`` (n,) for positions (n, 3)."""
-    dyn = PoseDynamics(problem.robot, positions, problem.orientation, problem.motion)
-    result = {f"margin_{name}": CRITERIA[name](dyn, problem.actuator) for name in problem.criteria}
-    result["jacobian_rank"] = dyn.jacobian_rank.astype(np.int8)
+    """Margins ``margin_<criterion>`` (n,), the worst over the orientation set, for positions (n, 3)."""
+    result = {}
+    for orientation in problem.orientations:
+        state = problem.spec.state(problem.robot, positions, orientation)
+        for name in problem.criteria:
+            margin = CRITERIA[name](state, problem.limits)
+            key = f"margin_{name}"
+            result[key] = margin if key not in result else np.minimum(result[key], margin)
+        if hasattr(state, "jacobian_rank"):
+            rank = state.jacobian_rank.astype(np.int8)
+            result["jacobian_rank"] = np.minimum(result.get("jacobian_rank", rank), rank)
     return result
 
 
@@ -36,7 +55,8 @@ def classify(margins: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
 
     A pose is feasible when every margin is >= 0. ``limiting`` names the criterion with the
     smallest margin: the most violated one for an infeasible pose, the tightest for a feasible
-    one. Each infeasible pose is therefore attributed to exactly one criterion.
+    one; a violated gate (``GATES``, e.g. a singular structure matrix) takes precedence. Each
+    infeasible pose is therefore attributed to exactly one criterion.
     """
     names = list(margins)
     stacked = np.column_stack([margins[name] for name in names])
@@ -45,4 +65,7 @@ def classify(margins: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
         raise FloatingPointError(f"non-finite margin at pose index {row}: {stacked[row]}")
     feasible = (stacked >= 0).all(axis=1)
     limiting = np.asarray(names, dtype=object)[stacked.argmin(axis=1)]
+    for gate in reversed(GATES):  # the first gate listed wins
+        if gate in margins:
+            limiting[margins[gate] < 0] = gate
     return feasible, limiting

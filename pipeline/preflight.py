@@ -24,7 +24,7 @@ from hydra.core.override_parser.types import Override
 from omegaconf import DictConfig, OmegaConf
 
 from pipeline.actuators import load_catalogue
-from pipeline.config import validate
+from pipeline.config import register, validate
 from pipeline.errors import ConfigError
 
 CONF_DIR = Path(__file__).resolve().parent.parent / "conf"
@@ -80,6 +80,7 @@ def check(argv: list[str]) -> None:
         raise ConfigError(one_line(exc)) from exc
     if jobs is None:
         return
+    register()
     parser = OverridesParser.create()
     composed: dict[tuple[str, ...], DictConfig] = {}
     catalogues = {}

@@ -45,3 +45,34 @@ def cpr8(
         box_hi=np.array([d - de, s - de, -de]),
         cable_names=("k", "h", "m", "n", "k'", "h'", "m'", "n'"),
     )
+
+
+def irpm6(
+    r_base: float, r_end: float, gamma_deg: float, box_lo, box_hi
+) -> CableRobot:
+    """6-cable IRPM of Hamed & Zohoor, Figs. 1-4, eqs. (1)-(2) (docs/model.md: our reading).
+
+    Base points C_i lie on a circle of radius r_base in the base plane Z = 0, platform points D_i
+    on a circle of radius r_end in the platform plane z = 0 (body frame, origin O_M). Points come
+    in pairs separated by the angle gamma: base pairs (C1, C2), (C3, C4), (C5, C6) centred at
+    0, 120, 240 deg; platform pairs (D2, D3), (D4, D5), (D6, D1) centred at 60, 180, 300 deg,
+    so that each base pair feeds two neighbouring platform pairs (gamma = 0: two triangles
+    rotated by 60 deg, the 3-3 Stewart arrangement). Z points down from the base plane, into
+    the search box, so the weight is +f_z.
+    """
+    half = gamma_deg / 2.0
+    base_deg = np.array([-half, half, 120 - half, 120 + half, 240 - half, 240 + half])
+    platform_deg = np.array([300 + half, 60 - half, 60 + half, 180 - half, 180 + half, 300 - half])
+    return CableRobot(
+        name="irpm6",
+        anchors=_circle(r_base, base_deg),
+        attachments=_circle(r_end, platform_deg),
+        box_lo=np.asarray(box_lo, dtype=float),
+        box_hi=np.asarray(box_hi, dtype=float),
+        cable_names=tuple(f"C{i}D{i}" for i in range(1, 7)),
+    )
+
+
+def _circle(radius: float, degrees: np.ndarray) -> np.ndarray:
+    angles = np.deg2rad(degrees)
+    return np.column_stack([radius * np.cos(angles), radius * np.sin(angles), np.zeros(len(angles))])

@@ -5,7 +5,8 @@ fixed overrides, the swept keys, the analyses that turn the sweep summary into t
 figures. Running it is always the same three steps:
 
 1. the sweep, as one ``python -m pipeline -m`` command (Hydra, the preflight, joblib chunks)
-   into ``outputs/studies/NAME/jobs/``;
+   into ``outputs/studies/NAME/jobs/`` (one command per case, into ``jobs/CASE/``, when the
+   study declares ``cases``), gathered into ``outputs/studies/NAME/summary.parquet``;
 2. the analyses (``ANALYSES``), each written as ``outputs/studies/NAME/<analysis>.parquet``;
 3. the figures (``pipeline.figures``), drawn from those Parquet files only, into
    ``outputs/studies/NAME/figures/``.
@@ -18,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import shutil
 import subprocess
 import sys
 from dataclasses import dataclass, field
@@ -31,12 +33,17 @@ from pipeline.actuators import load_catalogue
 from pipeline.choice import acceptance, choose
 from pipeline.errors import ConfigError
 from pipeline.figures import FigureSpec, StudyResults, render
-from pipeline.preflight import CONF_DIR, one_line
+from pipeline.preflight import CONF_DIR, check, one_line
 from pipeline.results import write_parquet
 
 STUDIES_DIR = CONF_DIR.parent / "studies"
 OUTPUT_DIR = Path("outputs") / "studies"
 ALWAYS_EXCLUDED = ["compute.n_jobs", "compute.backend", "compute.chunk_size"]
+# Studies are many small jobs: run two jobs at a time, each on one core (one level of parallelism)
+LAUNCHERS = {
+    "joblib": ["hydra/launcher=joblib", "hydra.launcher.n_jobs=2", "compute.n_jobs=1"],
+    "basic": [],
+}
 ANALYSES: dict[str, Callable[[pd.DataFrame], pd.DataFrame]] = {
     "choice": choose,
     "acceptance": acceptance,
@@ -48,12 +55,14 @@ log = logging.getLogger("pipeline.study")
 class StudySpec:
     """A study file. ``sweep`` maps a key to Hydra sweep values (``"0,15,30,45"``,
     ``"range(1,6)"``); the value ``catalogue`` sweeps ``actuator`` over every id of the
-    configured catalogue."""
+    configured catalogue. ``cases`` (name -> overrides) repeats the sweep once per case, for
+    settings that are not a cartesian product (e.g. the radii pairs of one paper figure each)."""
 
     title: str
     source: str
     overrides: list[str] = field(default_factory=list)
     sweep: dict[str, str] = field(default_factory=dict)
+    cases: dict[str, list[str]] = field(default_factory=dict)
     analyses: list[str] = field(default_factory=list)
     figures: list[FigureSpec] = field(default_factory=list)
     name: Optional[str] = None
@@ -85,7 +94,8 @@ def load_study(name: str, directory: Path = STUDIES_DIR) -> StudySpec:
     return study
 
 
-def sweep_command(study: StudySpec, extra: list[str], jobs_dir: Path) -> list[str]:
+def sweep_command(study: StudySpec, extra: list[str], jobs_dir: Path,
+                  launcher: str = "joblib") -> list[str]:
     """The ``python -m pipeline`` arguments of a study's sweep. Job folders are named by the
     swept keys only (fixed and extra overrides are excluded from the folder name)."""
     fixed = [*study.overrides, *extra]
@@ -94,28 +104,38 @@ def sweep_command(study: StudySpec, extra: list[str], jobs_dir: Path) -> list[st
     return [
         "-m", f"hydra.sweep.dir={jobs_dir}",
         f"hydra.job.config.override_dirname.exclude_keys=[{','.join(excluded)}]",
-        *study.overrides, *swept, *extra,
+        *LAUNCHERS[launcher], *study.overrides, *swept, *extra,
     ]
 
 
 def run_study(name: str, extra: list[str], out_root: Path = OUTPUT_DIR,
-              figures_only: bool = False) -> list[Path]:
-    """Sweep (unless ``figures_only``), analyses and figures of one study; returns the files."""
+              figures_only: bool = False, launcher: str = "joblib") -> list[Path]:
+    """Sweep (unless ``figures_only``), analyses and figures of one study; returns the files.
+    A full run replaces the study's ``jobs/`` folder, so no job of an earlier run lingers."""
     study = load_study(name)
     out = out_root / name
+    cases = study.cases or {"": []}
+    provenance = OmegaConf.to_yaml({"study": name, "extra_overrides": extra})
     if not figures_only:
-        command = [sys.executable, "-m", "pipeline", *sweep_command(study, extra, out / "jobs")]
+        commands = [  # built and validated first: bad input fails before anything is removed
+            sweep_command(study, [*overrides, *extra], out / "jobs" / case, launcher)
+            for case, overrides in cases.items()
+        ]
+        for command in commands:
+            check(command)
         log.info("study %s: %s", name, study.title)
-        done = subprocess.run(command)
-        if done.returncode != 0:
-            raise SystemExit(done.returncode)
+        shutil.rmtree(out / "jobs", ignore_errors=True)
+        for command in commands:
+            done = subprocess.run([sys.executable, "-m", "pipeline", *command])
+            if done.returncode != 0:
+                raise SystemExit(done.returncode)
+        write_parquet(_gather(out / "jobs", cases), out / "summary.parquet", provenance)
     results = StudyResults(out)
     try:
         summary = results.summary
     except FileNotFoundError:
-        raise ConfigError(f"study {name}: no results in {out / 'jobs'}; run it without --figures-only")
-    written = []
-    provenance = OmegaConf.to_yaml({"study": name, "extra_overrides": extra})
+        raise ConfigError(f"study {name}: no results in {out}; run it without --figures-only")
+    written = [out / "summary.parquet"]
     for analysis in study.analyses:
         path = out / f"{analysis}.parquet"
         write_parquet(ANALYSES[analysis](summary), path, provenance)
@@ -123,6 +143,18 @@ def run_study(name: str, extra: list[str], out_root: Path = OUTPUT_DIR,
     for figure in study.figures:
         written.extend(render(figure, results, out / "figures"))
     return written
+
+
+def _gather(jobs_dir: Path, cases: dict[str, list[str]]) -> pd.DataFrame:
+    """The sweep summaries of every case, with ``case`` and ``job`` (relative to jobs/)."""
+    parts = []
+    for case in cases:
+        part = pd.read_parquet((jobs_dir / case if case else jobs_dir) / "summary.parquet")
+        if case:
+            part["job"] = case + "/" + part["job"]
+        part.insert(0, "case", case)
+        parts.append(part)
+    return pd.concat(parts, ignore_index=True)
 
 
 def _sweep_values(key: str, values: str, fixed: list[str]) -> str:
@@ -146,6 +178,8 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--list", action="store_true", help="list the studies and exit")
     parser.add_argument("--figures-only", action="store_true", help="redo analyses and figures from Parquet")
     parser.add_argument("--out", type=Path, default=OUTPUT_DIR, help="output root (default outputs/studies)")
+    parser.add_argument("--launcher", choices=sorted(LAUNCHERS), default="joblib",
+                        help="Hydra launcher: joblib runs 2 jobs at a time (default), basic one")
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="[%(name)s] %(message)s")
     if args.list:
@@ -161,7 +195,7 @@ def main(argv: list[str] | None = None) -> None:
         for name in names:
             load_study(name)
         for name in names:
-            for path in run_study(name, extra, args.out, args.figures_only):
+            for path in run_study(name, extra, args.out, args.figures_only, args.launcher):
                 log.info("wrote %s", path)
     except ConfigError as exc:
         print(f"error: {exc}", file=sys.stderr)

@@ -1,30 +1,77 @@
-"""CPR-WWA as a function of a composed config: build the problem, run the kernel, tabulate."""
+"""A workspace as a function of a composed config: build the problem, run the kernel, tabulate.
+
+One code path for every robot and analysis. The robot config only places points
+(``pipeline.robots``); the analysis picks the per-chunk state and its criteria:
+
+- ``cpr_wwa``: CPR-WWA of Filipovic & Kevac (2018), dynamics over the velocity and acceleration
+  sets against the limits of a catalogue actuator (eqs. 19-34);
+- ``statics``: static equilibrium under the applied wrench, tensions in [0, s_max] and lengths
+  <= l_max (eqs. 7-10 of Hamed & Zohoor).
+"""
 
 from __future__ import annotations
+
+import itertools
 
 import numpy as np
 import pandas as pd
 from omegaconf import DictConfig, OmegaConf
 
 from pipeline.actuators import actuator_model
+from pipeline.criteria import StaticLimits
 from pipeline.dynamics import MotionSpec
-from pipeline.grid import Grid, box_grid
+from pipeline.grid import Grid, box_grid, step_grid
 from pipeline.kernel import WorkspaceProblem, classify, evaluate_chunk
 from pipeline.motion import acceleration_set, velocity_set
 from pipeline.parallel import map_chunks
-from pipeline.robots import cpr8
+from pipeline.robots import cpr8, irpm6
+from pipeline.statics import StaticsSpec
 
 CPR_WWA_CRITERIA = ("speed", "torque", "acceleration", "voltage")  # eqs. (30), (32), (33), (34)
+STATICS_CRITERIA = ("singular", "tension_min", "tension_max", "length")  # eq. (10)
+DEFAULT_ANALYSIS = {"cpr8": "cpr_wwa", "irpm6": "statics"}
 CHUNK_BUDGET_FLOATS = 4_000_000  # largest (poses x cables x set size) array of one chunk: 32 MB
 
 
 def build_problem(cfg: DictConfig, catalogue: pd.DataFrame) -> tuple[WorkspaceProblem, Grid]:
-    """The CPR-WWA problem of section 3 for the configured robot, actuator and readings."""
+    """The workspace problem of the configured robot and analysis, and its position grid."""
+    robot, grid = ROBOTS[cfg.robot.name](cfg)
+    analysis = analysis_name(cfg)
+    spec, limits, criteria = ANALYSES[analysis](cfg, catalogue, robot)
+    problem = WorkspaceProblem(robot, orientation_set(cfg.orientation), spec, limits, criteria)
+    return problem, grid
+
+
+def analysis_name(cfg: DictConfig) -> str:
+    return _name(cfg.analysis) if cfg.analysis is not None else DEFAULT_ANALYSIS[cfg.robot.name]
+
+
+def orientation_set(orientation: DictConfig) -> np.ndarray:
+    """(k, 3) Euler angles: the constant orientation, or the total-orientation grid around it."""
+    nominal = np.array([orientation.psi, orientation.theta, orientation.phi], dtype=float)
+    total = orientation.total
+    if total.n == 1 or total.bound == 0:
+        return nominal[None, :]
+    offsets = np.linspace(-total.bound, total.bound, total.n)
+    grid = np.array(list(itertools.product(offsets, repeat=3)))
+    order = np.argsort(np.abs(grid).sum(axis=1), kind="stable")  # nominal orientation first
+    return nominal + grid[order]
+
+
+def _cpr8_robot(cfg: DictConfig):
     rc = cfg.robot
-    robot = cpr8(
-        rc.frame.d, rc.frame.s, rc.frame.v, rc.carrier.l, rc.carrier.w, rc.carrier.h,
-        lower_anchor_drop=rc.lower_anchor_drop,
-    )
+    robot = cpr8(rc.frame.d, rc.frame.s, rc.frame.v, rc.carrier.l, rc.carrier.w, rc.carrier.h,
+                 lower_anchor_drop=rc.lower_anchor_drop)
+    return robot, box_grid(robot.box_lo, robot.box_hi, cfg.grid.n, _name(cfg.grid.spacing))
+
+
+def _irpm6_robot(cfg: DictConfig):
+    rc = cfg.robot
+    robot = irpm6(rc.r_base, rc.r_end, rc.gamma_deg, rc.search.lo, rc.search.hi)
+    return robot, step_grid(robot.box_lo, robot.box_hi, rc.search.step)
+
+
+def _cpr_wwa(cfg: DictConfig, catalogue: pd.DataFrame, robot):
     actuator = actuator_model(
         catalogue.loc[cfg.actuator], cfg.drive.winch_radius, cfg.drive.gear_ratio,
         cfg.model.xi_in_torque_limit,
@@ -44,14 +91,26 @@ def build_problem(cfg: DictConfig, catalogue: pd.DataFrame) -> tuple[WorkspacePr
         rank_rtol=model.rank_rtol,
         jdot=model.jdot,
     )
-    orientation = (cfg.orientation.psi, cfg.orientation.theta, cfg.orientation.phi)
-    problem = WorkspaceProblem(robot, orientation, motion, actuator, CPR_WWA_CRITERIA)
-    grid = box_grid(robot.box_lo, robot.box_hi, cfg.grid.n, _name(cfg.grid.spacing))
-    return problem, grid
+    return motion, actuator, CPR_WWA_CRITERIA
+
+
+def _statics(cfg: DictConfig, catalogue: pd.DataFrame, robot):
+    w = cfg.wrench
+    spec = StaticsSpec(
+        wrench=np.array([w.fx, w.fy, w.fz, w.mx, w.my, w.mz], dtype=float),
+        moment_arm=_name(cfg.model.moment_arm),
+        rank_rtol=cfg.model.rank_rtol,
+    )
+    l_max = cfg.robot.get("l_max") or np.inf
+    return spec, StaticLimits(cfg.limits.s_max, float(l_max), cfg.model.rank_rtol), STATICS_CRITERIA
+
+
+ROBOTS = {"cpr8": _cpr8_robot, "irpm6": _irpm6_robot}
+ANALYSES = {"cpr_wwa": _cpr_wwa, "statics": _statics}
 
 
 def compute_workspace(cfg: DictConfig, catalogue: pd.DataFrame) -> tuple[pd.DataFrame, dict]:
-    """Points table (one row per grid pose) and the one-row summary of section 3 / Table 2."""
+    """Points table (one row per grid pose) and the one-row summary (counts, share, volume)."""
     problem, grid = build_problem(cfg, catalogue)
     raw = map_chunks(
         evaluate_chunk, problem, grid.positions,
@@ -67,15 +126,15 @@ def compute_workspace(cfg: DictConfig, catalogue: pd.DataFrame) -> tuple[pd.Data
     points["limiting"] = pd.Categorical(limiting, categories=list(problem.criteria))
     for name, margin in margins.items():
         points[f"margin_{name}"] = margin
-    points["jacobian_rank"] = raw["jacobian_rank"]
+    if "jacobian_rank" in raw:
+        points["jacobian_rank"] = raw["jacobian_rank"]
     return points, summarize(cfg, points, grid.cell_volume, problem)
 
 
 def bounded_chunk_size(problem: WorkspaceProblem, requested: int) -> int:
     """Poses per chunk: the requested size, lowered so that a chunk's largest intermediate
     array (poses x cables x velocity or acceleration set) stays within CHUNK_BUDGET_FLOATS."""
-    motion = problem.motion
-    per_pose = problem.robot.n_cables * max(len(motion.velocities), len(motion.accelerations))
+    per_pose = problem.robot.n_cables * problem.spec.set_size()
     return max(1, min(requested, CHUNK_BUDGET_FLOATS // per_pose))
 
 
@@ -83,8 +142,11 @@ def summarize(cfg: DictConfig, points: pd.DataFrame, cell_volume: float, problem
     """Flattened config (every swept key is a column) plus counts, percentage and volume."""
     n_points, n_feasible = len(points), int(points["feasible"].sum())
     row = flatten(OmegaConf.to_container(cfg, resolve=True, enum_to_str=True))
-    row["actuator_name"] = problem.actuator.name
-    row["actuator_power_W"] = problem.actuator.power
+    row["analysis"] = analysis_name(cfg)
+    if hasattr(problem.limits, "power"):  # an actuator
+        row["actuator_name"] = problem.limits.name
+        row["actuator_power_W"] = problem.limits.power
+    row["n_orientations"] = len(problem.orientations)
     for axis, lo, hi in zip("xyz", problem.robot.box_lo, problem.robot.box_hi):
         row[f"box.{axis}_min"], row[f"box.{axis}_max"] = float(lo), float(hi)
     row.update(

@@ -47,6 +47,18 @@ def test_single_run_with_parallel_chunks(tmp_path):
     assert "actuator 4" in log
 
 
+def test_irpm_gamma_sweep_summary_decreases_with_gamma(tmp_path):
+    proc = run(tmp_path, "-m", "robot=irpm6", "robot.gamma_deg=0,15,30,45")
+    assert proc.returncode == 0, proc.stderr
+    (sweep,) = (tmp_path / "outputs" / "sweeps").iterdir()
+    summary = pd.read_parquet(sweep / "summary.parquet")
+    assert summary["robot.gamma_deg"].tolist() == [0, 15, 30, 45]
+    assert summary["n_feasible"].tolist() == [2862, 1905, 1012, 266]
+    assert summary["volume_m3"].to_numpy() == pytest.approx(summary["n_feasible"] * 0.4**3)
+    points = pd.read_parquet(sweep / "robot.gamma_deg=30,robot=irpm6" / "points.parquet")
+    assert len(points) == 24986 and not points.isna().any().any()
+
+
 @pytest.mark.parametrize(
     "args, key",
     [
@@ -64,6 +76,9 @@ def test_single_run_with_parallel_chunks(tmp_path):
         (("load.mass=abc",), "load.mass=abc"),
         (("no_such_key=1",), "no_such_key"),
         (("model.acceleration_set=sphere",), "model.acceleration_set=sphere"),
+        (("robot=irpm6", "robot.r_end=0"), "robot.r_end=0"),
+        (("-m", "robot=irpm6", "limits.s_max=55000,-1"), "limits.s_max=-1"),
+        (("robot=irpm7",), "irpm7"),
     ],
 )
 def test_bad_input_one_line_error_nonzero_exit_no_files(tmp_path, args, key):

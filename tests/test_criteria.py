@@ -22,8 +22,8 @@ def test_voltage_and_acceleration_margins_equal_literal_enumeration(make_cfg, ca
     cfg = make_cfg(f"actuator={actuator}", "model.jdot=true", f"orientation.psi={psi}",
                    f"orientation.theta={theta}", f"orientation.phi={phi}")
     problem, grid = build_problem(cfg, catalogue)
-    dyn = PoseDynamics(problem.robot, grid.positions, problem.orientation, problem.motion)
-    act = problem.actuator
+    dyn = PoseDynamics(problem.robot, grid.positions, problem.orientation, problem.spec)
+    act = problem.limits
     # every (velocity k_v, acceleration k_a) combination, eq. (21)
     thdd = dyn.shaft_accel_from_velocity[:, :, :, None] + dyn.shaft_accel_from_acceleration[:, :, None, :]
     u = act.G_v * thdd + act.L_v * dyn.shaft_speed[:, :, :, None] + act.S_v * dyn.shaft_torque[:, :, None, :]

@@ -31,9 +31,9 @@ def test_velocity_grid_decoupled_from_position_grid(make_cfg, catalogue):
     from pipeline.workspace import build_problem
 
     problem, grid = build_problem(make_cfg("grid.n=12", "grid.n_vel=6"), catalogue)
-    assert grid.n_points == 12**3 and len(problem.motion.velocities) == 93
+    assert grid.n_points == 12**3 and len(problem.spec.velocities) == 93
     tied, _ = build_problem(make_cfg("grid.n=12"), catalogue)
-    assert len(tied.motion.velocities) == len(velocity_set(1.3, 12, "exclude"))
+    assert len(tied.spec.velocities) == len(velocity_set(1.3, 12, "exclude"))
 
 
 def test_chunk_size_bounded_by_memory_budget(make_cfg, catalogue):
@@ -43,7 +43,7 @@ def test_chunk_size_bounded_by_memory_budget(make_cfg, catalogue):
 
     dense, _ = build_problem(make_cfg("grid.n=40"), catalogue)
     size = bounded_chunk_size(dense, 20_000)
-    assert size * 8 * len(dense.motion.velocities) <= CHUNK_BUDGET_FLOATS
-    assert size == 4_000_000 // (8 * len(dense.motion.velocities))
+    assert size * 8 * len(dense.spec.velocities) <= CHUNK_BUDGET_FLOATS
+    assert size == 4_000_000 // (8 * len(dense.spec.velocities))
     paper, _ = build_problem(make_cfg(), catalogue)
     assert bounded_chunk_size(paper, 20_000) == 4_000_000 // (8 * 93)

@@ -9,7 +9,7 @@ from pipeline.workspace import build_problem, compute_workspace
 
 def _dyn(make_cfg, catalogue, *overrides):
     problem, grid = build_problem(make_cfg(*overrides), catalogue)
-    return PoseDynamics(problem.robot, grid.positions, problem.orientation, problem.motion)
+    return PoseDynamics(problem.robot, grid.positions, problem.orientation, problem.spec)
 
 
 def _residual(dyn, columns):

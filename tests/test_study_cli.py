@@ -55,7 +55,7 @@ def test_figures_are_drawn_from_the_parquet_results(choice_run, monkeypatch):
     run_study("actuator_choice", [], out_root, figures_only=True)
     assert {p.name: p.read_bytes() for p in figures.iterdir()} == before
 
-    summary_path = choice_run / "jobs" / "summary.parquet"
+    summary_path = choice_run / "summary.parquet"
     summary = pd.read_parquet(summary_path)
     edited = summary.copy()
     edited.loc[edited["actuator"] == 3, "feasible_pct"] = 42.0

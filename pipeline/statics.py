@@ -1,0 +1,91 @@
+"""Static equilibrium under an applied wrench: eqs. (7)-(10) of Hamed & Zohoor (IRPM paper).
+
+The structure matrix A (6, m) has one column per cable, [u_i; a_i x u_i], where u_i is the unit
+vector of l_i = r + R d_i - c_i (eq. 1, from the base point to the platform point) and a_i the
+moment arm (eq. 8). Tensions s solve A s = f_ext (eq. 7); for the square 6-cable case this is
+s = A^-1 f_ext (eq. 10), for other cable counts the minimum-norm least-squares solution.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from pipeline.dynamics import PoseGeometry, batched_pinv
+from pipeline.geometry import CableRobot
+
+
+@dataclass(frozen=True)
+class StaticsSpec:
+    """The applied wrench [f_x f_y f_z M_x M_y M_z] (N, N m) of eq. (11) and model options.
+
+    ``moment_arm``: ``"platform"`` takes a_i = R d_i, moments about the platform's reference
+    point O_M, where section IV applies the wrench; ``"base"`` takes eq. (9) literally,
+    a_i = r + R d_i, moments about the base centre O_F (docs/model.md compares them).
+    ``rank_rtol``: a pose is singular when the gram ratio of A (``PoseStatics.gram_ratio``)
+    falls below it.
+    """
+
+    wrench: np.ndarray
+    moment_arm: str = "platform"
+    rank_rtol: float = 1e-9
+
+    def state(self, robot: CableRobot, positions: np.ndarray, orientation) -> "PoseStatics":
+        return PoseStatics(robot, positions, orientation, self)
+
+    def set_size(self) -> int:
+        return 1
+
+
+class PoseStatics(PoseGeometry):
+    """Lazily evaluated structure matrix, conditioning and cable tensions of a chunk of poses."""
+
+    def __init__(self, robot: CableRobot, positions: np.ndarray, orientation, spec: StaticsSpec):
+        super().__init__(robot, positions, orientation)
+        self.spec = spec
+
+    @cached_property
+    def structure_matrix(self) -> np.ndarray:
+        """(n, 6, m) A of eq. (8): columns [u_i; a_i x u_i]."""
+        arms = np.broadcast_to(self.robot.attachments @ self.rotation.T, self.vectors.shape)
+        if self.spec.moment_arm == "base":
+            arms = arms + self.positions[:, None, :]
+        moments = np.cross(arms, self.unit)
+        return np.transpose(np.concatenate([self.unit, moments], axis=2), (0, 2, 1))
+
+    @cached_property
+    def gram_ratio(self) -> np.ndarray:
+        """(n,) det(A A^T) / prod(diag(A A^T)) in [0, 1] (Hadamard's inequality): 1 when the six
+        rows of A are orthogonal, 0 when A loses rank. Cheaper than an SVD per pose."""
+        gram = self._gram
+        scale = np.sqrt(np.einsum("nii->ni", gram))
+        scale = np.where(scale > 0, scale, 1.0)  # a zero row keeps a zero row: det 0
+        return np.clip(np.linalg.det(gram / scale[:, :, None] / scale[:, None, :]), 0.0, 1.0)
+
+    @cached_property
+    def singular(self) -> np.ndarray:
+        """(n,) poses whose structure matrix is numerically rank-deficient (gram ratio < rtol)."""
+        return self.gram_ratio < self.spec.rank_rtol
+
+    @cached_property
+    def tensions(self) -> np.ndarray:
+        """(n, m) minimum-norm tensions with A s = f_ext (eq. 7), N: s = A^T (A A^T)^-1 f, which
+        is A^-1 f for six cables (eq. 10). Singular poses get the least-squares s = A^+ f from an
+        SVD, so every value is finite."""
+        a, wrench = self.structure_matrix, self.spec.wrench
+        out = np.empty((a.shape[0], a.shape[2]))
+        ok = ~self.singular
+        if ok.any():
+            rhs = np.broadcast_to(wrench, (int(ok.sum()), 6))[..., None]
+            y = np.linalg.solve(self._gram[ok], rhs)[..., 0]
+            out[ok] = np.einsum("nkm,nk->nm", a[ok], y)
+        if (~ok).any():
+            pinv, _ = batched_pinv(a[~ok], self.spec.rank_rtol)
+            out[~ok] = pinv @ wrench
+        return out
+
+    @cached_property
+    def _gram(self) -> np.ndarray:
+        return np.einsum("nim,njm->nij", self.structure_matrix, self.structure_matrix)

@@ -1,0 +1,141 @@
+"""The 6-cable IRPM of Hamed & Zohoor through the generic model: statics invariants, the paper's
+conclusions where the model supports them, and the documented disagreements (docs/model.md)."""
+
+import numpy as np
+import pytest
+
+from pipeline.errors import ConfigError
+from pipeline.config import validate
+from pipeline.kernel import evaluate_chunk
+from pipeline.workspace import build_problem, compute_workspace
+
+
+@pytest.fixture(scope="module")
+def irpm(make_cfg, catalogue):
+    def run(*overrides):
+        return compute_workspace(make_cfg("robot=irpm6", *overrides), catalogue)
+    return run
+
+
+def volume(irpm, *overrides):
+    return irpm(*overrides)[1]["volume_m3"]
+
+
+def test_paper_search_box_is_31_by_31_by_26_points_of_0_4_m(irpm):
+    points, summary = irpm()
+    assert summary["n_points"] == 31 * 31 * 26
+    assert summary["volume_m3"] == pytest.approx(summary["n_feasible"] * 0.4**3)
+    assert not points.isna().any().any()
+
+
+def test_tensions_balance_the_wrench_at_every_regular_pose(make_cfg, catalogue):
+    problem, grid = build_problem(make_cfg("robot=irpm6", "robot.gamma_deg=30",
+                                           "orientation.psi=0.2", "wrench.mx=20000"), catalogue)
+    state = problem.spec.state(problem.robot, grid.positions, problem.orientation)
+    regular = ~state.singular
+    residual = np.einsum("nkm,nm->nk", state.structure_matrix, state.tensions) - problem.spec.wrench
+    assert regular.sum() > 20000
+    assert np.abs(residual[regular]).max() < 1e-6 * np.abs(problem.spec.wrench).max()
+    exact = np.linalg.solve(state.structure_matrix[regular][:50], problem.spec.wrench)
+    np.testing.assert_allclose(state.tensions[regular][:50], exact, rtol=1e-8, atol=1e-6)
+
+
+def test_base_plane_layer_is_reported_singular_never_nan(irpm):
+    points, summary = irpm()
+    top = points["z"] == 0.0
+    assert (points.loc[top, "limiting"] == "singular").all() and not points.loc[top, "feasible"].any()
+    assert summary["lost_singular"] == 31 * 31
+    assert np.isfinite(points.filter(like="margin_").to_numpy()).all()
+
+
+def test_workspace_is_mirror_symmetric_about_the_xz_plane(irpm):
+    points, _ = irpm("robot.gamma_deg=15")
+    grid = points.set_index(["x", "y", "z"])["feasible"]
+    mirrored = points.assign(y=-points["y"]).set_index(["x", "y", "z"])["feasible"]
+    assert grid.sum() > 1000
+    assert (grid.sort_index().to_numpy() == mirrored.sort_index().to_numpy()).all()
+
+
+def test_volume_grows_with_the_tension_limit(irpm):
+    volumes = [volume(irpm, f"limits.s_max={s}") for s in (40e3, 55e3, 80e3)]
+    assert volumes[0] < volumes[1] < volumes[2]
+
+
+def test_volume_decreases_as_gamma_grows(irpm):
+    """Sections III.A-C: "reduction in angle gamma results in the increase of workspace"."""
+    for r_end in (1.2, 6.0):
+        volumes = [volume(irpm, f"robot.r_end={r_end}", f"robot.gamma_deg={g}") for g in (0, 15, 30, 45)]
+        assert volumes == sorted(volumes, reverse=True) and volumes[0] > 4 * volumes[3], r_end
+
+
+def test_volume_grows_with_the_base_radius_conclusion_2(irpm):
+    volumes = [volume(irpm, "robot.r_end=1.2", f"robot.r_base={r}") for r in (2, 4, 6, 8)]
+    assert volumes == sorted(volumes) and volumes[3] > 10 * volumes[0]
+
+
+def test_no_maximum_at_base_ratio_1_conclusion_3(irpm):
+    volumes = [volume(irpm, "robot.r_end=0.6", f"robot.r_base={r}") for r in (0.6, 1.2, 3.0, 6.0)]
+    assert volumes == sorted(volumes) and volumes[-1] > 100 * volumes[0]
+
+
+def test_end_ratio_independence_conclusions_1_4_5_holds_only_approximately(irpm):
+    """Conclusions 1, 4, 5: at zero rotation and zero moments the volume does not depend on
+    r_end / r_base. Our model: within 8 % at gamma = 0 (175.0 to 189.1 m^3), but 25 % apart at
+    gamma = 30 (62.5 to 78.3 m^3), also under lateral forces. docs/model.md explains why."""
+    at_0 = [volume(irpm, f"robot.r_end={r}") for r in (1.2, 2.4, 3.6, 4.8, 6.0)]
+    at_30 = [volume(irpm, "robot.gamma_deg=30", f"robot.r_end={r}") for r in (1.2, 2.4, 3.6, 4.8, 6.0)]
+    assert at_0 == pytest.approx([183.168, 189.12, 189.12, 183.168, 174.976])
+    assert max(at_0) / min(at_0) < 1.09
+    assert max(at_30) / min(at_30) > 1.2  # the disagreement, pinned
+    lateral = [volume(irpm, "wrench.fx=50000", f"robot.r_end={r}") for r in (3.6, 4.8, 6.0)]
+    assert max(lateral) / min(lateral) < 1.2
+
+
+def test_moment_arm_reading_about_the_base_makes_r_end_dominant(irpm):
+    """Eq. (9) read literally (moments about O_F) is much further from conclusion 1."""
+    volumes = [volume(irpm, "model.moment_arm=base", f"robot.r_end={r}") for r in (0.6, 6.0)]
+    assert volumes[1] > 50 * volumes[0]
+
+
+def test_total_orientation_workspace_is_a_subset(irpm):
+    constant, _ = irpm("robot.gamma_deg=15")
+    total, summary = irpm("robot.gamma_deg=15", "orientation.total.bound=0.1", "orientation.total.n=3")
+    assert summary["n_orientations"] == 27
+    assert (total["feasible"] <= constant["feasible"]).all()
+    assert 0 < total["feasible"].sum() < constant["feasible"].sum()
+
+
+def test_short_cables_make_everything_infeasible(irpm):
+    points, summary = irpm("robot.l_max=0.5")
+    assert summary["n_feasible"] == 0 and summary["lost_length"] > 0
+    assert not points.isna().any().any()
+
+
+@pytest.mark.parametrize("override, message", [
+    ("robot.r_end=0", "robot.r_end=0"),
+    ("limits.s_max=-55000", "limits.s_max=-55000"),
+    ("robot.gamma_deg=130", "robot.gamma_deg=130"),
+    ("robot.search.step=0", "robot.search.step=0"),
+    ("robot.search.lo=[7,-6,0]", "x from 7"),
+])
+def test_bad_irpm_values_are_named(make_cfg, catalogue, override, message):
+    with pytest.raises(ConfigError) as info:
+        validate(make_cfg("robot=irpm6", override), catalogue.index)
+    assert message in str(info.value)
+
+
+def test_cpr8_goes_through_the_same_statics(make_cfg, catalogue):
+    """The generic statics on the 8-cable CPR-8 (weight 2 kg * g, z up): rank 5 at zero
+    orientation (the singular gate); at 0.5 rad the minimum-norm tensions balance the weight,
+    and every grid pose needs at least one pushing cable (the finding behind issue 8)."""
+    overrides = ["analysis=statics", "wrench.fz=-19.62", "limits.s_max=1000"]
+    _, flat = compute_workspace(make_cfg(*overrides), catalogue)
+    assert flat["lost_singular"] == 216
+    problem, grid = build_problem(make_cfg(*overrides, "orientation.psi=0.5",
+                                           "orientation.theta=0.5", "orientation.phi=0.5"), catalogue)
+    margins = evaluate_chunk(problem, grid.positions)
+    assert (margins["margin_singular"] > 0).all()
+    state = problem.spec.state(problem.robot, grid.positions, problem.orientation)
+    residual = np.einsum("nkm,nm->nk", state.structure_matrix, state.tensions) - problem.spec.wrench
+    assert np.abs(residual).max() < 1e-9
+    assert (margins["margin_tension_min"] < 0).all()
