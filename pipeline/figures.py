@@ -183,6 +183,7 @@ def heatmap(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_di
         grid = pd.DataFrame({"x": _column(part, spec.x), "y": _column(part, spec.y),
                              "v": _column(part, spec.value)}).pivot_table(
             index="y", columns="x", values="v", aggfunc="first").sort_index(ascending=False)
+        grid = grid.rename(index="{:g}".format, columns="{:g}".format)
         sns.heatmap(grid, ax=ax, vmin=vmin, vmax=vmax, cmap="viridis", annot=True, fmt=".0f",
                     annot_kws={"fontsize": 6}, cbar=ax is axes[0][-1], square=False)
         ax.set_title("" if facet is None else f"{spec.facet} = {facet:g}", fontsize=8)
