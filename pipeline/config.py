@@ -47,10 +47,12 @@ class MomentArm(Enum):
 
 
 class Analysis(Enum):
-    """Which workspace: CPR-WWA (dynamics, actuator limits) or statics (wrench, tensions)."""
+    """Which workspace: CPR-WWA (dynamics, actuator limits), statics (wrench, tensions), or the
+    straight-line simulation experiments compared with CPR-WWA (``pipeline.lines``)."""
 
     cpr_wwa = "cpr_wwa"
     statics = "statics"
+    lines = "lines"
 
 
 class Spacing(Enum):

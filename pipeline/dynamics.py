@@ -110,9 +110,8 @@ class PoseDynamics(PoseGeometry):
         if not self.motion.jdot:
             return np.zeros(self.shaft_speed.shape)
         along = np.einsum("nmj,vj->nmv", self.unit, v)
-        speed2 = np.einsum("vj,vj->v", v, v)
-        denom = self.lengths[..., None] * self.motion.winch_radius[None, :, None]
-        return (speed2[None, None, :] - along**2) / denom
+        speed2 = np.einsum("vj,vj->v", v, v)[None, None, :]
+        return centripetal(speed2, along, self.lengths[..., None], self.motion.winch_radius[None, :, None])
 
     @cached_property
     def wrenches(self) -> np.ndarray:
@@ -123,7 +122,7 @@ class PoseDynamics(PoseGeometry):
         return np.hstack([forces, np.zeros_like(forces)])
 
     @cached_property
-    def _wrench_pinv(self) -> tuple[np.ndarray, np.ndarray]:
+    def wrench_pinv(self) -> tuple[np.ndarray, np.ndarray]:
         columns = 3 if self.motion.pinv_columns == "translational" else 6
         transposed = np.transpose(self.jacobian[:, :, :columns], (0, 2, 1))  # (n, c, m)
         return batched_pinv(transposed, self.motion.rank_rtol)
@@ -131,15 +130,21 @@ class PoseDynamics(PoseGeometry):
     @cached_property
     def jacobian_rank(self) -> np.ndarray:
         """(n,) numerical rank of the J^T used in eq. (20)."""
-        sigma = self._wrench_pinv[1]
+        sigma = self.wrench_pinv[1]
         return (sigma > self.motion.rank_rtol * sigma[:, :1]).sum(axis=1)
 
     @cached_property
     def shaft_torque(self) -> np.ndarray:
         """(n, m, k_a) load torques M = (J^T)^+ F behind the gearbox (eq. 20)."""
-        pinv = self._wrench_pinv[0]
+        pinv = self.wrench_pinv[0]
         columns = pinv.shape[2]
         return np.einsum("nmc,ac->nma", pinv, self.wrenches[:, :columns])
+
+
+def centripetal(speed2, along, length, radius):
+    """J-dot p-dot of one cable at constant orientation: (|v|^2 - (u.v)^2) / (l R) (rad/s^2),
+    the rate of change of the cable direction times the velocity, behind the winch."""
+    return (speed2 - along**2) / (length * radius)
 
 
 def batched_pinv(matrices: np.ndarray, rtol: float) -> tuple[np.ndarray, np.ndarray]:

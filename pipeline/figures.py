@@ -27,6 +27,7 @@ CONSTRAINT_COLOURS = {  # one colour per limiting constraint, the same in every 
     "singular": "#000000",
 }
 FEASIBLE_COLOUR = "#009E73"
+PANEL_TITLES = {"feasible_grid": "CPR-WWA grid", "feasible": "simulated lines"}
 
 
 @dataclass
@@ -35,7 +36,8 @@ class FigureSpec:
     ``_``); ``per`` draws one file per value of a summary column (e.g. ``case``), ``cloud`` one
     per job. ``x``, ``y``, ``value`` are summary columns or pandas expressions over them (dotted
     names in backticks); ``select`` keeps the jobs whose columns take the listed values;
-    ``hline`` is a number or a summary column; ``invert_z`` draws z downwards."""
+    ``hline`` is a number or a summary column; ``invert_z`` draws z downwards; ``panels`` the
+    feasibility columns a cloud shows side by side; ``line`` the simulated line of a time series."""
 
     kind: str
     file: str
@@ -50,6 +52,8 @@ class FigureSpec:
     ylabel: Optional[str] = None
     per: Optional[str] = None
     invert_z: bool = False
+    panels: list[str] = field(default_factory=lambda: ["feasible"])
+    line: int = 0
     select: dict[str, Any] = field(default_factory=dict)
 
 
@@ -68,6 +72,9 @@ class StudyResults:
 
     def points(self, job: str) -> pd.DataFrame:
         return pd.read_parquet(self.directory / "jobs" / job / "points.parquet")
+
+    def samples(self, job: str) -> pd.DataFrame:
+        return pd.read_parquet(self.directory / "jobs" / job / "samples.parquet")
 
 
 def render(spec: FigureSpec, results: StudyResults, out_dir: Path) -> list[Path]:
@@ -123,31 +130,69 @@ def limiting_bar(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, o
 
 
 def cloud(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
-    """Figs. 4a, 8 (CPR-8) and 5-12 (IRPM): one 3D picture per selected job; feasible points
-    as dots, infeasible ones as crosses coloured by their limiting constraint, the searched
-    box outlined."""
+    """Figs. 4, 5, 8 (CPR-8) and 5-12 (IRPM): one 3D picture per selected job, one panel per
+    column of ``panels`` (e.g. the grid and the simulated verdicts side by side); feasible points
+    as dots, infeasible ones as crosses coloured by their limiting constraint when the job has
+    one, the searched box outlined."""
     written = []
     for _, job in table.iterrows():
         points = results.points(job["job"])
-        fig = plt.figure(figsize=(5.6, 4.6))
-        ax = fig.add_subplot(projection="3d")
-        feasible = points["feasible"].to_numpy()
-        ax.scatter(*(points.loc[feasible, c] for c in "xyz"), s=6, c=FEASIBLE_COLOUR,
-                   depthshade=False, label=f"feasible ({feasible.sum()})")
-        infeasible = points.loc[~feasible]
-        if len(infeasible) <= 5000:  # dense grids: draw the feasible set only
-            for name, group in infeasible.groupby("limiting", observed=True):
-                ax.scatter(*(group[c] for c in "xyz"), s=10, marker="x", linewidths=0.7,
-                           c=CONSTRAINT_COLOURS.get(name, "0.5"), depthshade=False,
-                           label=f"{name} ({len(group)})")
-        _box(ax, job)
-        if spec.invert_z:
-            ax.invert_zaxis()
-        ax.set_xlabel("x (m)")
-        ax.set_ylabel("y (m)")
-        ax.set_zlabel("z (m)")
-        ax.set_title(_fill(spec.title or "", job), fontsize=9)
-        ax.legend(loc="upper left", fontsize=7, bbox_to_anchor=(0.0, 1.0))
+        fig = plt.figure(figsize=(5.6 * len(spec.panels), 4.6))
+        for i, column in enumerate(spec.panels, start=1):
+            ax = fig.add_subplot(1, len(spec.panels), i, projection="3d")
+            _cloud_panel(ax, points, column, spec.invert_z)
+            _box(ax, job)
+            if len(spec.panels) > 1:
+                ax.set_title(PANEL_TITLES.get(column, column), fontsize=9)
+        fig.suptitle(_fill(spec.title or "", job), fontsize=10)
+        written.append(_save(fig, out_dir / _fill(spec.file, job)))
+    return written
+
+
+def _cloud_panel(ax, points: pd.DataFrame, column: str, invert_z: bool) -> None:
+    feasible = points[column].to_numpy()
+    ax.scatter(*(points.loc[feasible, c] for c in "xyz"), s=6, c=FEASIBLE_COLOUR,
+               depthshade=False, label=f"feasible ({feasible.sum()})")
+    infeasible = points.loc[~feasible]
+    limiting = "limiting" + column[len("feasible"):]
+    if len(infeasible) <= 5000:  # dense grids: draw the feasible set only
+        groups = (infeasible.groupby(limiting, observed=True) if limiting in points
+                  else [("infeasible", infeasible)])
+        for name, group in groups:
+            ax.scatter(*(group[c] for c in "xyz"), s=10, marker="x", linewidths=0.7,
+                       c=CONSTRAINT_COLOURS.get(name, "0.5"), depthshade=False,
+                       label=f"{name} ({len(group)})")
+    if invert_z:
+        ax.invert_zaxis()
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.set_zlabel("z (m)")
+    ax.legend(loc="upper left", fontsize=7, bbox_to_anchor=(0.0, 1.0))
+
+
+def timeseries(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
+    """Fig. 6: shaft speed, load torque and control voltage of every cable along simulated line
+    ``line`` (line 0 is O''-F''), with the actuator limits of eqs. (30), (32), (34) dashed."""
+    written = []
+    rows = [("theta_dot", "limit_speed", "shaft speed (rad/s)"),
+            ("torque", "limit_torque", "load torque (N m)"),
+            ("voltage", "limit_voltage", "control voltage (V)")]
+    for _, job in table.iterrows():
+        samples = results.samples(job["job"])
+        line = samples[samples["line"] == spec.line]
+        cables = sum(c.startswith("theta_dot_") for c in samples.columns)
+        fig, axes = plt.subplots(3, 1, sharex=True, figsize=(6.4, 7.0))
+        for ax, (quantity, limit, label) in zip(axes, rows):
+            for cable in range(1, cables + 1):
+                ax.plot(line["t"], line[f"{quantity}_{cable}"], lw=1, label=str(cable),
+                        color=plt.cm.tab10(cable - 1))
+            for sign in (1, -1):
+                ax.axhline(sign * job[limit], color="0.2", linestyle="--", lw=0.9)
+            ax.set_ylabel(label)
+        axes[0].legend(title="cable", ncol=cables, fontsize=7, loc="lower center",
+                       bbox_to_anchor=(0.5, 1.0))
+        axes[-1].set_xlabel("t (s)")
+        fig.suptitle(_fill(spec.title or "", job), fontsize=10, y=1.02)
         written.append(_save(fig, out_dir / _fill(spec.file, job)))
     return written
 
@@ -198,6 +243,7 @@ KINDS: dict[str, Callable[[FigureSpec, pd.DataFrame, StudyResults, Path], list[P
     "choice_bar": choice_bar,
     "limiting_bar": limiting_bar,
     "cloud": cloud,
+    "timeseries": timeseries,
     "curve": curve,
     "heatmap": heatmap,
 }

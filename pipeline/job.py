@@ -12,18 +12,26 @@ from omegaconf import DictConfig, OmegaConf
 from pipeline.actuators import load_catalogue
 from pipeline.config import validate
 from pipeline.results import write_parquet
-from pipeline.workspace import compute_workspace
+from pipeline.lines import simulate_lines
+from pipeline.workspace import analysis_name, compute_workspace
 
 log = logging.getLogger("pipeline")
 
 
 def run_job(cfg: DictConfig) -> dict:
-    """Validate, compute the feasible workspace, write both Parquet files; returns the summary."""
+    """Validate, compute the feasible workspace, write the Parquet files; returns the summary."""
     catalogue = load_catalogue(cfg.catalogue)
     validate(cfg, catalogue.index)
-    points, summary = compute_workspace(cfg, catalogue)
     out = Path(HydraConfig.get().runtime.output_dir)
     config_yaml = OmegaConf.to_yaml(cfg, resolve=True)
+    if analysis_name(cfg) == "lines":
+        samples, points, summary = simulate_lines(cfg, catalogue)
+        write_parquet(samples, out / "samples.parquet", config_yaml)
+        log.info("%d lines, %d samples; simulated %d vs grid %d feasible points, agreement %.1f%%",
+                 summary["n_lines"], summary["n_samples"], summary["n_feasible"],
+                 summary["n_feasible_grid"], summary["agreement_pct"])
+    else:
+        points, summary = compute_workspace(cfg, catalogue)
     write_parquet(points, out / "points.parquet", config_yaml)
     write_parquet(pd.DataFrame([summary]), out / "summary.parquet", config_yaml)
     lost = ", ".join(

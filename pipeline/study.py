@@ -140,6 +140,7 @@ def run_study(name: str, extra: list[str], out_root: Path = OUTPUT_DIR,
         path = out / f"{analysis}.parquet"
         write_parquet(ANALYSES[analysis](summary), path, provenance)
         written.append(path)
+    shutil.rmtree(out / "figures", ignore_errors=True)  # no figure of an earlier run lingers
     for figure in study.figures:
         written.extend(render(figure, results, out / "figures"))
     return written

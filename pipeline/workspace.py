@@ -106,11 +106,12 @@ def _statics(cfg: DictConfig, catalogue: pd.DataFrame, robot):
 
 
 ROBOTS = {"cpr8": _cpr8_robot, "irpm6": _irpm6_robot}
-ANALYSES = {"cpr_wwa": _cpr_wwa, "statics": _statics}
+ANALYSES = {"cpr_wwa": _cpr_wwa, "statics": _statics, "lines": _cpr_wwa}
 
 
 def compute_workspace(cfg: DictConfig, catalogue: pd.DataFrame) -> tuple[pd.DataFrame, dict]:
-    """Points table (one row per grid pose) and the one-row summary (counts, share, volume)."""
+    """Points table (one row per grid pose) and the one-row summary (counts, share, volume) of
+    the grid procedure (for ``analysis=lines``, the CPR-WWA grid it is compared with)."""
     problem, grid = build_problem(cfg, catalogue)
     raw = map_chunks(
         evaluate_chunk, problem, grid.positions,

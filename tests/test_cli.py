@@ -59,6 +59,18 @@ def test_irpm_gamma_sweep_summary_decreases_with_gamma(tmp_path):
     assert len(points) == 24986 and not points.isna().any().any()
 
 
+def test_line_simulation_job_writes_samples(tmp_path):
+    proc = run(tmp_path, "analysis=lines", "actuator=2")
+    assert proc.returncode == 0, proc.stderr
+    (job,) = (tmp_path / "outputs" / "runs").iterdir()
+    samples = pd.read_parquet(job / "samples.parquet")
+    assert {"line", "t", "x", "y", "z", "theta_dot_8", "torque_1", "voltage_5", "margin_torque",
+            "ok"} <= set(samples.columns)
+    summary = pd.read_parquet(job / "summary.parquet").iloc[0]
+    assert (summary["n_feasible"], summary["n_feasible_grid"]) == (204, 208)
+    assert "agreement 98.1%" in (job / "pipeline.log").read_text()
+
+
 @pytest.mark.parametrize(
     "args, key",
     [
