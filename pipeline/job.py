@@ -1,4 +1,11 @@
-"""The Hydra task: one CPR-WWA job writes points.parquet and summary.parquet in its folder."""
+"""The Hydra task: one job writes points.parquet (samples.parquet for lines) and, last,
+summary.parquet in its folder.
+
+A job whose folder already holds a summary.parquet written with the same resolved config and
+the same code version is not recomputed: every file is written to a temporary name and renamed
+(``pipeline.results.write_parquet``), and the summary is written last, so its presence proves
+the job finished. A sweep killed mid-way therefore resumes with only the missing jobs.
+"""
 
 from __future__ import annotations
 
@@ -11,7 +18,7 @@ from omegaconf import DictConfig, OmegaConf
 
 from pipeline.actuators import load_catalogue
 from pipeline.config import validate
-from pipeline.results import write_parquet
+from pipeline.results import CONFIG_KEY, VERSION_KEY, code_version, read_metadata, write_parquet
 from pipeline.lines import simulate_lines
 from pipeline.workspace import analysis_name, compute_workspace
 
@@ -24,6 +31,10 @@ def run_job(cfg: DictConfig) -> dict:
     validate(cfg, catalogue.index)
     out = Path(HydraConfig.get().runtime.output_dir)
     config_yaml = OmegaConf.to_yaml(cfg, resolve=True)
+    done = finished_summary(out, config_yaml)
+    if done is not None:
+        log.info("reused the finished job in %s (same config and code version)", out)
+        return done
     if analysis_name(cfg) == "lines":
         samples, points, summary = simulate_lines(cfg, catalogue)
         write_parquet(samples, out / "samples.parquet", config_yaml)
@@ -45,3 +56,14 @@ def run_job(cfg: DictConfig) -> dict:
         lost,
     )
     return summary
+
+
+def finished_summary(out: Path, config_yaml: str) -> dict | None:
+    """The summary of a job already finished in ``out`` with this config and code, else None."""
+    path = out / "summary.parquet"
+    if not path.exists():
+        return None
+    meta = read_metadata(path)
+    if meta.get(CONFIG_KEY) != config_yaml or meta.get(VERSION_KEY) != code_version():
+        return None
+    return pd.read_parquet(path).iloc[0].to_dict()

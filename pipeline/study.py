@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import os
 import shutil
 import subprocess
 import sys
@@ -34,7 +35,7 @@ from pipeline.choice import acceptance, choose
 from pipeline.errors import ConfigError
 from pipeline.figures import FigureSpec, StudyResults, render
 from pipeline.preflight import CONF_DIR, check, one_line
-from pipeline.results import write_parquet
+from pipeline.results import code_version, write_parquet
 
 STUDIES_DIR = CONF_DIR.parent / "studies"
 OUTPUT_DIR = Path("outputs") / "studies"
@@ -111,7 +112,7 @@ def sweep_command(study: StudySpec, extra: list[str], jobs_dir: Path,
 def run_study(name: str, extra: list[str], out_root: Path = OUTPUT_DIR,
               figures_only: bool = False, launcher: str = "joblib") -> list[Path]:
     """Sweep (unless ``figures_only``), analyses and figures of one study; returns the files.
-    A full run replaces the study's ``jobs/`` folder, so no job of an earlier run lingers."""
+    The jobs of an interrupted run of the same study are reused (``_start_or_resume``)."""
     study = load_study(name)
     out = out_root / name
     cases = study.cases or {"": []}
@@ -124,7 +125,7 @@ def run_study(name: str, extra: list[str], out_root: Path = OUTPUT_DIR,
         for command in commands:
             check(command)
         log.info("study %s: %s", name, study.title)
-        shutil.rmtree(out / "jobs", ignore_errors=True)
+        _start_or_resume(out / "jobs", commands)
         for command in commands:
             done = subprocess.run([sys.executable, "-m", "pipeline", *command])
             if done.returncode != 0:
@@ -144,6 +145,22 @@ def run_study(name: str, extra: list[str], out_root: Path = OUTPUT_DIR,
     for figure in study.figures:
         written.extend(render(figure, results, out / "figures"))
     return written
+
+
+def _start_or_resume(jobs_dir: Path, commands: list[list[str]]) -> None:
+    """Keep ``jobs/`` when it was started by exactly these commands (a rerun after an
+    interruption then computes only the missing jobs); otherwise start it afresh, so no job of
+    a different sweep lingers."""
+    record = jobs_dir / "commands.yaml"
+    wanted = OmegaConf.to_yaml({"commands": commands, "version": code_version()})
+    if record.exists() and record.read_text() == wanted:
+        log.info("resuming %s: finished jobs are reused", jobs_dir)
+        return
+    shutil.rmtree(jobs_dir, ignore_errors=True)
+    jobs_dir.mkdir(parents=True)
+    tmp = record.with_name(".commands.yaml.tmp")
+    tmp.write_text(wanted)
+    os.replace(tmp, record)
 
 
 def _gather(jobs_dir: Path, cases: dict[str, list[str]]) -> pd.DataFrame:
