@@ -8,6 +8,7 @@ naming the offending key and value.
 
 from __future__ import annotations
 
+import importlib.util
 from dataclasses import dataclass, field
 from enum import Enum
 from typing import Any, Optional
@@ -212,11 +213,13 @@ class ModelConfig:
 
 @dataclass
 class ComputeConfig:
-    """Parallel execution: joblib backend, workers, poses per chunk."""
+    """Parallel execution: joblib backend, workers, poses per chunk. ``backend=dask`` runs the
+    chunks on the Dask scheduler at ``scheduler`` (null: a local cluster of n_jobs workers)."""
 
     n_jobs: int = 2
     backend: str = "loky"
     chunk_size: int = 20_000
+    scheduler: Optional[str] = None
 
 
 @dataclass
@@ -277,7 +280,7 @@ POSITIVE = (
     "model.rank_rtol",
     "compute.chunk_size",
 )
-JOBLIB_BACKENDS = ("loky", "threading", "multiprocessing", "sequential")
+JOBLIB_BACKENDS = ("loky", "threading", "multiprocessing", "sequential", "dask")
 
 
 def validate(cfg: DictConfig, catalogue_ids) -> None:
@@ -298,6 +301,8 @@ def validate(cfg: DictConfig, catalogue_ids) -> None:
         raise ConfigError(
             f"compute.backend={cfg.compute.backend}: must be one of {', '.join(JOBLIB_BACKENDS)}"
         )
+    if cfg.compute.backend == "dask" and importlib.util.find_spec("distributed") is None:
+        raise ConfigError("compute.backend=dask: needs Dask, pip install 'cdpr-studies[dask]'")
     if cfg.actuator not in set(catalogue_ids):
         ids = ", ".join(str(i) for i in sorted(catalogue_ids))
         raise ConfigError(f"actuator={cfg.actuator}: no such id in the catalogue (ids: {ids})")

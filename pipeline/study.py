@@ -39,7 +39,7 @@ from pipeline.results import code_version, write_parquet
 
 STUDIES_DIR = CONF_DIR.parent / "studies"
 OUTPUT_DIR = Path("outputs") / "studies"
-ALWAYS_EXCLUDED = ["compute.n_jobs", "compute.backend", "compute.chunk_size"]
+ALWAYS_EXCLUDED = ["compute.n_jobs", "compute.backend", "compute.chunk_size", "compute.scheduler"]
 # Studies are many small jobs: run two jobs at a time, each on one core (one level of parallelism)
 LAUNCHERS = {
     "joblib": ["hydra/launcher=joblib", "hydra.launcher.n_jobs=2", "compute.n_jobs=1"],
@@ -198,7 +198,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--out", type=Path, default=OUTPUT_DIR, help="output root (default outputs/studies)")
     parser.add_argument("--launcher", choices=sorted(LAUNCHERS), default="joblib",
                         help="Hydra launcher: joblib runs 2 jobs at a time (default), basic one")
-    args = parser.parse_args(argv)
+    args = parser.parse_intermixed_args(argv)
     logging.basicConfig(level=logging.INFO, format="[%(name)s] %(message)s")
     if args.list:
         for name in available():

@@ -117,6 +117,7 @@ def compute_workspace(cfg: DictConfig, catalogue: pd.DataFrame) -> tuple[pd.Data
         evaluate_chunk, problem, grid.positions,
         n_jobs=cfg.compute.n_jobs, backend=cfg.compute.backend,
         chunk_size=bounded_chunk_size(problem, cfg.compute.chunk_size),
+        scheduler=cfg.compute.scheduler,
     )
     margins = {name: raw[f"margin_{name}"] for name in problem.criteria}
     feasible, limiting = classify(margins)

@@ -1,0 +1,34 @@
+"""compute.backend=dask: the same chunks on a local Dask distributed cluster, the same results."""
+
+import subprocess
+import sys
+
+import pandas as pd
+import pytest
+
+from pipeline.workspace import compute_workspace
+
+pytestmark = pytest.mark.slow
+
+
+def test_kernel_chunks_on_a_local_dask_cluster_equal_the_local_result(make_cfg, catalogue):
+    overrides = ["actuator=4", "grid.n=10", "compute.chunk_size=200",
+                 "orientation.psi=0.5", "orientation.theta=0.5", "orientation.phi=0.5"]
+    local, _ = compute_workspace(make_cfg(*overrides), catalogue)
+    cfg = make_cfg(*overrides, "compute.backend=dask", "compute.n_jobs=2")
+    distributed, summary = compute_workspace(cfg, catalogue)
+    pd.testing.assert_frame_equal(distributed, local)
+    assert summary["n_feasible"] == local["feasible"].sum()
+
+
+def test_small_study_on_dask_equals_the_local_study(tmp_path):
+    for out, extra in (("local", []), ("dask", ["compute.backend=dask", "compute.chunk_size=50"])):
+        proc = subprocess.run(
+            [sys.executable, "-m", "pipeline.study", "actuator_choice", "--launcher", "basic",
+             "--out", out, *extra], cwd=tmp_path, capture_output=True, text=True, timeout=600)
+        assert proc.returncode == 0, proc.stderr
+    local = pd.read_parquet(tmp_path / "local" / "actuator_choice" / "choice.parquet")
+    dask = pd.read_parquet(tmp_path / "dask" / "actuator_choice" / "choice.parquet")
+    pd.testing.assert_frame_equal(dask, local)
+    log = (tmp_path / "dask" / "actuator_choice" / "jobs" / "actuator=1" / "pipeline.log").read_text()
+    assert "chunks on the Dask cluster tcp://" in log
