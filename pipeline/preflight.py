@@ -40,8 +40,7 @@ def job_overrides(argv: list[str]) -> list[list[str]] | None:
     overrides = _overrides(argv)
     if overrides is None or not _is_multirun(argv):
         return None if overrides is None else [overrides]
-    parsed = OverridesParser.create().parse_overrides(overrides)
-    return BasicSweeper.split_arguments(parsed, max_batch_size=None)[0]
+    return BasicSweeper.split_arguments(parse(overrides), max_batch_size=None)[0]
 
 
 def _overrides(argv: list[str]) -> list[str] | None:
@@ -67,8 +66,19 @@ def _multirun_base(argv: list[str]) -> list[str] | None:
     included) when it composes the sweep config, before the jobs."""
     if not _is_multirun(argv):
         return None
-    parsed = OverridesParser.create().parse_overrides(_overrides(argv))
-    return [o.input_line for o in parsed if not o.is_sweep_override()]
+    return [o.input_line for o in parse(_overrides(argv)) if not o.is_sweep_override()]
+
+
+def parse(overrides: list[str]) -> list[Override]:
+    """Hydra's parse of each override; a grammar error names the override it is in."""
+    parser = OverridesParser.create()
+    parsed = []
+    for text in overrides:
+        try:
+            parsed.extend(parser.parse_overrides([text]))
+        except Exception as exc:  # Hydra's override grammar errors have several types
+            raise ConfigError(f"{text}: {one_line(exc)}") from exc
+    return parsed
 
 
 def check(argv: list[str]) -> None:
@@ -81,12 +91,11 @@ def check(argv: list[str]) -> None:
     if jobs is None:
         return
     register()
-    parser = OverridesParser.create()
     composed: dict[tuple[str, ...], DictConfig] = {}
     catalogues = {}
 
     def build(overrides: list[str]) -> DictConfig:
-        parsed = parser.parse_overrides(overrides)
+        parsed = parse(overrides)
         structural = tuple(o.input_line for o in parsed if _structural(o))
         if structural not in composed:
             try:

@@ -136,6 +136,9 @@ def run_study(name: str, extra: list[str], out_root: Path = OUTPUT_DIR,
         summary = results.summary
     except FileNotFoundError:
         raise ConfigError(f"study {name}: no results in {out}; run it without --figures-only")
+    except (OSError, ValueError) as exc:  # pyarrow's ArrowInvalid is a ValueError
+        raise ConfigError(f"{out / 'summary.parquet'}: not a readable Parquet file ({exc}); "
+                          "rerun the study") from exc
     written = [out / "summary.parquet"]
     for analysis in study.analyses:
         path = out / f"{analysis}.parquet"

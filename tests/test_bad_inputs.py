@@ -1,0 +1,98 @@
+"""Bad input end to end: every case exits non-zero with one line on stderr and adds no file
+under outputs/ (config values, override syntax, catalogue files, corrupted earlier results)."""
+
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from pipeline.actuators import load_catalogue
+
+pytestmark = pytest.mark.slow
+
+
+def _catalogue_files(folder: Path) -> None:
+    table = load_catalogue().reset_index()
+    table.rename(columns={"power_W": "power_kW"}).to_csv(folder / "unit.csv", index=False)
+    table.assign(inertia_g_cm2=-table["inertia_g_cm2"]).to_csv(folder / "inertia.csv", index=False)
+    table.astype({"voltage_V": str}).assign(voltage_V="48 V").to_csv(folder / "text.csv", index=False)
+    table.assign(id=1).to_csv(folder / "dup.csv", index=False)
+    table.drop(columns="gear_ratio").to_csv(folder / "missing.csv", index=False)
+    table.to_parquet(folder / "cat.parquet")
+    data = (folder / "cat.parquet").read_bytes()
+    (folder / "truncated.parquet").write_bytes(data[: len(data) // 2])
+    (folder / "empty.csv").write_text("")
+
+
+@pytest.fixture(scope="module")
+def workdir(tmp_path_factory):
+    """A working directory with catalogue files and the results of an earlier study run, one
+    of whose Parquet files is then truncated."""
+    root = tmp_path_factory.mktemp("bad")
+    _catalogue_files(root)
+    done = subprocess.run([sys.executable, "-m", "pipeline.study", "actuator_choice"], cwd=root,
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    shutil.copytree(root / "outputs" / "studies" / "actuator_choice",
+                    root / "outputs" / "studies" / "design_mass")
+    summary = root / "outputs" / "studies" / "design_mass" / "summary.parquet"
+    summary.write_bytes(summary.read_bytes()[:300])
+    return root
+
+
+CASES = [
+    ("pipeline", ["actuator=9"], "actuator=9"),
+    ("pipeline", ["-m", "actuator=1,2,9"], "actuator=9"),
+    ("pipeline", ["load.mass=0"], "load.mass=0"),
+    ("pipeline", ["load.mass=abc"], "load.mass=abc"),
+    ("pipeline", ["no_such_key=1"], "no_such_key"),
+    ("pipeline", ["model.acceleration_set=sphere"], "sphere"),
+    ("pipeline", ["robot=irpm7"], "irpm7"),
+    ("pipeline", ["robot=irpm6", "robot.r_end=0"], "robot.r_end=0"),
+    ("pipeline", ["-m", "robot=irpm6", "limits.s_max=55000,-1"], "limits.s_max=-1"),
+    ("pipeline", ["robot=irpm6", "robot.gamma_deg=130"], "robot.gamma_deg=130"),
+    ("pipeline", ["robot=irpm6", "robot.search.step=0"], "robot.search.step=0"),
+    ("pipeline", ["grid.n=1"], "grid.n=1"),
+    ("pipeline", ["compute.backend=spark"], "compute.backend=spark"),
+    ("pipeline", ["compute.n_jobs=0"], "compute.n_jobs=0"),
+    ("pipeline", ["choice.required_pct=150"], "choice.required_pct=150"),
+    ("pipeline", ["orientation.total.n=0"], "orientation.total"),
+    ("pipeline", ["actuator=[1,2"], "actuator=[1,2"),
+    ("pipeline", ["load.mass=1,2"], "load.mass"),
+    ("pipeline", ["analysis=dynamics"], "dynamics"),
+    ("pipeline", ["catalogue=nowhere.csv"], "catalogue=nowhere.csv: cannot read"),
+    ("pipeline", ["catalogue=unit.csv"], "unit 'kW' is not supported"),
+    ("pipeline", ["catalogue=truncated.parquet"], "catalogue=truncated.parquet"),
+    ("pipeline", ["catalogue=inertia.csv"], "row 2, column inertia_g_cm2"),
+    ("pipeline", ["catalogue=empty.csv"], "catalogue=empty.csv"),
+    ("pipeline.study", ["no_such_study"], "study 'no_such_study' not found"),
+    ("pipeline.study", ["actuator_choice", "catalogue=text.csv"], "row 2, column voltage_V: '48 V'"),
+    ("pipeline.study", ["actuator_choice", "catalogue=dup.csv"], "row 3, column id: duplicate id 1"),
+    ("pipeline.study", ["actuator_choice", "catalogue=missing.csv"], "missing column(s) gear_ratio"),
+    ("pipeline.study", ["design_mass", "--figures-only"], "not a readable Parquet file"),
+    ("pipeline.study", ["design_mass", "load.mass=-1"], "load.mass=-1.0: must be > 0"),
+    ("pipeline.study", ["actuator_choice", "drive.gear_ratio=0"], "drive.gear_ratio=0"),
+    ("pipeline.study", [], "no study given"),
+    ("pipeline.report", [], "no results for studies"),
+]
+
+
+def listing(root: Path) -> set[str]:
+    return {str(p.relative_to(root)) for p in (root / "outputs").rglob("*")}
+
+
+@pytest.mark.parametrize("module, args, expected", CASES, ids=[" ".join(c[1]) or c[0] for c in CASES])
+def test_one_line_error_nonzero_exit_and_no_new_output(workdir, module, args, expected):
+    before = listing(workdir)
+    proc = subprocess.run([sys.executable, "-m", module, *args], cwd=workdir,
+                          capture_output=True, text=True, timeout=300)
+    lines = proc.stderr.strip().splitlines()
+    assert proc.returncode == 2, proc.stderr
+    assert len(lines) == 1 and lines[0].startswith("error: ") and expected in lines[0], proc.stderr
+    assert listing(workdir) == before
+
+
+def test_the_catalogue_of_bad_inputs_has_at_least_25_cases():
+    assert len(CASES) >= 25

@@ -1,0 +1,61 @@
+"""The reproduction report is built from study Parquet files only; dvc.yaml covers every study."""
+
+import pandas as pd
+import pytest
+import yaml
+
+import pipeline.report
+from pipeline.choice import choose
+from pipeline.lines import simulate_lines
+from pipeline.study import STUDIES_DIR, available
+from pipeline.workspace import compute_workspace
+
+STUDIES = ["actuator_choice", "line_simulation", "irpm_fig13_end_ratio"]
+
+
+@pytest.fixture
+def studies(tmp_path, make_cfg, catalogue):
+    root = tmp_path / "studies"
+    for name in STUDIES:
+        (root / name / "figures").mkdir(parents=True)
+    summary = pd.DataFrame([compute_workspace(make_cfg(f"actuator={a}"), catalogue)[1] for a in range(1, 6)])
+    summary.to_parquet(root / "actuator_choice" / "summary.parquet")
+    choose(summary).to_parquet(root / "actuator_choice" / "choice.parquet")
+    (root / "actuator_choice" / "figures" / "fig9.png").write_bytes(b"\x89PNG fake")
+    lines = pd.DataFrame([simulate_lines(make_cfg("analysis=lines", f"actuator={a}"), catalogue)[2]
+                          for a in (1, 2)]).assign(case="zero")
+    lines.to_parquet(root / "line_simulation" / "summary.parquet")
+    irpm = pd.DataFrame([compute_workspace(make_cfg("robot=irpm6", f"robot.r_end={r}",
+                                                    f"robot.gamma_deg={g}"), catalogue)[1]
+                         for r in (1.2, 6.0) for g in (0, 30)])
+    irpm.to_parquet(root / "irpm_fig13_end_ratio" / "summary.parquet")
+    return root
+
+
+def test_report_compares_paper_and_ours_and_carries_the_figures(studies, tmp_path, monkeypatch):
+    monkeypatch.setattr(pipeline.report, "available", lambda: STUDIES)
+    index = pipeline.report.build(studies, tmp_path / "report")
+    text = index.read_text()
+    assert "| 4 | 87.04 | 85.19 | -1.85 | voltage 32 |" in text
+    assert "| 2 | 96.30 | 96.30 | +0.00 | torque 8 |" in text
+    assert "Accepted at x = 90 %: paper [1, 2], ours [1, 2]." in text
+    assert "| translational, zero | 100.00 | 98.15 |" in text
+    assert "| 0.2 | 183.2 | 64.8 |" in text
+    assert "![fig9](figures/actuator_choice/fig9.png)" in text
+    assert (tmp_path / "report" / "figures" / "actuator_choice" / "fig9.png").read_bytes() == b"\x89PNG fake"
+
+
+def test_report_names_the_studies_without_results(tmp_path):
+    with pytest.raises(FileNotFoundError, match="actuator_choice"):
+        pipeline.report.build(tmp_path, tmp_path / "report")
+    assert not (tmp_path / "report").exists()
+
+
+def test_dvc_yaml_has_one_stage_per_study_and_a_report_on_all_of_them():
+    dvc = yaml.safe_load((STUDIES_DIR.parent / "dvc.yaml").read_text())
+    stages = dvc["stages"]
+    assert stages["study"]["foreach"] == available()
+    assert stages["study"]["do"]["cmd"] == "python -m pipeline.study ${item}"
+    assert {f"outputs/studies/{n}" for n in available()} <= set(stages["report"]["deps"])
+    for dep in stages["study"]["do"]["deps"]:
+        assert (STUDIES_DIR.parent / dep.replace("${item}", available()[0])).exists()
