@@ -1,37 +1,58 @@
-"""Throughput of the CPR-WWA kernel against the literal per-pose reference, in one run.
+"""Throughput of the workspace kernels against the literal per-pose reference, in one run.
 
-    python benchmarks/bench_kernel.py          # reference on 6^3, kernel on 6^3 and 40^3
-    python benchmarks/bench_kernel.py --full   # also 100^3 on 2 workers
+    python benchmarks/bench_kernel.py          # reference on 6^3, CPR-WWA on 6^3 and 40^3, IRPM
+    python benchmarks/bench_kernel.py --full   # also CPR-WWA 100^3 on 2 workers
 
-Paper's sets: 93 velocities (7 per axis, |v| < V) and 8 acceleration corners, actuator 2,
-psi = theta = phi = 0.5 rad (rank-6 Jacobian). Ratios are against the reference's poses/s measured
-here, in the same process. Peak memory is this process's maximum resident set size.
+CPR-WWA: the paper's sets, 93 velocities (7 per axis, |v| < V) and 8 acceleration corners,
+actuator 2, psi = theta = phi = 0.5 rad (rank-6 Jacobian). IRPM: statics on the paper's box
+(31 x 31 x 26 points), gamma = 15 deg. "1 core" rows run with one BLAS thread. Ratios are against
+the reference's poses/s measured here, in the same process. Peak memory is this process's
+maximum resident set size (workers not included).
 """
 
 from __future__ import annotations
 
-import argparse
-import resource
-import time
+import os
 
-from hydra import compose, initialize_config_dir
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")  # honest per-core figures: set before numpy is imported
 
-from pipeline.actuators import load_catalogue
-from pipeline.config import register
-from pipeline.kernel import evaluate_chunk
-from pipeline.parallel import map_chunks
-from pipeline.preflight import CONF_DIR
-from pipeline.reference import literal_margins
-from pipeline.workspace import bounded_chunk_size, build_problem
+import argparse  # noqa: E402
+import resource  # noqa: E402
+import time  # noqa: E402
+
+from hydra import compose, initialize_config_dir  # noqa: E402
+
+from pipeline.actuators import load_catalogue  # noqa: E402
+from pipeline.config import register  # noqa: E402
+from pipeline.kernel import evaluate_chunk  # noqa: E402
+from pipeline.parallel import map_chunks  # noqa: E402
+from pipeline.preflight import CONF_DIR  # noqa: E402
+from pipeline.reference import literal_margins  # noqa: E402
+from pipeline.workspace import bounded_chunk_size, build_problem  # noqa: E402
 
 
 def problem_for(n: int):
+    return composed(f"grid.n={n}", "grid.n_vel=6", "actuator=2",
+                    "orientation.psi=0.5", "orientation.theta=0.5", "orientation.phi=0.5")
+
+
+def composed(*overrides: str):
     with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
-        cfg = compose("config", overrides=[
-            f"grid.n={n}", "grid.n_vel=6", "actuator=2",
-            "orientation.psi=0.5", "orientation.theta=0.5", "orientation.phi=0.5",
-        ])
+        cfg = compose("config", overrides=list(overrides))
     return build_problem(cfg, load_catalogue())
+
+
+def serial_rate(problem, grid) -> float:
+    """Seconds for the whole grid in chunks, one process, after one warm-up chunk."""
+    size = bounded_chunk_size(problem, 20_000)
+    evaluate_chunk(problem, grid.positions[:size])  # warm-up (imports, caches)
+
+    def serial():
+        for start in range(0, grid.n_points, size):
+            evaluate_chunk(problem, grid.positions[start:start + size])
+
+    return timed(serial)
 
 
 def timed(function) -> float:
@@ -55,14 +76,9 @@ def main() -> None:
 
     for n in (6, 40):
         problem, grid = problem_for(n)
-        size = bounded_chunk_size(problem, 20_000)
-
-        def serial():
-            for start in range(0, grid.n_points, size):
-                evaluate_chunk(problem, grid.positions[start:start + size])
-
-        evaluate_chunk(problem, grid.positions[:size])  # warm-up (imports, BLAS threads)
-        rows.append((f"kernel {n}^3, 1 core", grid.n_points, timed(serial)))
+        rows.append((f"CPR-WWA kernel {n}^3, 1 core", grid.n_points, serial_rate(problem, grid)))
+    problem, grid = composed("robot=irpm6", "robot.gamma_deg=15")
+    rows.append(("IRPM statics 31x31x26, 1 core", grid.n_points, serial_rate(problem, grid)))
     for i, n in enumerate((40, 100) if args.full else (40,)):
         problem, grid = problem_for(n)
         size = bounded_chunk_size(problem, 20_000)
@@ -72,7 +88,7 @@ def main() -> None:
 
         if i == 0:
             parallel()  # start the loky worker pool once, outside the timing
-        rows.append((f"kernel {n}^3, 2 workers (loky)", grid.n_points, timed(parallel)))
+        rows.append((f"CPR-WWA kernel {n}^3, 2 workers", grid.n_points, timed(parallel)))
 
     print(f"{'case':34s} {'poses':>9s} {'seconds':>9s} {'poses/s':>11s} {'x reference':>12s}")
     for name, poses, secs in rows:

@@ -37,7 +37,17 @@ def max_abs_sum(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     Identity: max_{j,k} |a_j + b_k| = max(max_j a_j + max_k b_k, -(min_j a_j + min_k b_k)),
     because |x| = max(x, -x) and a maximum of a sum of independent terms is the sum of maxima.
     """
-    return np.maximum(a.max(axis=-1) + b.max(axis=-1), -(a.min(axis=-1) + b.min(axis=-1)))
+    return max_abs_sum_of_ranges((a.max(axis=-1), a.min(axis=-1)), (b.max(axis=-1), b.min(axis=-1)))
+
+
+def max_abs_sum_of_ranges(a: tuple, b: tuple) -> np.ndarray:
+    """:func:`max_abs_sum` from the (max, min) of each term over its own set."""
+    return np.maximum(a[0] + b[0], -(a[1] + b[1]))
+
+
+def _ranges(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(max, min) over the last axis (the velocity or acceleration set)."""
+    return values.max(axis=-1), values.min(axis=-1)
 
 
 def _margin(worst: np.ndarray, limit: float) -> np.ndarray:
@@ -47,7 +57,8 @@ def _margin(worst: np.ndarray, limit: float) -> np.ndarray:
 
 def speed(dyn: PoseDynamics, act: ActuatorModel) -> np.ndarray:
     """Eq. (30): |theta_dot_i| <= omega_mot / (9.5493 N_V) for every velocity of the set."""
-    return _margin(np.abs(dyn.shaft_speed).max(axis=2), act.speed_limit)
+    high, low = dyn.shaft_speed_range
+    return _margin(np.maximum(high, -low), act.speed_limit)
 
 
 def torque(dyn: PoseDynamics, act: ActuatorModel) -> np.ndarray:
@@ -57,16 +68,23 @@ def torque(dyn: PoseDynamics, act: ActuatorModel) -> np.ndarray:
 
 def acceleration(dyn: PoseDynamics, act: ActuatorModel) -> np.ndarray:
     """Eq. (33): |theta_ddot_i| <= M_mot N_M / J_r over every (velocity, acceleration) pair."""
-    worst = max_abs_sum(dyn.shaft_accel_from_velocity, dyn.shaft_accel_from_acceleration)
+    from_velocity = _ranges(dyn.shaft_accel_from_velocity) if dyn.motion.jdot else (0.0, 0.0)
+    worst = max_abs_sum_of_ranges(from_velocity, _ranges(dyn.shaft_accel_from_acceleration))
     return _margin(worst, act.accel_limit)
 
 
 def voltage(dyn: PoseDynamics, act: ActuatorModel) -> np.ndarray:
     """Eq. (34) with u of eq. (21): |G_v theta_ddot + L_v theta_dot + S_v M| <= U_mot over every
-    (velocity, acceleration) pair; the velocity part and the acceleration part are separable."""
-    from_velocity = act.L_v * dyn.shaft_speed + act.G_v * dyn.shaft_accel_from_velocity
-    from_acceleration = act.G_v * dyn.shaft_accel_from_acceleration + act.S_v * dyn.shaft_torque
-    return _margin(max_abs_sum(from_velocity, from_acceleration), act.voltage_limit)
+    (velocity, acceleration) pair; the velocity part and the acceleration part are separable.
+    Without J-dot the velocity part is L_v theta_dot (L_v >= 0), whose range is L_v times the
+    range of theta_dot, already known from eq. (30)."""
+    if dyn.motion.jdot:
+        from_velocity = _ranges(act.L_v * dyn.shaft_speed + act.G_v * dyn.shaft_accel_from_velocity)
+    else:
+        high, low = dyn.shaft_speed_range
+        from_velocity = (act.L_v * high, act.L_v * low)
+    from_acceleration = _ranges(act.G_v * dyn.shaft_accel_from_acceleration + act.S_v * dyn.shaft_torque)
+    return _margin(max_abs_sum_of_ranges(from_velocity, from_acceleration), act.voltage_limit)
 
 
 def singular(st: PoseStatics, lim: StaticLimits) -> np.ndarray:

@@ -13,6 +13,7 @@ from functools import cached_property
 
 import numpy as np
 
+from pipeline.linalg import batched_pinv
 from pipeline.geometry import (
     CableRobot,
     cable_vectors,
@@ -31,6 +32,8 @@ class MotionSpec:
     ``rank_rtol``: singular values below ``rank_rtol * sigma_max`` are treated as zero in the
     pseudo-inverse (the CPR-8 Jacobian has rank 5 at zero orientation).
     ``jdot``: add the centripetal term (J-dot p-dot) of the shaft acceleration.
+    ``velocity_extremes``: the velocities among which every linear function of the velocity
+    takes its extremes (``motion.extreme_points``); null = the whole set.
     """
 
     velocities: np.ndarray
@@ -41,6 +44,7 @@ class MotionSpec:
     pinv_columns: str = "translational"
     rank_rtol: float = 1e-9
     jdot: bool = False
+    velocity_extremes: np.ndarray | None = None
 
     def state(self, robot: CableRobot, positions: np.ndarray, orientation) -> "PoseDynamics":
         return PoseDynamics(robot, positions, orientation, self)
@@ -94,8 +98,21 @@ class PoseDynamics(PoseGeometry):
 
     @cached_property
     def shaft_speed(self) -> np.ndarray:
-        """(n, m, k_v) theta_dot for every velocity of the set, Euler rates zero (eq. 19)."""
-        return np.einsum("nmj,vj->nmv", self.jacobian[:, :, :3], self.motion.velocities)
+        """(n, m, k_v) theta_dot for every velocity of the set, Euler rates zero (eq. 19); one
+        BLAS product over the whole chunk."""
+        n, m, _ = self.jacobian.shape
+        flat = np.ascontiguousarray(self.jacobian[:, :, :3]).reshape(n * m, 3)
+        return (flat @ self.motion.velocities.T).reshape(n, m, -1)
+
+    @cached_property
+    def shaft_speed_range(self) -> tuple[np.ndarray, np.ndarray]:
+        """(n, m) largest and smallest theta_dot over the velocity set. theta_dot is linear in
+        the velocity, so only ``motion.velocity_extremes`` need to be evaluated."""
+        extremes = self.motion.velocity_extremes
+        if extremes is None:
+            return self.shaft_speed.max(axis=2), self.shaft_speed.min(axis=2)
+        speed = np.einsum("nmj,vj->nmv", self.jacobian[:, :, :3], extremes)
+        return speed.max(axis=2), speed.min(axis=2)
 
     @cached_property
     def shaft_accel_from_acceleration(self) -> np.ndarray:
@@ -130,8 +147,7 @@ class PoseDynamics(PoseGeometry):
     @cached_property
     def jacobian_rank(self) -> np.ndarray:
         """(n,) numerical rank of the J^T used in eq. (20)."""
-        sigma = self.wrench_pinv[1]
-        return (sigma > self.motion.rank_rtol * sigma[:, :1]).sum(axis=1)
+        return self.wrench_pinv[1]
 
     @cached_property
     def shaft_torque(self) -> np.ndarray:
@@ -145,18 +161,3 @@ def centripetal(speed2, along, length, radius):
     """J-dot p-dot of one cable at constant orientation: (|v|^2 - (u.v)^2) / (l R) (rad/s^2),
     the rate of change of the cable direction times the velocity, behind the winch."""
     return (speed2 - along**2) / (length * radius)
-
-
-def batched_pinv(matrices: np.ndarray, rtol: float) -> tuple[np.ndarray, np.ndarray]:
-    """Moore-Penrose pseudo-inverse of a stack (n, r, c) and the singular values (n, k),
-    largest first, of each matrix.
-
-    Singular values at or below ``rtol * sigma_max`` are dropped, so a rank-deficient matrix gives
-    the minimum-norm least-squares inverse of its well-conditioned part, never inf or NaN.
-    """
-    u, sigma, vt = np.linalg.svd(matrices, full_matrices=False)
-    cutoff = rtol * sigma[:, :1]
-    keep = sigma > cutoff
-    inverse = np.divide(1.0, sigma, out=np.zeros_like(sigma), where=keep)
-    pinv = np.einsum("nki,nk,njk->nij", vt, inverse, u)
-    return pinv, sigma

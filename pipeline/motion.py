@@ -31,6 +31,27 @@ def velocity_set(v_max: float, n: int, boundary: str = "exclude") -> np.ndarray:
     return candidates[keep]
 
 
+def extreme_points(points: np.ndarray, step: float) -> np.ndarray:
+    """The points of a grid set (spacing ``step``) that are not the midpoint of two other points
+    of the set along one of the 13 grid directions {-1, 0, 1}^3 / +-.
+
+    A midpoint v = (a + b) / 2 satisfies f(v) <= max(f(a), f(b)) for every linear f, so the
+    maximum (and minimum) of any linear function over the set is attained among the points
+    kept: for the 93 velocities of N = 6 these are 12. The CPR-WWA speed and voltage criteria
+    (without J-dot) are linear in the velocity, so they need only these (tested against the
+    whole set).
+    """
+    index = np.round((points - points.min(axis=0)) / step).astype(int) + 1
+    occupied = np.zeros(index.max(axis=0) + 2, dtype=bool)
+    occupied[tuple(index.T)] = True
+    removable = np.zeros(len(points), dtype=bool)
+    for direction in itertools.product((-1, 0, 1), repeat=3):
+        if direction > (0, 0, 0):  # each line once: d and -d give the same test
+            d = np.array(direction)
+            removable |= occupied[tuple((index + d).T)] & occupied[tuple((index - d).T)]
+    return points[~removable]
+
+
 def acceleration_set(v_max: float, t_acc: float, t_dec: float, kind: str = "corners") -> np.ndarray:
     """(k, 3) carrier accelerations of eqs. (27)-(29), each axis in [-V/t_dec, +V/t_acc].
 

@@ -13,7 +13,8 @@ from functools import cached_property
 
 import numpy as np
 
-from pipeline.dynamics import PoseGeometry, batched_pinv
+from pipeline.dynamics import PoseGeometry
+from pipeline.linalg import batched_pinv, gram, gram_ratio
 from pipeline.geometry import CableRobot
 
 
@@ -59,10 +60,7 @@ class PoseStatics(PoseGeometry):
     def gram_ratio(self) -> np.ndarray:
         """(n,) det(A A^T) / prod(diag(A A^T)) in [0, 1] (Hadamard's inequality): 1 when the six
         rows of A are orthogonal, 0 when A loses rank. Cheaper than an SVD per pose."""
-        gram = self._gram
-        scale = np.sqrt(np.einsum("nii->ni", gram))
-        scale = np.where(scale > 0, scale, 1.0)  # a zero row keeps a zero row: det 0
-        return np.clip(np.linalg.det(gram / scale[:, :, None] / scale[:, None, :]), 0.0, 1.0)
+        return gram_ratio(self._gram)
 
     @cached_property
     def singular(self) -> np.ndarray:
@@ -88,4 +86,4 @@ class PoseStatics(PoseGeometry):
 
     @cached_property
     def _gram(self) -> np.ndarray:
-        return np.einsum("nim,njm->nij", self.structure_matrix, self.structure_matrix)
+        return gram(self.structure_matrix)

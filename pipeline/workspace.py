@@ -22,7 +22,7 @@ from pipeline.criteria import StaticLimits
 from pipeline.dynamics import MotionSpec
 from pipeline.grid import Grid, box_grid, step_grid
 from pipeline.kernel import WorkspaceProblem, classify, evaluate_chunk
-from pipeline.motion import acceleration_set, velocity_set
+from pipeline.motion import acceleration_set, extreme_points, velocity_set
 from pipeline.parallel import map_chunks
 from pipeline.robots import cpr8, irpm6
 from pipeline.statics import StaticsSpec
@@ -77,10 +77,11 @@ def _cpr_wwa(cfg: DictConfig, catalogue: pd.DataFrame, robot):
         cfg.model.xi_in_torque_limit,
     )
     model = cfg.model
+    n_vel = cfg.grid.n_vel or cfg.grid.n
+    velocities = velocity_set(cfg.motion.v_max, n_vel, _name(model.velocity_boundary))
     motion = MotionSpec(
-        velocities=velocity_set(
-            cfg.motion.v_max, cfg.grid.n_vel or cfg.grid.n, _name(model.velocity_boundary)
-        ),
+        velocities=velocities,
+        velocity_extremes=extreme_points(velocities, 2 * cfg.motion.v_max / n_vel),
         accelerations=acceleration_set(
             cfg.motion.v_max, cfg.motion.t_acc, cfg.motion.t_dec, _name(model.acceleration_set)
         ),

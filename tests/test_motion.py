@@ -47,3 +47,20 @@ def test_chunk_size_bounded_by_memory_budget(make_cfg, catalogue):
     assert size == 4_000_000 // (8 * len(dense.spec.velocities))
     paper, _ = build_problem(make_cfg(), catalogue)
     assert bounded_chunk_size(paper, 20_000) == 4_000_000 // (8 * 93)
+
+
+@pytest.mark.parametrize("n", [2, 5, 6, 9, 12])
+@pytest.mark.parametrize("boundary", ["exclude", "include"])
+def test_extreme_velocities_give_the_extremes_of_every_linear_function(n, boundary):
+    from pipeline.motion import extreme_points
+
+    velocities = velocity_set(1.3, n, boundary)
+    extremes = extreme_points(velocities, 2 * 1.3 / n)
+    directions = np.random.default_rng(n).normal(size=(500, 3))
+    np.testing.assert_allclose((directions @ extremes.T).max(axis=1),
+                               (directions @ velocities.T).max(axis=1), rtol=0, atol=1e-12)
+    np.testing.assert_allclose((directions @ extremes.T).min(axis=1),
+                               (directions @ velocities.T).min(axis=1), rtol=0, atol=1e-12)
+    assert len(extremes) < len(velocities) or len(velocities) <= 8
+    if (n, boundary) == (6, "exclude"):
+        assert len(extremes) == 12
