@@ -18,7 +18,9 @@ from omegaconf import DictConfig, OmegaConf
 
 from pipeline.actuators import load_catalogue
 from pipeline.config import validate
-from pipeline.results import CONFIG_KEY, VERSION_KEY, code_version, read_metadata, write_parquet
+from pipeline.results import (
+    CONFIG_KEY, VERSION_KEY, ParquetSink, code_version, read_metadata, write_parquet,
+)
 from pipeline.lines import simulate_lines
 from pipeline.workspace import analysis_name, compute_workspace
 
@@ -41,9 +43,10 @@ def run_job(cfg: DictConfig) -> dict:
         log.info("%d lines, %d samples; simulated %d vs grid %d feasible points, agreement %.1f%%",
                  summary["n_lines"], summary["n_samples"], summary["n_feasible"],
                  summary["n_feasible_grid"], summary["agreement_pct"])
-    else:
-        points, summary = compute_workspace(cfg, catalogue)
-    write_parquet(points, out / "points.parquet", config_yaml)
+        write_parquet(points, out / "points.parquet", config_yaml)
+    else:  # streamed chunk by chunk: memory bounded by a chunk, not by the grid
+        with ParquetSink(out / "points.parquet", config_yaml) as sink:
+            _, summary = compute_workspace(cfg, catalogue, sink.write)
     write_parquet(pd.DataFrame([summary]), out / "summary.parquet", config_yaml)
     lost = ", ".join(
         f"{key[len('lost_'):]} {value}" for key, value in summary.items() if key.startswith("lost_")

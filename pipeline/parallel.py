@@ -13,7 +13,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import math
-from typing import Callable
+from typing import Callable, Iterator
 
 import numpy as np
 from joblib import Parallel, delayed, effective_n_jobs, parallel_config
@@ -40,21 +40,35 @@ def map_chunks(
     scheduler: str | None = None,
 ) -> dict[str, np.ndarray]:
     """``function(problem, positions[s])`` for every chunk s, concatenated per output key."""
+    parts = [part for _, part in iter_chunks(function, problem, positions, n_jobs, backend,
+                                              chunk_size, scheduler)]
+    return {key: np.concatenate([p[key] for p in parts]) for key in parts[0]}
+
+
+def iter_chunks(
+    function: Callable[..., dict[str, np.ndarray]],
+    problem,
+    positions: np.ndarray,
+    n_jobs: int = 2,
+    backend: str = "loky",
+    chunk_size: int = 20_000,
+    scheduler: str | None = None,
+) -> Iterator[tuple[slice, dict[str, np.ndarray]]]:
+    """(slice, ``function(problem, positions[slice])``) for every chunk, in order, as each
+    finishes: a caller can write results out chunk by chunk (bounded memory)."""
     workers = effective_n_jobs(n_jobs)
     slices = chunk_slices(len(positions), workers, chunk_size)
-    parts = []
     if len(slices) <= 1 or workers == 1:
         for i, s in enumerate(slices, start=1):
-            parts.append(function(problem, positions[s]))
+            yield s, function(problem, positions[s])
             _progress(i, len(slices))
-    else:
-        with _engine(backend, workers, scheduler) as joblib_backend:
-            runner = Parallel(n_jobs=workers, backend=joblib_backend, return_as="generator")
-            tasks = (delayed(function)(problem, positions[s]) for s in slices)
-            for i, part in enumerate(runner(tasks), start=1):
-                parts.append(part)
-                _progress(i, len(slices))
-    return {key: np.concatenate([p[key] for p in parts]) for key in parts[0]}
+        return
+    with _engine(backend, workers, scheduler) as joblib_backend:
+        runner = Parallel(n_jobs=workers, backend=joblib_backend, return_as="generator")
+        tasks = (delayed(function)(problem, positions[s]) for s in slices)
+        for i, (s, part) in enumerate(zip(slices, runner(tasks)), start=1):
+            yield s, part
+            _progress(i, len(slices))
 
 
 @contextlib.contextmanager

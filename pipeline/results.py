@@ -41,15 +41,39 @@ def code_version() -> str:
 def write_parquet(frame: pd.DataFrame, path: Path, config_yaml: str) -> None:
     """Write ``frame`` to ``path`` via a temporary file and a rename: no half-written file ever
     carries the final name."""
-    table = pa.Table.from_pandas(frame, preserve_index=False)
-    meta = dict(table.schema.metadata or {})
-    meta[CONFIG_KEY.encode()] = config_yaml.encode()
-    meta[VERSION_KEY.encode()] = code_version().encode()
-    table = table.replace_schema_metadata(meta)
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.tmp")
-    pq.write_table(table, tmp)
-    os.replace(tmp, path)
+    with ParquetSink(path, config_yaml) as sink:
+        sink.write(frame)
+
+
+class ParquetSink:
+    """Write a table chunk by chunk (one row group per :meth:`write`) to a temporary file,
+    renamed to ``path`` only when the ``with`` block ends without an error."""
+
+    def __init__(self, path: Path, config_yaml: str):
+        self.path = Path(path)
+        self.tmp = self.path.with_name(f".{self.path.name}.tmp")
+        self.config_yaml = config_yaml
+        self.writer: pq.ParquetWriter | None = None
+
+    def write(self, frame: pd.DataFrame) -> None:
+        table = pa.Table.from_pandas(frame, preserve_index=False)
+        if self.writer is None:
+            meta = dict(table.schema.metadata or {})
+            meta[CONFIG_KEY.encode()] = self.config_yaml.encode()
+            meta[VERSION_KEY.encode()] = code_version().encode()
+            self.writer = pq.ParquetWriter(self.tmp, table.schema.with_metadata(meta))
+        self.writer.write_table(table.replace_schema_metadata(self.writer.schema.metadata))
+
+    def __enter__(self) -> "ParquetSink":
+        return self
+
+    def __exit__(self, kind, value, traceback) -> None:
+        if self.writer is not None:
+            self.writer.close()
+        if kind is None and self.writer is not None:
+            os.replace(self.tmp, self.path)
+        else:
+            self.tmp.unlink(missing_ok=True)
 
 
 def read_metadata(path: Path) -> dict[str, str]:

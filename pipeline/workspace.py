@@ -12,6 +12,8 @@ One code path for every robot and analysis. The robot config only places points
 from __future__ import annotations
 
 import itertools
+from collections import Counter
+from typing import Callable
 
 import numpy as np
 import pandas as pd
@@ -23,7 +25,7 @@ from pipeline.dynamics import MotionSpec
 from pipeline.grid import Grid, box_grid, step_grid
 from pipeline.kernel import WorkspaceProblem, classify, evaluate_chunk
 from pipeline.motion import acceleration_set, extreme_points, velocity_set
-from pipeline.parallel import map_chunks
+from pipeline.parallel import iter_chunks
 from pipeline.robots import cpr8, irpm6
 from pipeline.statics import StaticsSpec
 
@@ -110,19 +112,40 @@ ROBOTS = {"cpr8": _cpr8_robot, "irpm6": _irpm6_robot}
 ANALYSES = {"cpr_wwa": _cpr_wwa, "statics": _statics, "lines": _cpr_wwa}
 
 
-def compute_workspace(cfg: DictConfig, catalogue: pd.DataFrame) -> tuple[pd.DataFrame, dict]:
+def compute_workspace(
+    cfg: DictConfig, catalogue: pd.DataFrame, sink: Callable[[pd.DataFrame], None] | None = None
+) -> tuple[pd.DataFrame | None, dict]:
     """Points table (one row per grid pose) and the one-row summary (counts, share, volume) of
-    the grid procedure (for ``analysis=lines``, the CPR-WWA grid it is compared with)."""
+    the grid procedure (for ``analysis=lines``, the CPR-WWA grid it is compared with).
+
+    With ``sink``, each chunk's rows go to ``sink`` as soon as the chunk is done and no table is
+    kept (returns None for it): memory stays bounded by a chunk, whatever the grid size."""
     problem, grid = build_problem(cfg, catalogue)
-    raw = map_chunks(
+    chunks = iter_chunks(
         evaluate_chunk, problem, grid.positions,
         n_jobs=cfg.compute.n_jobs, backend=cfg.compute.backend,
         chunk_size=bounded_chunk_size(problem, cfg.compute.chunk_size),
         scheduler=cfg.compute.scheduler,
     )
+    parts, n_feasible, lost = [], 0, Counter()
+    for span, raw in chunks:
+        points = tabulate(problem, grid.positions[span], raw)
+        n_feasible += int(points["feasible"].sum())
+        lost.update(points.loc[~points["feasible"], "limiting"].astype(str))
+        if sink is None:
+            parts.append(points)
+        else:
+            sink(points)
+    counts = {"n_points": grid.n_points, "n_feasible": n_feasible, "lost": lost}
+    table = pd.concat(parts, ignore_index=True) if sink is None else None
+    return table, summarize(cfg, counts, grid.cell_volume, problem)
+
+
+def tabulate(problem: WorkspaceProblem, positions: np.ndarray, raw: dict) -> pd.DataFrame:
+    """One chunk's points: position, orientation, verdict, limiting criterion, margins."""
     margins = {name: raw[f"margin_{name}"] for name in problem.criteria}
     feasible, limiting = classify(margins)
-    points = pd.DataFrame(grid.positions, columns=["x", "y", "z"])
+    points = pd.DataFrame(positions, columns=["x", "y", "z"])
     for name, value in zip(("psi", "theta", "phi"), problem.orientation):
         points[name] = value
     points["feasible"] = feasible
@@ -131,7 +154,7 @@ def compute_workspace(cfg: DictConfig, catalogue: pd.DataFrame) -> tuple[pd.Data
         points[f"margin_{name}"] = margin
     if "jacobian_rank" in raw:
         points["jacobian_rank"] = raw["jacobian_rank"]
-    return points, summarize(cfg, points, grid.cell_volume, problem)
+    return points
 
 
 def bounded_chunk_size(problem: WorkspaceProblem, requested: int) -> int:
@@ -141,9 +164,10 @@ def bounded_chunk_size(problem: WorkspaceProblem, requested: int) -> int:
     return max(1, min(requested, CHUNK_BUDGET_FLOATS // per_pose))
 
 
-def summarize(cfg: DictConfig, points: pd.DataFrame, cell_volume: float, problem) -> dict:
-    """Flattened config (every swept key is a column) plus counts, percentage and volume."""
-    n_points, n_feasible = len(points), int(points["feasible"].sum())
+def summarize(cfg: DictConfig, counts: dict, cell_volume: float, problem) -> dict:
+    """Flattened config (every swept key is a column) plus counts, percentage and volume;
+    ``counts``: n_points, n_feasible and ``lost`` (limiting criterion -> infeasible points)."""
+    n_points, n_feasible = counts["n_points"], counts["n_feasible"]
     row = flatten(OmegaConf.to_container(cfg, resolve=True, enum_to_str=True))
     row["analysis"] = analysis_name(cfg)
     if hasattr(problem.limits, "power"):  # an actuator
@@ -158,9 +182,8 @@ def summarize(cfg: DictConfig, points: pd.DataFrame, cell_volume: float, problem
         feasible_pct=100.0 * n_feasible / n_points,
         volume_m3=n_feasible * cell_volume,
     )
-    lost = points.loc[~points["feasible"], "limiting"].value_counts()
     for name in problem.criteria:
-        row[f"lost_{name}"] = int(lost.get(name, 0))
+        row[f"lost_{name}"] = int(counts["lost"].get(name, 0))
     return row
 
 
