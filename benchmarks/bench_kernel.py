@@ -26,7 +26,7 @@ from hydra import compose, initialize_config_dir  # noqa: E402
 from pipeline.actuators import load_catalogue  # noqa: E402
 from pipeline.config import register  # noqa: E402
 from pipeline.kernel import evaluate_chunk  # noqa: E402
-from pipeline.parallel import map_chunks  # noqa: E402
+from pipeline.parallel import iter_chunks  # noqa: E402
 from pipeline.preflight import CONF_DIR  # noqa: E402
 from pipeline.reference import literal_margins  # noqa: E402
 from pipeline.workspace import bounded_chunk_size, build_problem  # noqa: E402
@@ -84,7 +84,8 @@ def main() -> None:
         size = bounded_chunk_size(problem, 20_000)
 
         def parallel():
-            map_chunks(evaluate_chunk, problem, grid.positions, n_jobs=2, chunk_size=size)
+            for _ in iter_chunks(evaluate_chunk, problem, grid.positions, n_jobs=2, chunk_size=size):
+                pass
 
         if i == 0:
             parallel()  # start the loky worker pool once, outside the timing

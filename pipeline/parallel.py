@@ -1,7 +1,7 @@
 """Chunked parallel map over poses: one level of parallelism, one task per chunk of poses.
 
 Follows scikit-learn's ``_parallel_pairwise``: the poses are split into contiguous slices, each
-worker evaluates the vectorised kernel on its slice, and results are concatenated in order. A
+worker evaluates the vectorised kernel on its slice, and the results come back in order. A
 problem that fits in a single chunk runs in-process (no pool start-up). The joblib backend is a
 parameter: ``dask`` sends the same chunks to a Dask distributed cluster (the scheduler at
 ``scheduler``, or a local cluster of ``n_jobs`` single-threaded worker processes) through
@@ -28,21 +28,6 @@ def chunk_slices(n_items: int, n_jobs: int, chunk_size: int) -> list[slice]:
         n_chunks = max(n_chunks, n_jobs)
     bounds = np.linspace(0, n_items, n_chunks + 1).round().astype(int)
     return [slice(a, b) for a, b in zip(bounds[:-1], bounds[1:]) if b > a]
-
-
-def map_chunks(
-    function: Callable[..., dict[str, np.ndarray]],
-    problem,
-    positions: np.ndarray,
-    n_jobs: int = 2,
-    backend: str = "loky",
-    chunk_size: int = 20_000,
-    scheduler: str | None = None,
-) -> dict[str, np.ndarray]:
-    """``function(problem, positions[s])`` for every chunk s, concatenated per output key."""
-    parts = [part for _, part in iter_chunks(function, problem, positions, n_jobs, backend,
-                                              chunk_size, scheduler)]
-    return {key: np.concatenate([p[key] for p in parts]) for key in parts[0]}
 
 
 def iter_chunks(
