@@ -63,14 +63,15 @@ def speed(dyn: PoseDynamics, act: ActuatorModel) -> np.ndarray:
 
 def torque(dyn: PoseDynamics, act: ActuatorModel) -> np.ndarray:
     """Eq. (32): |M_i| <= M_mot N_M for every acceleration of the set, M from eq. (20)."""
-    return _margin(np.abs(dyn.shaft_torque).max(axis=2), act.torque_limit)
+    high, low = dyn.acceleration_range(*dyn.torque_affine)
+    return _margin(np.maximum(high, -low), act.torque_limit)
 
 
 def acceleration(dyn: PoseDynamics, act: ActuatorModel) -> np.ndarray:
     """Eq. (33): |theta_ddot_i| <= M_mot N_M / J_r over every (velocity, acceleration) pair."""
     from_velocity = _ranges(dyn.shaft_accel_from_velocity) if dyn.motion.jdot else (0.0, 0.0)
-    worst = max_abs_sum_of_ranges(from_velocity, _ranges(dyn.shaft_accel_from_acceleration))
-    return _margin(worst, act.accel_limit)
+    from_acceleration = dyn.acceleration_range(dyn.jacobian[:, :, :3], 0.0)
+    return _margin(max_abs_sum_of_ranges(from_velocity, from_acceleration), act.accel_limit)
 
 
 def voltage(dyn: PoseDynamics, act: ActuatorModel) -> np.ndarray:
@@ -83,7 +84,10 @@ def voltage(dyn: PoseDynamics, act: ActuatorModel) -> np.ndarray:
     else:
         high, low = dyn.shaft_speed_range
         from_velocity = (act.L_v * high, act.L_v * low)
-    from_acceleration = _ranges(act.G_v * dyn.shaft_accel_from_acceleration + act.S_v * dyn.shaft_torque)
+    torque_coefficients, torque_offset = dyn.torque_affine
+    from_acceleration = dyn.acceleration_range(  # G_v J a + S_v M, affine in a
+        act.G_v * dyn.jacobian[:, :, :3] + act.S_v * torque_coefficients, act.S_v * torque_offset
+    )
     return _margin(max_abs_sum_of_ranges(from_velocity, from_acceleration), act.voltage_limit)
 
 

@@ -115,6 +115,39 @@ class PoseDynamics(PoseGeometry):
         return speed.max(axis=2), speed.min(axis=2)
 
     @cached_property
+    def _acceleration_box(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """Centre and half-width per axis when the acceleration set is the full product of its
+        per-axis values (both readings of eqs. 27-29 are); None otherwise."""
+        acc = self.motion.accelerations
+        axes = [np.unique(acc[:, j]) for j in range(3)]
+        if len(np.unique(acc, axis=0)) != np.prod([len(a) for a in axes]):
+            return None
+        lo, hi = np.array([a[0] for a in axes]), np.array([a[-1] for a in axes])
+        return (lo + hi) / 2, (hi - lo) / 2
+
+    def acceleration_range(self, coefficients: np.ndarray, offset) -> tuple[np.ndarray, np.ndarray]:
+        """(n, m) largest and smallest value of ``coefficients . a + offset`` over the
+        acceleration set. On a product set (a box's grid) a linear function ranges over
+        c . centre +- |c| . half-width, with no enumeration; otherwise every a is evaluated."""
+        box = self._acceleration_box
+        if box is None:
+            values = np.einsum("nmj,aj->nma", coefficients, self.motion.accelerations)
+            values = values + np.asarray(offset)[..., None]
+            return values.max(axis=2), values.min(axis=2)
+        centre, half = box
+        middle = coefficients @ centre + offset
+        spread = np.abs(coefficients) @ half
+        return middle + spread, middle - spread
+
+    @cached_property
+    def torque_affine(self) -> tuple[np.ndarray, np.ndarray]:
+        """M = (J^T)^+ F is affine in the acceleration (eqs. 20, 31: F = m (a - g e_z), no
+        moments): M = C a + d with C (n, m, 3) and d (n, m)."""
+        pinv = self.wrench_pinv[0]
+        mass = self.motion.mass
+        return mass * pinv[:, :, :3], -mass * self.motion.gravity * pinv[:, :, 2]
+
+    @cached_property
     def shaft_accel_from_acceleration(self) -> np.ndarray:
         """(n, m, k_a) J p_ddot: the part of theta_ddot linear in the carrier acceleration."""
         return np.einsum("nmj,aj->nma", self.jacobian[:, :, :3], self.motion.accelerations)
