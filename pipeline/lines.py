@@ -17,7 +17,7 @@ import pandas as pd
 from omegaconf import DictConfig
 
 from pipeline.trajectory import inverse_dynamics, sample_margins, trapezoid
-from pipeline.workspace import CPR_WWA_CRITERIA, build_problem, compute_workspace
+from pipeline.workspace import CPR_WWA_CRITERIA, build_problem, grid_workspace
 
 QUANTITIES = ("theta_dot", "torque", "voltage")
 DT = 0.01  # s, time step of the simulated lines
@@ -26,8 +26,8 @@ DT = 0.01  # s, time step of the simulated lines
 def simulate_lines(cfg: DictConfig, catalogue: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame, dict]:
     """(samples, points, summary): every line sample, the grid points with both verdicts, and
     the CPR-WWA summary extended with the simulated count and the agreement."""
-    points, summary = compute_workspace(cfg, catalogue)
     problem, grid = build_problem(cfg, catalogue)
+    points, summary = grid_workspace(cfg, problem, grid)
     lines = _lines(grid.positions)
     parts = []
     for number, (axis, start, end) in enumerate(lines):

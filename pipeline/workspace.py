@@ -120,7 +120,14 @@ def compute_workspace(
 
     With ``sink``, each chunk's rows go to ``sink`` as soon as the chunk is done and no table is
     kept (returns None for it): memory stays bounded by a chunk, whatever the grid size."""
-    problem, grid = build_problem(cfg, catalogue)
+    return grid_workspace(cfg, *build_problem(cfg, catalogue), sink)
+
+
+def grid_workspace(
+    cfg: DictConfig, problem: WorkspaceProblem, grid: Grid,
+    sink: Callable[[pd.DataFrame], None] | None = None,
+) -> tuple[pd.DataFrame | None, dict]:
+    """:func:`compute_workspace` for an already built problem and grid."""
     chunks = iter_chunks(
         evaluate_chunk, problem, grid.positions,
         n_jobs=cfg.compute.n_jobs, backend=cfg.compute.backend,
