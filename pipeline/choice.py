@@ -9,10 +9,6 @@ from __future__ import annotations
 
 import pandas as pd
 
-from pipeline.workspace import CPR_WWA_CRITERIA
-
-LOST = [f"lost_{name}" for name in CPR_WWA_CRITERIA]
-
 
 def choose(summary: pd.DataFrame) -> pd.DataFrame:
     """Rank the actuators of a CPR-WWA sweep summary and accept those with x(i_a) >= x.
@@ -37,12 +33,13 @@ def choose(summary: pd.DataFrame) -> pd.DataFrame:
         "required_pct": table["choice.required_pct"].to_numpy(),
     })
     out["accepted"] = out["feasible_pct"] >= out["required_pct"]
-    for column in LOST:
+    lost = [c for c in table.columns if c.startswith("lost_")]  # the jobs' criteria, in order
+    for column in lost:
         out[column] = table[column].to_numpy()
         out[f"{column}_pct"] = 100.0 * out[column] / out["n_points"]
     out["rejected_by"] = [
         "" if row.accepted else ", ".join(
-            f"{c[5:]} {getattr(row, c)}" for c in LOST if getattr(row, c) > 0
+            f"{c[5:]} {getattr(row, c)}" for c in lost if getattr(row, c) > 0
         )
         for row in out.itertuples()
     ]

@@ -47,6 +47,14 @@ class MomentArm(Enum):
     base = "base"
 
 
+class TensionModel(Enum):
+    """Cable forces the criteria check: minimum-norm (the papers' eq. 20 / eq. 10, any sign) or
+    pulling cables only, chosen by linear programming (``pipeline.tensions``)."""
+
+    pinv = "pinv"
+    feasible = "feasible"
+
+
 class Analysis(Enum):
     """Which workspace: CPR-WWA (dynamics, actuator limits), statics (wrench, tensions), or the
     straight-line simulation experiments compared with CPR-WWA (``pipeline.lines``)."""
@@ -155,6 +163,19 @@ class LimitsConfig:
 
 
 @dataclass
+class TensionConfig:
+    """``model``: pinv (papers) or feasible (cables only pull). ``t_min``: smallest tension (N).
+    ``t_max``: cable rating (N) of CPR-WWA, null = the motor torque limit / R_i only (statics:
+    ``limits.s_max``). ``residual_rtol``: a required wrench is unreachable when the equilibrium
+    residual exceeds this fraction of it."""
+
+    model: TensionModel = TensionModel.pinv
+    t_min: float = 0.0
+    t_max: Optional[float] = None
+    residual_rtol: float = 1e-6
+
+
+@dataclass
 class GridConfig:
     """N points per axis of the geometric workspace (section 3; the paper uses N = 6).
     ``n_vel``: N of the velocity grid of eqs. (23)-(25); null ties it to ``n`` as in the paper.
@@ -238,6 +259,7 @@ class Config:
     load: LoadConfig = field(default_factory=LoadConfig)
     wrench: WrenchConfig = field(default_factory=WrenchConfig)
     limits: LimitsConfig = field(default_factory=LimitsConfig)
+    tension: TensionConfig = field(default_factory=TensionConfig)
     drive: DriveConfig = field(default_factory=DriveConfig)
     choice: ChoiceConfig = field(default_factory=ChoiceConfig)
     model: ModelConfig = field(default_factory=ModelConfig)
@@ -278,6 +300,7 @@ POSITIVE = (
     "robot.l_max",
     "robot.search.step",
     "model.rank_rtol",
+    "tension.residual_rtol",
     "compute.chunk_size",
 )
 JOBLIB_BACKENDS = ("loky", "threading", "multiprocessing", "sequential", "dask")
@@ -306,12 +329,27 @@ def validate(cfg: DictConfig, catalogue_ids) -> None:
     if cfg.actuator not in set(catalogue_ids):
         ids = ", ".join(str(i) for i in sorted(catalogue_ids))
         raise ConfigError(f"actuator={cfg.actuator}: no such id in the catalogue (ids: {ids})")
+    _validate_tension(cfg)
     total = cfg.orientation.total
     if total.n < 1 or total.bound < 0:
         raise ConfigError(f"orientation.total={OmegaConf.to_container(total)}: needs n >= 1, bound >= 0")
     if cfg.robot.name not in ROBOT_VALIDATORS:
         raise ConfigError(f"robot.name={cfg.robot.name}: unknown robot ({', '.join(ROBOT_VALIDATORS)})")
     ROBOT_VALIDATORS[cfg.robot.name](cfg.robot)
+
+
+def _validate_tension(cfg: DictConfig) -> None:
+    tension = cfg.tension
+    if tension.t_min < 0:
+        raise ConfigError(f"tension.t_min={tension.t_min}: must be >= 0 (a cable cannot push)")
+    if tension.t_max is None:
+        return
+    if tension.t_max <= tension.t_min:
+        raise ConfigError(f"tension.t_max={tension.t_max}: must be > tension.t_min={tension.t_min}")
+    from pipeline.workspace import analysis_name
+
+    if analysis_name(cfg) == "statics":
+        raise ConfigError(f"tension.t_max={tension.t_max}: statics take the cable rating from limits.s_max")
 
 
 def _validate_cpr8(robot: DictConfig) -> None:

@@ -5,6 +5,9 @@ satisfies a criterion when its margin is >= 0, and margins of different criteria
 Criteria are independent functions ``(state, limits) -> (n,) margins``; an analysis composes
 them by name (``CRITERIA``). CPR-WWA criteria read a :class:`PoseDynamics` and an
 :class:`ActuatorModel`; static criteria read a :class:`PoseStatics` and :class:`StaticLimits`.
+Under the ``feasible`` tension model the criteria on cable forces (unreachable, slack,
+tension_max, torque, voltage) read the nested capacity margins of ``pipeline.tensions``,
+computed once per chunk and limits (:func:`feasible_margins`).
 """
 
 from __future__ import annotations
@@ -17,6 +20,7 @@ import numpy as np
 from pipeline.actuators import ActuatorModel
 from pipeline.dynamics import PoseDynamics
 from pipeline.statics import PoseStatics
+from pipeline.tensions import Family, feasible_tensions
 
 Criterion = Callable[[Any, Any], np.ndarray]
 
@@ -63,6 +67,8 @@ def speed(dyn: PoseDynamics, act: ActuatorModel) -> np.ndarray:
 
 def torque(dyn: PoseDynamics, act: ActuatorModel) -> np.ndarray:
     """Eq. (32): |M_i| <= M_mot N_M for every acceleration of the set, M from eq. (20)."""
+    if _feasible_model(dyn):
+        return feasible_margins(dyn, act)["torque"]
     high, low = dyn.acceleration_range(*dyn.torque_affine)
     return _margin(np.maximum(high, -low), act.torque_limit)
 
@@ -79,16 +85,22 @@ def voltage(dyn: PoseDynamics, act: ActuatorModel) -> np.ndarray:
     (velocity, acceleration) pair; the velocity part and the acceleration part are separable.
     Without J-dot the velocity part is L_v theta_dot (L_v >= 0), whose range is L_v times the
     range of theta_dot, already known from eq. (30)."""
-    if dyn.motion.jdot:
-        from_velocity = _ranges(act.L_v * dyn.shaft_speed + act.G_v * dyn.shaft_accel_from_velocity)
-    else:
-        high, low = dyn.shaft_speed_range
-        from_velocity = (act.L_v * high, act.L_v * low)
+    if _feasible_model(dyn):
+        return feasible_margins(dyn, act)["voltage"]
     torque_coefficients, torque_offset = dyn.torque_affine
     from_acceleration = dyn.acceleration_range(  # G_v J a + S_v M, affine in a
         act.G_v * dyn.jacobian[:, :, :3] + act.S_v * torque_coefficients, act.S_v * torque_offset
     )
-    return _margin(max_abs_sum_of_ranges(from_velocity, from_acceleration), act.voltage_limit)
+    return _margin(max_abs_sum_of_ranges(_voltage_from_velocity(dyn, act), from_acceleration),
+                   act.voltage_limit)
+
+
+def _voltage_from_velocity(dyn: PoseDynamics, act: ActuatorModel) -> tuple[np.ndarray, np.ndarray]:
+    """(max, min) (n, m) of the velocity part of eq. (21), L_v theta_dot (+ G_v J-dot p-dot)."""
+    if dyn.motion.jdot:
+        return _ranges(act.L_v * dyn.shaft_speed + act.G_v * dyn.shaft_accel_from_velocity)
+    high, low = dyn.shaft_speed_range
+    return act.L_v * high, act.L_v * low
 
 
 def singular(st: PoseStatics, lim: StaticLimits) -> np.ndarray:
@@ -97,14 +109,26 @@ def singular(st: PoseStatics, lim: StaticLimits) -> np.ndarray:
     return (st.gram_ratio - lim.rank_rtol) / (1.0 - lim.rank_rtol)
 
 
-def tension_min(st: PoseStatics, lim: StaticLimits) -> np.ndarray:
-    """Eq. (10): s_i >= 0, a cable can only pull. Margin min_i s_i / s_max."""
-    return st.tensions.min(axis=1) / lim.s_max
+def unreachable(state, limits) -> np.ndarray:
+    """``feasible`` model: every required wrench must be in the range of S (J^T or A), within
+    |S S^+ w - w| <= residual_rtol |w|. Margin 1 - residual / (residual_rtol |w|)."""
+    return feasible_margins(state, limits)["unreachable"]
 
 
-def tension_max(st: PoseStatics, lim: StaticLimits) -> np.ndarray:
-    """Eq. (10): s_i <= s_max."""
-    return _margin(st.tensions, lim.s_max)
+def slack(state, limits) -> np.ndarray:
+    """A cable can only pull: tensions >= t_min (eq. 10 of the IRPM paper: s_i >= 0). Margin
+    (min_i s_i - t_min) / s_max; under ``feasible`` the best such margin over all valid
+    tension distributions (CPR-8: in units of the torque limit)."""
+    if _feasible_model(state):
+        return feasible_margins(state, limits)["slack"]
+    return (state.tensions.min(axis=1) - state.spec.tension.t_min) / limits.s_max
+
+
+def tension_max(state, limits) -> np.ndarray:
+    """Eq. (10): s_i <= s_max (IRPM), or the cable rating ``tension.t_max`` (CPR-8)."""
+    if _feasible_model(state):
+        return feasible_margins(state, limits)["tension_max"]
+    return _margin(state.tensions, limits.s_max)
 
 
 def length(st: PoseStatics, lim: StaticLimits) -> np.ndarray:
@@ -118,7 +142,60 @@ CRITERIA: dict[str, Criterion] = {
     "acceleration": acceleration,
     "voltage": voltage,
     "singular": singular,
-    "tension_min": tension_min,
+    "unreachable": unreachable,
+    "slack": slack,
     "tension_max": tension_max,
     "length": length,
 }
+
+
+def feasible_margins(state, limits) -> dict[str, np.ndarray]:
+    """(n,) margins of the ``feasible`` tension model, the worst over the required wrenches:
+    ``unreachable`` and one per family of :func:`tension_families`. Cached on the state per
+    limits: one set of LPs serves every criterion that reads it."""
+    cache = state.__dict__.setdefault("_feasible_margins", {})
+    if limits not in cache:
+        margins, _ = feasible_tensions(
+            state.structure, *state.wrench_pinv, state.required_wrenches,
+            tension_families(state, limits), _tension(state).residual_rtol,
+        )
+        cache[limits] = {name: value.min(axis=1) for name, value in margins.items()}
+    return cache[limits]
+
+
+def tension_families(state, limits) -> list[Family]:
+    """The intervals on the cable forces x, in gate order. CPR-8 (x = M = R t, per required
+    acceleration a_k, :func:`actuator_families`): the voltage must hold for every velocity of
+    the set, |G_v J a_k + L_v theta_dot + S_v M| <= U (eqs. 21, 34). IRPM (x = s): slack
+    s >= t_min and s <= s_max (eq. 10), both in units of s_max."""
+    tension = _tension(state)
+    if isinstance(state, PoseStatics):
+        return [Family("slack", tension.t_min, np.inf, limits.s_max),
+                Family("tension_max", -np.inf, limits.s_max, limits.s_max)]
+    high, low = _voltage_from_velocity(state, limits)  # (n, m)
+    accel = limits.G_v * np.einsum("nmj,kj->nkm", state.jacobian[:, :, :3], state.wrench_accelerations)
+    return actuator_families(tension, state.motion.winch_radius, limits,
+                             accel + high[:, None, :], accel + low[:, None, :])
+
+
+def actuator_families(tension, radius, act: ActuatorModel, high, low) -> list[Family]:
+    """CPR-8 families on x = M = R t: slack M >= R t_min, the cable rating M <= R t_max, torque
+    |M| <= T (eq. 32), voltage -U <= other + S_v M <= U (eqs. 21, 34), where ``other`` (the
+    G_v theta_ddot + L_v theta_dot part) ranges in [low, high] (n, K, m)."""
+    torque_limit = act.torque_limit
+    families = [Family("slack", radius * tension.t_min, np.inf, torque_limit)]
+    if tension.t_max is not None:
+        rating = radius * tension.t_max
+        families.append(Family("tension_max", -np.inf, rating, rating))
+    families.append(Family("torque", -torque_limit, torque_limit, torque_limit))
+    volts, s_v = act.voltage_limit, act.S_v
+    families.append(Family("voltage", (-volts - low) / s_v, (volts - high) / s_v, volts / s_v))
+    return families
+
+
+def _tension(state):
+    return state.spec.tension if isinstance(state, PoseStatics) else state.motion.tension
+
+
+def _feasible_model(state) -> bool:
+    return _tension(state).model == "feasible"

@@ -8,12 +8,14 @@ geometric part (:class:`PoseGeometry`) is shared with the statics of ``pipeline.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import itertools
+from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
 
 from pipeline.linalg import batched_pinv
+from pipeline.tensions import TensionSpec
 from pipeline.geometry import (
     CableRobot,
     cable_vectors,
@@ -34,6 +36,8 @@ class MotionSpec:
     ``jdot``: add the centripetal term (J-dot p-dot) of the shaft acceleration.
     ``velocity_extremes``: the velocities among which every linear function of the velocity
     takes its extremes (``motion.extreme_points``); null = the whole set.
+    ``tension``: which torques the torque and voltage criteria check (``pipeline.tensions``);
+    the wrench rows follow ``pinv_columns`` (forces only, or forces and moments).
     """
 
     velocities: np.ndarray
@@ -45,6 +49,7 @@ class MotionSpec:
     rank_rtol: float = 1e-9
     jdot: bool = False
     velocity_extremes: np.ndarray | None = None
+    tension: TensionSpec = field(default_factory=TensionSpec)
 
     def state(self, robot: CableRobot, positions: np.ndarray, orientation) -> "PoseDynamics":
         return PoseDynamics(robot, positions, orientation, self)
@@ -165,17 +170,34 @@ class PoseDynamics(PoseGeometry):
 
     @cached_property
     def wrenches(self) -> np.ndarray:
-        """(k_a, 6) F = [m xdd, m ydd, m (zdd - g), 0, 0, 0] for every acceleration (eq. 31)."""
-        m, g = self.motion.mass, self.motion.gravity
-        acc = self.motion.accelerations
-        forces = m * (acc - np.array([0.0, 0.0, g]))
-        return np.hstack([forces, np.zeros_like(forces)])
+        """(k_a, 6) F of eq. (31) for every acceleration of the set."""
+        return load_wrenches(self.motion, self.motion.accelerations)
+
+    @cached_property
+    def structure(self) -> np.ndarray:
+        """(n, c, m) J^T of eq. (20), c = 3 (``translational``) or 6 (``full``) rows."""
+        columns = 3 if self.motion.pinv_columns == "translational" else 6
+        return np.transpose(self.jacobian[:, :, :columns], (0, 2, 1))
 
     @cached_property
     def wrench_pinv(self) -> tuple[np.ndarray, np.ndarray]:
-        columns = 3 if self.motion.pinv_columns == "translational" else 6
-        transposed = np.transpose(self.jacobian[:, :, :columns], (0, 2, 1))  # (n, c, m)
-        return batched_pinv(transposed, self.motion.rank_rtol)
+        """(J^T)^+ (n, m, c) and the rank of J^T (n,)."""
+        return batched_pinv(self.structure, self.motion.rank_rtol)
+
+    @cached_property
+    def wrench_accelerations(self) -> np.ndarray:
+        """(K, 3) accelerations whose wrenches decide the ``feasible`` model: the 8 vertices of
+        the box on a product set (the wrench-feasible set is convex), else the whole set."""
+        box = self._acceleration_box
+        if box is None:
+            return self.motion.accelerations
+        centre, half = box
+        return centre + half * np.array(list(itertools.product((-1.0, 1.0), repeat=3)))
+
+    @cached_property
+    def required_wrenches(self) -> np.ndarray:
+        """(K, c) F of eq. (31) at ``wrench_accelerations``, the rows of ``structure``."""
+        return load_wrenches(self.motion, self.wrench_accelerations)[:, : self.structure.shape[1]]
 
     @cached_property
     def jacobian_rank(self) -> np.ndarray:
@@ -188,6 +210,12 @@ class PoseDynamics(PoseGeometry):
         pinv = self.wrench_pinv[0]
         columns = pinv.shape[2]
         return np.einsum("nmc,ac->nma", pinv, self.wrenches[:, :columns])
+
+
+def load_wrenches(motion: MotionSpec, accelerations: np.ndarray) -> np.ndarray:
+    """(k, 6) F = [m xdd, m ydd, m (zdd - g), 0, 0, 0] of eq. (31)."""
+    forces = motion.mass * (accelerations - np.array([0.0, 0.0, motion.gravity]))
+    return np.hstack([forces, np.zeros_like(forces)])
 
 
 def centripetal(speed2, along, length, radius):

@@ -10,7 +10,9 @@ import numpy as np
 from pipeline.criteria import CRITERIA
 from pipeline.geometry import CableRobot
 
-GATES = ("singular",)  # criteria that, when violated, make the others meaningless
+# criteria that, when violated, decide the verdict whatever the others say: a singular structure
+# matrix, a wrench out of reach, a cable that would have to push (first listed wins)
+GATES = ("singular", "unreachable", "slack")
 
 
 @dataclass(frozen=True)
@@ -55,7 +57,7 @@ def classify(margins: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
 
     A pose is feasible when every margin is >= 0. ``limiting`` names the criterion with the
     smallest margin: the most violated one for an infeasible pose, the tightest for a feasible
-    one; a violated gate (``GATES``, e.g. a singular structure matrix) takes precedence. Each
+    one; a violated gate (``GATES``: singular, unreachable, slack) takes precedence. Each
     infeasible pose is therefore attributed to exactly one criterion.
     """
     names = list(margins)

@@ -17,7 +17,7 @@ import pandas as pd
 from omegaconf import DictConfig
 
 from pipeline.trajectory import inverse_dynamics, sample_margins, trapezoid
-from pipeline.workspace import CPR_WWA_CRITERIA, build_problem, grid_workspace
+from pipeline.workspace import build_problem, grid_workspace
 
 QUANTITIES = ("theta_dot", "torque", "voltage")
 DT = 0.01  # s, time step of the simulated lines
@@ -54,9 +54,9 @@ def simulate_lines(cfg: DictConfig, catalogue: pd.DataFrame) -> tuple[pd.DataFra
     for key in ("wrench_residual", "power_cables", "power_load"):
         samples[key] = quantities[key]
     margins = sample_margins(quantities, act)
-    for name in CPR_WWA_CRITERIA:
+    for name in problem.criteria:
         samples[f"margin_{name}"] = margins[name]
-    samples["ok"] = np.column_stack([margins[n] for n in CPR_WWA_CRITERIA]).min(axis=1) >= 0
+    samples["ok"] = np.column_stack([margins[n] for n in problem.criteria]).min(axis=1) >= 0
 
     points = points.rename(columns={"feasible": "feasible_grid", "limiting": "limiting_grid"})
     points["feasible"] = _point_verdict(samples, points)

@@ -8,7 +8,7 @@ s = A^-1 f_ext (eq. 10), for other cable counts the minimum-norm least-squares s
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
@@ -16,6 +16,7 @@ import numpy as np
 from pipeline.dynamics import PoseGeometry
 from pipeline.linalg import batched_pinv, gram, gram_ratio
 from pipeline.geometry import CableRobot
+from pipeline.tensions import TensionSpec
 
 
 @dataclass(frozen=True)
@@ -26,12 +27,14 @@ class StaticsSpec:
     point O_M, where section IV applies the wrench; ``"base"`` takes eq. (9) literally,
     a_i = r + R d_i, moments about the base centre O_F (docs/model.md compares them).
     ``rank_rtol``: a pose is singular when the gram ratio of A (``PoseStatics.gram_ratio``)
-    falls below it.
+    falls below it. ``tension``: minimum-norm tensions (``pinv``, eq. 10) or pulling cables
+    only (``feasible``, ``pipeline.tensions``; for six cables the same verdict).
     """
 
     wrench: np.ndarray
     moment_arm: str = "platform"
     rank_rtol: float = 1e-9
+    tension: TensionSpec = field(default_factory=TensionSpec)
 
     def state(self, robot: CableRobot, positions: np.ndarray, orientation) -> "PoseStatics":
         return PoseStatics(robot, positions, orientation, self)
@@ -55,6 +58,21 @@ class PoseStatics(PoseGeometry):
             arms = arms + self.positions[:, None, :]
         moments = np.cross(arms, self.unit)
         return np.transpose(np.concatenate([self.unit, moments], axis=2), (0, 2, 1))
+
+    @property
+    def structure(self) -> np.ndarray:
+        """A of eq. (8), the S of ``pipeline.tensions``: A s = f_ext."""
+        return self.structure_matrix
+
+    @cached_property
+    def wrench_pinv(self) -> tuple[np.ndarray, np.ndarray]:
+        """A^+ (n, m, 6) and the rank of A (n,)."""
+        return batched_pinv(self.structure_matrix, self.spec.rank_rtol)
+
+    @property
+    def required_wrenches(self) -> np.ndarray:
+        """(1, 6) the applied wrench of eq. (11)."""
+        return self.spec.wrench[None, :]
 
     @cached_property
     def gram_ratio(self) -> np.ndarray:

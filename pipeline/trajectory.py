@@ -12,8 +12,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from pipeline.actuators import ActuatorModel
-from pipeline.dynamics import MotionSpec, PoseDynamics, centripetal
+from pipeline.criteria import actuator_families
+from pipeline.dynamics import MotionSpec, PoseDynamics, centripetal, load_wrenches
 from pipeline.geometry import CableRobot
+from pipeline.tensions import feasible_tensions
 
 
 @dataclass(frozen=True)
@@ -62,7 +64,9 @@ def inverse_dynamics(
     acceleration (constant orientation): shaft speed theta_dot = J p_dot (eq. 19), shaft
     acceleration J p_ddot (+ J-dot p_dot when ``motion.jdot``), load torque M = (J^T)^+ F with
     F = m (p_ddot - g e_z) (eqs. 20, 31), voltage u (eq. 21). Also the wrench residual
-    |J^T M - F| and both sides of the power balance, sum_i M_i theta_dot_i and F . p_dot (n,)."""
+    |J^T M - F| and both sides of the power balance, sum_i M_i theta_dot_i and F . p_dot (n,).
+    Under ``tension.model=feasible`` M is the LP's choice (``pipeline.tensions``) for each
+    sample's own wrench, speed and acceleration, and ``margins`` holds that model's margins."""
     state = PoseDynamics(robot, positions, orientation, motion)
     jt = state.jacobian[:, :, :3]
     theta_dot = np.einsum("nmj,nj->nm", jt, velocities)
@@ -71,29 +75,38 @@ def inverse_dynamics(
         along = np.einsum("nmj,nj->nm", state.unit, velocities)
         speed2 = np.einsum("nj,nj->n", velocities, velocities)[:, None]
         theta_ddot = theta_ddot + centripetal(speed2, along, state.lengths, motion.winch_radius)
-    forces = motion.mass * (accelerations - np.array([0.0, 0.0, motion.gravity]))
-    wrench = np.hstack([forces, np.zeros_like(forces)])
-    pinv = state.wrench_pinv[0]
-    columns = pinv.shape[2]
-    torque = np.einsum("nmc,nc->nm", pinv, wrench[:, :columns])
-    reached = np.einsum("nmc,nm->nc", state.jacobian[:, :, :columns], torque)
+    wrench = load_wrenches(motion, accelerations)[:, : state.structure.shape[1]]
+    margins = {}
+    if motion.tension.model == "feasible":
+        other = (actuator.G_v * theta_ddot + actuator.L_v * theta_dot)[:, None, :]
+        families = actuator_families(motion.tension, motion.winch_radius, actuator, other, other)
+        margins, chosen = feasible_tensions(state.structure, *state.wrench_pinv, wrench[:, None, :],
+                                            families, motion.tension.residual_rtol)
+        margins = {name: value[:, 0] for name, value in margins.items()}
+        torque = chosen[:, 0, :]
+    else:
+        torque = np.einsum("nmc,nc->nm", state.wrench_pinv[0], wrench)
+    reached = np.einsum("ncm,nm->nc", state.structure, torque)
     return {
         "theta_dot": theta_dot,
         "theta_ddot": theta_ddot,
         "torque": torque,
         "voltage": actuator.G_v * theta_ddot + actuator.L_v * theta_dot + actuator.S_v * torque,
-        "wrench_residual": np.linalg.norm(reached - wrench[:, :columns], axis=1),
+        "wrench_residual": np.linalg.norm(reached - wrench, axis=1),
         "power_cables": np.einsum("nm,nm->n", torque, theta_dot),
-        "power_load": np.einsum("nj,nj->n", forces, velocities),
+        "power_load": np.einsum("nj,nj->n", wrench[:, :3], velocities),
+        "margins": margins,
     }
 
 
 def sample_margins(quantities: dict[str, np.ndarray], act: ActuatorModel) -> dict[str, np.ndarray]:
-    """Relative margins of every sample, as the CPR-WWA criteria define them (eqs. 30, 32-34)."""
+    """Relative margins of every sample, as the CPR-WWA criteria define them (eqs. 30, 32-34);
+    under the ``feasible`` model its own (incl. ``unreachable`` and ``slack``) replace them."""
     worst = {
         "speed": (quantities["theta_dot"], act.speed_limit),
         "torque": (quantities["torque"], act.torque_limit),
         "acceleration": (quantities["theta_ddot"], act.accel_limit),
         "voltage": (quantities["voltage"], act.voltage_limit),
     }
-    return {name: 1.0 - np.abs(values).max(axis=1) / limit for name, (values, limit) in worst.items()}
+    margins = {name: 1.0 - np.abs(values).max(axis=1) / limit for name, (values, limit) in worst.items()}
+    return {**margins, **quantities["margins"]}

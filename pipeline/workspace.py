@@ -7,6 +7,9 @@ One code path for every robot and analysis. The robot config only places points
   sets against the limits of a catalogue actuator (eqs. 19-34);
 - ``statics``: static equilibrium under the applied wrench, tensions in [0, s_max] and lengths
   <= l_max (eqs. 7-10 of Hamed & Zohoor).
+
+``tension.model=feasible`` replaces the minimum-norm cable forces of both by pulling cables only
+(``pipeline.tensions``) and adds the criteria ``unreachable`` and ``slack``.
 """
 
 from __future__ import annotations
@@ -28,9 +31,11 @@ from pipeline.motion import acceleration_set, extreme_points, velocity_set
 from pipeline.parallel import iter_chunks
 from pipeline.robots import cpr8, irpm6
 from pipeline.statics import StaticsSpec
+from pipeline.tensions import TensionSpec
 
 CPR_WWA_CRITERIA = ("speed", "torque", "acceleration", "voltage")  # eqs. (30), (32), (33), (34)
-STATICS_CRITERIA = ("singular", "tension_min", "tension_max", "length")  # eq. (10)
+STATICS_CRITERIA = ("singular", "slack", "tension_max", "length")  # eq. (10)
+FEASIBLE_GATES = ("unreachable", "slack")  # tension=feasible (pipeline.tensions)
 DEFAULT_ANALYSIS = {"cpr8": "cpr_wwa", "irpm6": "statics"}
 CHUNK_BUDGET_FLOATS = 4_000_000  # largest (poses x cables x set size) array of one chunk: 32 MB
 
@@ -93,8 +98,12 @@ def _cpr_wwa(cfg: DictConfig, catalogue: pd.DataFrame, robot):
         pinv_columns=_name(model.pinv_columns),
         rank_rtol=model.rank_rtol,
         jdot=model.jdot,
+        tension=tension_spec(cfg),
     )
-    return motion, actuator, CPR_WWA_CRITERIA
+    if motion.tension.model == "pinv":
+        return motion, actuator, CPR_WWA_CRITERIA
+    rating = ("tension_max",) if motion.tension.t_max is not None else ()
+    return motion, actuator, (*FEASIBLE_GATES, *rating, *CPR_WWA_CRITERIA)
 
 
 def _statics(cfg: DictConfig, catalogue: pd.DataFrame, robot):
@@ -103,9 +112,18 @@ def _statics(cfg: DictConfig, catalogue: pd.DataFrame, robot):
         wrench=np.array([w.fx, w.fy, w.fz, w.mx, w.my, w.mz], dtype=float),
         moment_arm=_name(cfg.model.moment_arm),
         rank_rtol=cfg.model.rank_rtol,
+        tension=tension_spec(cfg),
     )
     l_max = cfg.robot.get("l_max") or np.inf
-    return spec, StaticLimits(cfg.limits.s_max, float(l_max), cfg.model.rank_rtol), STATICS_CRITERIA
+    limits = StaticLimits(cfg.limits.s_max, float(l_max), cfg.model.rank_rtol)
+    if spec.tension.model == "pinv":
+        return spec, limits, STATICS_CRITERIA
+    return spec, limits, (*FEASIBLE_GATES, *STATICS_CRITERIA[2:])
+
+
+def tension_spec(cfg: DictConfig) -> TensionSpec:
+    t = cfg.tension
+    return TensionSpec(_name(t.model), t.t_min, t.t_max, t.residual_rtol)
 
 
 ROBOTS = {"cpr8": _cpr8_robot, "irpm6": _irpm6_robot}

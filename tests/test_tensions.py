@@ -1,0 +1,192 @@
+"""The ``feasible`` tension model (issue 8): analytic cases, agreement with the papers' own
+criterion where it must agree, independent checks of the LPs, and the comparison study."""
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from scipy.optimize import nnls
+
+from pipeline.actuators import ActuatorModel
+from pipeline.criteria import CRITERIA, tension_families
+from pipeline.dynamics import MotionSpec, load_wrenches
+from pipeline.geometry import CableRobot
+from pipeline.kernel import WorkspaceProblem, classify, evaluate_chunk
+from pipeline.tensions import TensionSpec, feasible_tensions
+from pipeline.workspace import build_problem, compute_workspace
+
+MASS, GRAVITY, HALF, RADIUS = 2.0, 9.81, 1.0, 0.05
+ACTUATOR = ActuatorModel(id=0, name="test", power=1.0, G_v=0.0, L_v=0.0, S_v=2.0,
+                         speed_limit=10.0, torque_limit=1.0, accel_limit=100.0,
+                         voltage_limit=12.0, winch_radius=RADIUS)
+FEASIBLE_CPR_WWA = ("unreachable", "slack", "speed", "torque", "acceleration", "voltage")
+
+
+def square_robot() -> CableRobot:
+    """Four cables from the corners (+-HALF, +-HALF, 0) to one point (a point mass), z up."""
+    corners = np.array([[HALF, HALF, 0.0], [-HALF, HALF, 0.0], [-HALF, -HALF, 0.0], [HALF, -HALF, 0.0]])
+    return CableRobot("square4", corners, np.zeros((4, 3)), np.full(3, -3.0), np.full(3, 3.0),
+                      tuple("abcd"))
+
+
+def hanging_motion(t_min=0.0) -> MotionSpec:
+    still = np.zeros((1, 3))
+    return MotionSpec(velocities=still, accelerations=still, mass=MASS, gravity=GRAVITY,
+                      winch_radius=np.full(4, RADIUS), tension=TensionSpec("feasible", t_min))
+
+
+def test_symmetric_four_cable_point_mass_gets_the_analytic_tensions():
+    depth = 2.0
+    motion = hanging_motion()
+    state = motion.state(square_robot(), np.array([[0.0, 0.0, -depth]]), (0.0, 0.0, 0.0))
+    length = np.sqrt(2 * HALF**2 + depth**2)
+    tension = MASS * GRAVITY * length / (4 * depth)  # each cable carries a quarter of the weight
+    margins, chosen = feasible_tensions(state.structure, *state.wrench_pinv, state.required_wrenches,
+                                        tension_families(state, ACTUATOR), 1e-6)
+    assert chosen[0, 0] / RADIUS == pytest.approx(np.full(4, tension), rel=1e-7)
+    torque = RADIUS * tension
+    assert margins["slack"][0, 0] == pytest.approx(torque / ACTUATOR.torque_limit, rel=1e-7)
+    assert CRITERIA["torque"](state, ACTUATOR)[0] == pytest.approx(1 - torque / ACTUATOR.torque_limit)
+    assert CRITERIA["voltage"](state, ACTUATOR)[0] == pytest.approx(
+        1 - ACTUATOR.S_v * torque / ACTUATOR.voltage_limit)
+    assert CRITERIA["unreachable"](state, ACTUATOR)[0] == pytest.approx(1.0)
+
+
+def test_minimum_tension_raises_every_cable_and_is_reported_as_slack_when_out_of_reach():
+    state = hanging_motion(t_min=10.0).state(square_robot(), np.array([[0.0, 0.0, -2.0]]), (0, 0, 0))
+    # a quarter of the weight along each cable is 6.02 N < 10 N, and the null space of four
+    # cables to a point cannot raise all four at once: the floor cannot be met
+    assert CRITERIA["slack"](state, ACTUATOR)[0] < 0
+
+
+def verdicts(problem, positions):
+    raw = evaluate_chunk(problem, positions)
+    return classify({name: raw[f"margin_{name}"] for name in problem.criteria})
+
+
+def test_a_pose_that_needs_a_pushing_cable_is_slack_never_feasible():
+    robot = square_robot()
+    positions = np.array([[0.0, 0.0, 1.0], [0.3, -0.2, 0.5], [0.0, 0.0, -2.0]])  # above, above, below
+    problem = WorkspaceProblem(robot, np.zeros((1, 3)), hanging_motion(), ACTUATOR, FEASIBLE_CPR_WWA)
+    feasible, limiting = verdicts(problem, positions)
+    assert feasible.tolist() == [False, False, True]
+    assert limiting[:2].tolist() == ["slack", "slack"]
+    # the paper's model accepts the first two: its torques are small, only their sign is wrong
+    pinv = replace(hanging_motion(), tension=TensionSpec("pinv"))
+    paper = WorkspaceProblem(robot, np.zeros((1, 3)), pinv, ACTUATOR, FEASIBLE_CPR_WWA[2:])
+    assert verdicts(paper, positions)[0].tolist() == [True, True, True]
+    state = pinv.state(robot, positions[:1], (0, 0, 0))
+    assert (state.shaft_torque < 0).all()
+
+
+def test_irpm_feasible_model_is_the_papers_criterion(make_cfg, catalogue):
+    """Six cables, square structure matrix: x = A^-1 f is the only candidate, so the LP model
+    and s = A^-1 f with 0 <= s <= s_max (eq. 10) agree pose by pose."""
+    for gamma in (0, 30):
+        paper, _ = compute_workspace(make_cfg("robot=irpm6", f"robot.gamma_deg={gamma}"), catalogue)
+        ours, _ = compute_workspace(
+            make_cfg("robot=irpm6", f"robot.gamma_deg={gamma}", "tension.model=feasible"), catalogue)
+        assert ours["feasible"].sum() == paper["feasible"].sum() > 0
+        assert (ours["feasible"] == paper["feasible"]).all()
+        regular = paper["margin_singular"] >= 0
+        assert (ours.loc[~regular, "limiting"] == "unreachable").all()
+        for name in ("slack", "tension_max"):
+            expected = np.minimum(paper.loc[regular, f"margin_{name}"], 1.0)
+            assert ours.loc[regular, f"margin_{name}"].to_numpy() == pytest.approx(expected, abs=1e-9)
+
+
+def test_cpr8_lp_never_loses_a_pose_whose_minimum_norm_torques_are_valid(make_cfg, catalogue):
+    """Where the paper's torques pull (M >= 0 at every acceleration) and keep every limit, they
+    are one candidate of the LP: the pose stays feasible and its margins can only grow."""
+    for orientation in (0.0, 0.5):
+        angles = [f"orientation.{a}={orientation}" for a in ("psi", "theta", "phi")]
+        for actuator in (1, 5):
+            cfg = [f"actuator={actuator}", *angles]
+            problem, grid = build_problem(make_cfg(*cfg), catalogue)
+            state = problem.spec.state(problem.robot, grid.positions, problem.orientations[0])
+            pulling = (state.shaft_torque >= 0).all(axis=(1, 2))
+            paper, _ = compute_workspace(make_cfg(*cfg), catalogue)
+            ours, _ = compute_workspace(make_cfg(*cfg, "tension.model=feasible"), catalogue)
+            valid = pulling & paper["feasible"].to_numpy()
+            assert valid.sum() > 20, (orientation, actuator)
+            assert ours.loc[valid, "feasible"].all()
+            for name in ("torque", "voltage"):
+                assert (ours.loc[valid, f"margin_{name}"] >= paper.loc[valid, f"margin_{name}"] - 1e-9).all()
+            # both models see the same motion: speed and shaft acceleration are identical
+            for name in ("speed", "acceleration"):
+                assert ours[f"margin_{name}"].to_numpy() == pytest.approx(paper[f"margin_{name}"])
+
+
+@pytest.mark.parametrize("columns,orientation", [("translational", 0.0), ("full", 0.5)])
+def test_slack_agrees_with_an_independent_nonnegative_least_squares(columns, orientation, make_cfg, catalogue):
+    """Slack margin < 0 exactly where scipy's NNLS finds no x >= 0 with J^T x = F."""
+    angles = [f"orientation.{a}={orientation}" for a in ("psi", "theta", "phi")]
+    problem, grid = build_problem(make_cfg(f"model.pinv_columns={columns}", "tension.model=feasible",
+                                           *angles), catalogue)
+    state = problem.spec.state(problem.robot, grid.positions, problem.orientations[0])
+    margins, _ = feasible_tensions(state.structure, *state.wrench_pinv, state.required_wrenches,
+                                   tension_families(state, problem.limits), 1e-6)
+    wrenches = state.required_wrenches
+    residual = np.array([[nnls(s, w)[1] / np.linalg.norm(w) for w in wrenches] for s in state.structure])
+    clear = np.abs(margins["slack"]) > 1e-6
+    assert clear.mean() > 0.95
+    assert ((margins["slack"] < 0) == (residual > 1e-9))[clear].all()
+    assert (margins["slack"] < 0).any()
+
+
+def test_the_box_vertices_decide_every_acceleration_inside_it(make_cfg, catalogue):
+    """The capacity margin is concave in the wrench: at random accelerations inside the box it
+    is never below its minimum over the eight vertices (tested for slack, the first family)."""
+    problem, grid = build_problem(make_cfg("tension.model=feasible"), catalogue)
+    state = problem.spec.state(problem.robot, grid.positions, problem.orientations[0])
+    families = tension_families(state, problem.limits)
+    vertices, _ = feasible_tensions(state.structure, *state.wrench_pinv, state.required_wrenches,
+                                    families[:1], 1e-6)
+    rng = np.random.default_rng(0)
+    box = state.wrench_accelerations
+    inside = box.min(axis=0) + rng.random((12, 3)) * (box.max(axis=0) - box.min(axis=0))
+    wrenches = load_wrenches(problem.spec, inside)[:, :3]
+    interior, _ = feasible_tensions(state.structure, *state.wrench_pinv, wrenches, families[:1], 1e-6)
+    assert (interior["slack"].min(axis=1) >= vertices["slack"].min(axis=1) - 1e-9).all()
+
+
+def test_zero_orientation_with_moment_rows_is_unreachable_as_the_rank_5_jacobian_says(make_cfg, catalogue):
+    points, summary = compute_workspace(
+        make_cfg("tension.model=feasible", "model.pinv_columns=full"), catalogue)
+    assert summary["lost_unreachable"] == 216
+    assert (points["limiting"] == "unreachable").all()
+
+
+def test_lines_use_the_lp_torques_and_agree_with_the_grid(make_cfg, catalogue):
+    from pipeline.lines import simulate_lines
+
+    samples, points, summary = simulate_lines(make_cfg("analysis=lines", "tension.model=feasible"),
+                                              catalogue)
+    assert summary["n_feasible_grid"] == 144 and summary["agreement_pct"] == pytest.approx(100.0)
+    ok = samples[samples["margin_slack"] >= 0]
+    torques = ok[[f"torque_{i}" for i in range(1, 9)]].to_numpy()
+    assert torques.min() >= -1e-7  # every chosen torque pulls wherever pulling is possible
+    assert ok["wrench_residual"].max() < 1e-8
+    assert ok["power_cables"].to_numpy() == pytest.approx(ok["power_load"].to_numpy(), abs=1e-7)
+
+
+def test_forces_only_loses_the_outer_ring_of_the_lower_layers_to_slack(make_cfg, catalogue):
+    points, summary = compute_workspace(make_cfg("tension.model=feasible"), catalogue)
+    lost = points[~points["feasible"]]
+    assert summary["lost_slack"] == len(lost) == 72
+    xs, ys = np.unique(points["x"]), np.unique(points["y"])
+    ring = lost["x"].isin(xs[[0, -1]]) | lost["y"].isin(ys[[0, -1]])
+    assert ring.all() and (lost["z"] < -0.9).all()
+    assert -0.003 < lost["margin_slack"].min() and lost["margin_slack"].max() < 0  # just short
+
+
+@pytest.mark.parametrize("orientation,hanging", [(0.0, 68), (0.5, 0)])
+def test_with_moment_balance_few_or_no_poses_can_even_hang_still(orientation, hanging, make_cfg, catalogue):
+    """NNLS, independent of the LPs: poses where the carrier can hang at rest (F = -m g e_z, no
+    moment) with pulling cables, at zero orientation and at 0.5 rad about every axis."""
+    angles = [f"orientation.{a}={orientation}" for a in ("psi", "theta", "phi")]
+    problem, grid = build_problem(make_cfg("model.pinv_columns=full", *angles), catalogue)
+    state = problem.spec.state(problem.robot, grid.positions, problem.orientations[0])
+    weight = load_wrenches(problem.spec, np.zeros((1, 3)))[0]
+    residual = np.array([nnls(s, weight)[1] for s in state.structure]) / np.linalg.norm(weight)
+    assert (residual < 1e-9).sum() == hanging
