@@ -23,8 +23,8 @@ import seaborn as sns  # noqa: E402
 STYLE = "pipeline.styles.paper"
 CONSTRAINT_COLOURS = {  # one colour per limiting constraint, the same in every figure
     "speed": "#0072B2", "torque": "#D55E00", "acceleration": "#CC79A7", "voltage": "#E69F00",
-    "tension_min": "#D55E00", "tension_max": "#0072B2", "length": "#CC79A7",
-    "singular": "#000000",
+    "slack": "#882255", "tension_max": "#0072B2", "length": "#CC79A7",
+    "singular": "#000000", "unreachable": "#777777",
 }
 FEASIBLE_COLOUR = "#009E73"
 PANEL_TITLES = {"feasible_grid": "CPR-WWA grid", "feasible": "simulated lines"}
@@ -33,11 +33,13 @@ PANEL_TITLES = {"feasible_grid": "CPR-WWA grid", "feasible": "simulated lines"}
 @dataclass
 class FigureSpec:
     """One declared figure. ``file`` and ``title`` may hold ``{column}`` fields (dots written as
-    ``_``); ``per`` draws one file per value of a summary column (e.g. ``case``), ``cloud`` one
-    per job. ``x``, ``y``, ``value`` are summary columns or pandas expressions over them (dotted
-    names in backticks); ``select`` keeps the jobs whose columns take the listed values;
-    ``hline`` is a number or a summary column; ``invert_z`` draws z downwards; ``panels`` the
-    feasibility columns a cloud shows side by side; ``line`` the simulated line of a time series."""
+    ``_``); ``per`` draws one file per value of a summary column or list of columns (e.g.
+    ``case``), ``cloud`` one per job. ``x``, ``y``, ``value`` are summary columns or pandas
+    expressions over them (dotted names in backticks); ``select`` keeps the jobs whose columns
+    take the listed values; ``hline`` is a number or a summary column; ``invert_z`` draws z
+    downwards; ``panels`` the feasibility columns a cloud shows side by side, or, with
+    ``panels_from`` (e.g. ``tension.model``), that column's values, one job each per ``per``
+    group; ``line`` the simulated line of a time series."""
 
     kind: str
     file: str
@@ -50,9 +52,10 @@ class FigureSpec:
     hline: Optional[Any] = None
     xlabel: Optional[str] = None
     ylabel: Optional[str] = None
-    per: Optional[str] = None
+    per: Optional[Any] = None
     invert_z: bool = False
     panels: list[str] = field(default_factory=lambda: ["feasible"])
+    panels_from: Optional[str] = None
     line: int = 0
     select: dict[str, Any] = field(default_factory=dict)
 
@@ -131,22 +134,36 @@ def limiting_bar(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, o
 
 def cloud(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
     """Figs. 4, 5, 8 (CPR-8) and 5-12 (IRPM): one 3D picture per selected job, one panel per
-    column of ``panels`` (e.g. the grid and the simulated verdicts side by side); feasible points
-    as dots, infeasible ones as crosses coloured by their limiting constraint when the job has
-    one, the searched box outlined."""
+    column of ``panels`` (e.g. the grid and the simulated verdicts side by side), or one picture
+    per ``per`` group with one panel per value of ``panels_from`` listed in ``panels``; feasible
+    points as dots, infeasible ones as crosses coloured by their limiting constraint when the
+    job has one, the searched box outlined."""
+    if spec.panels_from:
+        values = table[spec.panels_from].astype(str)
+        jobs = [table[values == value].iloc[0] for value in spec.panels]
+        panels = [(results.points(job["job"]), "feasible",
+                   f"{spec.panels_from} = {job[spec.panels_from]}: {job['n_feasible']}/{job['n_points']}")
+                  for job in jobs]
+        return [_cloud_figure(spec, panels, jobs[0], out_dir)]
     written = []
     for _, job in table.iterrows():
         points = results.points(job["job"])
-        fig = plt.figure(figsize=(5.6 * len(spec.panels), 4.6))
-        for i, column in enumerate(spec.panels, start=1):
-            ax = fig.add_subplot(1, len(spec.panels), i, projection="3d")
-            _cloud_panel(ax, points, column, spec.invert_z)
-            _box(ax, job)
-            if len(spec.panels) > 1:
-                ax.set_title(PANEL_TITLES.get(column, column), fontsize=9)
-        fig.suptitle(_fill(spec.title or "", job), fontsize=10)
-        written.append(_save(fig, out_dir / _fill(spec.file, job)))
+        titles = [PANEL_TITLES.get(c, c) if len(spec.panels) > 1 else None for c in spec.panels]
+        panels = [(points, column, title) for column, title in zip(spec.panels, titles)]
+        written.append(_cloud_figure(spec, panels, job, out_dir))
     return written
+
+
+def _cloud_figure(spec: FigureSpec, panels: list, job: pd.Series, out_dir: Path) -> Path:
+    fig = plt.figure(figsize=(5.6 * len(panels), 4.6))
+    for i, (points, column, title) in enumerate(panels, start=1):
+        ax = fig.add_subplot(1, len(panels), i, projection="3d")
+        _cloud_panel(ax, points, column, spec.invert_z)
+        _box(ax, job)
+        if title:
+            ax.set_title(title, fontsize=9)
+    fig.suptitle(_fill(spec.title or "", job), fontsize=10)
+    return _save(fig, out_dir / _fill(spec.file, job))
 
 
 def _cloud_panel(ax, points: pd.DataFrame, column: str, invert_z: bool) -> None:
@@ -197,6 +214,35 @@ def timeseries(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out
     return written
 
 
+def survival_bar(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
+    """Issue 8: per actuator, the minimum-norm (paper) and the physically valid feasible share,
+    labelled with the share of the former that survives; one panel per case and wrench rows."""
+    data = results.table("survival")
+    cases, rows = data["case"].unique(), sorted(data["wrench_rows"].unique(), reverse=True)
+    fig, axes = plt.subplots(len(rows), len(cases), figsize=(4.2 * len(cases), 3.3 * len(rows)),
+                             squeeze=False, sharey=True, layout="constrained")
+    for (row, col), ax in np.ndenumerate(axes):
+        part = data[(data["wrench_rows"] == rows[row]) & (data["case"] == cases[col])]
+        part = part.sort_values("actuator")
+        at = np.arange(len(part))
+        ax.bar(at - 0.2, part["paper_pct"], 0.4, color="0.7", edgecolor="black", lw=0.4,
+               label="pinv (paper, eq. 20)")
+        bars = ax.bar(at + 0.2, part["physical_pct"], 0.4, color=FEASIBLE_COLOUR,
+                      edgecolor="black", lw=0.4, label="cables only pull")
+        ax.bar_label(bars, labels=[f"{v:.0f}%" if np.isfinite(v) else "–" for v in part["survive_pct"]],
+                     padding=2, fontsize=7)
+        ax.set_xticks(at, part["actuator"].astype(str))
+        ax.set_ylim(0, 115)
+        ax.set_title(f"{cases[col]}, wrench rows: {rows[row]}", fontsize=9)
+        ax.set_xlabel("actuator")
+    for ax in axes[:, 0]:
+        ax.set_ylabel(spec.ylabel or "feasible share of the grid (%)")
+    axes[0, -1].legend(loc="upper right", fontsize=7)
+    if spec.title:
+        fig.suptitle(spec.title, fontsize=10)
+    return [_save(fig, out_dir / spec.file)]
+
+
 def curve(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
     """Volume (or share) versus a swept parameter, one line per ``hue`` value (Figs. 13-15)."""
     data = pd.DataFrame({"x": _column(table, spec.x), "y": _column(table, spec.y)})
@@ -243,6 +289,7 @@ KINDS: dict[str, Callable[[FigureSpec, pd.DataFrame, StudyResults, Path], list[P
     "choice_bar": choice_bar,
     "limiting_bar": limiting_bar,
     "cloud": cloud,
+    "survival_bar": survival_bar,
     "timeseries": timeseries,
     "curve": curve,
     "heatmap": heatmap,

@@ -42,6 +42,7 @@ def build(studies_dir: Path = OUTPUT_DIR, out: Path = REPORT_DIR) -> Path:
         *_table2(studies_dir),
         *_lines_agreement(studies_dir),
         *_irpm(studies_dir),
+        *_tensions(studies_dir),
         "## Figures",
         "",
     ]
@@ -104,6 +105,23 @@ def _irpm(studies_dir: Path) -> list[str]:
     rows += ["", "Spread max / min over r_end / r_base (conclusion 1 says 1.00): "
              + ", ".join(f"γ = {g:g}°: {s:.2f}" for g, s in spread.items()) + ".", ""]
     return rows
+
+
+def _tensions(studies_dir: Path) -> list[str]:
+    table = pd.read_parquet(studies_dir / "tension_comparison" / "survival.parquet")
+    rows = ["## CPR-8, the paper's torques against cables that can only pull (issue 8)", "",
+            "No paper number: the papers never check the sign of a tension. Share of the "
+            "minimum-norm (pinv) feasible points that stay feasible when the tensions must pull "
+            "(`tension.model=feasible`), in %, and the feasible counts pinv → pulling of 216:", "",
+            "| wrench rows, orientation | " + " | ".join(
+                f"act. {a}" for a in sorted(table["actuator"].unique())) + " |",
+            "| --- |" + " --- |" * table["actuator"].nunique()]
+    for (reading, case), part in table.groupby(["wrench_rows", "case"], sort=False):
+        cells = [f"{'–' if pd.isna(r.survive_pct) else f'{r.survive_pct:.1f}'} "
+                 f"({r.n_paper} → {r.n_physical})" for r in part.sort_values("actuator").itertuples()]
+        rows.append(f"| {reading}, {case} | " + " | ".join(cells) + " |")
+    return rows + ["", "Forces only is the paper's reading of eq. (20); forces and moments "
+                   "(`full`) also keeps the carrier's orientation (docs/model.md section 7).", ""]
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -36,6 +36,7 @@ from pipeline.errors import ConfigError
 from pipeline.figures import FigureSpec, StudyResults, render
 from pipeline.preflight import CONF_DIR, check, one_line
 from pipeline.results import code_version, write_parquet
+from pipeline.survival import survival
 
 STUDIES_DIR = CONF_DIR.parent / "studies"
 OUTPUT_DIR = Path("outputs") / "studies"
@@ -45,9 +46,10 @@ LAUNCHERS = {
     "joblib": ["hydra/launcher=joblib", "hydra.launcher.n_jobs=2", "compute.n_jobs=1"],
     "basic": [],
 }
-ANALYSES: dict[str, Callable[[pd.DataFrame], pd.DataFrame]] = {
-    "choice": choose,
-    "acceptance": acceptance,
+ANALYSES: dict[str, Callable[[StudyResults], pd.DataFrame]] = {
+    "choice": lambda results: choose(results.summary),
+    "acceptance": lambda results: acceptance(results.summary),
+    "survival": survival,
 }
 log = logging.getLogger("pipeline.study")
 
@@ -133,7 +135,7 @@ def run_study(name: str, extra: list[str], out_root: Path = OUTPUT_DIR,
         write_parquet(_gather(out / "jobs", cases), out / "summary.parquet", provenance)
     results = StudyResults(out)
     try:
-        summary = results.summary
+        results.summary  # noqa: B018  (read once: a missing or corrupt file fails here, clearly)
     except FileNotFoundError:
         raise ConfigError(f"study {name}: no results in {out}; run it without --figures-only")
     except (OSError, ValueError) as exc:  # pyarrow's ArrowInvalid is a ValueError
@@ -142,7 +144,7 @@ def run_study(name: str, extra: list[str], out_root: Path = OUTPUT_DIR,
     written = [out / "summary.parquet"]
     for analysis in study.analyses:
         path = out / f"{analysis}.parquet"
-        write_parquet(ANALYSES[analysis](summary), path, provenance)
+        write_parquet(ANALYSES[analysis](results), path, provenance)
         written.append(path)
     shutil.rmtree(out / "figures", ignore_errors=True)  # no figure of an earlier run lingers
     for figure in study.figures:

@@ -6,11 +6,13 @@ import yaml
 
 import pipeline.report
 from pipeline.choice import choose
+from pipeline.figures import StudyResults
+from pipeline.survival import survival
 from pipeline.lines import simulate_lines
 from pipeline.study import STUDIES_DIR, available
 from pipeline.workspace import compute_workspace
 
-STUDIES = ["actuator_choice", "line_simulation", "irpm_fig13_end_ratio"]
+STUDIES = ["actuator_choice", "line_simulation", "irpm_fig13_end_ratio", "tension_comparison"]
 
 
 @pytest.fixture
@@ -29,6 +31,15 @@ def studies(tmp_path, make_cfg, catalogue):
                                                     f"robot.gamma_deg={g}"), catalogue)[1]
                          for r in (1.2, 6.0) for g in (0, 30)])
     irpm.to_parquet(root / "irpm_fig13_end_ratio" / "summary.parquet")
+    rows = []
+    for model in ("pinv", "feasible"):
+        points, row = compute_workspace(make_cfg(f"tension.model={model}"), catalogue)
+        (root / "tension_comparison" / "jobs" / model).mkdir(parents=True)
+        points.to_parquet(root / "tension_comparison" / "jobs" / model / "points.parquet")
+        rows.append({**row, "job": model, "case": "zero"})
+    pd.DataFrame(rows).to_parquet(root / "tension_comparison" / "summary.parquet")
+    comparison = survival(StudyResults(root / "tension_comparison"))
+    comparison.to_parquet(root / "tension_comparison" / "survival.parquet")
     return root
 
 
@@ -41,6 +52,7 @@ def test_report_compares_paper_and_ours_and_carries_the_figures(studies, tmp_pat
     assert "Accepted at x = 90 %: paper [1, 2], ours [1, 2]." in text
     assert "| translational, zero | 100.00 | 98.15 |" in text
     assert "| 0.2 | 183.2 | 64.8 |" in text
+    assert "| translational, zero | 66.7 (216 → 144) |" in text
     assert "![fig9](figures/actuator_choice/fig9.png)" in text
     assert (tmp_path / "report" / "figures" / "actuator_choice" / "fig9.png").read_bytes() == b"\x89PNG fake"
 

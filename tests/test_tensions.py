@@ -1,9 +1,12 @@
 """The ``feasible`` tension model (issue 8): analytic cases, agreement with the papers' own
 criterion where it must agree, independent checks of the LPs, and the comparison study."""
 
+import subprocess
+import sys
 from dataclasses import replace
 
 import numpy as np
+import pandas as pd
 import pytest
 from scipy.optimize import nnls
 
@@ -168,6 +171,29 @@ def test_lines_use_the_lp_torques_and_agree_with_the_grid(make_cfg, catalogue):
     assert torques.min() >= -1e-7  # every chosen torque pulls wherever pulling is possible
     assert ok["wrench_residual"].max() < 1e-8
     assert ok["power_cables"].to_numpy() == pytest.approx(ok["power_load"].to_numpy(), abs=1e-7)
+
+
+@pytest.mark.slow
+def test_comparison_study_reports_the_surviving_share_per_actuator_and_orientation(tmp_path):
+    proc = subprocess.run([sys.executable, "-m", "pipeline.study", "tension_comparison"],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    out = tmp_path / "outputs" / "studies" / "tension_comparison"
+    table = pd.read_parquet(out / "survival.parquet").set_index(["wrench_rows", "case", "actuator"])
+    forces = table.loc["translational"]
+    assert forces.loc[("zero", 1), ["n_paper", "n_physical", "n_survive"]].tolist() == [216, 144, 144]
+    assert forces.loc[("zero", 1), "survive_pct"] == pytest.approx(66.67, abs=0.01)
+    assert forces.loc[("rot05", 1), ["n_paper", "n_survive", "n_gained"]].tolist() == [207, 157, 4]
+    assert forces.loc[("zero", 5), ["n_paper", "n_physical", "n_survive"]].tolist() == [24, 32, 24]
+    moments = table.loc["full"]
+    assert (moments["n_physical"] == 0).all()
+    assert moments.loc[("zero", 1), "lost_unreachable"] == 216
+    assert moments.loc[("rot05", 1), "lost_slack"] == 182
+    losses = table[[c for c in table if c.startswith("lost_")]].sum(axis=1)
+    assert (losses == table["n_paper"] - table["n_survive"]).all()
+    figures = sorted(p.name for p in (out / "figures").iterdir())
+    assert figures == sorted(["survival_by_actuator.png"] + [
+        f"tension_{case}_actuator{a}.png" for case in ("zero", "rot05") for a in range(1, 6)])
 
 
 def test_forces_only_loses_the_outer_ring_of_the_lower_layers_to_slack(make_cfg, catalogue):
