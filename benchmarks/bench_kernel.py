@@ -1,6 +1,7 @@
 """Throughput of the workspace kernels against the literal per-pose reference, in one run.
 
-    python benchmarks/bench_kernel.py          # reference on 6^3, CPR-WWA on 6^3 and 40^3, IRPM
+    python benchmarks/bench_kernel.py          # reference on 6^3, CPR-WWA on 6^3 and 40^3, IRPM,
+                                               # both with tension.model=feasible (LPs)
     python benchmarks/bench_kernel.py --full   # also CPR-WWA 100^3 on 2 workers
 
 CPR-WWA: the paper's sets, 93 velocities (7 per axis, |v| < V) and 8 acceleration corners,
@@ -32,9 +33,9 @@ from pipeline.reference import literal_margins  # noqa: E402
 from pipeline.workspace import bounded_chunk_size, build_problem  # noqa: E402
 
 
-def problem_for(n: int):
+def problem_for(n: int, *extra: str):
     return composed(f"grid.n={n}", "grid.n_vel=6", "actuator=2",
-                    "orientation.psi=0.5", "orientation.theta=0.5", "orientation.phi=0.5")
+                    "orientation.psi=0.5", "orientation.theta=0.5", "orientation.phi=0.5", *extra)
 
 
 def composed(*overrides: str):
@@ -77,8 +78,13 @@ def main() -> None:
     for n in (6, 40):
         problem, grid = problem_for(n)
         rows.append((f"CPR-WWA kernel {n}^3, 1 core", grid.n_points, serial_rate(problem, grid)))
+    for n in (6, 20):  # cables only pull: 8 acceleration vertices x 3 nested LPs per pose
+        problem, grid = problem_for(n, "tension.model=feasible")
+        rows.append((f"CPR-WWA feasible tensions {n}^3, 1 core", grid.n_points, serial_rate(problem, grid)))
     problem, grid = composed("robot=irpm6", "robot.gamma_deg=15")
     rows.append(("IRPM statics 31x31x26, 1 core", grid.n_points, serial_rate(problem, grid)))
+    problem, grid = composed("robot=irpm6", "robot.gamma_deg=15", "tension.model=feasible")
+    rows.append(("IRPM feasible tensions, 1 core", grid.n_points, serial_rate(problem, grid)))
     for i, n in enumerate((40, 100) if args.full else (40,)):
         problem, grid = problem_for(n)
         size = bounded_chunk_size(problem, 20_000)
@@ -91,10 +97,10 @@ def main() -> None:
             parallel()  # start the loky worker pool once, outside the timing
         rows.append((f"CPR-WWA kernel {n}^3, 2 workers", grid.n_points, timed(parallel)))
 
-    print(f"{'case':34s} {'poses':>9s} {'seconds':>9s} {'poses/s':>11s} {'x reference':>12s}")
+    print(f"{'case':40s} {'poses':>9s} {'seconds':>9s} {'poses/s':>11s} {'x reference':>12s}")
     for name, poses, secs in rows:
         rate = poses / secs
-        print(f"{name:34s} {poses:9d} {secs:9.3f} {rate:11,.0f} {rate / reference:12,.0f}")
+        print(f"{name:40s} {poses:9d} {secs:9.3f} {rate:11,.0f} {rate / reference:12,.0f}")
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(f"peak resident memory of this process: {peak:.0f} MiB")
 

@@ -38,6 +38,7 @@ STATICS_CRITERIA = ("singular", "slack", "tension_max", "length")  # eq. (10)
 FEASIBLE_GATES = ("unreachable", "slack")  # tension=feasible (pipeline.tensions)
 DEFAULT_ANALYSIS = {"cpr8": "cpr_wwa", "irpm6": "statics"}
 CHUNK_BUDGET_FLOATS = 4_000_000  # largest (poses x cables x set size) array of one chunk: 32 MB
+LP_CHUNK_POSES = 1024  # tension.model=feasible: ~3 s of LPs per chunk, so progress is visible
 
 
 def build_problem(cfg: DictConfig, catalogue: pd.DataFrame) -> tuple[WorkspaceProblem, Grid]:
@@ -179,13 +180,18 @@ def tabulate(problem: WorkspaceProblem, positions: np.ndarray, raw: dict) -> pd.
         points[f"margin_{name}"] = margin
     if "jacobian_rank" in raw:
         points["jacobian_rank"] = raw["jacobian_rank"]
+    if "unreachable" in margins:  # |S S^+ w - w| / |w|, worst over the required wrenches
+        points["wrench_residual"] = (1.0 - margins["unreachable"]) * problem.spec.tension.residual_rtol
     return points
 
 
 def bounded_chunk_size(problem: WorkspaceProblem, requested: int) -> int:
     """Poses per chunk: the requested size, lowered so that a chunk's largest intermediate
-    array (poses x cables x velocity or acceleration set) stays within CHUNK_BUDGET_FLOATS."""
+    array (poses x cables x velocity or acceleration set) stays within CHUNK_BUDGET_FLOATS,
+    and to LP_CHUNK_POSES when the cable forces come from LPs."""
     per_pose = problem.robot.n_cables * problem.spec.set_size()
+    if problem.spec.tension.model == "feasible":
+        requested = min(requested, LP_CHUNK_POSES)
     return max(1, min(requested, CHUNK_BUDGET_FLOATS // per_pose))
 
 

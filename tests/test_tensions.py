@@ -158,6 +158,9 @@ def test_zero_orientation_with_moment_rows_is_unreachable_as_the_rank_5_jacobian
         make_cfg("tension.model=feasible", "model.pinv_columns=full"), catalogue)
     assert summary["lost_unreachable"] == 216
     assert (points["limiting"] == "unreachable").all()
+    assert points["wrench_residual"].min() > 1e-3  # a relative residual, far above 1e-6
+    forces, _ = compute_workspace(make_cfg("tension.model=feasible"), catalogue)
+    assert forces["wrench_residual"].max() < 1e-12
 
 
 def test_lines_use_the_lp_torques_and_agree_with_the_grid(make_cfg, catalogue):
@@ -180,15 +183,23 @@ def test_comparison_study_reports_the_surviving_share_per_actuator_and_orientati
     assert proc.returncode == 0, proc.stderr
     out = tmp_path / "outputs" / "studies" / "tension_comparison"
     table = pd.read_parquet(out / "survival.parquet").set_index(["wrench_rows", "case", "actuator"])
+    expected = {  # (case, actuator): (paper, physical, survive, gained), docs/model.md section 7
+        ("zero", 1): (216, 144, 144, 0), ("zero", 2): (208, 136, 136, 0),
+        ("zero", 3): (184, 112, 112, 0), ("zero", 4): (184, 112, 112, 0),
+        ("zero", 5): (24, 32, 24, 8), ("rot05", 1): (207, 161, 157, 4),
+        ("rot05", 2): (193, 153, 144, 9), ("rot05", 3): (183, 135, 134, 1),
+        ("rot05", 4): (183, 134, 134, 0), ("rot05", 5): (24, 32, 24, 8),
+    }
     forces = table.loc["translational"]
-    assert forces.loc[("zero", 1), ["n_paper", "n_physical", "n_survive"]].tolist() == [216, 144, 144]
+    for key, counts in expected.items():
+        assert tuple(forces.loc[key, ["n_paper", "n_physical", "n_survive", "n_gained"]]) == counts, key
     assert forces.loc[("zero", 1), "survive_pct"] == pytest.approx(66.67, abs=0.01)
-    assert forces.loc[("rot05", 1), ["n_paper", "n_survive", "n_gained"]].tolist() == [207, 157, 4]
-    assert forces.loc[("zero", 5), ["n_paper", "n_physical", "n_survive"]].tolist() == [24, 32, 24]
     moments = table.loc["full"]
     assert (moments["n_physical"] == 0).all()
-    assert moments.loc[("zero", 1), "lost_unreachable"] == 216
-    assert moments.loc[("rot05", 1), "lost_slack"] == 182
+    assert moments.loc["zero", "n_paper"].tolist() == [216, 208, 184, 184, 0]
+    assert moments.loc["rot05", "n_paper"].tolist() == [182, 120, 30, 9, 0]
+    assert (moments.loc["zero", "lost_unreachable"] == moments.loc["zero", "n_paper"]).all()
+    assert (moments.loc["rot05", "lost_slack"] == moments.loc["rot05", "n_paper"]).all()
     losses = table[[c for c in table if c.startswith("lost_")]].sum(axis=1)
     assert (losses == table["n_paper"] - table["n_survive"]).all()
     figures = sorted(p.name for p in (out / "figures").iterdir())
@@ -202,8 +213,10 @@ def test_forces_only_loses_the_outer_ring_of_the_lower_layers_to_slack(make_cfg,
     assert summary["lost_slack"] == len(lost) == 72
     xs, ys = np.unique(points["x"]), np.unique(points["y"])
     ring = lost["x"].isin(xs[[0, -1]]) | lost["y"].isin(ys[[0, -1]])
-    assert ring.all() and (lost["z"] < -0.9).all()
-    assert -0.003 < lost["margin_slack"].min() and lost["margin_slack"].max() < 0  # just short
+    assert ring.all()
+    assert lost.groupby(lost["z"].round(3)).size().tolist() == [20, 20, 20, 12]  # lowest first
+    assert lost["margin_slack"].min() == pytest.approx(-0.0025, abs=1e-4)  # just short
+    assert lost["margin_slack"].max() == pytest.approx(-0.0007, abs=1e-4)
 
 
 @pytest.mark.parametrize("orientation,hanging", [(0.0, 68), (0.5, 0)])
@@ -216,3 +229,15 @@ def test_with_moment_balance_few_or_no_poses_can_even_hang_still(orientation, ha
     weight = load_wrenches(problem.spec, np.zeros((1, 3)))[0]
     residual = np.array([nnls(s, weight)[1] for s in state.structure]) / np.linalg.norm(weight)
     assert (residual < 1e-9).sum() == hanging
+
+
+def test_verdicts_do_not_depend_on_how_poses_are_chunked_or_batched(make_cfg, catalogue, monkeypatch):
+    import pipeline.tensions
+
+    whole, _ = compute_workspace(make_cfg("tension.model=feasible", "actuator=3"), catalogue)
+    monkeypatch.setattr(pipeline.tensions, "LP_BLOCKS", 40)
+    split, _ = compute_workspace(make_cfg("tension.model=feasible", "actuator=3",
+                                          "compute.chunk_size=37"), catalogue)
+    assert (whole["feasible"] == split["feasible"]).all()
+    for name in ("slack", "torque", "voltage"):
+        assert split[f"margin_{name}"].to_numpy() == pytest.approx(whole[f"margin_{name}"], abs=1e-7)
