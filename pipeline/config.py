@@ -40,6 +40,14 @@ class AccelerationSet(Enum):
     colon = "colon"
 
 
+class Inertia(Enum):
+    """Sign of the inertial term of eq. (31): as printed, m (a - g e_z), or Newton's m (-a - g e_z)
+    for the force the cables must exert with z up (docs/model.md section 4)."""
+
+    paper = "paper"
+    newton = "newton"
+
+
 class MomentArm(Enum):
     """Moment arm of eq. (8) of the IRPM paper: R d_i (about O_M) or r + R d_i (eq. 9 literal)."""
 
@@ -226,6 +234,7 @@ class ModelConfig:
     pinv_columns: PinvColumns = PinvColumns.translational
     velocity_boundary: VelocityBoundary = VelocityBoundary.exclude
     acceleration_set: AccelerationSet = AccelerationSet.corners
+    inertia: Inertia = Inertia.paper
     moment_arm: MomentArm = MomentArm.platform
     jdot: bool = False
     xi_in_torque_limit: bool = True

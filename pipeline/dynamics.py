@@ -38,6 +38,8 @@ class MotionSpec:
     takes its extremes (``motion.extreme_points``); null = the whole set.
     ``tension``: which torques the torque and voltage criteria check (``pipeline.tensions``);
     the wrench rows follow ``pinv_columns`` (forces only, or forces and moments).
+    ``inertia``: ``"paper"`` takes F of eq. (31) as printed, m (a - g e_z); ``"newton"`` the
+    force the pulling cables must exert with z up, m (-a - g e_z) (docs/model.md section 4).
     """
 
     velocities: np.ndarray
@@ -50,6 +52,7 @@ class MotionSpec:
     jdot: bool = False
     velocity_extremes: np.ndarray | None = None
     tension: TensionSpec = field(default_factory=TensionSpec)
+    inertia: str = "paper"
 
     def state(self, robot: CableRobot, positions: np.ndarray, orientation) -> "PoseDynamics":
         return PoseDynamics(robot, positions, orientation, self)
@@ -146,11 +149,11 @@ class PoseDynamics(PoseGeometry):
 
     @cached_property
     def torque_affine(self) -> tuple[np.ndarray, np.ndarray]:
-        """M = (J^T)^+ F is affine in the acceleration (eqs. 20, 31: F = m (a - g e_z), no
+        """M = (J^T)^+ F is affine in the acceleration (eqs. 20, 31: F = m (+-a - g e_z), no
         moments): M = C a + d with C (n, m, 3) and d (n, m)."""
         pinv = self.wrench_pinv[0]
         mass = self.motion.mass
-        return mass * pinv[:, :, :3], -mass * self.motion.gravity * pinv[:, :, 2]
+        return inertia_sign(self.motion) * mass * pinv[:, :, :3], -mass * self.motion.gravity * pinv[:, :, 2]
 
     @cached_property
     def shaft_accel_from_acceleration(self) -> np.ndarray:
@@ -213,9 +216,14 @@ class PoseDynamics(PoseGeometry):
 
 
 def load_wrenches(motion: MotionSpec, accelerations: np.ndarray) -> np.ndarray:
-    """(k, 6) F = [m xdd, m ydd, m (zdd - g), 0, 0, 0] of eq. (31)."""
-    forces = motion.mass * (accelerations - np.array([0.0, 0.0, motion.gravity]))
+    """(k, 6) F = [m xdd, m ydd, m (zdd - g), 0, 0, 0] of eq. (31) (``inertia="paper"``), or
+    with -a in place of a (``"newton"``)."""
+    forces = motion.mass * (inertia_sign(motion) * accelerations - np.array([0.0, 0.0, motion.gravity]))
     return np.hstack([forces, np.zeros_like(forces)])
+
+
+def inertia_sign(motion: MotionSpec) -> float:
+    return 1.0 if motion.inertia == "paper" else -1.0
 
 
 def centripetal(speed2, along, length, radius):

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from pipeline.actuators import ActuatorModel
-from pipeline.dynamics import MotionSpec
+from pipeline.dynamics import MotionSpec, load_wrenches
 from pipeline.geometry import CableRobot, rotation_matrix, rotation_partials
 
 
@@ -41,8 +41,7 @@ def literal_margins(
         pinv = np.linalg.pinv(jac[:, :columns].T, rtol=motion.rank_rtol)
         per_acceleration = []
         for a in motion.accelerations:
-            force = motion.mass * (a - np.array([0.0, 0.0, motion.gravity]))
-            wrench = np.concatenate([force, np.zeros(3)])  # eq. (31)
+            wrench = load_wrenches(motion, a[None, :])[0]  # eq. (31)
             per_acceleration.append((pinv @ wrench[:columns], jac[:, :3] @ a))  # eq. (20), J a
         worst = [0.0, 0.0, 0.0, 0.0]
         for v in motion.velocities:

@@ -100,6 +100,7 @@ def _cpr_wwa(cfg: DictConfig, catalogue: pd.DataFrame, robot):
         rank_rtol=model.rank_rtol,
         jdot=model.jdot,
         tension=tension_spec(cfg),
+        inertia=_name(model.inertia),
     )
     if motion.tension.model == "pinv":
         return motion, actuator, CPR_WWA_CRITERIA

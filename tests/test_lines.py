@@ -102,3 +102,13 @@ def test_agreement_with_the_grid_per_actuator_and_orientation(lines, reading, or
     assert summary["agreement_pct"] == pytest.approx(expected, abs=0.01)
     assert summary["n_feasible_grid"] == points["feasible_grid"].sum()
     assert summary["n_lines"] == 72 and not points.isna().any().any()
+
+
+@pytest.mark.parametrize("orientation, expected", [("zero", [100.0, 98.15, 98.15, 100.0, 87.04]),
+                                                   ("rot05", [99.54, 100.0, 99.07, 98.61, 88.43])])
+def test_agreement_with_newtons_sign_of_the_inertial_term(lines, orientation, expected):
+    """model.inertia=newton (docs/model.md section 4): the grid is unchanged (symmetric box), the
+    lines accelerate and brake with the other sign."""
+    got = [lines(f"actuator={a}", "model.inertia=newton", *(ROT if orientation == "rot05" else []))[2]
+           ["agreement_pct"] for a in range(1, 6)]
+    assert got == pytest.approx(expected, abs=0.01)

@@ -241,3 +241,14 @@ def test_verdicts_do_not_depend_on_how_poses_are_chunked_or_batched(make_cfg, ca
     assert (whole["feasible"] == split["feasible"]).all()
     for name in ("slack", "torque", "voltage"):
         assert split[f"margin_{name}"].to_numpy() == pytest.approx(whole[f"margin_{name}"], abs=1e-7)
+
+
+@pytest.mark.parametrize("inertia,factor", [("newton", GRAVITY + 1.0), ("paper", GRAVITY - 1.0)])
+def test_accelerating_upwards_needs_more_tension_under_newton(inertia, factor):
+    """Four symmetric cables lift the point mass at 1 m/s^2: Newton's law needs m (g + a) of
+    vertical force; eq. (31) as printed gives m (g - a) (the a -> -a flip of docs/model.md)."""
+    depth = 2.0
+    motion = replace(hanging_motion(), accelerations=np.array([[0.0, 0.0, 1.0]]), inertia=inertia)
+    state = motion.state(square_robot(), np.array([[0.0, 0.0, -depth]]), (0.0, 0.0, 0.0))
+    length = np.sqrt(2 * HALF**2 + depth**2)
+    assert state.shaft_torque[0, :, 0] / RADIUS == pytest.approx(np.full(4, MASS * factor * length / (4 * depth)))
