@@ -205,10 +205,12 @@ class MotionConfig:
 
 @dataclass
 class LoadConfig:
-    """Load mass m (kg) of eq. (31) and gravitational acceleration g (m/s^2)."""
+    """Load mass m (kg) of eq. (31), gravitational acceleration g (m/s^2) and a constant external
+    wrench [f_x f_y f_z M_x M_y M_z] (N, N m) the cables must also balance (CPR-WWA, lines)."""
 
     mass: float = 2.0
     gravity: float = 9.81
+    external: list[float] = field(default_factory=lambda: [0.0] * 6)
 
 
 @dataclass
@@ -339,6 +341,8 @@ def validate(cfg: DictConfig, catalogue_ids) -> None:
         ids = ", ".join(str(i) for i in sorted(catalogue_ids))
         raise ConfigError(f"actuator={cfg.actuator}: no such id in the catalogue (ids: {ids})")
     _validate_tension(cfg)
+    if len(cfg.load.external) != 6:
+        raise ConfigError(f"load.external={list(cfg.load.external)}: needs 6 values (fx fy fz mx my mz)")
     total = cfg.orientation.total
     if total.n < 1 or total.bound < 0:
         raise ConfigError(f"orientation.total={OmegaConf.to_container(total)}: needs n >= 1, bound >= 0")

@@ -40,6 +40,7 @@ class MotionSpec:
     the wrench rows follow ``pinv_columns`` (forces only, or forces and moments).
     ``inertia``: ``"paper"`` takes F of eq. (31) as printed, m (a - g e_z); ``"newton"`` the
     force the pulling cables must exert with z up, m (-a - g e_z) (docs/model.md section 4).
+    ``external``: a constant wrench (6,) added to F of eq. (31) (N, N m; zeros in the paper).
     """
 
     velocities: np.ndarray
@@ -53,6 +54,7 @@ class MotionSpec:
     velocity_extremes: np.ndarray | None = None
     tension: TensionSpec = field(default_factory=TensionSpec)
     inertia: str = "paper"
+    external: np.ndarray = field(default_factory=lambda: np.zeros(6))
 
     def state(self, robot: CableRobot, positions: np.ndarray, orientation) -> "PoseDynamics":
         return PoseDynamics(robot, positions, orientation, self)
@@ -149,11 +151,12 @@ class PoseDynamics(PoseGeometry):
 
     @cached_property
     def torque_affine(self) -> tuple[np.ndarray, np.ndarray]:
-        """M = (J^T)^+ F is affine in the acceleration (eqs. 20, 31: F = m (+-a - g e_z), no
-        moments): M = C a + d with C (n, m, 3) and d (n, m)."""
+        """M = (J^T)^+ F is affine in the acceleration (eqs. 20, 31: F = m (+-a - g e_z) + the
+        external wrench): M = C a + d with C (n, m, 3) and d (n, m) = M at rest."""
         pinv = self.wrench_pinv[0]
         mass = self.motion.mass
-        return inertia_sign(self.motion) * mass * pinv[:, :, :3], -mass * self.motion.gravity * pinv[:, :, 2]
+        at_rest = load_wrenches(self.motion, np.zeros((1, 3)))[0, : pinv.shape[2]]
+        return inertia_sign(self.motion) * mass * pinv[:, :, :3], pinv @ at_rest
 
     @cached_property
     def shaft_accel_from_acceleration(self) -> np.ndarray:
@@ -217,9 +220,9 @@ class PoseDynamics(PoseGeometry):
 
 def load_wrenches(motion: MotionSpec, accelerations: np.ndarray) -> np.ndarray:
     """(k, 6) F = [m xdd, m ydd, m (zdd - g), 0, 0, 0] of eq. (31) (``inertia="paper"``), or
-    with -a in place of a (``"newton"``)."""
+    with -a in place of a (``"newton"``), plus ``motion.external``."""
     forces = motion.mass * (inertia_sign(motion) * accelerations - np.array([0.0, 0.0, motion.gravity]))
-    return np.hstack([forces, np.zeros_like(forces)])
+    return np.hstack([forces, np.zeros_like(forces)]) + motion.external
 
 
 def inertia_sign(motion: MotionSpec) -> float:

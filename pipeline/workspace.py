@@ -101,6 +101,7 @@ def _cpr_wwa(cfg: DictConfig, catalogue: pd.DataFrame, robot):
         jdot=model.jdot,
         tension=tension_spec(cfg),
         inertia=_name(model.inertia),
+        external=np.asarray(cfg.load.external, dtype=float),
     )
     if motion.tension.model == "pinv":
         return motion, actuator, CPR_WWA_CRITERIA

@@ -63,6 +63,7 @@ CASES = [
     ("pipeline", ["load.mass=1,2"], "load.mass"),
     ("pipeline", ["analysis=dynamics"], "dynamics"),
     ("pipeline", ["tension.model=lp"], "tension.model"),
+    ("pipeline", ["load.external=[0,0,-5]"], "load.external"),
     ("pipeline", ["tension.model=feasible", "tension.t_min=-5"], "tension.t_min=-5"),
     ("pipeline", ["tension.t_min=20", "tension.t_max=10"], "tension.t_max=10"),
     ("pipeline", ["robot=irpm6", "tension.t_max=1000"], "limits.s_max"),

@@ -252,3 +252,18 @@ def test_accelerating_upwards_needs_more_tension_under_newton(inertia, factor):
     state = motion.state(square_robot(), np.array([[0.0, 0.0, -depth]]), (0.0, 0.0, 0.0))
     length = np.sqrt(2 * HALF**2 + depth**2)
     assert state.shaft_torque[0, :, 0] / RADIUS == pytest.approx(np.full(4, MASS * factor * length / (4 * depth)))
+
+
+@pytest.mark.parametrize("model", ["pinv", "feasible"])
+def test_an_external_force_adds_to_the_weight(model):
+    """load.external: a constant downward pull of m g on the hanging point mass doubles every
+    tension, under both tension models, in the grid criteria and in F of eq. (31)."""
+    robot, at = square_robot(), np.array([[0.0, 0.0, -2.0]])
+    plain = replace(hanging_motion(), tension=TensionSpec(model))
+    pulled = replace(plain, external=np.array([0.0, 0.0, -MASS * GRAVITY, 0.0, 0.0, 0.0]))
+    heavy = replace(plain, mass=2 * MASS)
+    assert load_wrenches(pulled, np.zeros((1, 3))) == pytest.approx(load_wrenches(heavy, np.zeros((1, 3))))
+    for name in ("torque", "voltage"):
+        got = CRITERIA[name](pulled.state(robot, at, (0, 0, 0)), ACTUATOR)
+        assert got == pytest.approx(CRITERIA[name](heavy.state(robot, at, (0, 0, 0)), ACTUATOR))
+        assert got < CRITERIA[name](plain.state(robot, at, (0, 0, 0)), ACTUATOR)
