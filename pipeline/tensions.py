@@ -32,8 +32,6 @@ import numpy as np
 import scipy.sparse as sparse
 from scipy.optimize import linprog
 
-from pipeline.linalg import batched_pinv
-
 RELAX = 1e-9  # extra relaxation (in units of each family's scale) of earlier families' bounds
 LP_BLOCKS = 256  # (pose, wrench) pairs per HiGHS call; HiGHS time grows faster than linearly
 
@@ -92,7 +90,7 @@ def capacity_margins(
     """Nested capacity margins (n, K) per family and the chosen x (n, K, m): the solution of the
     last family's LP. ``wrenches`` (n, K, r) must lie in the range of S (see
     :func:`reachability`); ``pinv`` and ``rank`` (n,) are S^+ and the rank of S."""
-    n, r, m = structure.shape
+    n, _, m = structure.shape
     k = wrenches.shape[1]
     full = [_broadcast(f, (n, k, m)) for f in families]
     margins = {f.name: np.empty((n, k)) for f in families}
