@@ -116,6 +116,7 @@ def _tensions(studies_dir: Path) -> list[str]:
             "| wrench rows, orientation | " + " | ".join(
                 f"act. {a}" for a in sorted(table["actuator"].unique())) + " |",
             "| --- |" + " --- |" * table["actuator"].nunique()]
+    table = table.sort_values("wrench_rows", ascending=False, kind="stable")  # the paper's first
     for (reading, case), part in table.groupby(["wrench_rows", "case"], sort=False):
         cells = [f"{'–' if pd.isna(r.survive_pct) else f'{r.survive_pct:.1f}'} "
                  f"({r.n_paper} → {r.n_physical})" for r in part.sort_values("actuator").itertuples()]
