@@ -267,3 +267,11 @@ def test_an_external_force_adds_to_the_weight(model):
         got = CRITERIA[name](pulled.state(robot, at, (0, 0, 0)), ACTUATOR)
         assert got == pytest.approx(CRITERIA[name](heavy.state(robot, at, (0, 0, 0)), ACTUATOR))
         assert got < CRITERIA[name](plain.state(robot, at, (0, 0, 0)), ACTUATOR)
+
+
+def test_statics_code_path_finds_the_same_68_hanging_poses(make_cfg, catalogue):
+    """analysis=statics on CPR-8 (geometric structure matrix A of eq. 8, not J): the carrier's
+    weight alone, pulling cables, moment balance: the same 68 poses as NNLS on J^T above."""
+    _, summary = compute_workspace(make_cfg("analysis=statics", "tension.model=feasible",
+                                            "wrench.fz=-19.62", "limits.s_max=1000"), catalogue)
+    assert summary["n_feasible"] == 68 and summary["lost_slack"] == 148
