@@ -231,7 +231,9 @@ class ChoiceConfig:
 
 @dataclass
 class ModelConfig:
-    """Readings of the ambiguous equations (docs/model.md gives each one's numbers)."""
+    """Readings of the ambiguous equations (docs/model.md gives each one's numbers).
+    ``margin_atol``: margins within it of zero are exactly 0 and satisfied (``pipeline.verdict``),
+    so a pose on a limit gets the same verdict on every CPU."""
 
     pinv_columns: PinvColumns = PinvColumns.translational
     velocity_boundary: VelocityBoundary = VelocityBoundary.exclude
@@ -241,6 +243,7 @@ class ModelConfig:
     jdot: bool = False
     xi_in_torque_limit: bool = True
     rank_rtol: float = 1e-9
+    margin_atol: float = 1e-9
 
 
 @dataclass
@@ -325,6 +328,8 @@ def validate(cfg: DictConfig, catalogue_ids) -> None:
             raise ConfigError(f"{key}={value}: must be > 0")
     if not 0 < cfg.choice.required_pct <= 100:
         raise ConfigError(f"choice.required_pct={cfg.choice.required_pct}: must be in (0, 100]")
+    if not 0 <= cfg.model.margin_atol <= 1e-3:
+        raise ConfigError(f"model.margin_atol={cfg.model.margin_atol}: must be in [0, 1e-3]")
     if cfg.grid.n < 2:
         raise ConfigError(f"grid.n={cfg.grid.n}: must be >= 2")
     if cfg.grid.n_vel is not None and cfg.grid.n_vel < 1:

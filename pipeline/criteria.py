@@ -104,9 +104,13 @@ def _voltage_from_velocity(dyn: PoseDynamics, act: ActuatorModel) -> tuple[np.nd
 
 
 def singular(st: PoseStatics, lim: StaticLimits) -> np.ndarray:
-    """The structure matrix must have full rank: margin (g - rtol) / (1 - rtol) in [-rtol, 1]
-    with g its gram ratio; a singular pose has no tensions to check (``kernel.GATES``)."""
-    return (st.gram_ratio - lim.rank_rtol) / (1.0 - lim.rank_rtol)
+    """The structure matrix must have full rank. With g its gram ratio in [0, 1] the margin is
+    (g - rtol) / (1 - rtol) in [0, 1] for a regular pose and g / rtol - 1 in [-1, 0) for a
+    singular one (continuous and increasing in g, -1 for an exactly singular pose, so the
+    verdict tolerance of ``pipeline.verdict`` never reaches it). A singular pose has no tensions
+    to check (``verdict.GATES``)."""
+    g, rtol = st.gram_ratio, lim.rank_rtol
+    return np.where(g >= rtol, (g - rtol) / (1.0 - rtol), g / rtol - 1.0)
 
 
 def unreachable(state, limits) -> np.ndarray:

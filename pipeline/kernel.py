@@ -10,11 +10,6 @@ import numpy as np
 from pipeline.criteria import CRITERIA
 from pipeline.geometry import CableRobot
 
-# criteria that, when violated, decide the verdict whatever the others say: a singular structure
-# matrix, a wrench out of reach, a cable that would have to push (first listed wins)
-GATES = ("singular", "unreachable", "slack")
-
-
 @dataclass(frozen=True)
 class WorkspaceProblem:
     """Everything a worker needs, as plain arrays and numbers (no config objects).
@@ -23,6 +18,7 @@ class WorkspaceProblem:
     statics); ``limits`` is what the criteria compare against (an ``ActuatorModel`` or
     ``StaticLimits``). ``orientations`` (k, 3): the pose must satisfy every criterion at every
     one of them (k = 1: constant-orientation workspace; k > 1: total-orientation workspace).
+    ``margin_atol``: margins within it of zero count as exactly 0 (``pipeline.verdict``).
     """
 
     robot: CableRobot
@@ -30,6 +26,7 @@ class WorkspaceProblem:
     spec: Any
     limits: Any
     criteria: tuple[str, ...]
+    margin_atol: float = 1e-9
 
     @property
     def orientation(self) -> tuple[float, float, float]:
@@ -50,24 +47,3 @@ def evaluate_chunk(problem: WorkspaceProblem, positions: np.ndarray) -> dict[str
             rank = state.jacobian_rank.astype(np.int8)
             result["jacobian_rank"] = np.minimum(result.get("jacobian_rank", rank), rank)
     return result
-
-
-def classify(margins: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
-    """Feasibility and the limiting criterion of every pose.
-
-    A pose is feasible when every margin is >= 0. ``limiting`` names the criterion with the
-    smallest margin: the most violated one for an infeasible pose, the tightest for a feasible
-    one; a violated gate (``GATES``: singular, unreachable, slack) takes precedence. Each
-    infeasible pose is therefore attributed to exactly one criterion.
-    """
-    names = list(margins)
-    stacked = np.column_stack([margins[name] for name in names])
-    if not np.isfinite(stacked).all():
-        row = int(np.flatnonzero(~np.isfinite(stacked).all(axis=1))[0])
-        raise FloatingPointError(f"non-finite margin at pose index {row}: {stacked[row]}")
-    feasible = (stacked >= 0).all(axis=1)
-    limiting = np.asarray(names, dtype=object)[stacked.argmin(axis=1)]
-    for gate in reversed(GATES):  # the first gate listed wins
-        if gate in margins:
-            limiting[margins[gate] < 0] = gate
-    return feasible, limiting

@@ -17,6 +17,7 @@ import pandas as pd
 from omegaconf import DictConfig
 
 from pipeline.trajectory import inverse_dynamics, sample_margins, trapezoid
+from pipeline.verdict import classify
 from pipeline.workspace import build_problem, grid_workspace
 
 QUANTITIES = ("theta_dot", "torque", "voltage")
@@ -53,10 +54,11 @@ def simulate_lines(cfg: DictConfig, catalogue: pd.DataFrame) -> tuple[pd.DataFra
             samples[f"{name}_{cable + 1}"] = quantities[name][:, cable]
     for key in ("wrench_residual", "power_cables", "power_load"):
         samples[key] = quantities[key]
-    margins = sample_margins(quantities, act)
+    raw = sample_margins(quantities, act)
+    margins, samples["ok"], _ = classify({name: raw[name] for name in problem.criteria},
+                                         problem.margin_atol)
     for name in problem.criteria:
         samples[f"margin_{name}"] = margins[name]
-    samples["ok"] = np.column_stack([margins[n] for n in problem.criteria]).min(axis=1) >= 0
 
     points = points.rename(columns={"feasible": "feasible_grid", "limiting": "limiting_grid"})
     points["feasible"] = _point_verdict(samples, points)

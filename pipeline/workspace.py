@@ -26,12 +26,13 @@ from pipeline.actuators import actuator_model
 from pipeline.criteria import StaticLimits
 from pipeline.dynamics import MotionSpec
 from pipeline.grid import Grid, box_grid, step_grid
-from pipeline.kernel import WorkspaceProblem, classify, evaluate_chunk
+from pipeline.kernel import WorkspaceProblem, evaluate_chunk
 from pipeline.motion import acceleration_set, extreme_points, velocity_set
 from pipeline.parallel import iter_chunks
 from pipeline.robots import cpr8, irpm6
 from pipeline.statics import StaticsSpec
 from pipeline.tensions import TensionSpec
+from pipeline.verdict import classify
 
 CPR_WWA_CRITERIA = ("speed", "torque", "acceleration", "voltage")  # eqs. (30), (32), (33), (34)
 STATICS_CRITERIA = ("singular", "slack", "tension_max", "length")  # eq. (10)
@@ -46,7 +47,8 @@ def build_problem(cfg: DictConfig, catalogue: pd.DataFrame) -> tuple[WorkspacePr
     robot, grid = ROBOTS[cfg.robot.name](cfg)
     analysis = analysis_name(cfg)
     spec, limits, criteria = ANALYSES[analysis](cfg, catalogue, robot)
-    problem = WorkspaceProblem(robot, orientation_set(cfg.orientation), spec, limits, criteria)
+    problem = WorkspaceProblem(robot, orientation_set(cfg.orientation), spec, limits, criteria,
+                               cfg.model.margin_atol)
     return problem, grid
 
 
@@ -171,8 +173,8 @@ def grid_workspace(
 
 def tabulate(problem: WorkspaceProblem, positions: np.ndarray, raw: dict) -> pd.DataFrame:
     """One chunk's points: position, orientation, verdict, limiting criterion, margins."""
-    margins = {name: raw[f"margin_{name}"] for name in problem.criteria}
-    feasible, limiting = classify(margins)
+    margins, feasible, limiting = classify(
+        {name: raw[f"margin_{name}"] for name in problem.criteria}, problem.margin_atol)
     points = pd.DataFrame(positions, columns=["x", "y", "z"])
     for name, value in zip(("psi", "theta", "phi"), problem.orientation):
         points[name] = value

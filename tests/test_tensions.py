@@ -14,7 +14,8 @@ from pipeline.actuators import ActuatorModel
 from pipeline.criteria import CRITERIA, tension_families
 from pipeline.dynamics import MotionSpec, load_wrenches
 from pipeline.geometry import CableRobot
-from pipeline.kernel import WorkspaceProblem, classify, evaluate_chunk
+from pipeline.kernel import WorkspaceProblem, evaluate_chunk
+from pipeline.verdict import classify
 from pipeline.tensions import TensionSpec, feasible_tensions
 from pipeline.workspace import build_problem, compute_workspace
 
@@ -64,7 +65,7 @@ def test_minimum_tension_raises_every_cable_and_is_reported_as_slack_when_out_of
 
 def verdicts(problem, positions):
     raw = evaluate_chunk(problem, positions)
-    return classify({name: raw[f"margin_{name}"] for name in problem.criteria})
+    return classify({name: raw[f"margin_{name}"] for name in problem.criteria}, problem.margin_atol)[1:]
 
 
 def test_a_pose_that_needs_a_pushing_cable_is_slack_never_feasible():
