@@ -165,16 +165,17 @@ class WrenchConfig:
 
 @dataclass
 class LimitsConfig:
-    """Largest sustainable cable tension s_max (N) of eq. (10)."""
+    """``s_max``: the IRPM paper's name (eq. 10) for ``tension.t_max``, kept as an alias: when
+    given it replaces ``tension.t_max``."""
 
-    s_max: float = 55_000.0
+    s_max: Optional[float] = None
 
 
 @dataclass
 class TensionConfig:
     """``model``: pinv (papers) or feasible (cables only pull). ``t_min``: smallest tension (N).
-    ``t_max``: cable rating (N) of CPR-WWA, null = the motor torque limit / R_i only (statics:
-    ``limits.s_max``). ``residual_rtol``: a required wrench is unreachable when the equilibrium
+    ``t_max``: cable rating (N) in every analysis, null = none (CPR-WWA: the motor torque limit
+    / R_i only); ``limits.s_max`` is an alias. ``residual_rtol``: a required wrench is unreachable when the equilibrium
     residual exceeds this fraction of it."""
 
     model: TensionModel = TensionModel.pinv
@@ -205,11 +206,13 @@ class MotionConfig:
 
 @dataclass
 class LoadConfig:
-    """Load mass m (kg) of eq. (31), gravitational acceleration g (m/s^2) and a constant external
-    wrench [f_x f_y f_z M_x M_y M_z] (N, N m) the cables must also balance (CPR-WWA, lines)."""
+    """Load mass m (kg) of eq. (31), gravitational acceleration g (m/s^2, along -up of the robot),
+    centre of mass (m, platform frame) and a constant external wrench [f_x f_y f_z M_x M_y M_z]
+    (N, N m) the cables must also balance, in every analysis."""
 
     mass: float = 2.0
     gravity: float = 9.81
+    com: list[float] = field(default_factory=lambda: [0.0] * 3)
     external: list[float] = field(default_factory=lambda: [0.0] * 6)
 
 
@@ -294,9 +297,8 @@ def job_dir_name(override_dirname: str, job_num: int) -> str:
     return override_dirname.replace("/", "_") or f"job{job_num}"
 
 
+NON_NEGATIVE = ("load.mass", "load.gravity")
 POSITIVE = (
-    "load.mass",
-    "load.gravity",
     "motion.v_max",
     "motion.t_acc",
     "motion.t_dec",
@@ -308,7 +310,6 @@ POSITIVE = (
     "robot.carrier.h",
     "drive.winch_radius",
     "drive.gear_ratio",
-    "limits.s_max",
     "robot.r_base",
     "robot.r_end",
     "robot.l_max",
@@ -324,8 +325,20 @@ def validate(cfg: DictConfig, catalogue_ids) -> None:
     """Raise ConfigError on the first value the model cannot use: '<key>=<value>: <rule>'."""
     for key in POSITIVE:
         value = _select(cfg, key)
-        if value is not None and not value > 0:
-            raise ConfigError(f"{key}={value}: must be > 0")
+        if value is not None and not 0 < value < float("inf"):
+            raise ConfigError(f"{key}={value}: must be > 0 and finite")
+    for key in NON_NEGATIVE:
+        value = _select(cfg, key)
+        if not 0 <= value < float("inf"):
+            raise ConfigError(f"{key}={value}: must be >= 0 and finite")
+    for key in ("load.com", "load.external"):
+        values = list(_select(cfg, key))
+        if not all(isinstance(v, (int, float)) and abs(v) < float("inf") for v in values):
+            raise ConfigError(f"{key}={values}: every value must be a finite number")
+    if cfg.model.moment_arm.name == "base" and cfg.load.mass > 0:
+        raise ConfigError(f"model.moment_arm=base: moments about the base are only read for a "
+                          f"massless platform (load.mass={cfg.load.mass}); set load.mass=0 and put "
+                          "the weight in wrench.*")
     if not 0 < cfg.choice.required_pct <= 100:
         raise ConfigError(f"choice.required_pct={cfg.choice.required_pct}: must be in (0, 100]")
     if not 0 <= cfg.model.margin_atol <= 1e-3:
@@ -348,6 +361,8 @@ def validate(cfg: DictConfig, catalogue_ids) -> None:
     _validate_tension(cfg)
     if len(cfg.load.external) != 6:
         raise ConfigError(f"load.external={list(cfg.load.external)}: needs 6 values (fx fy fz mx my mz)")
+    if len(cfg.load.com) != 3:
+        raise ConfigError(f"load.com={list(cfg.load.com)}: needs 3 values (x y z, m, platform frame)")
     total = cfg.orientation.total
     if total.n < 1 or total.bound < 0:
         raise ConfigError(f"orientation.total={OmegaConf.to_container(total)}: needs n >= 1, bound >= 0")
@@ -358,16 +373,18 @@ def validate(cfg: DictConfig, catalogue_ids) -> None:
 
 def _validate_tension(cfg: DictConfig) -> None:
     tension = cfg.tension
-    if tension.t_min < 0:
-        raise ConfigError(f"tension.t_min={tension.t_min}: must be >= 0 (a cable cannot push)")
-    if tension.t_max is None:
-        return
-    if tension.t_max <= tension.t_min:
-        raise ConfigError(f"tension.t_max={tension.t_max}: must be > tension.t_min={tension.t_min}")
+    if not 0 <= tension.t_min < float("inf"):
+        raise ConfigError(f"tension.t_min={tension.t_min}: must be >= 0 and finite (a cable cannot push)")
+    s_max = cfg.limits.s_max
+    t_max = s_max if s_max is not None else tension.t_max
+    key = "limits.s_max" if s_max is not None else "tension.t_max"
+    if t_max is not None and not tension.t_min < t_max < float("inf"):
+        raise ConfigError(f"{key}={t_max}: must be finite and > tension.t_min={tension.t_min}")
     from pipeline.workspace import analysis_name
 
-    if analysis_name(cfg) == "statics":
-        raise ConfigError(f"tension.t_max={tension.t_max}: statics take the cable rating from limits.s_max")
+    if tension.model.name == "pinv" and tension.t_min != 0 and analysis_name(cfg) != "statics":
+        raise ConfigError(f"tension.t_min={tension.t_min}: the pinv model checks the papers' "
+                          "minimum-norm torques, which may push; set tension.model=feasible")
 
 
 def _validate_cpr8(robot: DictConfig) -> None:

@@ -27,12 +27,15 @@ Criterion = Callable[[Any, Any], np.ndarray]
 
 @dataclass(frozen=True)
 class StaticLimits:
-    """Eq. (10) of the IRPM paper: tensions in [0, s_max] (N), lengths <= l_max (m); a pose is
-    singular when the gram ratio of the structure matrix is below ``rank_rtol``."""
+    """Eq. (10) of the IRPM paper: tensions in [t_min, s_max] (N; s_max = ``tension.t_max``,
+    inf = no rating), lengths <= l_max (m); a pose is singular when the gram ratio of the
+    structure matrix is below ``rank_rtol``. ``scale`` (N) is the unit of the slack margin:
+    s_max, or without a rating the magnitude of the force the cables balance (at least 1 N)."""
 
     s_max: float
     l_max: float
     rank_rtol: float
+    scale: float
 
 
 def max_abs_sum(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -121,18 +124,21 @@ def unreachable(state, limits) -> np.ndarray:
 
 def slack(state, limits) -> np.ndarray:
     """A cable can only pull: tensions >= t_min (eq. 10 of the IRPM paper: s_i >= 0). Margin
-    (min_i s_i - t_min) / s_max; under ``feasible`` the best such margin over all valid
-    tension distributions (CPR-8: in units of the torque limit)."""
+    (min_i s_i - t_min) / scale (``StaticLimits.scale``); under ``feasible`` the best such margin
+    over all valid tension distributions (CPR-8: in units of the torque limit)."""
     if _feasible_model(state):
         return feasible_margins(state, limits)["slack"]
-    return (state.tensions.min(axis=1) - state.spec.tension.t_min) / limits.s_max
+    return (state.tensions.min(axis=1) - state.spec.tension.t_min) / limits.scale
 
 
 def tension_max(state, limits) -> np.ndarray:
     """Eq. (10): s_i <= s_max (IRPM), or the cable rating ``tension.t_max`` (CPR-8)."""
     if _feasible_model(state):
         return feasible_margins(state, limits)["tension_max"]
-    return _margin(state.tensions, limits.s_max)
+    if isinstance(state, PoseStatics):
+        return _margin(state.tensions, limits.s_max)
+    high, _ = state.acceleration_range(*state.torque_affine)  # largest M_i = R_i t_i over the set
+    return _margin(high / state.motion.winch_radius, state.motion.tension.t_max)
 
 
 def length(st: PoseStatics, lim: StaticLimits) -> np.ndarray:
@@ -171,11 +177,13 @@ def tension_families(state, limits) -> list[Family]:
     """The intervals on the cable forces x, in gate order. CPR-8 (x = M = R t, per required
     acceleration a_k, :func:`actuator_families`): the voltage must hold for every velocity of
     the set, |G_v J a_k + L_v theta_dot + S_v M| <= U (eqs. 21, 34). IRPM (x = s): slack
-    s >= t_min and s <= s_max (eq. 10), both in units of s_max."""
+    s >= t_min and s <= s_max (eq. 10), in units of ``StaticLimits.scale`` and s_max."""
     tension = _tension(state)
     if isinstance(state, PoseStatics):
-        return [Family("slack", tension.t_min, np.inf, limits.s_max),
-                Family("tension_max", -np.inf, limits.s_max, limits.s_max)]
+        slack = Family("slack", tension.t_min, np.inf, limits.scale)
+        if not np.isfinite(limits.s_max):
+            return [slack]
+        return [slack, Family("tension_max", -np.inf, limits.s_max, limits.s_max)]
     high, low = _voltage_from_velocity(state, limits)  # (n, m)
     accel = limits.G_v * np.einsum("nmj,kj->nkm", state.jacobian[:, :, :3], state.wrench_accelerations)
     return actuator_families(tension, state.motion.winch_radius, limits,

@@ -19,10 +19,24 @@ from pipeline.tensions import TensionSpec
 from pipeline.geometry import (
     CableRobot,
     cable_vectors,
+    euler_rate_axes,
     length_jacobian,
     rotation_matrix,
-    rotation_partials,
+    structure_matrix,
 )
+
+
+@dataclass(frozen=True)
+class Load:
+    """What the cables carry besides inertia: a load of ``mass`` (kg) under gravity of magnitude
+    ``gravity`` (m/s^2, along -up of the robot) with its centre of mass at ``com`` (m, platform
+    frame), and a constant ``external`` wrench [f; M] (N, N m; fixed axes, moments about the
+    platform's reference point)."""
+
+    mass: float = 0.0
+    gravity: float = 9.81
+    com: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    external: np.ndarray = field(default_factory=lambda: np.zeros(6))
 
 
 @dataclass(frozen=True)
@@ -40,13 +54,13 @@ class MotionSpec:
     the wrench rows follow ``pinv_columns`` (forces only, or forces and moments).
     ``inertia``: ``"paper"`` takes F of eq. (31) as printed, m (a - g e_z); ``"newton"`` the
     force the pulling cables must exert with z up, m (-a - g e_z) (docs/model.md section 4).
-    ``external``: a constant wrench (6,) added to F of eq. (31) (N, N m; zeros in the paper).
+    ``load``: mass, gravity, centre of mass and external wrench of F in eq. (31) (:class:`Load`;
+    the paper: 2 kg at the reference point, no external wrench).
     """
 
     velocities: np.ndarray
     accelerations: np.ndarray
-    mass: float
-    gravity: float
+    load: Load
     winch_radius: np.ndarray
     pinv_columns: str = "translational"
     rank_rtol: float = 1e-9
@@ -54,7 +68,6 @@ class MotionSpec:
     velocity_extremes: np.ndarray | None = None
     tension: TensionSpec = field(default_factory=TensionSpec)
     inertia: str = "paper"
-    external: np.ndarray = field(default_factory=lambda: np.zeros(6))
 
     def state(self, robot: CableRobot, positions: np.ndarray, orientation) -> "PoseDynamics":
         return PoseDynamics(robot, positions, orientation, self)
@@ -92,6 +105,17 @@ class PoseGeometry:
         lengths = self.lengths[..., None]
         return np.divide(self.vectors, lengths, out=np.zeros_like(self.vectors), where=lengths > 0)
 
+    @cached_property
+    def arms(self) -> np.ndarray:
+        """(n, m, 3) R b_i: attachment points from the platform's reference point, fixed axes."""
+        return np.broadcast_to(self.robot.attachments @ self.rotation.T, self.vectors.shape)
+
+    @cached_property
+    def structure_matrix(self) -> np.ndarray:
+        """(n, 6, m) A = [u_i; (R b_i) x u_i] (``geometry.structure_matrix``): A t balances the
+        wrench on the platform, moments about its reference point."""
+        return structure_matrix(self.unit, self.arms)
+
 
 class PoseDynamics(PoseGeometry):
     """Lazily evaluated CPR-WWA quantities (eqs. 18-22) for a chunk of poses."""
@@ -102,8 +126,9 @@ class PoseDynamics(PoseGeometry):
 
     @cached_property
     def jacobian(self) -> np.ndarray:
-        """(n, m, 6) shaft Jacobian J of eq. (19): theta_dot = J p_dot, rows divided by R_i (18)."""
-        dl_dp = length_jacobian(self.robot, self.unit, rotation_partials(*self.orientation))
+        """(n, m, 6) shaft Jacobian J of eq. (19): theta_dot = J p_dot, rows divided by R_i (18);
+        J^T = blockdiag(I, E^T) A diag(1 / R_i) with A the structure matrix."""
+        dl_dp = length_jacobian(self.structure_matrix, euler_rate_axes(*self.orientation))
         return dl_dp / self.motion.winch_radius[None, :, None]
 
     @cached_property
@@ -151,12 +176,14 @@ class PoseDynamics(PoseGeometry):
 
     @cached_property
     def torque_affine(self) -> tuple[np.ndarray, np.ndarray]:
-        """M = (J^T)^+ F is affine in the acceleration (eqs. 20, 31: F = m (+-a - g e_z) + the
-        external wrench): M = C a + d with C (n, m, 3) and d (n, m) = M at rest."""
+        """M = (J^T)^+ F is affine in the acceleration (eqs. 20, 31: F = L a + F_0, the inertia
+        +-m a acting at the centre of mass, the weight and the external wrench in F_0):
+        M = C a + d with C (n, m, 3) and d (n, m) = M at rest."""
         pinv = self.wrench_pinv[0]
-        mass = self.motion.mass
-        at_rest = load_wrenches(self.motion, np.zeros((1, 3)))[0, : pinv.shape[2]]
-        return inertia_sign(self.motion) * mass * pinv[:, :, :3], pinv @ at_rest
+        rows = pinv.shape[2]
+        slope, at_rest = load_wrench_terms(self.motion.load, inertia_sign(self.motion),
+                                           self.robot.up, self.rotation)
+        return pinv @ slope[:rows], pinv @ at_rest[:rows]
 
     @cached_property
     def shaft_accel_from_acceleration(self) -> np.ndarray:
@@ -177,7 +204,7 @@ class PoseDynamics(PoseGeometry):
     @cached_property
     def wrenches(self) -> np.ndarray:
         """(k_a, 6) F of eq. (31) for every acceleration of the set."""
-        return load_wrenches(self.motion, self.motion.accelerations)
+        return load_wrenches(self.motion, self.motion.accelerations, self.robot.up, self.rotation)
 
     @cached_property
     def structure(self) -> np.ndarray:
@@ -203,7 +230,8 @@ class PoseDynamics(PoseGeometry):
     @cached_property
     def required_wrenches(self) -> np.ndarray:
         """(K, c) F of eq. (31) at ``wrench_accelerations``, the rows of ``structure``."""
-        return load_wrenches(self.motion, self.wrench_accelerations)[:, : self.structure.shape[1]]
+        wrenches = load_wrenches(self.motion, self.wrench_accelerations, self.robot.up, self.rotation)
+        return wrenches[:, : self.structure.shape[1]]
 
     @cached_property
     def jacobian_rank(self) -> np.ndarray:
@@ -218,11 +246,25 @@ class PoseDynamics(PoseGeometry):
         return np.einsum("nmc,ac->nma", pinv, self.wrenches[:, :columns])
 
 
-def load_wrenches(motion: MotionSpec, accelerations: np.ndarray) -> np.ndarray:
-    """(k, 6) F = [m xdd, m ydd, m (zdd - g), 0, 0, 0] of eq. (31) (``inertia="paper"``), or
-    with -a in place of a (``"newton"``), plus ``motion.external``."""
-    forces = motion.mass * (inertia_sign(motion) * accelerations - np.array([0.0, 0.0, motion.gravity]))
-    return np.hstack([forces, np.zeros_like(forces)]) + motion.external
+def load_wrench_terms(load: Load, sign: float, up: np.ndarray, rotation: np.ndarray):
+    """F of eq. (31) as L a + F_0: L (6, 3) and F_0 (6,). The load (mass m, centre of mass
+    R com from the platform's reference point) carries its weight m g (-up) and the inertial
+    force ``sign`` m a (``inertia``: ``paper`` +1, ``newton`` -1), both acting at the centre of
+    mass, plus ``load.external``. With z up, com = 0 and sign +1 this is the paper's
+    F = [m xdd, m ydd, m (zdd - g), 0, 0, 0]; with a = 0 it is the wrench of eq. (7) of the
+    IRPM paper that the weight adds to f_ext."""
+    arm = rotation @ np.asarray(load.com, dtype=float)
+    cross = np.array([[0.0, -arm[2], arm[1]], [arm[2], 0.0, -arm[0]], [-arm[1], arm[0], 0.0]])
+    slope = sign * load.mass * np.vstack([np.eye(3), cross])
+    weight = -load.mass * load.gravity * np.asarray(up, dtype=float)
+    return slope, np.concatenate([weight, cross @ weight]) + load.external
+
+
+def load_wrenches(motion: MotionSpec, accelerations: np.ndarray, up: np.ndarray,
+                  rotation: np.ndarray) -> np.ndarray:
+    """(k, 6) F of eq. (31) for accelerations (k, 3): :func:`load_wrench_terms` evaluated."""
+    slope, at_rest = load_wrench_terms(motion.load, inertia_sign(motion), up, rotation)
+    return accelerations @ slope.T + at_rest
 
 
 def inertia_sign(motion: MotionSpec) -> float:

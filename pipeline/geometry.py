@@ -8,11 +8,19 @@ The cable vector of cable ``i`` at pose ``p = [x y z psi theta phi]`` is
 which is eqs. (1)-(17) of Filipovic & Kevac (2018) for the CPR-8 and eqs. (1)-(3) of Hamed & Zohoor
 for the IRPM. ``R`` is eq. (9) of the CPR-8 paper (identical to eq. (2) of the IRPM paper):
 R = Rz(phi) Ry(theta) Rx(psi).
+
+One structure matrix serves every analysis (:func:`structure_matrix`): A (6, m) with columns
+[u_i; (R b_i) x u_i], u_i = c_i / l_i, moments about the platform's reference point. A tension
+t_i >= 0 pulls the platform along -u_i, so the cables balance a wrench w (everything else that
+acts on the platform, in the fixed frame's axes) when A t = w: eq. (7) of the IRPM paper. The
+CPR-8's shaft Jacobian of eq. (19) is the same matrix seen through Euler rates and winches,
+J^T = blockdiag(I, E^T) A diag(1 / R_i), E the angular velocity per Euler rate
+(:func:`euler_rate_axes`), because u_i . (dR/dq b_i) = e_q . ((R b_i) x u_i).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -25,6 +33,8 @@ class CableRobot:
     attachments: (m, 3) platform points in the body frame, m.
     box_lo, box_hi: (3,) corners of the region searched for the workspace, m.
     cable_names: m labels used in results and plots.
+    up: (3,) unit vector of the fixed frame pointing up; gravity acts along -up (CPR-8: +z,
+    IRPM: -Z, its Z axis points down from the base).
     """
 
     name: str
@@ -33,6 +43,7 @@ class CableRobot:
     box_lo: np.ndarray
     box_hi: np.ndarray
     cable_names: tuple[str, ...]
+    up: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, 1.0]))
 
     @property
     def n_cables(self) -> int:
@@ -56,18 +67,27 @@ def cable_vectors(robot: CableRobot, positions: np.ndarray, rotation: np.ndarray
     return positions[:, None, :] + attached[None, :, :] - robot.anchors[None, :, :]
 
 
-def length_jacobian(
-    robot: CableRobot, unit: np.ndarray, rotation_derivatives: np.ndarray
-) -> np.ndarray:
-    """(n, m, 6) analytic dl_i/dp for p = [x y z psi theta phi] (eq. 19 without the 1/R_i of eq. 18).
+def structure_matrix(unit: np.ndarray, arms: np.ndarray) -> np.ndarray:
+    """(n, 6, m) A with columns [u_i; arm_i x u_i] from unit cable vectors (n, m, 3) and moment
+    arms (n, m, 3): A t is the wrench the tensions t balance (eq. 8 of the IRPM paper)."""
+    return np.transpose(np.concatenate([unit, np.cross(arms, unit)], axis=2), (0, 2, 1))
 
-    Translation columns are the unit cable vectors; the column of Euler angle q is
-    u_i . (dR/dq b_i). Columns 4-6 are derivatives with respect to the Euler angles themselves
-    (the paper's p-dot holds Euler-angle rates, not the angular velocity).
-    """
-    lever = np.einsum("qjk,mk->qmj", rotation_derivatives, robot.attachments)  # (3, m, 3)
-    angular = np.einsum("nmj,qmj->nmq", unit, lever)
-    return np.concatenate([unit, angular], axis=2)
+
+def euler_rate_axes(psi: float, theta: float, phi: float) -> np.ndarray:
+    """(3, 3) E whose column q is the angular velocity of the platform per unit rate of Euler
+    angle q of eq. (9): dR/dq = [e_q]x R, so e_q is the axial vector of dR/dq R^T."""
+    skew = rotation_partials(psi, theta, phi) @ rotation_matrix(psi, theta, phi).T
+    return np.stack([skew[:, 2, 1], skew[:, 0, 2], skew[:, 1, 0]], axis=0)
+
+
+def length_jacobian(structure: np.ndarray, rate_axes: np.ndarray) -> np.ndarray:
+    """(n, m, 6) dl_i/dp for p = [x y z psi theta phi] (eq. 19 without the 1/R_i of eq. 18),
+    from the structure matrix (n, 6, m): translation columns u_i, Euler-angle columns
+    ((R b_i) x u_i) . e_q. Columns 4-6 are derivatives with respect to the Euler angles
+    themselves (the paper's p-dot holds Euler-angle rates, not the angular velocity)."""
+    forces, moments = structure[:, :3, :], structure[:, 3:, :]
+    angular = np.einsum("njm,jq->nmq", moments, rate_axes)
+    return np.concatenate([np.transpose(forces, (0, 2, 1)), angular], axis=2)
 
 
 def _rx(a: float) -> np.ndarray:

@@ -41,7 +41,7 @@ def literal_margins(
         pinv = np.linalg.pinv(jac[:, :columns].T, rtol=motion.rank_rtol)
         per_acceleration = []
         for a in motion.accelerations:
-            wrench = load_wrenches(motion, a[None, :])[0]  # eq. (31)
+            wrench = load_wrenches(motion, a[None, :], robot.up, rot)[0]  # eq. (31)
             per_acceleration.append((pinv @ wrench[:columns], jac[:, :3] @ a))  # eq. (20), J a
         worst = [0.0, 0.0, 0.0, 0.0]
         for v in motion.velocities:

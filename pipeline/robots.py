@@ -44,6 +44,7 @@ def cpr8(
         box_lo=np.array([de, de, -(v - de)]),
         box_hi=np.array([d - de, s - de, -de]),
         cable_names=("k", "h", "m", "n", "k'", "h'", "m'", "n'"),
+        up=np.array([0.0, 0.0, 1.0]),
     )
 
 
@@ -70,6 +71,7 @@ def irpm6(
         box_lo=np.asarray(box_lo, dtype=float),
         box_hi=np.asarray(box_hi, dtype=float),
         cable_names=tuple(f"C{i}D{i}" for i in range(1, 7)),
+        up=np.array([0.0, 0.0, -1.0]),
     )
 
 

@@ -13,15 +13,16 @@ from functools import cached_property
 
 import numpy as np
 
-from pipeline.dynamics import PoseGeometry
+from pipeline.dynamics import Load, PoseGeometry, load_wrench_terms
 from pipeline.linalg import batched_pinv, gram, gram_ratio
-from pipeline.geometry import CableRobot
+from pipeline.geometry import CableRobot, structure_matrix
 from pipeline.tensions import TensionSpec
 
 
 @dataclass(frozen=True)
 class StaticsSpec:
-    """The applied wrench [f_x f_y f_z M_x M_y M_z] (N, N m) of eq. (11) and model options.
+    """The applied wrench [f_x f_y f_z M_x M_y M_z] (N, N m) of eq. (11), the load whose weight
+    (and centre-of-mass moment) and external wrench add to it, and model options.
 
     ``moment_arm``: ``"platform"`` takes a_i = R d_i, moments about the platform's reference
     point O_M, where section IV applies the wrench; ``"base"`` takes eq. (9) literally,
@@ -35,6 +36,7 @@ class StaticsSpec:
     moment_arm: str = "platform"
     rank_rtol: float = 1e-9
     tension: TensionSpec = field(default_factory=TensionSpec)
+    load: Load = field(default_factory=Load)
 
     def state(self, robot: CableRobot, positions: np.ndarray, orientation) -> "PoseStatics":
         return PoseStatics(robot, positions, orientation, self)
@@ -52,12 +54,17 @@ class PoseStatics(PoseGeometry):
 
     @cached_property
     def structure_matrix(self) -> np.ndarray:
-        """(n, 6, m) A of eq. (8): columns [u_i; a_i x u_i]."""
-        arms = np.broadcast_to(self.robot.attachments @ self.rotation.T, self.vectors.shape)
-        if self.spec.moment_arm == "base":
-            arms = arms + self.positions[:, None, :]
-        moments = np.cross(arms, self.unit)
-        return np.transpose(np.concatenate([self.unit, moments], axis=2), (0, 2, 1))
+        """(n, 6, m) A of eq. (8): columns [u_i; a_i x u_i], a_i = R d_i (``platform``) or
+        r + R d_i (``base``)."""
+        arms = self.arms if self.spec.moment_arm == "platform" else self.arms + self.positions[:, None, :]
+        return structure_matrix(self.unit, arms)
+
+    @cached_property
+    def wrench(self) -> np.ndarray:
+        """(6,) the wrench the cables balance: the applied f_ext of eq. (11) plus the load's
+        weight, its moment about the reference point and the load's external wrench."""
+        _, at_rest = load_wrench_terms(self.spec.load, 0.0, self.robot.up, self.rotation)
+        return self.spec.wrench + at_rest
 
     @property
     def structure(self) -> np.ndarray:
@@ -71,8 +78,8 @@ class PoseStatics(PoseGeometry):
 
     @property
     def required_wrenches(self) -> np.ndarray:
-        """(1, 6) the applied wrench of eq. (11)."""
-        return self.spec.wrench[None, :]
+        """(1, 6) the wrench of :attr:`wrench`."""
+        return self.wrench[None, :]
 
     @cached_property
     def gram_ratio(self) -> np.ndarray:
@@ -90,7 +97,7 @@ class PoseStatics(PoseGeometry):
         """(n, m) minimum-norm tensions with A s = f_ext (eq. 7), N: s = A^T (A A^T)^-1 f, which
         is A^-1 f for six cables (eq. 10). Singular poses get the least-squares s = A^+ f from an
         SVD, so every value is finite."""
-        a, wrench = self.structure_matrix, self.spec.wrench
+        a, wrench = self.structure_matrix, self.wrench
         out = np.empty((a.shape[0], a.shape[2]))
         ok = ~self.singular
         if ok.any():

@@ -75,7 +75,7 @@ def inverse_dynamics(
         along = np.einsum("nmj,nj->nm", state.unit, velocities)
         speed2 = np.einsum("nj,nj->n", velocities, velocities)[:, None]
         theta_ddot = theta_ddot + centripetal(speed2, along, state.lengths, motion.winch_radius)
-    wrench = load_wrenches(motion, accelerations)[:, : state.structure.shape[1]]
+    wrench = load_wrenches(motion, accelerations, robot.up, state.rotation)[:, : state.structure.shape[1]]
     margins = {}
     if motion.tension.model == "feasible":
         other = (actuator.G_v * theta_ddot + actuator.L_v * theta_dot)[:, None, :]

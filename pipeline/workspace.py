@@ -5,7 +5,8 @@ One code path for every robot and analysis. The robot config only places points
 
 - ``cpr_wwa``: CPR-WWA of Filipovic & Kevac (2018), dynamics over the velocity and acceleration
   sets against the limits of a catalogue actuator (eqs. 19-34);
-- ``statics``: static equilibrium under the applied wrench, tensions in [0, s_max] and lengths
+- ``statics``: static equilibrium under the applied wrench and the load's weight, tensions in
+  [t_min, t_max] and lengths
   <= l_max (eqs. 7-10 of Hamed & Zohoor).
 
 ``tension.model=feasible`` replaces the minimum-norm cable forces of both by pulling cables only
@@ -24,7 +25,7 @@ from omegaconf import DictConfig, OmegaConf
 
 from pipeline.actuators import actuator_model
 from pipeline.criteria import StaticLimits
-from pipeline.dynamics import MotionSpec
+from pipeline.dynamics import Load, MotionSpec
 from pipeline.grid import Grid, box_grid, step_grid
 from pipeline.kernel import WorkspaceProblem, evaluate_chunk
 from pipeline.motion import acceleration_set, extreme_points, velocity_set
@@ -95,19 +96,17 @@ def _cpr_wwa(cfg: DictConfig, catalogue: pd.DataFrame, robot):
         accelerations=acceleration_set(
             cfg.motion.v_max, cfg.motion.t_acc, cfg.motion.t_dec, _name(model.acceleration_set)
         ),
-        mass=cfg.load.mass,
-        gravity=cfg.load.gravity,
+        load=load_spec(cfg),
         winch_radius=np.full(robot.n_cables, actuator.winch_radius),
         pinv_columns=_name(model.pinv_columns),
         rank_rtol=model.rank_rtol,
         jdot=model.jdot,
         tension=tension_spec(cfg),
         inertia=_name(model.inertia),
-        external=np.asarray(cfg.load.external, dtype=float),
     )
-    if motion.tension.model == "pinv":
-        return motion, actuator, CPR_WWA_CRITERIA
     rating = ("tension_max",) if motion.tension.t_max is not None else ()
+    if motion.tension.model == "pinv":
+        return motion, actuator, (*rating, *CPR_WWA_CRITERIA)
     return motion, actuator, (*FEASIBLE_GATES, *rating, *CPR_WWA_CRITERIA)
 
 
@@ -118,17 +117,35 @@ def _statics(cfg: DictConfig, catalogue: pd.DataFrame, robot):
         moment_arm=_name(cfg.model.moment_arm),
         rank_rtol=cfg.model.rank_rtol,
         tension=tension_spec(cfg),
+        load=load_spec(cfg),
     )
     l_max = cfg.robot.get("l_max") or np.inf
-    limits = StaticLimits(cfg.limits.s_max, float(l_max), cfg.model.rank_rtol)
+    rating = spec.tension.t_max
+    force = spec.wrench[:3] + spec.load.external[:3] - spec.load.mass * spec.load.gravity * robot.up
+    scale = rating if rating is not None else max(float(np.linalg.norm(force)), 1.0)
+    limits = StaticLimits(np.inf if rating is None else rating, float(l_max), cfg.model.rank_rtol, scale)
+    criteria = STATICS_CRITERIA if rating is not None else tuple(c for c in STATICS_CRITERIA if c != "tension_max")
     if spec.tension.model == "pinv":
-        return spec, limits, STATICS_CRITERIA
-    return spec, limits, (*FEASIBLE_GATES, *STATICS_CRITERIA[2:])
+        return spec, limits, criteria
+    return spec, limits, (*FEASIBLE_GATES, *criteria[2:])
+
+
+def load_spec(cfg: DictConfig) -> Load:
+    load = cfg.load
+    return Load(float(load.mass), float(load.gravity), np.asarray(load.com, dtype=float),
+                np.asarray(load.external, dtype=float))
 
 
 def tension_spec(cfg: DictConfig) -> TensionSpec:
     t = cfg.tension
-    return TensionSpec(_name(t.model), t.t_min, t.t_max, t.residual_rtol)
+    return TensionSpec(_name(t.model), t.t_min, cable_rating(cfg), t.residual_rtol)
+
+
+def cable_rating(cfg: DictConfig) -> float | None:
+    """The largest cable tension (N): ``tension.t_max``, replaced by its alias ``limits.s_max``
+    (the IRPM paper's name) when that is given; None = no rating."""
+    t_max, s_max = cfg.tension.t_max, cfg.limits.s_max
+    return s_max if s_max is not None else t_max
 
 
 ROBOTS = {"cpr8": _cpr8_robot, "irpm6": _irpm6_robot}

@@ -76,7 +76,7 @@ def test_line_simulation_job_writes_samples(tmp_path):
     [
         (("actuator=9",), "actuator=9"),
         (("-m", "actuator=1,2,9"), "actuator=9"),
-        (("load.mass=0",), "load.mass=0"),
+        (("load.mass=inf",), "load.mass=inf"),
         (("load.mass=-2",), "load.mass=-2"),
         (("drive.winch_radius=-0.1",), "drive.winch_radius=-0.1"),
         (("grid.n=0",), "grid.n=0"),

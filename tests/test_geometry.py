@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from pipeline.dynamics import MotionSpec, PoseDynamics
+from pipeline.dynamics import Load, MotionSpec, PoseDynamics
 from pipeline.geometry import cable_vectors, rotation_matrix, rotation_partials
 from pipeline.robots import cpr8
 
@@ -10,7 +10,7 @@ RNG = np.random.default_rng(7)
 
 
 def _dyn(positions, orientation, radius=0.08):
-    motion = MotionSpec(np.zeros((1, 3)), np.zeros((1, 3)), 2.0, 9.81, np.full(8, radius),
+    motion = MotionSpec(np.zeros((1, 3)), np.zeros((1, 3)), Load(2.0, 9.81), np.full(8, radius),
                         pinv_columns="full")
     return PoseDynamics(ROBOT, positions, orientation, motion)
 

@@ -12,7 +12,7 @@ from scipy.optimize import nnls
 
 from pipeline.actuators import ActuatorModel
 from pipeline.criteria import CRITERIA, tension_families
-from pipeline.dynamics import MotionSpec, load_wrenches
+from pipeline.dynamics import Load, MotionSpec, load_wrenches
 from pipeline.geometry import CableRobot
 from pipeline.kernel import WorkspaceProblem, evaluate_chunk
 from pipeline.verdict import classify
@@ -35,7 +35,7 @@ def square_robot() -> CableRobot:
 
 def hanging_motion(t_min=0.0) -> MotionSpec:
     still = np.zeros((1, 3))
-    return MotionSpec(velocities=still, accelerations=still, mass=MASS, gravity=GRAVITY,
+    return MotionSpec(velocities=still, accelerations=still, load=Load(MASS, GRAVITY),
                       winch_radius=np.full(4, RADIUS), tension=TensionSpec("feasible", t_min))
 
 
@@ -149,7 +149,7 @@ def test_the_box_vertices_decide_every_acceleration_inside_it(make_cfg, catalogu
     rng = np.random.default_rng(0)
     box = state.wrench_accelerations
     inside = box.min(axis=0) + rng.random((12, 3)) * (box.max(axis=0) - box.min(axis=0))
-    wrenches = load_wrenches(problem.spec, inside)[:, :3]
+    wrenches = load_wrenches(problem.spec, inside, problem.robot.up, state.rotation)[:, :3]
     interior, _ = feasible_tensions(state.structure, *state.wrench_pinv, wrenches, families[:1], 1e-6)
     assert (interior["slack"].min(axis=1) >= vertices["slack"].min(axis=1) - 1e-9).all()
 
@@ -227,7 +227,7 @@ def test_with_moment_balance_few_or_no_poses_can_even_hang_still(orientation, ha
     angles = [f"orientation.{a}={orientation}" for a in ("psi", "theta", "phi")]
     problem, grid = build_problem(make_cfg("model.pinv_columns=full", *angles), catalogue)
     state = problem.spec.state(problem.robot, grid.positions, problem.orientations[0])
-    weight = load_wrenches(problem.spec, np.zeros((1, 3)))[0]
+    weight = load_wrenches(problem.spec, np.zeros((1, 3)), problem.robot.up, state.rotation)[0]
     residual = np.array([nnls(s, weight)[1] for s in state.structure]) / np.linalg.norm(weight)
     assert (residual < 1e-9).sum() == hanging
 
@@ -261,9 +261,10 @@ def test_an_external_force_adds_to_the_weight(model):
     tension, under both tension models, in the grid criteria and in F of eq. (31)."""
     robot, at = square_robot(), np.array([[0.0, 0.0, -2.0]])
     plain = replace(hanging_motion(), tension=TensionSpec(model))
-    pulled = replace(plain, external=np.array([0.0, 0.0, -MASS * GRAVITY, 0.0, 0.0, 0.0]))
-    heavy = replace(plain, mass=2 * MASS)
-    assert load_wrenches(pulled, np.zeros((1, 3))) == pytest.approx(load_wrenches(heavy, np.zeros((1, 3))))
+    pulled = replace(plain, load=replace(plain.load, external=np.array([0, 0, -MASS * GRAVITY, 0, 0, 0])))
+    heavy = replace(plain, load=replace(plain.load, mass=2 * MASS))
+    rest, up = np.zeros((1, 3)), robot.up
+    assert load_wrenches(pulled, rest, up, np.eye(3)) == pytest.approx(load_wrenches(heavy, rest, up, np.eye(3)))
     for name in ("torque", "voltage"):
         got = CRITERIA[name](pulled.state(robot, at, (0, 0, 0)), ACTUATOR)
         assert got == pytest.approx(CRITERIA[name](heavy.state(robot, at, (0, 0, 0)), ACTUATOR))
@@ -274,5 +275,5 @@ def test_statics_code_path_finds_the_same_68_hanging_poses(make_cfg, catalogue):
     """analysis=statics on CPR-8 (geometric structure matrix A of eq. 8, not J): the carrier's
     weight alone, pulling cables, moment balance: the same 68 poses as NNLS on J^T above."""
     _, summary = compute_workspace(make_cfg("analysis=statics", "tension.model=feasible",
-                                            "wrench.fz=-19.62", "limits.s_max=1000"), catalogue)
+                                            "tension.t_max=1000"), catalogue)
     assert summary["n_feasible"] == 68 and summary["lost_slack"] == 148

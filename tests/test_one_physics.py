@@ -1,0 +1,57 @@
+"""One physics for every robot and analysis: one structure matrix, gravity from the robot, the
+load's weight and centre-of-mass moment in the statics (issue 15)."""
+
+import numpy as np
+import pytest
+
+from pipeline.geometry import euler_rate_axes, rotation_matrix, rotation_partials
+from pipeline.workspace import build_problem
+
+
+@pytest.mark.parametrize("angles", [(0.0, 0.0, 0.0), (0.5, 0.5, 0.5), (-0.3, 1.2, 2.0)])
+def test_euler_rate_axes_generate_the_rotation_partials(angles):
+    """dR/dq = [e_q]x R for each Euler angle q of eq. (9)."""
+    axes, r = euler_rate_axes(*angles), rotation_matrix(*angles)
+    for q, partial in enumerate(rotation_partials(*angles)):
+        e = axes[:, q]
+        skew = np.array([[0, -e[2], e[1]], [e[2], 0, -e[0]], [-e[1], e[0], 0]])
+        np.testing.assert_allclose(skew @ r, partial, atol=1e-14)
+
+
+def test_cpr8_jacobian_is_the_structure_matrix_through_euler_rates_and_winches(make_cfg, catalogue):
+    """J^T = blockdiag(I, E^T) A diag(1 / R_i) (docs/model.md, conventions)."""
+    problem, grid = build_problem(make_cfg("orientation.psi=0.4", "orientation.phi=-0.7",
+                                           "model.pinv_columns=full"), catalogue)
+    state = problem.spec.state(problem.robot, grid.positions, problem.orientation)
+    blocks = np.eye(6)
+    blocks[3:, 3:] = euler_rate_axes(*problem.orientation).T
+    expected = np.einsum("ij,njm->nim", blocks, state.structure_matrix) / problem.spec.winch_radius
+    np.testing.assert_allclose(state.structure, expected, atol=1e-13)
+
+
+def test_irpm_under_cpr_wwa_hangs_its_load_with_pulling_cables(make_cfg, catalogue):
+    """The IRPM's Z axis points down: gravity comes from its robot.up, so at the centre of its
+    box the minimum-norm torques holding 20 kg at rest all pull. Before gravity was robot data,
+    cpr_wwa took z as up for every robot and these torques all pushed."""
+    problem, _ = build_problem(make_cfg("robot=irpm6", "analysis=cpr_wwa", "load.mass=20"), catalogue)
+    state = problem.spec.state(problem.robot, np.array([[0.0, 0.0, 5.0]]), problem.orientation)
+    _, at_rest = state.torque_affine
+    assert (at_rest > 0).all()
+    assert problem.robot.up == pytest.approx([0, 0, -1])
+
+
+@pytest.mark.parametrize("phi", [0.0, 0.4])  # (pi / 2 is the 3-3 arrangement's singularity)
+def test_statics_balance_the_weight_and_its_moment_about_the_reference_point(make_cfg, catalogue, phi):
+    """An off-centre centre of mass: w = [m g (-up); (R com) x m g (-up)] plus the applied wrench,
+    and the minimum-norm tensions balance it (IRPM, Z down, 1000 kg at 0.3 m along the platform
+    x axis, rotated with the platform)."""
+    mass, g = 1000.0, 9.81
+    problem, _ = build_problem(make_cfg("robot=irpm6", f"load.mass={mass}", "load.com=[0.3,0,0]",
+                                        "wrench.fx=500", f"orientation.phi={phi}"), catalogue)
+    state = problem.spec.state(problem.robot, np.array([[0.5, -0.2, 6.0]]), problem.orientation)
+    weight = np.array([0.0, 0.0, mass * g])
+    arm = rotation_matrix(0.0, 0.0, phi) @ np.array([0.3, 0.0, 0.0])
+    expected = np.concatenate([weight, np.cross(arm, weight)]) + [500, 0, 100_000, 0, 0, 0]
+    np.testing.assert_allclose(state.wrench, expected, atol=1e-9)
+    balanced = np.einsum("nkm,nm->nk", state.structure_matrix, state.tensions)[0]
+    np.testing.assert_allclose(balanced, expected, rtol=1e-9, atol=1e-6)
