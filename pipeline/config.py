@@ -9,7 +9,7 @@ naming the offending key and value.
 from __future__ import annotations
 
 import importlib.util
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields, is_dataclass
 from enum import Enum
 from typing import Any, Optional
 
@@ -128,6 +128,29 @@ class Irpm6Config:
     gamma_deg: float = 0.0
     l_max: float = 15.0
     search: SearchConfig = field(default_factory=SearchConfig)
+
+
+@dataclass
+class PointsSearchConfig(SearchConfig):
+    """Searched box and step (m); ``spacing``: ``faces`` (lo + k step up to hi, as the IRPM) or
+    ``centres`` (lo + (k + 1/2) step, the centres of the cells of side step inside the box)."""
+
+    spacing: str = "faces"
+
+
+@dataclass
+class PointsConfig:
+    """A robot given by its points (``pipeline.robots.PointsRobot`` checks them): anchors
+    (fixed frame) and attachments (platform frame), lists of [x, y, z] in m; optional cable
+    names; the up direction; the longest cable l_max (m, null = none); the search box."""
+
+    name: str = "points"
+    anchors: Any = MISSING
+    attachments: Any = MISSING
+    cable_names: Optional[list[str]] = None
+    up: list[float] = field(default_factory=lambda: [0.0, 0.0, 1.0])
+    l_max: Optional[float] = None
+    search: PointsSearchConfig = field(default_factory=PointsSearchConfig)
 
 
 @dataclass
@@ -289,6 +312,7 @@ def register() -> None:
     store.store(name="schema", node=Config)
     store.store(group="robot", name="cpr8_schema", node=Cpr8Config)
     store.store(group="robot", name="irpm6_schema", node=Irpm6Config)
+    store.store(group="robot", name="points_schema", node=PointsConfig)
     OmegaConf.register_new_resolver("cdpr.jobdir", job_dir_name, replace=True)
 
 
@@ -321,8 +345,25 @@ POSITIVE = (
 JOBLIB_BACKENDS = ("loky", "threading", "multiprocessing", "sequential", "dask")
 
 
+def unknown_keys(node: DictConfig, schema, prefix: str = "") -> None:
+    """ConfigError for the first key of ``node`` that ``schema`` (a dataclass) does not declare:
+    a ``+key`` override adds keys past Hydra's struct check, and would otherwise be ignored."""
+    declared = {f.name: f for f in fields(schema)}
+    for key in node:
+        if key not in declared:
+            raise ConfigError(f"{prefix}{key}: not a key of {schema.__name__} "
+                              f"(keys: {', '.join(declared)})")
+        default = declared[key].default_factory() if callable(declared[key].default_factory) else None
+        if is_dataclass(default) and isinstance(node[key], DictConfig):
+            unknown_keys(node[key], type(default), f"{prefix}{key}.")
+
+
 def validate(cfg: DictConfig, catalogue_ids) -> None:
     """Raise ConfigError on the first value the model cannot use: '<key>=<value>: <rule>'."""
+    unknown_keys(cfg, Config)
+    if cfg.robot.get("name") not in ROBOT_SCHEMAS:
+        raise ConfigError(f"robot.name={cfg.robot.get('name')}: unknown robot ({', '.join(ROBOT_SCHEMAS)})")
+    unknown_keys(cfg.robot, ROBOT_SCHEMAS[cfg.robot.name], "robot.")
     for key in POSITIVE:
         value = _select(cfg, key)
         if value is not None and not 0 < value < float("inf"):
@@ -366,8 +407,6 @@ def validate(cfg: DictConfig, catalogue_ids) -> None:
     total = cfg.orientation.total
     if total.n < 1 or total.bound < 0:
         raise ConfigError(f"orientation.total={OmegaConf.to_container(total)}: needs n >= 1, bound >= 0")
-    if cfg.robot.name not in ROBOT_VALIDATORS:
-        raise ConfigError(f"robot.name={cfg.robot.name}: unknown robot ({', '.join(ROBOT_VALIDATORS)})")
     ROBOT_VALIDATORS[cfg.robot.name](cfg.robot)
 
 
@@ -416,7 +455,14 @@ def _validate_irpm6(robot: DictConfig) -> None:
             raise ConfigError(f"robot.search: {axis} from {lo} to {hi}: lo must be <= hi")
 
 
-ROBOT_VALIDATORS = {"cpr8": _validate_cpr8, "irpm6": _validate_irpm6}
+def _validate_points(robot: DictConfig) -> None:
+    from pipeline.robots import PointsRobot
+
+    PointsRobot.from_config(robot)
+
+
+ROBOT_VALIDATORS = {"cpr8": _validate_cpr8, "irpm6": _validate_irpm6, "points": _validate_points}
+ROBOT_SCHEMAS = {"cpr8": Cpr8Config, "irpm6": Irpm6Config, "points": PointsConfig}
 
 
 def _select(cfg: DictConfig, dotted: str):

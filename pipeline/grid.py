@@ -39,13 +39,19 @@ def box_grid(lo: np.ndarray, hi: np.ndarray, n: int, spacing: str = "linspace") 
     return Grid(positions=positions, cell_volume=float(np.prod(hi - lo)) / n**3)
 
 
-def step_grid(lo: np.ndarray, hi: np.ndarray, step: float) -> Grid:
-    """Points lo + k * step on every axis up to hi inclusive (IRPM paper, section III: the box
-    [-6, 6]^2 x [0, 10] m with step 0.4 m gives 31 x 31 x 26 points). Each point stands for a
-    cube of side ``step``, so the volume is n_feasible * step^3."""
+def step_grid(lo: np.ndarray, hi: np.ndarray, step: float, spacing: str = "faces") -> Grid:
+    """Points lo + k * step on every axis up to hi inclusive (``faces``; IRPM paper, section
+    III: the box [-6, 6]^2 x [0, 10] m with step 0.4 m gives 31 x 31 x 26 points), or the
+    centres lo + (k + 1/2) step of the cells of side ``step`` that fit in the box
+    (``centres``). Each point stands for a cube of side ``step``: volume = n_feasible * step^3."""
     lo, hi = np.asarray(lo, float), np.asarray(hi, float)
-    counts = np.floor((hi - lo) / step + 1e-9).astype(int) + 1
-    axes = [a + step * np.arange(k) for a, k in zip(lo, counts)]
+    if spacing == "faces":
+        counts, offset = np.floor((hi - lo) / step + 1e-9).astype(int) + 1, 0.0
+    elif spacing == "centres":
+        counts, offset = np.floor((hi - lo) / step + 1e-9).astype(int), 0.5 * step
+    else:
+        raise ValueError(f"unknown grid spacing {spacing!r}")
+    axes = [a + offset + step * np.arange(k) for a, k in zip(lo, counts)]
     mesh = np.meshgrid(*axes, indexing="ij")
     positions = np.column_stack([m.ravel() for m in mesh])
     return Grid(positions=positions, cell_volume=float(step) ** 3)

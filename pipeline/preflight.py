@@ -91,12 +91,13 @@ def check(argv: list[str]) -> None:
     if jobs is None:
         return
     register()
+    search_path = _search_path(argv)
     composed: dict[tuple[str, ...], DictConfig] = {}
     catalogues = {}
 
     def build(overrides: list[str]) -> DictConfig:
         parsed = parse(overrides)
-        structural = tuple(o.input_line for o in parsed if _structural(o))
+        structural = (*search_path, *(o.input_line for o in parsed if _structural(o)))
         if structural not in composed:
             try:
                 composed[structural] = compose(config_name="config", overrides=list(structural))
@@ -116,6 +117,23 @@ def check(argv: list[str]) -> None:
             if cfg.catalogue not in catalogues:
                 catalogues[cfg.catalogue] = load_catalogue(cfg.catalogue)
             validate(cfg, catalogues[cfg.catalogue].index)
+
+
+def _search_path(argv: list[str]) -> tuple[str, ...]:
+    """``--config-dir DIR`` (``-cd DIR``, ``--config-dir=DIR``) as the override Hydra applies for
+    it, so that the preflight composes from the user's folder as the job will."""
+    for i, arg in enumerate(argv):
+        folder = None
+        if arg in ("--config-dir", "-cd") and i + 1 < len(argv):
+            folder = argv[i + 1]
+        elif arg.startswith("--config-dir="):
+            folder = arg.split("=", 1)[1]
+        if folder is not None:
+            path = Path(folder).expanduser().resolve()
+            if not path.is_dir():
+                raise ConfigError(f"--config-dir={folder}: no such folder")
+            return (f"hydra.searchpath=[file://{path}]",)
+    return ()
 
 
 def _structural(override: Override) -> bool:

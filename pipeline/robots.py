@@ -1,12 +1,17 @@
 """Robot builders: turn a robot's design parameters into the generic :class:`CableRobot`.
 
-Each builder only places points; kinematics, dynamics and workspace criteria are shared.
+Each builder only places points; kinematics, dynamics and workspace criteria are shared. The
+papers' two robots are parametric builders (:func:`cpr8`, :func:`irpm6`); any other robot is
+given by its points (:class:`PointsRobot`, ``robot=points`` or a user's YAML file).
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
+from pipeline.errors import ConfigError
 from pipeline.geometry import CableRobot
 
 
@@ -78,3 +83,84 @@ def irpm6(
 def _circle(radius: float, degrees: np.ndarray) -> np.ndarray:
     angles = np.deg2rad(degrees)
     return np.column_stack([radius * np.cos(angles), radius * np.sin(angles), np.zeros(len(angles))])
+
+
+@dataclass(frozen=True)
+class PointsRobot:
+    """A robot given by its points (``robot=points``): every field is checked here, once, and a
+    bad one raises ConfigError naming ``robot.<key>`` and its value.
+
+    anchors (m, 3) fixed-frame points and attachments (m, 3) platform-frame points, m >= 2 in
+    the same order; cable_names (m labels, default "1".."m"); up, the frame's up direction
+    (normalised, gravity acts along -up); l_max, the longest cable (m, None = none); the search
+    box lo, hi (3,) with step (m) and spacing ``faces`` or ``centres``."""
+
+    anchors: np.ndarray
+    attachments: np.ndarray
+    cable_names: tuple[str, ...]
+    up: np.ndarray
+    l_max: float | None
+    lo: np.ndarray
+    hi: np.ndarray
+    step: float
+    spacing: str
+
+    @classmethod
+    def from_config(cls, robot) -> "PointsRobot":
+        search = robot.search
+        anchors = _points("robot.anchors", robot.anchors)
+        attachments = _points("robot.attachments", robot.attachments)
+        if len(anchors) != len(attachments):
+            raise ConfigError(f"robot.attachments: {len(attachments)} points for {len(anchors)} "
+                              "anchors (one attachment per cable, in the same order)")
+        if len(anchors) < 2:
+            raise ConfigError(f"robot.anchors: {len(anchors)} cable(s); a cable robot needs >= 2")
+        names = robot.cable_names
+        if names is None:
+            names = [str(i) for i in range(1, len(anchors) + 1)]
+        if len(names) != len(anchors) or len(set(names)) != len(names):
+            raise ConfigError(f"robot.cable_names={list(names)}: needs {len(anchors)} distinct names")
+        up = _vector("robot.up", robot.up)
+        if not np.linalg.norm(up) > 0:
+            raise ConfigError(f"robot.up={list(robot.up)}: must be a non-zero vector (gravity acts along -up)")
+        if robot.l_max is not None and not 0 < robot.l_max < np.inf:
+            raise ConfigError(f"robot.l_max={robot.l_max}: must be > 0 and finite (or null)")
+        lo, hi = _vector("robot.search.lo", search.lo), _vector("robot.search.hi", search.hi)
+        for axis, a, b in zip("xyz", lo, hi):
+            if not a <= b:
+                raise ConfigError(f"robot.search: {axis} from {a} to {b}: lo must be <= hi")
+        if not 0 < search.step < np.inf:
+            raise ConfigError(f"robot.search.step={search.step}: must be > 0 and finite")
+        if search.spacing not in ("faces", "centres"):
+            raise ConfigError(f"robot.search.spacing={search.spacing}: must be faces or centres")
+        return cls(anchors, attachments, tuple(str(n) for n in names), up / np.linalg.norm(up),
+                   None if robot.l_max is None else float(robot.l_max), lo, hi,
+                   float(search.step), str(search.spacing))
+
+    def build(self) -> CableRobot:
+        return CableRobot(name="points", anchors=self.anchors, attachments=self.attachments,
+                          box_lo=self.lo, box_hi=self.hi, cable_names=self.cable_names, up=self.up)
+
+
+def _points(key: str, value) -> np.ndarray:
+    """(m, 3) finite floats from a list of [x, y, z]; ConfigError naming the first bad point."""
+    try:
+        rows = list(value)
+    except TypeError:
+        raise ConfigError(f"{key}={value}: must be a list of [x, y, z] points") from None
+    for i, row in enumerate(rows):
+        _vector(f"{key}[{i}]", row)
+    return np.array([[float(v) for v in row] for row in rows], dtype=float).reshape(-1, 3)
+
+
+def _vector(key: str, value) -> np.ndarray:
+    """(3,) finite floats, or ConfigError '<key>=<value>: ...'."""
+    try:
+        items = list(value)
+    except TypeError:
+        items = None
+    if items is None or len(items) != 3 or not all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v) for v in items):
+        shown = items if items is not None else value
+        raise ConfigError(f"{key}={shown}: must be 3 finite numbers [x, y, z] (m)")
+    return np.array(items, dtype=float)

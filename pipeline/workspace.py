@@ -30,7 +30,7 @@ from pipeline.grid import Grid, box_grid, step_grid
 from pipeline.kernel import WorkspaceProblem, evaluate_chunk
 from pipeline.motion import acceleration_set, extreme_points, velocity_set
 from pipeline.parallel import iter_chunks
-from pipeline.robots import cpr8, irpm6
+from pipeline.robots import PointsRobot, cpr8, irpm6
 from pipeline.statics import StaticsSpec
 from pipeline.tensions import TensionSpec
 from pipeline.verdict import classify
@@ -38,7 +38,7 @@ from pipeline.verdict import classify
 CPR_WWA_CRITERIA = ("speed", "torque", "acceleration", "voltage")  # eqs. (30), (32), (33), (34)
 STATICS_CRITERIA = ("singular", "slack", "tension_max", "length")  # eq. (10)
 FEASIBLE_GATES = ("unreachable", "slack")  # tension=feasible (pipeline.tensions)
-DEFAULT_ANALYSIS = {"cpr8": "cpr_wwa", "irpm6": "statics"}
+DEFAULT_ANALYSIS = {"cpr8": "cpr_wwa", "irpm6": "statics", "points": "statics"}
 CHUNK_BUDGET_FLOATS = 4_000_000  # largest (poses x cables x set size) array of one chunk: 32 MB
 LP_CHUNK_POSES = 1024  # tension.model=feasible: ~3 s of LPs per chunk, so progress is visible
 
@@ -124,7 +124,9 @@ def _statics(cfg: DictConfig, catalogue: pd.DataFrame, robot):
     force = spec.wrench[:3] + spec.load.external[:3] - spec.load.mass * spec.load.gravity * robot.up
     scale = rating if rating is not None else max(float(np.linalg.norm(force)), 1.0)
     limits = StaticLimits(np.inf if rating is None else rating, float(l_max), cfg.model.rank_rtol, scale)
-    criteria = STATICS_CRITERIA if rating is not None else tuple(c for c in STATICS_CRITERIA if c != "tension_max")
+    unused = {"tension_max"} if rating is None else set()
+    unused |= {"length"} if not np.isfinite(l_max) else set()  # no rating, no length limit
+    criteria = tuple(c for c in STATICS_CRITERIA if c not in unused)
     if spec.tension.model == "pinv":
         return spec, limits, criteria
     return spec, limits, (*FEASIBLE_GATES, *criteria[2:])
@@ -148,7 +150,12 @@ def cable_rating(cfg: DictConfig) -> float | None:
     return s_max if s_max is not None else t_max
 
 
-ROBOTS = {"cpr8": _cpr8_robot, "irpm6": _irpm6_robot}
+def _points_robot(cfg: DictConfig):
+    spec = PointsRobot.from_config(cfg.robot)
+    return spec.build(), step_grid(spec.lo, spec.hi, spec.step, spec.spacing)
+
+
+ROBOTS = {"cpr8": _cpr8_robot, "irpm6": _irpm6_robot, "points": _points_robot}
 ANALYSES = {"cpr_wwa": _cpr_wwa, "statics": _statics, "lines": _cpr_wwa}
 
 
