@@ -14,7 +14,7 @@ from enum import Enum
 from typing import Any, Optional
 
 from hydra.core.config_store import ConfigStore
-from omegaconf import MISSING, DictConfig, OmegaConf
+from omegaconf import MISSING, DictConfig, ListConfig, OmegaConf
 
 from pipeline.errors import ConfigError
 
@@ -191,19 +191,19 @@ class LimitsConfig:
     """``s_max``: the IRPM paper's name (eq. 10) for ``tension.t_max``, kept as an alias: when
     given it replaces ``tension.t_max``."""
 
-    s_max: Optional[float] = None
+    s_max: Any = None
 
 
 @dataclass
 class TensionConfig:
     """``model``: pinv (papers) or feasible (cables only pull). ``t_min``: smallest tension (N).
-    ``t_max``: cable rating (N) in every analysis, null = none (CPR-WWA: the motor torque limit
+    ``t_max``: cable rating (N) in every analysis; each a number or one per cable, null = none (CPR-WWA: the motor torque limit
     / R_i only); ``limits.s_max`` is an alias. ``residual_rtol``: a required wrench is unreachable when the equilibrium
     residual exceeds this fraction of it."""
 
     model: TensionModel = TensionModel.pinv
-    t_min: float = 0.0
-    t_max: Optional[float] = None
+    t_min: Any = 0.0
+    t_max: Any = None
     residual_rtol: float = 1e-6
 
 
@@ -284,8 +284,17 @@ class ComputeConfig:
 
 
 @dataclass
+class OutputConfig:
+    """``cables``: add per-pose cable lengths and tensions to points.parquet
+    (``pipeline.quantities``)."""
+
+    cables: bool = False
+
+
+@dataclass
 class Config:
-    """Root config. ``analysis`` null = the robot's own (cpr8: cpr_wwa, irpm6: statics).
+    """Root config. ``analysis`` null = the robot's own (cpr8: cpr_wwa, irpm6 and points: statics).
+    ``poses``: a list of [x, y, z] positions (m) checked instead of the robot's grid (null: grid).
     ``actuator`` is the integer id of a catalogue row; ``catalogue`` a CSV or Parquet path
     (null = the shipped Table 1 of the CPR-8 paper)."""
 
@@ -304,6 +313,8 @@ class Config:
     choice: ChoiceConfig = field(default_factory=ChoiceConfig)
     model: ModelConfig = field(default_factory=ModelConfig)
     compute: ComputeConfig = field(default_factory=ComputeConfig)
+    output: OutputConfig = field(default_factory=OutputConfig)
+    poses: Any = None
 
 
 def register() -> None:
@@ -364,6 +375,7 @@ def validate(cfg: DictConfig, catalogue_ids) -> None:
     if cfg.robot.get("name") not in ROBOT_SCHEMAS:
         raise ConfigError(f"robot.name={cfg.robot.get('name')}: unknown robot ({', '.join(ROBOT_SCHEMAS)})")
     unknown_keys(cfg.robot, ROBOT_SCHEMAS[cfg.robot.name], "robot.")
+    ROBOT_VALIDATORS[cfg.robot.name](cfg.robot)
     for key in POSITIVE:
         value = _select(cfg, key)
         if value is not None and not 0 < value < float("inf"):
@@ -400,6 +412,10 @@ def validate(cfg: DictConfig, catalogue_ids) -> None:
         ids = ", ".join(str(i) for i in sorted(catalogue_ids))
         raise ConfigError(f"actuator={cfg.actuator}: no such id in the catalogue (ids: {ids})")
     _validate_tension(cfg)
+    if cfg.poses is not None:
+        from pipeline.robots import point_list
+
+        point_list("poses", cfg.poses)
     if len(cfg.load.external) != 6:
         raise ConfigError(f"load.external={list(cfg.load.external)}: needs 6 values (fx fy fz mx my mz)")
     if len(cfg.load.com) != 3:
@@ -407,23 +423,46 @@ def validate(cfg: DictConfig, catalogue_ids) -> None:
     total = cfg.orientation.total
     if total.n < 1 or total.bound < 0:
         raise ConfigError(f"orientation.total={OmegaConf.to_container(total)}: needs n >= 1, bound >= 0")
-    ROBOT_VALIDATORS[cfg.robot.name](cfg.robot)
 
 
 def _validate_tension(cfg: DictConfig) -> None:
-    tension = cfg.tension
-    if not 0 <= tension.t_min < float("inf"):
-        raise ConfigError(f"tension.t_min={tension.t_min}: must be >= 0 and finite (a cable cannot push)")
-    s_max = cfg.limits.s_max
-    t_max = s_max if s_max is not None else tension.t_max
-    key = "limits.s_max" if s_max is not None else "tension.t_max"
-    if t_max is not None and not tension.t_min < t_max < float("inf"):
-        raise ConfigError(f"{key}={t_max}: must be finite and > tension.t_min={tension.t_min}")
-    from pipeline.workspace import analysis_name
+    from pipeline.workspace import analysis_name, build_robot, cable_rating
 
-    if tension.model.name == "pinv" and tension.t_min != 0 and analysis_name(cfg) != "statics":
-        raise ConfigError(f"tension.t_min={tension.t_min}: the pinv model checks the papers' "
+    tension = cfg.tension
+    n_cables = build_robot(cfg).n_cables
+    t_min = _limit_values("tension.t_min", tension.t_min, n_cables)
+    if not (t_min >= 0).all():
+        raise ConfigError(f"tension.t_min={_shown(tension.t_min)}: must be >= 0 (a cable cannot push)")
+    rating = cable_rating(cfg)
+    key = "limits.s_max" if cfg.limits.s_max is not None else "tension.t_max"
+    if rating is not None and not (t_min < _limit_values(key, rating, n_cables)).all():
+        raise ConfigError(f"{key}={_shown(rating)}: must be > tension.t_min={_shown(tension.t_min)}")
+    if tension.model.name == "pinv" and (t_min != 0).any() and analysis_name(cfg) != "statics":
+        raise ConfigError(f"tension.t_min={_shown(tension.t_min)}: the pinv model checks the papers' "
                           "minimum-norm torques, which may push; set tension.model=feasible")
+
+
+def _limit_values(key: str, value, n_cables: int):
+    """A tension limit as an (m,) array: one finite number for every cable, or one per cable."""
+    import numpy as np
+
+    items = [value] if isinstance(value, (int, float)) and not isinstance(value, bool) else value
+    try:
+        items = list(items)
+    except TypeError:
+        items = None
+    if items is None or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in items):
+        raise ConfigError(f"{key}={_shown(value)}: must be a number (N) or a list of one per cable")
+    if len(items) not in (1, n_cables):
+        raise ConfigError(f"{key}={_shown(value)}: {len(items)} values for {n_cables} cables")
+    values = np.broadcast_to(np.asarray(items, dtype=float), (n_cables,))
+    if not np.isfinite(values).all():
+        raise ConfigError(f"{key}={_shown(value)}: must be finite (null: no limit)")
+    return values
+
+
+def _shown(value):
+    return OmegaConf.to_container(value) if isinstance(value, ListConfig) else value
 
 
 def _validate_cpr8(robot: DictConfig) -> None:

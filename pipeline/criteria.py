@@ -7,7 +7,7 @@ them by name (``CRITERIA``). CPR-WWA criteria read a :class:`PoseDynamics` and a
 :class:`ActuatorModel`; static criteria read a :class:`PoseStatics` and :class:`StaticLimits`.
 Under the ``feasible`` tension model the criteria on cable forces (unreachable, slack,
 tension_max, torque, voltage) read the nested capacity margins of ``pipeline.tensions``,
-computed once per chunk and limits (:func:`feasible_margins`).
+computed once per chunk and limits (:func:`feasible_solution`).
 """
 
 from __future__ import annotations
@@ -128,7 +128,7 @@ def slack(state, limits) -> np.ndarray:
     over all valid tension distributions (CPR-8: in units of the torque limit)."""
     if _feasible_model(state):
         return feasible_margins(state, limits)["slack"]
-    return (state.tensions.min(axis=1) - state.spec.tension.t_min) / limits.scale
+    return (state.tensions - state.spec.tension.t_min).min(axis=1) / limits.scale
 
 
 def tension_max(state, limits) -> np.ndarray:
@@ -136,9 +136,9 @@ def tension_max(state, limits) -> np.ndarray:
     if _feasible_model(state):
         return feasible_margins(state, limits)["tension_max"]
     if isinstance(state, PoseStatics):
-        return _margin(state.tensions, limits.s_max)
+        return 1.0 - (state.tensions / limits.s_max).max(axis=1)  # s_max: scalar or per cable
     high, _ = state.acceleration_range(*state.torque_affine)  # largest M_i = R_i t_i over the set
-    return _margin(high / state.motion.winch_radius, state.motion.tension.t_max)
+    return 1.0 - (high / state.motion.winch_radius / state.motion.tension.t_max).max(axis=1)
 
 
 def length(st: PoseStatics, lim: StaticLimits) -> np.ndarray:
@@ -161,16 +161,22 @@ CRITERIA: dict[str, Criterion] = {
 
 def feasible_margins(state, limits) -> dict[str, np.ndarray]:
     """(n,) margins of the ``feasible`` tension model, the worst over the required wrenches:
-    ``unreachable`` and one per family of :func:`tension_families`. Cached on the state per
-    limits: one set of LPs serves every criterion that reads it."""
-    cache = state.__dict__.setdefault("_feasible_margins", {})
-    if limits not in cache:
-        margins, _ = feasible_tensions(
+    ``unreachable`` and one per family of :func:`tension_families`."""
+    return feasible_solution(state, limits)[0]
+
+
+def feasible_solution(state, limits) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """:func:`feasible_margins` and the cable forces x (n, K, m) the LPs chose. Cached on the
+    state per limits: one set of LPs serves every criterion that reads it."""
+    cache = state.__dict__.setdefault("_feasible_solution", {})
+    key = id(limits)  # the problem's one limits object; arrays inside make it unhashable
+    if key not in cache:
+        margins, chosen = feasible_tensions(
             state.structure, *state.wrench_pinv, state.required_wrenches,
             tension_families(state, limits), _tension(state).residual_rtol,
         )
-        cache[limits] = {name: value.min(axis=1) for name, value in margins.items()}
-    return cache[limits]
+        cache[key] = ({name: value.min(axis=1) for name, value in margins.items()}, chosen)
+    return cache[key]
 
 
 def tension_families(state, limits) -> list[Family]:
@@ -181,7 +187,7 @@ def tension_families(state, limits) -> list[Family]:
     tension = _tension(state)
     if isinstance(state, PoseStatics):
         slack = Family("slack", tension.t_min, np.inf, limits.scale)
-        if not np.isfinite(limits.s_max):
+        if not np.isfinite(limits.s_max).all():
             return [slack]
         return [slack, Family("tension_max", -np.inf, limits.s_max, limits.s_max)]
     high, low = _voltage_from_velocity(state, limits)  # (n, m)

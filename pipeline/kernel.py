@@ -9,6 +9,7 @@ import numpy as np
 
 from pipeline.criteria import CRITERIA
 from pipeline.geometry import CableRobot
+from pipeline.quantities import cable_quantities
 
 @dataclass(frozen=True)
 class WorkspaceProblem:
@@ -19,6 +20,7 @@ class WorkspaceProblem:
     ``StaticLimits``). ``orientations`` (k, 3): the pose must satisfy every criterion at every
     one of them (k = 1: constant-orientation workspace; k > 1: total-orientation workspace).
     ``margin_atol``: margins within it of zero count as exactly 0 (``pipeline.verdict``).
+    ``cables``: also return the per-pose cable lengths and tensions (``pipeline.quantities``).
     """
 
     robot: CableRobot
@@ -27,6 +29,7 @@ class WorkspaceProblem:
     limits: Any
     criteria: tuple[str, ...]
     margin_atol: float = 1e-9
+    cables: bool = False
 
     @property
     def orientation(self) -> tuple[float, float, float]:
@@ -35,10 +38,13 @@ class WorkspaceProblem:
 
 
 def evaluate_chunk(problem: WorkspaceProblem, positions: np.ndarray) -> dict[str, np.ndarray]:
-    """Margins ``margin_<criterion>`` (n,), the worst over the orientation set, for positions (n, 3)."""
+    """Margins ``margin_<criterion>`` (n,), the worst over the orientation set, for positions
+    (n, 3); with ``problem.cables`` also the cable quantities at the nominal orientation."""
     result = {}
-    for orientation in problem.orientations:
+    for number, orientation in enumerate(problem.orientations):
         state = problem.spec.state(problem.robot, positions, orientation)
+        if problem.cables and number == 0:
+            result.update(cable_quantities(state, problem.limits))
         for name in problem.criteria:
             margin = CRITERIA[name](state, problem.limits)
             key = f"margin_{name}"

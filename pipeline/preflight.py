@@ -2,7 +2,7 @@
 
 Hydra makes the run (or sweep) folder before the task function starts, so a bad value found
 inside a job would leave folders behind. The preflight expands the command's sweep exactly as
-Hydra's basic sweeper does, builds each job's config, validates it, and stops at the first
+Hydra's basic sweeper does (with Hydra's public override parser), builds each job's config, validates it, and stops at the first
 problem with a one-line message naming the key and value.
 
 Composing a config costs about 80 ms, so a sweep of a thousand jobs is not composed a thousand
@@ -18,7 +18,7 @@ import re
 from pathlib import Path
 
 from hydra import compose, initialize_config_dir
-from hydra._internal.core_plugins.basic_sweeper import BasicSweeper
+import itertools
 from hydra.core.override_parser.overrides_parser import OverridesParser
 from hydra.core.override_parser.types import Override
 from omegaconf import DictConfig, OmegaConf
@@ -36,11 +36,31 @@ _NOISE = re.compile(r"^\s*(full_key|reference_type|object_type|object_type=).*$"
 
 
 def job_overrides(argv: list[str]) -> list[list[str]] | None:
-    """The override list of every job the command would launch; None when it launches none."""
+    """The override list of every job the command would launch; None when it launches none.
+
+    The expansion is the basic sweeper's: the cartesian product of every override's values, in
+    command order. A sweep it cannot enumerate (``interval(...)``, or another sweeper such as
+    Optuna choosing the values) is checked with its other overrides only: one job, the sweep's
+    fixed part, so such sweepers are not refused."""
     overrides = _overrides(argv)
     if overrides is None or not _is_multirun(argv):
         return None if overrides is None else [overrides]
-    return BasicSweeper.split_arguments(parse(overrides), max_batch_size=None)[0]
+    parsed = parse(overrides)
+    if any(o.is_interval_sweep() for o in parsed) or _other_sweeper(parsed):
+        return [[o.input_line for o in parsed if not o.is_sweep_override()]]
+    values: dict[str, list[str]] = {}  # a repeated key keeps its place and takes its last values
+    for override in parsed:
+        key = override.get_key_element()
+        if override.is_sweep_override():
+            values[key] = [f"{key}={value}" for value in override.sweep_string_iterator()]
+        else:
+            values[key] = [f"{key}={override.get_value_element_as_str()}"]
+    return [list(job) for job in itertools.product(*values.values())]
+
+
+def _other_sweeper(parsed: list[Override]) -> bool:
+    """The command picks a sweeper other than Hydra's basic one."""
+    return any(o.key_or_group == "hydra/sweeper" and o.value() != "basic" for o in parsed)
 
 
 def _overrides(argv: list[str]) -> list[str] | None:

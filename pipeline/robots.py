@@ -108,8 +108,8 @@ class PointsRobot:
     @classmethod
     def from_config(cls, robot) -> "PointsRobot":
         search = robot.search
-        anchors = _points("robot.anchors", robot.anchors)
-        attachments = _points("robot.attachments", robot.attachments)
+        anchors = point_list("robot.anchors", robot.anchors)
+        attachments = point_list("robot.attachments", robot.attachments)
         if len(anchors) != len(attachments):
             raise ConfigError(f"robot.attachments: {len(attachments)} points for {len(anchors)} "
                               "anchors (one attachment per cable, in the same order)")
@@ -142,12 +142,15 @@ class PointsRobot:
                           box_lo=self.lo, box_hi=self.hi, cable_names=self.cable_names, up=self.up)
 
 
-def _points(key: str, value) -> np.ndarray:
-    """(m, 3) finite floats from a list of [x, y, z]; ConfigError naming the first bad point."""
+def point_list(key: str, value) -> np.ndarray:
+    """(m, 3) finite floats from a non-empty list of [x, y, z]; ConfigError naming the first bad
+    point."""
     try:
         rows = list(value)
     except TypeError:
-        raise ConfigError(f"{key}={value}: must be a list of [x, y, z] points") from None
+        rows = []
+    if not rows or isinstance(value, str):
+        raise ConfigError(f"{key}={value}: must be a list of [x, y, z] points")
     for i, row in enumerate(rows):
         _vector(f"{key}[{i}]", row)
     return np.array([[float(v) for v in row] for row in rows], dtype=float).reshape(-1, 3)

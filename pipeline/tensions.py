@@ -41,12 +41,12 @@ class TensionSpec:
     """Which cable forces the criteria check. ``model``: ``"pinv"`` (minimum-norm, eq. 20 of the
     CPR-8 paper / eq. 10 of the IRPM paper, any sign) or ``"feasible"`` (pulling cables only,
     solved as above). ``t_min``: smallest cable tension (N). ``t_max``: cable rating (N), None =
-    the motor's torque limit / R_i only. ``residual_rtol``: a wrench is unreachable when
+    the motor's torque limit / R_i only. Both a float or one value per cable (m,). ``residual_rtol``: a wrench is unreachable when
     |S S^+ w - w| > residual_rtol |w|."""
 
     model: str = "pinv"
-    t_min: float = 0.0
-    t_max: float | None = None
+    t_min: float | np.ndarray = 0.0
+    t_max: float | np.ndarray | None = None
     residual_rtol: float = 1e-6
 
 

@@ -26,11 +26,12 @@ from omegaconf import DictConfig, OmegaConf
 from pipeline.actuators import actuator_model
 from pipeline.criteria import StaticLimits
 from pipeline.dynamics import Load, MotionSpec
+from pipeline.geometry import CableRobot
 from pipeline.grid import Grid, box_grid, step_grid
 from pipeline.kernel import WorkspaceProblem, evaluate_chunk
 from pipeline.motion import acceleration_set, extreme_points, velocity_set
 from pipeline.parallel import iter_chunks
-from pipeline.robots import PointsRobot, cpr8, irpm6
+from pipeline.robots import PointsRobot, cpr8, irpm6, point_list
 from pipeline.statics import StaticsSpec
 from pipeline.tensions import TensionSpec
 from pipeline.verdict import classify
@@ -45,11 +46,15 @@ LP_CHUNK_POSES = 1024  # tension.model=feasible: ~3 s of LPs per chunk, so progr
 
 def build_problem(cfg: DictConfig, catalogue: pd.DataFrame) -> tuple[WorkspaceProblem, Grid]:
     """The workspace problem of the configured robot and analysis, and its position grid."""
-    robot, grid = ROBOTS[cfg.robot.name](cfg)
+    robot = build_robot(cfg)
+    if cfg.poses is None:
+        grid = ROBOTS[cfg.robot.name][1](cfg, robot)
+    else:  # the user's own poses: no grid cell, no volume
+        grid = Grid(point_list("poses", cfg.poses), cell_volume=float("nan"))
     analysis = analysis_name(cfg)
     spec, limits, criteria = ANALYSES[analysis](cfg, catalogue, robot)
     problem = WorkspaceProblem(robot, orientation_set(cfg.orientation), spec, limits, criteria,
-                               cfg.model.margin_atol)
+                               cfg.model.margin_atol, cfg.output.cables)
     return problem, grid
 
 
@@ -69,17 +74,27 @@ def orientation_set(orientation: DictConfig) -> np.ndarray:
     return nominal + grid[order]
 
 
-def _cpr8_robot(cfg: DictConfig):
-    rc = cfg.robot
-    robot = cpr8(rc.frame.d, rc.frame.s, rc.frame.v, rc.carrier.l, rc.carrier.w, rc.carrier.h,
-                 lower_anchor_drop=rc.lower_anchor_drop)
-    return robot, box_grid(robot.box_lo, robot.box_hi, cfg.grid.n, _name(cfg.grid.spacing))
+def build_robot(cfg: DictConfig) -> CableRobot:
+    """The configured robot as data (``pipeline.robots``)."""
+    return ROBOTS[cfg.robot.name][0](cfg.robot)
 
 
-def _irpm6_robot(cfg: DictConfig):
-    rc = cfg.robot
-    robot = irpm6(rc.r_base, rc.r_end, rc.gamma_deg, rc.search.lo, rc.search.hi)
-    return robot, step_grid(robot.box_lo, robot.box_hi, rc.search.step)
+def _cpr8(rc: DictConfig) -> CableRobot:
+    return cpr8(rc.frame.d, rc.frame.s, rc.frame.v, rc.carrier.l, rc.carrier.w, rc.carrier.h,
+                lower_anchor_drop=rc.lower_anchor_drop)
+
+
+def _irpm6(rc: DictConfig) -> CableRobot:
+    return irpm6(rc.r_base, rc.r_end, rc.gamma_deg, rc.search.lo, rc.search.hi)
+
+
+def _box_grid(cfg: DictConfig, robot: CableRobot) -> Grid:
+    return box_grid(robot.box_lo, robot.box_hi, cfg.grid.n, _name(cfg.grid.spacing))
+
+
+def _step_grid(cfg: DictConfig, robot: CableRobot) -> Grid:
+    search = cfg.robot.search
+    return step_grid(robot.box_lo, robot.box_hi, search.step, search.get("spacing", "faces"))
 
 
 def _cpr_wwa(cfg: DictConfig, catalogue: pd.DataFrame, robot):
@@ -122,7 +137,7 @@ def _statics(cfg: DictConfig, catalogue: pd.DataFrame, robot):
     l_max = cfg.robot.get("l_max") or np.inf
     rating = spec.tension.t_max
     force = spec.wrench[:3] + spec.load.external[:3] - spec.load.mass * spec.load.gravity * robot.up
-    scale = rating if rating is not None else max(float(np.linalg.norm(force)), 1.0)
+    scale = float(np.max(rating)) if rating is not None else max(float(np.linalg.norm(force)), 1.0)
     limits = StaticLimits(np.inf if rating is None else rating, float(l_max), cfg.model.rank_rtol, scale)
     unused = {"tension_max"} if rating is None else set()
     unused |= {"length"} if not np.isfinite(l_max) else set()  # no rating, no length limit
@@ -140,22 +155,31 @@ def load_spec(cfg: DictConfig) -> Load:
 
 def tension_spec(cfg: DictConfig) -> TensionSpec:
     t = cfg.tension
-    return TensionSpec(_name(t.model), t.t_min, cable_rating(cfg), t.residual_rtol)
+    return TensionSpec(_name(t.model), per_cable(t.t_min), per_cable(cable_rating(cfg)), t.residual_rtol)
 
 
-def cable_rating(cfg: DictConfig) -> float | None:
-    """The largest cable tension (N): ``tension.t_max``, replaced by its alias ``limits.s_max``
-    (the IRPM paper's name) when that is given; None = no rating."""
+def cable_rating(cfg: DictConfig):
+    """The largest cable tension (N, a scalar or one per cable): ``tension.t_max``, replaced by
+    its alias ``limits.s_max`` (the IRPM paper's name) when that is given; None = no rating."""
     t_max, s_max = cfg.tension.t_max, cfg.limits.s_max
     return s_max if s_max is not None else t_max
 
 
-def _points_robot(cfg: DictConfig):
-    spec = PointsRobot.from_config(cfg.robot)
-    return spec.build(), step_grid(spec.lo, spec.hi, spec.step, spec.spacing)
+def per_cable(value):
+    """A tension limit as the kernels take it: a float, an (m,) array for a list, or None."""
+    if value is None:
+        return None
+    if isinstance(value, (int, float)):
+        return float(value)
+    return np.asarray(list(value), dtype=float)
 
 
-ROBOTS = {"cpr8": _cpr8_robot, "irpm6": _irpm6_robot, "points": _points_robot}
+# robot name -> (robot from its config node, position grid from the config and the robot)
+ROBOTS = {
+    "cpr8": (_cpr8, _box_grid),
+    "irpm6": (_irpm6, _step_grid),
+    "points": (lambda rc: PointsRobot.from_config(rc).build(), _step_grid),
+}
 ANALYSES = {"cpr_wwa": _cpr_wwa, "statics": _statics, "lines": _cpr_wwa}
 
 
@@ -208,6 +232,9 @@ def tabulate(problem: WorkspaceProblem, positions: np.ndarray, raw: dict) -> pd.
         points[f"margin_{name}"] = margin
     if "jacobian_rank" in raw:
         points["jacobian_rank"] = raw["jacobian_rank"]
+    for key, values in raw.items():  # output.cables: lengths and tensions (pipeline.quantities)
+        if key.startswith(("length_", "tension_")):
+            points[key] = values
     if "unreachable" in margins:  # |S S^+ w - w| / |w|, worst over the required wrenches
         points["wrench_residual"] = (1.0 - margins["unreachable"]) * problem.spec.tension.residual_rtol
     return points

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from pipeline.geometry import euler_rate_axes, rotation_matrix, rotation_partials
-from pipeline.workspace import build_problem
+from pipeline.workspace import build_problem, compute_workspace
 
 
 @pytest.mark.parametrize("angles", [(0.0, 0.0, 0.0), (0.5, 0.5, 0.5), (-0.3, 1.2, 2.0)])
@@ -55,3 +55,22 @@ def test_statics_balance_the_weight_and_its_moment_about_the_reference_point(mak
     np.testing.assert_allclose(state.wrench, expected, atol=1e-9)
     balanced = np.einsum("nkm,nm->nk", state.structure_matrix, state.tensions)[0]
     np.testing.assert_allclose(balanced, expected, rtol=1e-9, atol=1e-6)
+
+
+def test_per_cable_tension_limits_equal_to_a_scalar_give_the_same_workspace(make_cfg, catalogue):
+    scalar = compute_workspace(make_cfg("robot=irpm6"), catalogue)[1]["n_feasible"]
+    listed = compute_workspace(make_cfg("robot=irpm6", "tension.t_max=[55000,55000,55000,55000,55000,55000]"),
+                               catalogue)[1]["n_feasible"]
+    assert scalar == listed == 2862
+
+
+@pytest.mark.parametrize("model", ["pinv", "feasible"])
+def test_one_weak_cable_only_removes_poses_and_is_what_limits_them(make_cfg, catalogue, model):
+    """Cable C6D6 rated 1 kN instead of 55 kN: every pose feasible with it is feasible without
+    it, and the square IRPM gives the same verdicts under both tension models (36 poses)."""
+    strong, _ = compute_workspace(make_cfg("robot=irpm6"), catalogue)
+    weak, summary = compute_workspace(make_cfg("robot=irpm6", f"tension.model={model}",
+                                               "limits.s_max=[55000,55000,55000,55000,55000,1000]"), catalogue)
+    assert summary["n_feasible"] == 36
+    assert not (weak["feasible"] & ~strong["feasible"]).any()
+    assert (weak.loc[strong["feasible"] & ~weak["feasible"], "limiting"] == "tension_max").all()

@@ -35,3 +35,24 @@ def test_value_overrides_reuse_one_composition_and_stay_typed():
     check(["-m", f"load.mass={masses}"])
     with pytest.raises(ConfigError, match="grid.n=2.5"):
         check(["-m", f"load.mass={masses}", "grid.n=3,2.5"])
+
+
+def test_expansion_matches_hydra_basic_sweeper_with_ranges_and_repeated_keys():
+    """Same jobs, in the same order, as the basic sweeper's own split (Hydra's internal code is
+    used here only as the reference, never by the package)."""
+    from hydra._internal.core_plugins.basic_sweeper import BasicSweeper
+
+    from pipeline.preflight import parse
+
+    argv = ["-m", "actuator=range(1,4)", "load.mass=1", "grid.n=2,3", "load.mass=4,5"]
+    expected = BasicSweeper.split_arguments(parse(argv[1:]), max_batch_size=None)[0]
+    assert job_overrides(argv) == expected and len(expected) == 12
+
+
+def test_sweeps_the_preflight_cannot_enumerate_are_checked_by_their_fixed_part():
+    """interval(...) and other sweepers (e.g. Optuna) choose values at run time: not refused,
+    and a bad fixed value is still caught."""
+    assert job_overrides(["-m", "load.mass=interval(1,3)", "actuator=2"]) == [["actuator=2"]]
+    assert job_overrides(["-m", "hydra/sweeper=optuna", "load.mass=1,2"]) == [["hydra/sweeper=optuna"]]
+    with pytest.raises(ConfigError, match="actuator=9"):
+        check(["-m", "load.mass=interval(1,3)", "actuator=9"])

@@ -1,1 +1,0 @@
-"""Hydra sweeper plugin of cdpr-studies (discovered by Hydra in the ``hydra_plugins`` namespace)."""
