@@ -20,12 +20,9 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 import seaborn as sns  # noqa: E402
 
+from pipeline.criteria import COLOURS  # noqa: E402
+
 STYLE = "pipeline.styles.paper"
-CONSTRAINT_COLOURS = {  # one colour per limiting constraint, the same in every figure
-    "speed": "#0072B2", "torque": "#D55E00", "acceleration": "#CC79A7", "voltage": "#E69F00",
-    "slack": "#882255", "tension_max": "#0072B2", "length": "#CC79A7",
-    "singular": "#000000", "unreachable": "#777777",
-}
 FEASIBLE_COLOUR = "#009E73"
 PANEL_TITLES = {"feasible_grid": "CPR-WWA grid", "feasible": "simulated lines"}
 
@@ -123,7 +120,7 @@ def limiting_bar(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, o
         name = column[len("lost_"):-len("_pct")]
         share = choice[column].to_numpy()
         if share.any():
-            ax.bar(labels, share, bottom=bottom, color=CONSTRAINT_COLOURS.get(name),
+            ax.bar(labels, share, bottom=bottom, color=COLOURS.get(name),
                    label=f"lost to {name}", edgecolor="black", lw=0.4)
         bottom = bottom + share
     ax.set_ylim(0, 100)
@@ -177,7 +174,7 @@ def _cloud_panel(ax, points: pd.DataFrame, column: str, invert_z: bool) -> None:
                   else [("infeasible", infeasible)])
         for name, group in groups:
             ax.scatter(*(group[c] for c in "xyz"), s=10, marker="x", linewidths=0.7,
-                       c=CONSTRAINT_COLOURS.get(name, "0.5"), depthshade=False,
+                       c=COLOURS.get(name, "0.5"), depthshade=False,
                        label=f"{name} ({len(group)})")
     if invert_z:
         ax.invert_zaxis()

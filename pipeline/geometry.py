@@ -35,6 +35,7 @@ class CableRobot:
     cable_names: m labels used in results and plots.
     up: (3,) unit vector of the fixed frame pointing up; gravity acts along -up (CPR-8: +z,
     IRPM: -Z, its Z axis points down from the base).
+    l_max: the longest cable, m (None: no length limit); checked in every analysis.
     """
 
     name: str
@@ -44,6 +45,7 @@ class CableRobot:
     box_hi: np.ndarray
     cable_names: tuple[str, ...]
     up: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, 1.0]))
+    l_max: float | None = None
 
     @property
     def n_cables(self) -> int:

@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from pipeline.criteria import CRITERIA
+from pipeline.criteria import REGISTRY
 from pipeline.geometry import CableRobot
 from pipeline.quantities import cable_quantities
 
@@ -46,7 +46,7 @@ def evaluate_chunk(problem: WorkspaceProblem, positions: np.ndarray) -> dict[str
         if problem.cables and number == 0:
             result.update(cable_quantities(state, problem.limits))
         for name in problem.criteria:
-            margin = CRITERIA[name](state, problem.limits)
+            margin = REGISTRY[name].function(state, problem.limits)
             key = f"margin_{name}"
             result[key] = margin if key not in result else np.minimum(result[key], margin)
         if hasattr(state, "jacobian_rank"):

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipeline.criteria import feasible_solution
+from pipeline.criteria.forces import feasible_solution
 from pipeline.statics import PoseStatics
 
 

@@ -54,7 +54,7 @@ def cpr8(
 
 
 def irpm6(
-    r_base: float, r_end: float, gamma_deg: float, box_lo, box_hi
+    r_base: float, r_end: float, gamma_deg: float, box_lo, box_hi, l_max: float | None = None
 ) -> CableRobot:
     """6-cable IRPM of Hamed & Zohoor, Figs. 1-4, eqs. (1)-(2) (docs/model.md: our reading).
 
@@ -77,6 +77,7 @@ def irpm6(
         box_hi=np.asarray(box_hi, dtype=float),
         cable_names=tuple(f"C{i}D{i}" for i in range(1, 7)),
         up=np.array([0.0, 0.0, -1.0]),
+        l_max=l_max,
     )
 
 
@@ -139,7 +140,8 @@ class PointsRobot:
 
     def build(self) -> CableRobot:
         return CableRobot(name="points", anchors=self.anchors, attachments=self.attachments,
-                          box_lo=self.lo, box_hi=self.hi, cable_names=self.cable_names, up=self.up)
+                          box_lo=self.lo, box_hi=self.hi, cable_names=self.cable_names, up=self.up,
+                          l_max=self.l_max)
 
 
 def point_list(key: str, value) -> np.ndarray:

@@ -45,6 +45,19 @@ class StaticsSpec:
         return 1
 
 
+@dataclass(frozen=True)
+class StaticLimits:
+    """Eq. (10) of the IRPM paper: tensions in [t_min, s_max] (N; s_max = ``tension.t_max``,
+    inf = no rating, a scalar or one per cable); a pose is singular when the gram ratio of the
+    structure matrix is below ``rank_rtol``. ``scale`` (N) is the unit of the slack margin:
+    the largest rating, or without one the magnitude of the force the cables balance (at least
+    1 N). Cable lengths are limited by the robot's own ``l_max``."""
+
+    s_max: float | np.ndarray
+    rank_rtol: float
+    scale: float
+
+
 class PoseStatics(PoseGeometry):
     """Lazily evaluated structure matrix, conditioning and cable tensions of a chunk of poses."""
 

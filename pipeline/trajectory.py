@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pipeline.actuators import ActuatorModel
-from pipeline.criteria import actuator_families
+from pipeline.criteria.forces import actuator_families
 from pipeline.dynamics import MotionSpec, PoseDynamics, centripetal, load_wrenches
 from pipeline.geometry import CableRobot
 from pipeline.tensions import feasible_tensions
@@ -86,6 +86,10 @@ def inverse_dynamics(
         torque = chosen[:, 0, :]
     else:
         torque = np.einsum("nmc,nc->nm", state.wrench_pinv[0], wrench)
+    if motion.tension.t_max is not None and "tension_max" not in margins:  # pinv: the rating
+        margins["tension_max"] = 1.0 - (torque / motion.winch_radius / motion.tension.t_max).max(axis=1)
+    if robot.l_max is not None:
+        margins["length"] = 1.0 - (state.lengths / robot.l_max).max(axis=1)
     reached = np.einsum("ncm,nm->nc", state.structure, torque)
     return {
         "theta_dot": theta_dot,
@@ -101,7 +105,8 @@ def inverse_dynamics(
 
 def sample_margins(quantities: dict[str, np.ndarray], act: ActuatorModel) -> dict[str, np.ndarray]:
     """Relative margins of every sample, as the CPR-WWA criteria define them (eqs. 30, 32-34);
-    under the ``feasible`` model its own (incl. ``unreachable`` and ``slack``) replace them."""
+    under the ``feasible`` model its own (incl. ``unreachable`` and ``slack``) replace them, and
+    the cable rating and length margins come with them when those limits are given."""
     worst = {
         "speed": (quantities["theta_dot"], act.speed_limit),
         "torque": (quantities["torque"], act.torque_limit),

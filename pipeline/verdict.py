@@ -14,9 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-# criteria that, when violated, decide the verdict whatever the others say: a singular structure
-# matrix, a wrench out of reach, a cable that would have to push (first listed wins)
-GATES = ("singular", "unreachable", "slack")
+from pipeline.criteria import GATES  # violated, they decide the verdict (first listed wins)
 
 
 def snap(margin: np.ndarray, atol: float) -> np.ndarray:

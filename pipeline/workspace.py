@@ -24,7 +24,6 @@ import pandas as pd
 from omegaconf import DictConfig, OmegaConf
 
 from pipeline.actuators import actuator_model
-from pipeline.criteria import StaticLimits
 from pipeline.dynamics import Load, MotionSpec
 from pipeline.geometry import CableRobot
 from pipeline.grid import Grid, box_grid, step_grid
@@ -32,12 +31,11 @@ from pipeline.kernel import WorkspaceProblem, evaluate_chunk
 from pipeline.motion import acceleration_set, extreme_points, velocity_set
 from pipeline.parallel import iter_chunks
 from pipeline.robots import PointsRobot, cpr8, irpm6, point_list
-from pipeline.statics import StaticsSpec
+from pipeline.statics import StaticLimits, StaticsSpec
 from pipeline.tensions import TensionSpec
 from pipeline.verdict import classify
 
 CPR_WWA_CRITERIA = ("speed", "torque", "acceleration", "voltage")  # eqs. (30), (32), (33), (34)
-STATICS_CRITERIA = ("singular", "slack", "tension_max", "length")  # eq. (10)
 FEASIBLE_GATES = ("unreachable", "slack")  # tension=feasible (pipeline.tensions)
 DEFAULT_ANALYSIS = {"cpr8": "cpr_wwa", "irpm6": "statics", "points": "statics"}
 CHUNK_BUDGET_FLOATS = 4_000_000  # largest (poses x cables x set size) array of one chunk: 32 MB
@@ -85,7 +83,7 @@ def _cpr8(rc: DictConfig) -> CableRobot:
 
 
 def _irpm6(rc: DictConfig) -> CableRobot:
-    return irpm6(rc.r_base, rc.r_end, rc.gamma_deg, rc.search.lo, rc.search.hi)
+    return irpm6(rc.r_base, rc.r_end, rc.gamma_deg, rc.search.lo, rc.search.hi, rc.l_max)
 
 
 def _box_grid(cfg: DictConfig, robot: CableRobot) -> Grid:
@@ -119,10 +117,8 @@ def _cpr_wwa(cfg: DictConfig, catalogue: pd.DataFrame, robot):
         tension=tension_spec(cfg),
         inertia=_name(model.inertia),
     )
-    rating = ("tension_max",) if motion.tension.t_max is not None else ()
-    if motion.tension.model == "pinv":
-        return motion, actuator, (*rating, *CPR_WWA_CRITERIA)
-    return motion, actuator, (*FEASIBLE_GATES, *rating, *CPR_WWA_CRITERIA)
+    gates = FEASIBLE_GATES if motion.tension.model == "feasible" else ()
+    return motion, actuator, (*gates, *cable_limits(motion.tension, robot), *CPR_WWA_CRITERIA)
 
 
 def _statics(cfg: DictConfig, catalogue: pd.DataFrame, robot):
@@ -134,17 +130,19 @@ def _statics(cfg: DictConfig, catalogue: pd.DataFrame, robot):
         tension=tension_spec(cfg),
         load=load_spec(cfg),
     )
-    l_max = cfg.robot.get("l_max") or np.inf
     rating = spec.tension.t_max
     force = spec.wrench[:3] + spec.load.external[:3] - spec.load.mass * spec.load.gravity * robot.up
     scale = float(np.max(rating)) if rating is not None else max(float(np.linalg.norm(force)), 1.0)
-    limits = StaticLimits(np.inf if rating is None else rating, float(l_max), cfg.model.rank_rtol, scale)
-    unused = {"tension_max"} if rating is None else set()
-    unused |= {"length"} if not np.isfinite(l_max) else set()  # no rating, no length limit
-    criteria = tuple(c for c in STATICS_CRITERIA if c not in unused)
-    if spec.tension.model == "pinv":
-        return spec, limits, criteria
-    return spec, limits, (*FEASIBLE_GATES, *criteria[2:])
+    limits = StaticLimits(np.inf if rating is None else rating, cfg.model.rank_rtol, scale)
+    gates = ("singular", "slack") if spec.tension.model == "pinv" else FEASIBLE_GATES
+    return spec, limits, (*gates, *cable_limits(spec.tension, robot))
+
+
+def cable_limits(tension: TensionSpec, robot: CableRobot) -> tuple[str, ...]:
+    """The cable criteria every analysis checks when their limit is given: the rating
+    (``tension.t_max``) and the longest cable (the robot's ``l_max``)."""
+    return (("tension_max",) if tension.t_max is not None else ()) + (
+        ("length",) if robot.l_max is not None else ())
 
 
 def load_spec(cfg: DictConfig) -> Load:

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from pipeline.criteria import acceleration, max_abs_sum, voltage
+from pipeline.criteria.actuator import acceleration, max_abs_sum, voltage
 from pipeline.workspace import build_problem
 from pipeline.dynamics import PoseDynamics
 

@@ -11,7 +11,8 @@ import pytest
 from scipy.optimize import nnls
 
 from pipeline.actuators import ActuatorModel
-from pipeline.criteria import CRITERIA, tension_families
+from pipeline.criteria import REGISTRY
+from pipeline.criteria.forces import tension_families
 from pipeline.dynamics import Load, MotionSpec, load_wrenches
 from pipeline.geometry import CableRobot
 from pipeline.kernel import WorkspaceProblem, evaluate_chunk
@@ -50,17 +51,17 @@ def test_symmetric_four_cable_point_mass_gets_the_analytic_tensions():
     assert chosen[0, 0] / RADIUS == pytest.approx(np.full(4, tension), rel=1e-7)
     torque = RADIUS * tension
     assert margins["slack"][0, 0] == pytest.approx(torque / ACTUATOR.torque_limit, rel=1e-7)
-    assert CRITERIA["torque"](state, ACTUATOR)[0] == pytest.approx(1 - torque / ACTUATOR.torque_limit)
-    assert CRITERIA["voltage"](state, ACTUATOR)[0] == pytest.approx(
+    assert REGISTRY["torque"].function(state, ACTUATOR)[0] == pytest.approx(1 - torque / ACTUATOR.torque_limit)
+    assert REGISTRY["voltage"].function(state, ACTUATOR)[0] == pytest.approx(
         1 - ACTUATOR.S_v * torque / ACTUATOR.voltage_limit)
-    assert CRITERIA["unreachable"](state, ACTUATOR)[0] == pytest.approx(1.0)
+    assert REGISTRY["unreachable"].function(state, ACTUATOR)[0] == pytest.approx(1.0)
 
 
 def test_minimum_tension_raises_every_cable_and_is_reported_as_slack_when_out_of_reach():
     state = hanging_motion(t_min=10.0).state(square_robot(), np.array([[0.0, 0.0, -2.0]]), (0, 0, 0))
     # a quarter of the weight along each cable is 6.02 N < 10 N, and the null space of four
     # cables to a point cannot raise all four at once: the floor cannot be met
-    assert CRITERIA["slack"](state, ACTUATOR)[0] < 0
+    assert REGISTRY["slack"].function(state, ACTUATOR)[0] < 0
 
 
 def verdicts(problem, positions):
@@ -266,9 +267,9 @@ def test_an_external_force_adds_to_the_weight(model):
     rest, up = np.zeros((1, 3)), robot.up
     assert load_wrenches(pulled, rest, up, np.eye(3)) == pytest.approx(load_wrenches(heavy, rest, up, np.eye(3)))
     for name in ("torque", "voltage"):
-        got = CRITERIA[name](pulled.state(robot, at, (0, 0, 0)), ACTUATOR)
-        assert got == pytest.approx(CRITERIA[name](heavy.state(robot, at, (0, 0, 0)), ACTUATOR))
-        assert got < CRITERIA[name](plain.state(robot, at, (0, 0, 0)), ACTUATOR)
+        got = REGISTRY[name].function(pulled.state(robot, at, (0, 0, 0)), ACTUATOR)
+        assert got == pytest.approx(REGISTRY[name].function(heavy.state(robot, at, (0, 0, 0)), ACTUATOR))
+        assert got < REGISTRY[name].function(plain.state(robot, at, (0, 0, 0)), ACTUATOR)
 
 
 def test_statics_code_path_finds_the_same_68_hanging_poses(make_cfg, catalogue):

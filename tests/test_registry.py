@@ -1,0 +1,47 @@
+"""Criteria are first-class (one registry) and every robot x analysis combination runs on the
+same physics (issue 15)."""
+
+import numpy as np
+import pytest
+
+from pipeline.criteria import DYNAMICS, GATES, REGISTRY, STATICS
+from pipeline.verdict import classify
+from pipeline.workspace import build_problem, compute_workspace
+
+SMALL_POINTS = ["robot=points", "robot.anchors=[[-1,-1,2],[1,-1,2],[1,1,2],[-1,1,2]]",
+                "robot.attachments=[[0,0,0],[0,0,0],[0,0,0],[0,0,0]]", "robot.search.lo=[-0.5,-0.5,0.5]",
+                "robot.search.hi=[0.5,0.5,1.5]", "robot.search.step=0.25"]
+COMBINATIONS = [
+    (["robot=cpr8"], "cpr_wwa"), (["robot=cpr8"], "statics"),
+    (["robot=irpm6", "robot.search.step=1"], "cpr_wwa"), (["robot=irpm6", "robot.search.step=1"], "statics"),
+    (SMALL_POINTS, "cpr_wwa"), (SMALL_POINTS, "statics"), (SMALL_POINTS, "lines"),
+]
+
+
+@pytest.mark.parametrize("robot, analysis", COMBINATIONS)
+def test_every_robot_runs_every_analysis_with_criteria_it_can_read(make_cfg, catalogue, robot, analysis):
+    problem, _ = build_problem(make_cfg(*robot, f"analysis={analysis}"), catalogue)
+    reads = {REGISTRY[name].reads for name in problem.criteria}
+    assert reads <= ({"any", DYNAMICS} if analysis != "statics" else {"any", STATICS})
+    _, summary = compute_workspace(make_cfg(*robot, f"analysis={analysis}"), catalogue)
+    assert summary["n_points"] == summary["n_feasible"] + sum(
+        summary[f"lost_{name}"] for name in problem.criteria)
+
+
+def test_gates_come_from_the_registry_in_priority_order():
+    assert GATES == ("singular", "unreachable", "slack")
+    margins = {"voltage": np.array([-5.0]), "slack": np.array([-0.1]), "unreachable": np.array([-0.2])}
+    assert classify(margins, 1e-9)[2].tolist() == ["unreachable"]  # a gate wins over a worse margin
+
+
+def test_the_cable_length_limit_is_checked_in_cpr_wwa_too(make_cfg, catalogue):
+    """The IRPM's l_max = 15 m is robot data: under CPR-WWA its length criterion is there, equal
+    to 1 - max_i l_i / l_max, and with l_max = 5 m it removes every pose it should."""
+    cfg = make_cfg("robot=irpm6", "analysis=cpr_wwa", "load.mass=20", "robot.l_max=5")
+    problem, grid = build_problem(cfg, catalogue)
+    assert "length" in problem.criteria
+    points, summary = compute_workspace(cfg, catalogue)
+    state = problem.spec.state(problem.robot, grid.positions, problem.orientation)
+    np.testing.assert_allclose(points["margin_length"], 1 - state.lengths.max(axis=1) / 5.0, atol=1e-12)
+    too_long = state.lengths.max(axis=1) > 5.0 + 1e-9
+    assert too_long.any() and not points.loc[too_long, "feasible"].any()
