@@ -103,7 +103,7 @@ def robot_yaml(cables: dict, body: dict | None, step: float, source: str, box=No
         "# @package _global_",
         f"# Imported from CASPR: {source}. Anchors: link 0; attachments: link 1 (platform frame).",
         "defaults:",
-        "  - /robot/points@robot",
+        "  - /robot/points",
         "  - _self_",
         "robot:",
         "  anchors:",

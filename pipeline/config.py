@@ -15,8 +15,9 @@ from typing import Any, Optional
 
 from hydra.core.config_store import ConfigStore
 from omegaconf import MISSING, DictConfig, ListConfig, OmegaConf
+from omegaconf.errors import OmegaConfBaseException
 
-from pipeline.errors import ConfigError
+from pipeline.errors import ConfigError, one_line
 
 
 class PinvColumns(Enum):
@@ -293,13 +294,15 @@ class OutputConfig:
 
 @dataclass
 class Config:
-    """Root config. ``analysis`` null = the robot's own (cpr8: cpr_wwa, irpm6 and points: statics).
+    """Every key a job can have. A job has the common keys (conf/config.yaml) plus those of its
+    analysis (conf/analysis/) and robot (conf/robot/); :func:`typed_config` checks them against
+    this schema and keeps only those. ``analysis``: the chosen file of the analysis group.
     ``poses``: a list of [x, y, z] positions (m) checked instead of the robot's grid (null: grid).
     ``actuator`` is the integer id of a catalogue row; ``catalogue`` a CSV or Parquet path
     (null = the shipped Table 1 of the CPR-8 paper)."""
 
     robot: Any = MISSING
-    analysis: Optional[Analysis] = None
+    analysis: Analysis = Analysis.cpr_wwa
     actuator: int = 1
     catalogue: Optional[str] = None
     orientation: OrientationConfig = field(default_factory=OrientationConfig)
@@ -318,12 +321,8 @@ class Config:
 
 
 def register() -> None:
-    """Register the schemas with Hydra's ConfigStore (the YAML files in conf/ extend them)."""
-    store = ConfigStore.instance()
-    store.store(name="schema", node=Config)
-    store.store(group="robot", name="cpr8_schema", node=Cpr8Config)
-    store.store(group="robot", name="irpm6_schema", node=Irpm6Config)
-    store.store(group="robot", name="points_schema", node=PointsConfig)
+    """The resolver of sweep job folder names. The YAML files in conf/ are composed untyped; the
+    schemas here type and check the result (:func:`typed_config`)."""
     OmegaConf.register_new_resolver("cdpr.jobdir", job_dir_name, replace=True)
 
 
@@ -333,6 +332,8 @@ def job_dir_name(override_dirname: str, job_num: int) -> str:
 
 
 NON_NEGATIVE = ("load.mass", "load.gravity")
+FINITE = ("orientation.psi", "orientation.theta", "orientation.phi", "orientation.total.bound",
+          *(f"wrench.{c}" for c in ("fx", "fy", "fz", "mx", "my", "mz")))
 POSITIVE = (
     "motion.v_max",
     "motion.t_acc",
@@ -369,12 +370,47 @@ def unknown_keys(node: DictConfig, schema, prefix: str = "") -> None:
             unknown_keys(node[key], type(default), f"{prefix}{key}.")
 
 
-def validate(cfg: DictConfig, catalogue_ids) -> None:
-    """Raise ConfigError on the first value the model cannot use: '<key>=<value>: <rule>'."""
+def typed_config(cfg: DictConfig) -> DictConfig:
+    """The composed config with every value of its declared type (numbers, enums, lists), keeping
+    only the keys it has: a statics job has no ``actuator``, so its summary has none either.
+    An undeclared key (also one added with ``+``) or a value of the wrong type: ConfigError."""
     unknown_keys(cfg, Config)
-    if cfg.robot.get("name") not in ROBOT_SCHEMAS:
-        raise ConfigError(f"robot.name={cfg.robot.get('name')}: unknown robot ({', '.join(ROBOT_SCHEMAS)})")
-    unknown_keys(cfg.robot, ROBOT_SCHEMAS[cfg.robot.name], "robot.")
+    name = cfg.robot.get("name") if isinstance(cfg.get("robot"), DictConfig) else None
+    if name not in ROBOT_SCHEMAS:
+        raise ConfigError(f"robot.name={name}: unknown robot ({', '.join(ROBOT_SCHEMAS)})")
+    unknown_keys(cfg.robot, ROBOT_SCHEMAS[name], "robot.")
+    full = _merged(Config, cfg, "")
+    full.robot = _merged(ROBOT_SCHEMAS[name], cfg.robot, "robot.")
+    typed = _masked(full, cfg)
+    OmegaConf.set_struct(typed, True)
+    return typed
+
+
+def _merged(schema, node: DictConfig, prefix: str) -> DictConfig:
+    """``node`` merged into ``schema``'s typed defaults; a value of the wrong type is a
+    ConfigError naming the key and the value."""
+    try:
+        return OmegaConf.merge(OmegaConf.structured(schema), node)
+    except OmegaConfBaseException as exc:
+        message = one_line(exc).split(": full_key")[0]
+        raise ConfigError(f"{prefix}{exc.full_key}={exc.value}: {message}") from None
+
+
+def _masked(full: DictConfig, present: DictConfig) -> DictConfig:
+    """``full``'s typed values at the keys of ``present`` only."""
+    kept = {}
+    for key in present:
+        value = full[key]
+        if isinstance(present[key], DictConfig) and isinstance(value, DictConfig):
+            value = _masked(value, present[key])
+        kept[key] = value
+    return OmegaConf.create(kept)
+
+
+def validate(cfg: DictConfig, catalogue_ids=None) -> DictConfig:
+    """The typed config (:func:`typed_config`), or ConfigError on the first value the model
+    cannot use: '<key>=<value>: <rule>'. ``catalogue_ids``: the ids an ``actuator`` may take."""
+    cfg = typed_config(cfg)
     ROBOT_VALIDATORS[cfg.robot.name](cfg.robot)
     for key in POSITIVE:
         value = _select(cfg, key)
@@ -384,22 +420,27 @@ def validate(cfg: DictConfig, catalogue_ids) -> None:
         value = _select(cfg, key)
         if not 0 <= value < float("inf"):
             raise ConfigError(f"{key}={value}: must be >= 0 and finite")
+    for key in FINITE:
+        value = _select(cfg, key)
+        if not abs(value) < float("inf"):
+            raise ConfigError(f"{key}={value}: must be finite")
     for key in ("load.com", "load.external"):
         values = list(_select(cfg, key))
         if not all(isinstance(v, (int, float)) and abs(v) < float("inf") for v in values):
             raise ConfigError(f"{key}={values}: every value must be a finite number")
-    if cfg.model.moment_arm.name == "base" and cfg.load.mass > 0:
+    if "moment_arm" in cfg.model and cfg.model.moment_arm.name == "base" and cfg.load.mass > 0:
         raise ConfigError(f"model.moment_arm=base: moments about the base are only read for a "
                           f"massless platform (load.mass={cfg.load.mass}); set load.mass=0 and put "
                           "the weight in wrench.*")
-    if not 0 < cfg.choice.required_pct <= 100:
+    if "choice" in cfg and not 0 < cfg.choice.required_pct <= 100:
         raise ConfigError(f"choice.required_pct={cfg.choice.required_pct}: must be in (0, 100]")
     if not 0 <= cfg.model.margin_atol <= 1e-3:
         raise ConfigError(f"model.margin_atol={cfg.model.margin_atol}: must be in [0, 1e-3]")
-    if cfg.grid.n < 2:
-        raise ConfigError(f"grid.n={cfg.grid.n}: must be >= 2")
-    if cfg.grid.n_vel is not None and cfg.grid.n_vel < 1:
-        raise ConfigError(f"grid.n_vel={cfg.grid.n_vel}: must be >= 1")
+    grid = cfg.get("grid", {})
+    if "n" in grid and grid.n < 2:
+        raise ConfigError(f"grid.n={grid.n}: must be >= 2")
+    if grid.get("n_vel") is not None and grid.n_vel < 1:
+        raise ConfigError(f"grid.n_vel={grid.n_vel}: must be >= 1")
     if cfg.compute.n_jobs == 0:
         raise ConfigError("compute.n_jobs=0: must be a positive count or negative (joblib style)")
     if cfg.compute.backend not in JOBLIB_BACKENDS:
@@ -408,7 +449,7 @@ def validate(cfg: DictConfig, catalogue_ids) -> None:
         )
     if cfg.compute.backend == "dask" and importlib.util.find_spec("distributed") is None:
         raise ConfigError("compute.backend=dask: needs Dask, pip install 'cdpr-studies[dask]'")
-    if cfg.actuator not in set(catalogue_ids):
+    if "actuator" in cfg and cfg.actuator not in set(catalogue_ids):
         ids = ", ".join(str(i) for i in sorted(catalogue_ids))
         raise ConfigError(f"actuator={cfg.actuator}: no such id in the catalogue (ids: {ids})")
     _validate_tension(cfg)
@@ -423,6 +464,7 @@ def validate(cfg: DictConfig, catalogue_ids) -> None:
     total = cfg.orientation.total
     if total.n < 1 or total.bound < 0:
         raise ConfigError(f"orientation.total={OmegaConf.to_container(total)}: needs n >= 1, bound >= 0")
+    return cfg
 
 
 def _validate_tension(cfg: DictConfig) -> None:

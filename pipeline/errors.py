@@ -1,5 +1,23 @@
 """The one exception type for bad input: its message is the whole one-line error shown to users."""
 
+from __future__ import annotations
+
+import re
+
+_NOISE = re.compile(r"^\s*(full_key|reference_type|object_type|object_type=).*$")
+
 
 class ConfigError(ValueError):
     """A configuration or input file value that cannot be used; the message names key and value."""
+
+
+def one_line(exc: BaseException) -> str:
+    """Hydra/OmegaConf messages span several lines; keep the informative ones, joined."""
+    parts = []
+    while exc is not None:
+        for line in str(exc).splitlines():
+            line = line.strip()
+            if line and not _NOISE.match(line) and line not in parts:
+                parts.append(line)
+        exc = exc.__cause__
+    return ": ".join(parts)

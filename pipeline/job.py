@@ -29,8 +29,8 @@ log = logging.getLogger("pipeline")
 
 def run_job(cfg: DictConfig) -> dict:
     """Validate, compute the feasible workspace, write the Parquet files; returns the summary."""
-    catalogue = load_catalogue(cfg.catalogue)
-    validate(cfg, catalogue.index)
+    catalogue = load_catalogue(cfg.catalogue) if "catalogue" in cfg else None
+    cfg = validate(cfg, None if catalogue is None else catalogue.index)
     out = Path(HydraConfig.get().runtime.output_dir)
     config_yaml = OmegaConf.to_yaml(cfg, resolve=True)
     done = finished_summary(out, config_yaml)

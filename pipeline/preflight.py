@@ -22,17 +22,17 @@ import itertools
 from hydra.core.override_parser.overrides_parser import OverridesParser
 from hydra.core.override_parser.types import Override
 from omegaconf import DictConfig, OmegaConf
+from omegaconf.errors import ConfigAttributeError, ConfigKeyError
 
 from pipeline.actuators import load_catalogue
-from pipeline.config import register, validate
-from pipeline.errors import ConfigError
+from pipeline.config import register, typed_config, validate
+from pipeline.errors import ConfigError, one_line
 
 CONF_DIR = Path(__file__).resolve().parent.parent / "conf"
 NO_JOB_FLAGS = {"--help", "-h", "--hydra-help", "--info", "-i", "--cfg", "-c", "--version",
                 "--shell-completion", "-sc", "--resolve", "-p", "--package"}
 FLAGS_WITH_VALUE = {"--config-path", "-cp", "--config-name", "-cn", "--config-dir", "-cd",
                     "--experimental-rerun"}
-_NOISE = re.compile(r"^\s*(full_key|reference_type|object_type|object_type=).*$")
 
 
 def job_overrides(argv: list[str]) -> list[list[str]] | None:
@@ -131,12 +131,15 @@ def check(argv: list[str]) -> None:
 
     with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3", job_name="preflight"):
         if multirun_base is not None:
-            build(multirun_base)  # Hydra composes the sweep's own config from these first
+            typed_config(build(multirun_base))  # Hydra composes the sweep's own config first
         for overrides in jobs:
             cfg = build(overrides)
-            if cfg.catalogue not in catalogues:
-                catalogues[cfg.catalogue] = load_catalogue(cfg.catalogue)
-            validate(cfg, catalogues[cfg.catalogue].index)
+            ids = None
+            if "catalogue" in cfg:  # analyses with an actuator
+                if cfg.catalogue not in catalogues:
+                    catalogues[cfg.catalogue] = load_catalogue(cfg.catalogue)
+                ids = catalogues[cfg.catalogue].index
+            validate(cfg, ids)
 
 
 def _search_path(argv: list[str]) -> tuple[str, ...]:
@@ -170,17 +173,8 @@ def _apply(cfg: DictConfig, override: Override) -> None:
     """``key=value`` merged into the typed config, as Hydra's own override does."""
     try:
         OmegaConf.update(cfg, override.key_or_group, override.value(), merge=True)
+    except (ConfigAttributeError, ConfigKeyError):  # not a key of this job's robot and analysis
+        raise ConfigError(f"{override.input_line}: no such key for robot={cfg.robot.name} with "
+                          f"analysis={cfg.analysis} (a key of another analysis or robot, or a typo)") from None
     except Exception as exc:  # OmegaConf raises key, type and validation errors
         raise ConfigError(f"{override.input_line}: {one_line(exc)}") from exc
-
-
-def one_line(exc: BaseException) -> str:
-    """Hydra/OmegaConf messages span several lines; keep the informative ones, joined."""
-    parts = []
-    while exc is not None:
-        for line in str(exc).splitlines():
-            line = line.strip()
-            if line and not _NOISE.match(line) and line not in parts:
-                parts.append(line)
-        exc = exc.__cause__
-    return ": ".join(parts)

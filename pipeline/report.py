@@ -16,7 +16,7 @@ from pathlib import Path
 import pandas as pd
 
 from pipeline.paper import TABLE2_ACCEPTED, TABLE2_FEASIBLE_PCT
-from pipeline.preflight import one_line
+from pipeline.errors import one_line
 from pipeline.results import code_version
 from pipeline.study import OUTPUT_DIR, available, load_study
 

@@ -21,8 +21,8 @@ from pipeline.tensions import TensionSpec
 
 @dataclass(frozen=True)
 class StaticsSpec:
-    """The applied wrench [f_x f_y f_z M_x M_y M_z] (N, N m) of eq. (11), the load whose weight
-    (and centre-of-mass moment) and external wrench add to it, and model options.
+    """The load whose weight (and centre-of-mass moment) and external wrench the cables balance
+    (``load.external`` plus the applied wrench f_ext of eq. (11), ``wrench.*``), and model options.
 
     ``moment_arm``: ``"platform"`` takes a_i = R d_i, moments about the platform's reference
     point O_M, where section IV applies the wrench; ``"base"`` takes eq. (9) literally,
@@ -32,7 +32,6 @@ class StaticsSpec:
     only (``feasible``, ``pipeline.tensions``; for six cables the same verdict).
     """
 
-    wrench: np.ndarray
     moment_arm: str = "platform"
     rank_rtol: float = 1e-9
     tension: TensionSpec = field(default_factory=TensionSpec)
@@ -74,10 +73,9 @@ class PoseStatics(PoseGeometry):
 
     @cached_property
     def wrench(self) -> np.ndarray:
-        """(6,) the wrench the cables balance: the applied f_ext of eq. (11) plus the load's
-        weight, its moment about the reference point and the load's external wrench."""
-        _, at_rest = load_wrench_terms(self.spec.load, 0.0, self.robot.up, self.rotation)
-        return self.spec.wrench + at_rest
+        """(6,) the wrench the cables balance: the load's weight, its moment about the reference
+        point and the load's external wrench (which holds f_ext of eq. 11)."""
+        return load_wrench_terms(self.spec.load, 0.0, self.robot.up, self.rotation)[1]
 
     @property
     def structure(self) -> np.ndarray:

@@ -34,7 +34,8 @@ from pipeline.actuators import load_catalogue
 from pipeline.choice import acceptance, choose
 from pipeline.errors import ConfigError
 from pipeline.figures import FigureSpec, StudyResults, render
-from pipeline.preflight import CONF_DIR, check, one_line
+from pipeline.errors import one_line
+from pipeline.preflight import CONF_DIR, check
 from pipeline.results import code_version, write_parquet
 from pipeline.survival import survival
 

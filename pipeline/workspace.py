@@ -37,7 +37,7 @@ from pipeline.verdict import classify
 
 CPR_WWA_CRITERIA = ("speed", "torque", "acceleration", "voltage")  # eqs. (30), (32), (33), (34)
 FEASIBLE_GATES = ("unreachable", "slack")  # tension=feasible (pipeline.tensions)
-DEFAULT_ANALYSIS = {"cpr8": "cpr_wwa", "irpm6": "statics", "points": "statics"}
+DEFAULT_N_VEL = 6  # velocity grid of robots without an N x N x N position grid (section 3.1's N)
 CHUNK_BUDGET_FLOATS = 4_000_000  # largest (poses x cables x set size) array of one chunk: 32 MB
 LP_CHUNK_POSES = 1024  # tension.model=feasible: ~3 s of LPs per chunk, so progress is visible
 
@@ -57,7 +57,7 @@ def build_problem(cfg: DictConfig, catalogue: pd.DataFrame) -> tuple[WorkspacePr
 
 
 def analysis_name(cfg: DictConfig) -> str:
-    return _name(cfg.analysis) if cfg.analysis is not None else DEFAULT_ANALYSIS[cfg.robot.name]
+    return _name(cfg.analysis)
 
 
 def orientation_set(orientation: DictConfig) -> np.ndarray:
@@ -101,7 +101,7 @@ def _cpr_wwa(cfg: DictConfig, catalogue: pd.DataFrame, robot):
         cfg.model.xi_in_torque_limit,
     )
     model = cfg.model
-    n_vel = cfg.grid.n_vel or cfg.grid.n
+    n_vel = cfg.grid.n_vel or cfg.grid.get("n") or DEFAULT_N_VEL
     velocities = velocity_set(cfg.motion.v_max, n_vel, _name(model.velocity_boundary))
     motion = MotionSpec(
         velocities=velocities,
@@ -122,16 +122,14 @@ def _cpr_wwa(cfg: DictConfig, catalogue: pd.DataFrame, robot):
 
 
 def _statics(cfg: DictConfig, catalogue: pd.DataFrame, robot):
-    w = cfg.wrench
     spec = StaticsSpec(
-        wrench=np.array([w.fx, w.fy, w.fz, w.mx, w.my, w.mz], dtype=float),
         moment_arm=_name(cfg.model.moment_arm),
         rank_rtol=cfg.model.rank_rtol,
         tension=tension_spec(cfg),
         load=load_spec(cfg),
     )
     rating = spec.tension.t_max
-    force = spec.wrench[:3] + spec.load.external[:3] - spec.load.mass * spec.load.gravity * robot.up
+    force = spec.load.external[:3] - spec.load.mass * spec.load.gravity * robot.up
     scale = float(np.max(rating)) if rating is not None else max(float(np.linalg.norm(force)), 1.0)
     limits = StaticLimits(np.inf if rating is None else rating, cfg.model.rank_rtol, scale)
     gates = ("singular", "slack") if spec.tension.model == "pinv" else FEASIBLE_GATES
@@ -146,9 +144,12 @@ def cable_limits(tension: TensionSpec, robot: CableRobot) -> tuple[str, ...]:
 
 
 def load_spec(cfg: DictConfig) -> Load:
-    load = cfg.load
+    """The load of every analysis: mass, gravity, centre of mass, and as its external wrench
+    ``load.external`` plus the applied wrench ``wrench.*`` (IRPM eq. 11)."""
+    load, w = cfg.load, cfg.wrench
+    applied = np.array([w.fx, w.fy, w.fz, w.mx, w.my, w.mz], dtype=float)
     return Load(float(load.mass), float(load.gravity), np.asarray(load.com, dtype=float),
-                np.asarray(load.external, dtype=float))
+                np.asarray(load.external, dtype=float) + applied)
 
 
 def tension_spec(cfg: DictConfig) -> TensionSpec:

@@ -6,7 +6,7 @@ import pytest
 from hydra import compose, initialize_config_dir
 
 from pipeline.actuators import load_catalogue
-from pipeline.config import register
+from pipeline.config import register, typed_config
 from pipeline.preflight import CONF_DIR
 
 register()
@@ -19,10 +19,11 @@ def catalogue():
 
 @pytest.fixture(scope="session")
 def make_cfg():
-    """make_cfg(*overrides) -> the composed root config (serial compute for in-process tests)."""
+    """make_cfg(*overrides) -> the composed, typed config a job sees (serial compute for
+    in-process tests)."""
 
     def _make(*overrides: str):
         with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
-            return compose(config_name="config", overrides=["compute.n_jobs=1", *overrides])
+            return typed_config(compose(config_name="config", overrides=["compute.n_jobs=1", *overrides]))
 
     return _make

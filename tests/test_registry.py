@@ -45,3 +45,14 @@ def test_the_cable_length_limit_is_checked_in_cpr_wwa_too(make_cfg, catalogue):
     np.testing.assert_allclose(points["margin_length"], 1 - state.lengths.max(axis=1) / 5.0, atol=1e-12)
     too_long = state.lengths.max(axis=1) > 5.0 + 1e-9
     assert too_long.any() and not points.loc[too_long, "feasible"].any()
+
+
+def test_a_job_has_only_the_keys_of_its_robot_and_analysis(make_cfg, catalogue):
+    """The IRPM's statics summary carries no actuator, motion or CPR-8 grid; the CPR-8's no
+    moment-arm reading; each gets its own analysis' keys (conf/analysis/)."""
+    _, irpm = compute_workspace(make_cfg("robot=irpm6", "robot.search.step=1"), catalogue)
+    _, cpr8 = compute_workspace(make_cfg(), catalogue)
+    assert not any(k.startswith(("actuator", "motion.", "grid.", "drive.", "choice.")) for k in irpm)
+    assert irpm["model.moment_arm"] == "platform" and "model.moment_arm" not in cpr8
+    assert cpr8["actuator"] == 1 and cpr8["grid.n"] == 6 and "wrench.fz" in cpr8 and "wrench.fz" in irpm
+    assert not any(k.startswith("robot.r_") for k in cpr8)
