@@ -471,6 +471,11 @@ def _validate_tension(cfg: DictConfig) -> None:
 
     tension = cfg.tension
     n_cables = build_robot(cfg).n_cables
+    rows = 3 if "pinv_columns" in cfg.model and cfg.model.pinv_columns.name == "translational" else 6
+    if n_cables < rows:
+        what = "forces" if rows == 3 else "forces and moments"
+        raise ConfigError(f"robot: {n_cables} cables; analysis={analysis_name(cfg)} balances {what} "
+                          f"({rows} rows of the structure matrix) and needs >= {rows} cables")
     t_min = _limit_values("tension.t_min", tension.t_min, n_cables)
     if not (t_min >= 0).all():
         raise ConfigError(f"tension.t_min={_shown(tension.t_min)}: must be >= 0 (a cable cannot push)")

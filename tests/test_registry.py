@@ -8,9 +8,10 @@ from pipeline.criteria import DYNAMICS, GATES, REGISTRY, STATICS
 from pipeline.verdict import classify
 from pipeline.workspace import build_problem, compute_workspace
 
-SMALL_POINTS = ["robot=points", "robot.anchors=[[-1,-1,2],[1,-1,2],[1,1,2],[-1,1,2]]",
-                "robot.attachments=[[0,0,0],[0,0,0],[0,0,0],[0,0,0]]", "robot.search.lo=[-0.5,-0.5,0.5]",
-                "robot.search.hi=[0.5,0.5,1.5]", "robot.search.step=0.25"]
+SMALL_POINTS = ["robot=points",  # six cables: the fewest a wrench with moments needs
+                "robot.anchors=[[-1,-1,2],[1,-1,2],[1,1,2],[-1,1,2],[0,-1.5,2],[0,1.5,2]]",
+                "robot.attachments=[[-0.1,-0.1,0],[0.1,-0.1,0],[0.1,0.1,0],[-0.1,0.1,0],[0,-0.1,0.05],[0,0.1,0.05]]",
+                "robot.search.lo=[-0.5,-0.5,0.5]", "robot.search.hi=[0.5,0.5,1.5]", "robot.search.step=0.25"]
 COMBINATIONS = [
     (["robot=cpr8"], "cpr_wwa"), (["robot=cpr8"], "statics"),
     (["robot=irpm6", "robot.search.step=1"], "cpr_wwa"), (["robot=irpm6", "robot.search.step=1"], "statics"),
@@ -56,3 +57,21 @@ def test_a_job_has_only_the_keys_of_its_robot_and_analysis(make_cfg, catalogue):
     assert irpm["model.moment_arm"] == "platform" and "model.moment_arm" not in cpr8
     assert cpr8["actuator"] == 1 and cpr8["grid.n"] == 6 and "wrench.fz" in cpr8 and "wrench.fz" in irpm
     assert not any(k.startswith("robot.r_") for k in cpr8)
+
+
+@pytest.mark.parametrize("analysis, extra, needs", [
+    ("statics", [], 6), ("cpr_wwa", [], 3), ("cpr_wwa", ["model.pinv_columns=full"], 6)])
+def test_fewer_cables_than_the_analysis_balances_are_refused(make_cfg, catalogue, analysis, extra, needs):
+    """Four cables to a point: the statics' six wrench rows (and CPR-WWA's with moments) would
+    make every pose singular; CPR-WWA with forces only is a meaningful problem."""
+    from pipeline.config import validate
+    from pipeline.errors import ConfigError
+
+    four = ["robot=points", "robot.anchors=[[-1,-1,2],[1,-1,2],[1,1,2],[-1,1,2]]",
+            "robot.attachments=[[0,0,0],[0,0,0],[0,0,0],[0,0,0]]", "robot.search.lo=[-0.5,-0.5,0.5]",
+            "robot.search.hi=[0.5,0.5,1.5]", "robot.search.step=0.25", f"analysis={analysis}", *extra]
+    if needs == 3:
+        validate(make_cfg(*four), catalogue.index)
+        return
+    with pytest.raises(ConfigError, match=f"robot: 4 cables; analysis={analysis} .* needs >= 6 cables"):
+        validate(make_cfg(*four), catalogue.index)
