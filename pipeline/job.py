@@ -4,12 +4,21 @@ summary.parquet in its folder.
 A job whose folder already holds a summary.parquet written with the same resolved config and
 the same code version is not recomputed: every file is written to a temporary name and renamed
 (``pipeline.results.write_parquet``), and the summary is written last, so its presence proves
-the job finished. A sweep killed mid-way therefore resumes with only the missing jobs.
+the job finished. A sweep killed mid-way therefore resumes with only the missing jobs. Before a
+finished job is reused its data files are checked against the sha256 digests its summary
+recorded; an unreadable summary or a changed data file is recomputed, with a log line.
+
+One writer per folder: a job holds an exclusive lock on ``<folder>/.lock`` while it works, and
+a second job started into the same folder stops at once with one line and exit status 2.
 """
 
 from __future__ import annotations
 
+import fcntl
+import json
 import logging
+import sys
+from contextlib import contextmanager
 from pathlib import Path
 
 import pandas as pd
@@ -18,8 +27,10 @@ from omegaconf import DictConfig, OmegaConf
 
 from pipeline.actuators import load_catalogue
 from pipeline.config import validate
+from pipeline.errors import ConfigError
 from pipeline.results import (
-    CONFIG_KEY, VERSION_KEY, ParquetSink, code_version, read_metadata, write_parquet,
+    CONFIG_KEY, DIGESTS_KEY, VERSION_KEY, ParquetSink, code_version, digests_json, file_digest,
+    read_metadata, write_parquet,
 )
 from pipeline.lines import simulate_lines
 from pipeline.workspace import analysis_name, compute_workspace
@@ -32,6 +43,31 @@ def run_job(cfg: DictConfig) -> dict:
     catalogue = load_catalogue(cfg.catalogue) if "catalogue" in cfg else None
     cfg = validate(cfg, None if catalogue is None else catalogue.index)
     out = Path(HydraConfig.get().runtime.output_dir)
+    try:
+        with folder_lock(out):
+            return _run_locked(cfg, catalogue, out)
+    except ConfigError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        raise SystemExit(2) from None
+
+
+@contextmanager
+def folder_lock(out: Path):
+    """An exclusive lock on ``out/.lock`` for the duration of the block, or ConfigError at once
+    when another process holds it."""
+    with open(out / ".lock", "a") as handle:
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise ConfigError(f"{out}: another run is writing this folder; wait for it or "
+                              "choose another (hydra.run.dir=...)") from None
+        try:
+            yield
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)
+
+
+def _run_locked(cfg: DictConfig, catalogue, out: Path) -> dict:
     config_yaml = OmegaConf.to_yaml(cfg, resolve=True)
     done = finished_summary(out, config_yaml)
     if done is not None:
@@ -44,10 +80,13 @@ def run_job(cfg: DictConfig) -> dict:
                  summary["n_lines"], summary["n_samples"], summary["n_feasible"],
                  summary["n_feasible_grid"], summary["agreement_pct"])
         write_parquet(points, out / "points.parquet", config_yaml)
+        written = [out / "samples.parquet", out / "points.parquet"]
     else:  # streamed chunk by chunk: memory bounded by a chunk, not by the grid
         with ParquetSink(out / "points.parquet", config_yaml) as sink:
             _, summary = compute_workspace(cfg, catalogue, sink.write)
-    write_parquet(pd.DataFrame([summary]), out / "summary.parquet", config_yaml)
+        written = [out / "points.parquet"]
+    write_parquet(pd.DataFrame([summary]), out / "summary.parquet", config_yaml,
+                  {DIGESTS_KEY: digests_json(written)})
     lost = ", ".join(
         f"{key[len('lost_'):]} {value}" for key, value in summary.items() if key.startswith("lost_")
     )
@@ -62,11 +101,24 @@ def run_job(cfg: DictConfig) -> dict:
 
 
 def finished_summary(out: Path, config_yaml: str) -> dict | None:
-    """The summary of a job already finished in ``out`` with this config and code, else None."""
+    """The summary of a job already finished in ``out`` with this config and code, whose data
+    files still have the digests it recorded; else None (and a log line when something in the
+    folder is unreadable or changed)."""
     path = out / "summary.parquet"
     if not path.exists():
         return None
-    meta = read_metadata(path)
-    if meta.get(CONFIG_KEY) != config_yaml or meta.get(VERSION_KEY) != code_version():
+    try:
+        meta = read_metadata(path)
+        if meta.get(CONFIG_KEY) != config_yaml or meta.get(VERSION_KEY) != code_version():
+            return None
+        recorded = json.loads(meta.get(DIGESTS_KEY, "{}"))
+        changed = [name for name, digest in recorded.items()
+                   if not (out / name).exists() or file_digest(out / name) != digest]
+        if changed or not recorded:
+            log.warning("recomputing %s: %s changed since the job finished", out,
+                        ", ".join(changed) or "its data files are not recorded")
+            return None
+        return pd.read_parquet(path).iloc[0].to_dict()
+    except (OSError, ValueError) as exc:  # pyarrow's errors derive from these
+        log.warning("recomputing %s: unreadable summary.parquet (%s)", out, exc)
         return None
-    return pd.read_parquet(path).iloc[0].to_dict()

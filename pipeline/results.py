@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import hashlib
+import json
 import os
+import secrets
 import subprocess
 from functools import lru_cache
 from importlib import metadata
@@ -14,6 +17,7 @@ import pyarrow.parquet as pq
 
 CONFIG_KEY = "cdpr.config"
 VERSION_KEY = "cdpr.version"
+DIGESTS_KEY = "cdpr.digests"  # in a job's summary: sha256 of every data file the job wrote
 
 
 @lru_cache(maxsize=1)
@@ -38,21 +42,23 @@ def code_version() -> str:
     return f"{version}+g{sha}{'.dirty' if dirty else ''}"
 
 
-def write_parquet(frame: pd.DataFrame, path: Path, config_yaml: str) -> None:
+def write_parquet(frame: pd.DataFrame, path: Path, config_yaml: str, extra: dict | None = None) -> None:
     """Write ``frame`` to ``path`` via a temporary file and a rename: no half-written file ever
-    carries the final name."""
-    with ParquetSink(path, config_yaml) as sink:
+    carries the final name. ``extra``: more ``cdpr.*`` schema metadata (str values)."""
+    with ParquetSink(path, config_yaml, extra) as sink:
         sink.write(frame)
 
 
 class ParquetSink:
     """Write a table chunk by chunk (one row group per :meth:`write`) to a temporary file,
-    renamed to ``path`` only when the ``with`` block ends without an error."""
+    renamed to ``path`` only when the ``with`` block ends without an error. The temporary name
+    is unique to this writer (process id and a random part), so two writers never share one."""
 
-    def __init__(self, path: Path, config_yaml: str):
+    def __init__(self, path: Path, config_yaml: str, extra: dict | None = None):
         self.path = Path(path)
-        self.tmp = self.path.with_name(f".{self.path.name}.tmp")
+        self.tmp = self.path.with_name(f".{self.path.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp")
         self.config_yaml = config_yaml
+        self.extra = extra or {}
         self.writer: pq.ParquetWriter | None = None
 
     def write(self, frame: pd.DataFrame) -> None:
@@ -61,6 +67,7 @@ class ParquetSink:
             meta = dict(table.schema.metadata or {})
             meta[CONFIG_KEY.encode()] = self.config_yaml.encode()
             meta[VERSION_KEY.encode()] = code_version().encode()
+            meta.update({key.encode(): value.encode() for key, value in self.extra.items()})
             self.writer = pq.ParquetWriter(self.tmp, table.schema.with_metadata(meta))
         self.writer.write_table(table.replace_schema_metadata(self.writer.schema.metadata))
 
@@ -68,11 +75,12 @@ class ParquetSink:
         return self
 
     def __exit__(self, kind, value, traceback) -> None:
-        if self.writer is not None:
-            self.writer.close()
-        if kind is None and self.writer is not None:
-            os.replace(self.tmp, self.path)
-        else:
+        try:
+            if self.writer is not None:
+                self.writer.close()
+            if kind is None and self.writer is not None:
+                os.replace(self.tmp, self.path)
+        finally:
             self.tmp.unlink(missing_ok=True)
 
 
@@ -80,3 +88,17 @@ def read_metadata(path: Path) -> dict[str, str]:
     """The cdpr.* schema metadata of a Parquet file written by :func:`write_parquet`."""
     meta = pq.read_schema(path).metadata or {}
     return {k.decode(): v.decode() for k, v in meta.items() if k.startswith(b"cdpr.")}
+
+
+def file_digest(path: Path) -> str:
+    """sha256 of a file's bytes (hex)."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as handle:
+        for block in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def digests_json(paths: list[Path]) -> str:
+    """The ``cdpr.digests`` metadata of a job's summary: file name -> sha256."""
+    return json.dumps({p.name: file_digest(p) for p in paths}, sort_keys=True)

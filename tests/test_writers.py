@@ -1,0 +1,67 @@
+"""Writers that cannot collide and results verified before reuse (issue 16, items 5 and 6),
+end to end through the command line."""
+
+import subprocess
+import sys
+import time
+
+import pandas as pd
+import pytest
+
+from pipeline.results import read_metadata
+
+pytestmark = pytest.mark.slow
+SLOW_JOB = ["tension.model=feasible", "grid.n=12", "compute.n_jobs=1"]  # ~5 s of LPs
+
+
+def start(cwd, *args):
+    return subprocess.Popen([sys.executable, "-m", "pipeline", *args], cwd=cwd,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def test_a_second_writer_of_the_same_folder_stops_and_the_first_result_is_intact(tmp_path):
+    first = start(tmp_path, *SLOW_JOB, "hydra.run.dir=same")
+    deadline = time.monotonic() + 60
+    while not (tmp_path / "same" / ".lock").exists() and time.monotonic() < deadline:
+        time.sleep(0.05)
+    second = start(tmp_path, *SLOW_JOB, "actuator=2", "hydra.run.dir=same")  # another config
+    _, err2 = second.communicate(timeout=300)
+    _, err1 = first.communicate(timeout=300)
+    assert first.returncode == 0, err1
+    assert second.returncode == 2 and err2.strip().splitlines() == [
+        f"error: {tmp_path / 'same'}: another run is writing this folder; wait for it or choose "
+        "another (hydra.run.dir=...)"]
+    summary = pd.read_parquet(tmp_path / "same" / "summary.parquet")
+    points = pd.read_parquet(tmp_path / "same" / "points.parquet")
+    assert summary["actuator"].tolist() == [1] and len(points) == 12 ** 3 == summary["n_points"][0]
+    assert "actuator: 1" in read_metadata(tmp_path / "same" / "points.parquet")["cdpr.config"]
+    assert not list((tmp_path / "same").glob(".*.tmp"))
+
+
+def test_default_run_folders_of_the_same_second_differ(tmp_path):
+    runs = [start(tmp_path, "grid.n=3") for _ in range(2)]
+    for run in runs:
+        assert run.wait(timeout=300) == 0
+    assert len(list((tmp_path / "outputs" / "runs").iterdir())) == 2
+
+
+@pytest.mark.parametrize("damage", ["truncate_summary", "flip_points", "delete_points"])
+def test_a_damaged_finished_job_is_recomputed_not_reused(tmp_path, damage):
+    run = ["grid.n=4", "hydra.run.dir=job"]
+    assert start(tmp_path, *run).wait(timeout=300) == 0
+    job = tmp_path / "job"
+    good = pd.read_parquet(job / "points.parquet")
+    if damage == "truncate_summary":
+        (job / "summary.parquet").write_bytes((job / "summary.parquet").read_bytes()[:300])
+    elif damage == "flip_points":
+        data = bytearray((job / "points.parquet").read_bytes())
+        data[len(data) // 2] ^= 0xFF
+        (job / "points.parquet").write_bytes(bytes(data))
+    else:
+        (job / "points.parquet").unlink()
+    proc = start(tmp_path, *run)
+    _, err = proc.communicate(timeout=300)
+    assert proc.returncode == 0, err
+    assert "recomputing" in (job / "pipeline.log").read_text()
+    pd.testing.assert_frame_equal(pd.read_parquet(job / "points.parquet"), good)
+    assert pd.read_parquet(job / "summary.parquet")["n_points"].tolist() == [64]
