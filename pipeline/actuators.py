@@ -33,6 +33,7 @@ NUMERIC_COLUMNS: dict[str, tuple[float, bool]] = {
     "efficiency": (0.0, False),
     "winch_radius_m": (0.0, False),
 }
+FRACTIONS = ("efficiency",)  # dimensionless, in (0, 1]
 # column -> physical quantity its name starts with (the rest of the name is the unit)
 QUANTITY = {
     "power_W": "power",
@@ -103,6 +104,9 @@ def load_catalogue(path: str | Path | None = None) -> pd.DataFrame:
                 raise ConfigError(
                     f"catalogue={source}: row {row}, column {column}: {value:g} must be {rule}"
                 )
+            if column in FRACTIONS and value > 1:
+                raise ConfigError(f"catalogue={source}: row {row}, column {column}: {value:g} must "
+                                  "be a fraction in (0, 1] (per cent? divide by 100)")
         out[column] = values.astype(float)
     return out.set_index("id")
 

@@ -274,13 +274,16 @@ class ModelConfig:
 
 @dataclass
 class ComputeConfig:
-    """Parallel execution: joblib backend, workers, poses per chunk. ``backend=dask`` runs the
-    chunks on the Dask scheduler at ``scheduler`` (null: a local cluster of n_jobs workers)."""
+    """Parallel execution: joblib backend, workers (capped at the machine's cores except on
+    Dask), poses per chunk. ``backend=dask`` runs the chunks on the Dask scheduler at
+    ``scheduler`` (null: a local cluster of n_jobs workers). ``max_poses``: the most pose x
+    orientation evaluations a job may take (checked before any work; raise it knowingly)."""
 
     n_jobs: int = 2
     backend: str = "loky"
     chunk_size: int = 20_000
     scheduler: Optional[str] = None
+    max_poses: int = 50_000_000
 
 
 @dataclass
@@ -463,7 +466,31 @@ def validate(cfg: DictConfig, catalogue_ids=None) -> DictConfig:
     total = cfg.orientation.total
     if total.n < 1 or total.bound < 0:
         raise ConfigError(f"orientation.total={OmegaConf.to_container(total)}: needs n >= 1, bound >= 0")
+    _validate_size(cfg)
     return cfg
+
+
+MAX_VELOCITY_CANDIDATES = 10_000_000  # (n_vel + 1)^3 grid velocities of eq. (23), built in memory
+
+
+def _validate_size(cfg: DictConfig) -> None:
+    """Refuse, before any work, a job larger than ``compute.max_poses`` pose x orientation
+    evaluations or a velocity grid that would not fit in memory, naming the key to change."""
+    from pipeline.workspace import grid_size
+
+    n_vel = cfg.get("grid", {}).get("n_vel")
+    if n_vel is not None and (n_vel + 1) ** 3 > MAX_VELOCITY_CANDIDATES:
+        limit = round(MAX_VELOCITY_CANDIDATES ** (1 / 3)) - 1
+        raise ConfigError(f"grid.n_vel={n_vel}: the velocity grid would have {(n_vel + 1) ** 3:.3g} "
+                          f"candidates; at most grid.n_vel={limit}")
+    poses = grid_size(cfg)
+    orientations = cfg.orientation.total.n ** 3 if cfg.orientation.total.bound > 0 else 1
+    if poses * orientations > cfg.compute.max_poses:
+        raise ConfigError(
+            f"compute.max_poses={cfg.compute.max_poses}: this job has {poses:.3g} poses x "
+            f"{orientations:.3g} orientations = {poses * orientations:.3g} evaluations; use a "
+            "coarser grid (grid.n, robot.search.step), fewer orientation.total.n, or raise "
+            "compute.max_poses knowingly")
 
 
 def _validate_tension(cfg: DictConfig) -> None:
@@ -524,8 +551,8 @@ def _validate_cpr8(robot: DictConfig) -> None:
                 f"{robot.carrier.w} x {robot.carrier.h} m)"
             )
     drop = robot.lower_anchor_drop
-    if drop is not None and drop < 0:
-        raise ConfigError(f"robot.lower_anchor_drop={drop}: must be >= 0")
+    if drop is not None and not 0 <= drop < float("inf"):
+        raise ConfigError(f"robot.lower_anchor_drop={drop}: must be >= 0 and finite")
 
 
 def _validate_irpm6(robot: DictConfig) -> None:
@@ -536,8 +563,8 @@ def _validate_irpm6(robot: DictConfig) -> None:
         if len(search[key]) != 3:
             raise ConfigError(f"robot.search.{key}={list(search[key])}: needs 3 values (x, y, z)")
     for axis, lo, hi in zip("xyz", search.lo, search.hi):
-        if not lo <= hi:
-            raise ConfigError(f"robot.search: {axis} from {lo} to {hi}: lo must be <= hi")
+        if not lo <= hi or not abs(lo) + abs(hi) < float("inf"):
+            raise ConfigError(f"robot.search: {axis} from {lo} to {hi}: must be finite with lo <= hi")
 
 
 def _validate_points(robot: DictConfig) -> None:

@@ -61,8 +61,13 @@ def simulate_lines(cfg: DictConfig, catalogue: pd.DataFrame) -> tuple[pd.DataFra
         samples[f"margin_{name}"] = margins[name]
 
     points = points.rename(columns={"feasible": "feasible_grid", "limiting": "limiting_grid"})
-    points["feasible"] = _point_verdict(samples, points)
+    worst = _point_margins(samples, points, problem.criteria)
+    _, points["feasible"], limiting = classify(worst, 0.0)  # samples' margins are snapped already
+    points["limiting"] = pd.Categorical(limiting, categories=list(problem.criteria))
     agree = points["feasible"] == points["feasible_grid"]
+    for name in problem.criteria:  # counts of the lines' verdict; the grid's under lost_grid_*
+        summary[f"lost_grid_{name}"] = summary.pop(f"lost_{name}")
+        summary[f"lost_{name}"] = int(((limiting == name) & ~points["feasible"]).sum())
     summary.update(
         n_lines=len(lines), n_samples=len(samples),
         n_feasible_grid=summary["n_feasible"], n_feasible=int(points["feasible"].sum()),
@@ -87,15 +92,20 @@ def _lines(positions: np.ndarray) -> list[tuple[str, np.ndarray, np.ndarray]]:
     return lines
 
 
-def _point_verdict(samples: pd.DataFrame, points: pd.DataFrame) -> np.ndarray:
-    """A grid point is feasible when all samples of both its lines within half a step are."""
-    verdict = np.ones(len(points), dtype=bool)
-    key = points[["x", "y", "z"]].round(9)
-    for axis, across in (("x", ("y", "z")), ("y", ("x", "z"))):
+def _point_margins(samples: pd.DataFrame, points: pd.DataFrame, criteria) -> dict[str, np.ndarray]:
+    """Per grid point and criterion, the smallest margin over the samples of both its lines
+    within half a grid step: the point is feasible when all those samples are, and its limiting
+    criterion is the worst one among them."""
+    columns = [f"margin_{name}" for name in criteria]
+    key = pd.MultiIndex.from_frame(points[["x", "y", "z"]].round(9))
+    worst = None
+    for axis in ("x", "y"):
         on = samples[samples["axis"] == axis]
         nodes = np.unique(points[axis].to_numpy())
         nearest = nodes[np.abs(on[axis].to_numpy()[:, None] - nodes[None, :]).argmin(axis=1)]
-        ok = (on.assign(**{axis: nearest})[["x", "y", "z", "ok"]].round(9)
-              .groupby(["x", "y", "z"])["ok"].all())
-        verdict &= ok.reindex(pd.MultiIndex.from_frame(key)).fillna(False).to_numpy(dtype=bool)
-    return verdict
+        per_point = (on.assign(**{axis: nearest})[["x", "y", "z", *columns]].round({c: 9 for c in "xyz"})
+                     .groupby(["x", "y", "z"])[columns].min().reindex(key).to_numpy())
+        worst = per_point if worst is None else np.minimum(worst, per_point)
+    if np.isnan(worst).any():
+        raise ValueError("a grid point lies on no simulated line (a flat search box?)")
+    return {name: worst[:, i] for i, name in enumerate(criteria)}

@@ -19,8 +19,7 @@ def velocity_set(v_max: float, n: int, boundary: str = "exclude") -> np.ndarray:
     choice does not depend on floating-point rounding (plain ``<=`` keeps 24 of the 30 on-sphere
     velocities for n = 6, asymmetrically).
     """
-    axis = np.linspace(-v_max, v_max, n + 1)
-    candidates = np.array(list(itertools.product(axis, axis, axis)))
+    candidates = cartesian_cube(np.linspace(-v_max, v_max, n + 1))
     speed = np.linalg.norm(candidates, axis=1)
     if boundary == "include":
         keep = speed <= v_max * (1 + BOUNDARY_TOL)
@@ -29,6 +28,12 @@ def velocity_set(v_max: float, n: int, boundary: str = "exclude") -> np.ndarray:
     else:
         raise ValueError(f"unknown velocity boundary {boundary!r}")
     return candidates[keep]
+
+
+def cartesian_cube(axis: np.ndarray) -> np.ndarray:
+    """(k^3, 3) every triple of values of ``axis`` (k,), in ``itertools.product`` order, as one
+    array (no Python tuple per point)."""
+    return np.stack(np.meshgrid(axis, axis, axis, indexing="ij"), axis=-1).reshape(-1, 3)
 
 
 def extreme_points(points: np.ndarray, step: float) -> np.ndarray:

@@ -13,6 +13,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import math
+import os
 from typing import Callable, Iterator
 
 import numpy as np
@@ -42,6 +43,9 @@ def iter_chunks(
     """(slice, ``function(problem, positions[slice])``) for every chunk, in order, as each
     finishes: a caller can write results out chunk by chunk (bounded memory)."""
     workers = effective_n_jobs(n_jobs)
+    if backend != "dask" and workers > (os.cpu_count() or 1):  # more would only thrash memory
+        log.warning("compute.n_jobs=%d: capped at the %d cores of this machine", n_jobs, os.cpu_count())
+        workers = os.cpu_count() or 1
     slices = chunk_slices(len(positions), workers, chunk_size)
     if len(slices) <= 1 or workers == 1:
         for i, s in enumerate(slices, start=1):

@@ -41,7 +41,8 @@ from pipeline.survival import survival
 
 STUDIES_DIR = CONF_DIR.parent / "studies"
 OUTPUT_DIR = Path("outputs") / "studies"
-ALWAYS_EXCLUDED = ["compute.n_jobs", "compute.backend", "compute.chunk_size", "compute.scheduler"]
+ALWAYS_EXCLUDED = ["compute.n_jobs", "compute.backend", "compute.chunk_size", "compute.scheduler",
+                   "compute.max_poses"]
 # Studies are many small jobs: run two jobs at a time, each on one core (one level of parallelism)
 LAUNCHERS = {
     "joblib": ["hydra/launcher=joblib", "hydra.launcher.n_jobs=2", "compute.n_jobs=1"],
@@ -113,20 +114,17 @@ def sweep_command(study: StudySpec, extra: list[str], jobs_dir: Path,
 
 
 def run_study(name: str, extra: list[str], out_root: Path = OUTPUT_DIR,
-              figures_only: bool = False, launcher: str = "joblib") -> list[Path]:
+              figures_only: bool = False, launcher: str = "joblib",
+              commands: list[list[str]] | None = None) -> list[Path]:
     """Sweep (unless ``figures_only``), analyses and figures of one study; returns the files.
-    The jobs of an interrupted run of the same study are reused (``_start_or_resume``)."""
+    The jobs of an interrupted run of the same study are reused (``_start_or_resume``).
+    ``commands``: the study's sweep commands if already checked (:func:`checked_commands`)."""
     study = load_study(name)
     out = out_root / name
     cases = study.cases or {"": []}
     provenance = OmegaConf.to_yaml({"study": name, "extra_overrides": extra})
     if not figures_only:
-        commands = [  # built and validated first: bad input fails before anything is removed
-            sweep_command(study, [*overrides, *extra], out / "jobs" / case, launcher)
-            for case, overrides in cases.items()
-        ]
-        for command in commands:
-            check(command)
+        commands = commands or checked_commands(name, extra, out_root, launcher)
         log.info("study %s: %s", name, study.title)
         _start_or_resume(out / "jobs", commands)
         for command in commands:
@@ -151,6 +149,19 @@ def run_study(name: str, extra: list[str], out_root: Path = OUTPUT_DIR,
     for figure in study.figures:
         written.extend(render(figure, results, out / "figures"))
     return written
+
+
+def checked_commands(name: str, extra: list[str], out_root: Path = OUTPUT_DIR,
+                     launcher: str = "joblib") -> list[list[str]]:
+    """The sweep commands of a study (one per case), every job of them validated by the
+    preflight: bad input fails here, before anything is written or removed."""
+    study = load_study(name)
+    out = out_root / name
+    commands = [sweep_command(study, [*overrides, *extra], out / "jobs" / case, launcher)
+                for case, overrides in (study.cases or {"": []}).items()]
+    for command in commands:
+        check(command)
+    return commands
 
 
 def _start_or_resume(jobs_dir: Path, commands: list[list[str]]) -> None:
@@ -216,10 +227,14 @@ def main(argv: list[str] | None = None) -> None:
     try:
         if not names:
             raise ConfigError("no study given (use --all or --list)")
+        checked = {}  # every study of the command checked before the first one runs
         for name in names:
             load_study(name)
+            if not args.figures_only:
+                checked[name] = checked_commands(name, extra, args.out, args.launcher)
         for name in names:
-            for path in run_study(name, extra, args.out, args.figures_only, args.launcher):
+            for path in run_study(name, extra, args.out, args.figures_only, args.launcher,
+                                  checked.get(name)):
                 log.info("wrote %s", path)
     except ConfigError as exc:
         print(f"error: {exc}", file=sys.stderr)

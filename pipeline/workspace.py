@@ -15,7 +15,6 @@ One code path for every robot and analysis. The robot config only places points
 
 from __future__ import annotations
 
-import itertools
 from collections import Counter
 from typing import Callable
 
@@ -28,7 +27,7 @@ from pipeline.dynamics import Load, MotionSpec
 from pipeline.geometry import CableRobot
 from pipeline.grid import Grid, box_grid, step_grid
 from pipeline.kernel import WorkspaceProblem, evaluate_chunk
-from pipeline.motion import acceleration_set, extreme_points, velocity_set
+from pipeline.motion import acceleration_set, cartesian_cube, extreme_points, velocity_set
 from pipeline.parallel import iter_chunks
 from pipeline.robots import PointsRobot, cpr8, irpm6, point_list
 from pipeline.statics import StaticLimits, StaticsSpec
@@ -67,7 +66,7 @@ def orientation_set(orientation: DictConfig) -> np.ndarray:
     if total.n == 1 or total.bound == 0:
         return nominal[None, :]
     offsets = np.linspace(-total.bound, total.bound, total.n)
-    grid = np.array(list(itertools.product(offsets, repeat=3)))
+    grid = cartesian_cube(offsets)
     order = np.argsort(np.abs(grid).sum(axis=1), kind="stable")  # nominal orientation first
     return nominal + grid[order]
 
@@ -171,6 +170,18 @@ def per_cable(value):
     if isinstance(value, (int, float)):
         return float(value)
     return np.asarray(list(value), dtype=float)
+
+
+def grid_size(cfg: DictConfig) -> int:
+    """Poses a job checks, counted without building the grid (``config`` bounds it)."""
+    if cfg.poses is not None:
+        return len(cfg.poses)
+    if "search" not in cfg.robot:
+        return int(cfg.grid.n) ** 3
+    search = cfg.robot.search
+    spans = np.asarray(search.hi, dtype=float) - np.asarray(search.lo, dtype=float)
+    counts = np.floor(spans / search.step + 1e-9) + (search.get("spacing", "faces") == "faces")
+    return int(np.prod(np.maximum(counts, 0)))
 
 
 # robot name -> (robot from its config node, position grid from the config and the robot)

@@ -20,6 +20,7 @@ def _catalogue_files(folder: Path) -> None:
     table.astype({"voltage_V": str}).assign(voltage_V="48 V").to_csv(folder / "text.csv", index=False)
     table.assign(id=1).to_csv(folder / "dup.csv", index=False)
     table.drop(columns="gear_ratio").to_csv(folder / "missing.csv", index=False)
+    table.assign(efficiency=85).to_csv(folder / "percent.csv", index=False)
     table.to_parquet(folder / "cat.parquet")
     data = (folder / "cat.parquet").read_bytes()
     (folder / "truncated.parquet").write_bytes(data[: len(data) // 2])
@@ -76,6 +77,23 @@ CASES = [
     ("pipeline", ["catalogue=truncated.parquet"], "catalogue=truncated.parquet"),
     ("pipeline", ["catalogue=inertia.csv"], "row 2, column inertia_g_cm2"),
     ("pipeline", ["catalogue=empty.csv"], "catalogue=empty.csv"),
+    ("pipeline", ["catalogue=percent.csv"], "column efficiency: 85 must be a fraction in (0, 1]"),
+    ("pipeline", ["orientation.psi=nan"], "orientation.psi=nan: must be finite"),
+    ("pipeline", ["orientation.total.bound=inf"], "orientation.total.bound=inf: must be finite"),
+    ("pipeline", ["drive.winch_radius=inf"], "drive.winch_radius=inf"),
+    ("pipeline", ["model.rank_rtol=inf"], "model.rank_rtol=inf"),
+    ("pipeline", ["robot.lower_anchor_drop=inf"], "robot.lower_anchor_drop=inf"),
+    ("pipeline", ["motion.v_max=inf"], "motion.v_max=inf"),
+    ("pipeline", ["load.mass=inf"], "load.mass=inf"),
+    ("pipeline", ["load.external=[0,0,nan,0,0,0]"], "load.external"),
+    ("pipeline", ["robot=irpm6", "wrench.fx=nan"], "wrench.fx=nan"),
+    ("pipeline", ["robot=irpm6", "robot.search.hi=[6,6,inf]"], "z from 0.0 to inf"),
+    ("pipeline", ["tension.model=feasible", "tension.t_max=inf"], "tension.t_max=inf"),
+    ("pipeline", ["grid.n=1000000"], "compute.max_poses=50000000"),
+    ("pipeline", ["grid.n_vel=100000"], "grid.n_vel=100000"),
+    ("pipeline", ["orientation.total.n=1000", "orientation.total.bound=0.1"], "compute.max_poses"),
+    ("pipeline", ["-m", "load.mass=1,2,inf"], "load.mass=inf"),
+    ("pipeline", ["robot=irpm6", "actuator=3"], "no such key for robot=irpm6 with analysis=statics"),
     ("pipeline.study", ["no_such_study"], "study 'no_such_study' not found"),
     ("pipeline.study", ["actuator_choice", "catalogue=text.csv"], "row 2, column voltage_V: '48 V'"),
     ("pipeline.study", ["actuator_choice", "catalogue=dup.csv"], "row 3, column id: duplicate id 1"),
@@ -84,6 +102,7 @@ CASES = [
     ("pipeline.study", ["design_mass", "load.mass=-1"], "load.mass=-1.0: must be >= 0"),
     ("pipeline.study", ["actuator_choice", "drive.gear_ratio=0"], "drive.gear_ratio=0"),
     ("pipeline.study", [], "no study given"),
+    ("pipeline.study", ["design_mass", "irpm_fig13_end_ratio", "actuator=2"], "no such key for robot=irpm6"),
     ("pipeline.report", [], "no results for studies"),
 ]
 

@@ -102,6 +102,12 @@ def test_agreement_with_the_grid_per_actuator_and_orientation(lines, reading, or
     assert summary["agreement_pct"] == pytest.approx(expected, abs=0.01)
     assert summary["n_feasible_grid"] == points["feasible_grid"].sum()
     assert summary["n_lines"] == 72 and not points.isna().any().any()
+    lost = {k: v for k, v in summary.items() if k.startswith("lost_") and not k.startswith("lost_grid_")}
+    lost_grid = {k: v for k, v in summary.items() if k.startswith("lost_grid_")}
+    assert summary["n_feasible"] + sum(lost.values()) == summary["n_points"]  # the lines' verdict
+    assert summary["n_feasible_grid"] + sum(lost_grid.values()) == summary["n_points"]
+    for name, count in lost.items():  # each rejected point counted under its worst criterion
+        assert count == ((points["limiting"] == name[5:]) & ~points["feasible"]).sum()
 
 
 @pytest.mark.parametrize("orientation, expected", [("zero", [100.0, 98.15, 98.15, 100.0, 87.04]),
