@@ -25,7 +25,7 @@ import time  # noqa: E402
 from hydra import compose, initialize_config_dir  # noqa: E402
 
 from pipeline.actuators import load_catalogue  # noqa: E402
-from pipeline.config import register  # noqa: E402
+from pipeline.config import register, typed_config  # noqa: E402
 from pipeline.kernel import evaluate_chunk  # noqa: E402
 from pipeline.parallel import iter_chunks  # noqa: E402
 from pipeline.preflight import CONF_DIR  # noqa: E402
@@ -40,7 +40,7 @@ def problem_for(n: int, *extra: str):
 
 def composed(*overrides: str):
     with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
-        cfg = compose("config", overrides=list(overrides))
+        cfg = typed_config(compose("config", overrides=list(overrides)))
     return build_problem(cfg, load_catalogue())
 
 

@@ -376,6 +376,12 @@ def typed_config(cfg: DictConfig) -> DictConfig:
     """The composed config with every value of its declared type (numbers, enums, lists), keeping
     only the keys it has: a statics job has no ``actuator``, so its summary has none either.
     An undeclared key (also one added with ``+``) or a value of the wrong type: ConfigError."""
+    return masked(typed_schema(cfg), cfg)
+
+
+def typed_schema(cfg: DictConfig) -> DictConfig:
+    """``cfg`` merged into the typed schema (every declared key, typed nodes that check any
+    later assignment); :func:`masked` keeps the keys ``cfg`` has."""
     unknown_keys(cfg, Config)
     name = cfg.robot.get("name") if isinstance(cfg.get("robot"), DictConfig) else None
     if name not in ROBOT_SCHEMAS:
@@ -383,9 +389,7 @@ def typed_config(cfg: DictConfig) -> DictConfig:
     unknown_keys(cfg.robot, ROBOT_SCHEMAS[name], "robot.")
     full = _merged(Config, cfg, "")
     full.robot = _merged(ROBOT_SCHEMAS[name], cfg.robot, "robot.")
-    typed = _masked(full, cfg)
-    OmegaConf.set_struct(typed, True)
-    return typed
+    return full
 
 
 def _merged(schema, node: DictConfig, prefix: str) -> DictConfig:
@@ -398,8 +402,14 @@ def _merged(schema, node: DictConfig, prefix: str) -> DictConfig:
         raise ConfigError(f"{prefix}{exc.full_key}={exc.value}: {message}") from None
 
 
-def _masked(full: DictConfig, present: DictConfig) -> DictConfig:
-    """``full``'s typed values at the keys of ``present`` only."""
+def masked(full: DictConfig, present: DictConfig) -> DictConfig:
+    """``full``'s typed values at the keys of ``present`` only (struct: no key can be added)."""
+    typed = _masked(full, present)
+    OmegaConf.set_struct(typed, True)
+    return typed
+
+
+def _masked(full: DictConfig, present: DictConfig) -> dict:
     kept = {}
     for key in present:
         value = full[key]
@@ -409,10 +419,11 @@ def _masked(full: DictConfig, present: DictConfig) -> DictConfig:
     return OmegaConf.create(kept)
 
 
-def validate(cfg: DictConfig, catalogue_ids=None) -> DictConfig:
-    """The typed config (:func:`typed_config`), or ConfigError on the first value the model
-    cannot use: '<key>=<value>: <rule>'. ``catalogue_ids``: the ids an ``actuator`` may take."""
-    cfg = typed_config(cfg)
+def validate(cfg: DictConfig, catalogue_ids=None, typed: bool = False) -> DictConfig:
+    """The typed config (:func:`typed_config`; ``typed``: ``cfg`` already is), or ConfigError on
+    the first value the model cannot use: '<key>=<value>: <rule>'. ``catalogue_ids``: the ids
+    an ``actuator`` may take."""
+    cfg = cfg if typed else typed_config(cfg)
     ROBOT_VALIDATORS[cfg.robot.name](cfg.robot)
     for key in POSITIVE:
         value = _select(cfg, key)

@@ -25,7 +25,7 @@ from omegaconf import DictConfig, OmegaConf
 from omegaconf.errors import ConfigAttributeError, ConfigKeyError
 
 from pipeline.actuators import load_catalogue
-from pipeline.config import register, typed_config, validate
+from pipeline.config import masked, register, typed_schema, validate
 from pipeline.errors import ConfigError, one_line
 
 CONF_DIR = Path(__file__).resolve().parent.parent / "conf"
@@ -48,9 +48,18 @@ def job_overrides(argv: list[str]) -> list[list[str]] | None:
     parsed = parse(overrides)
     if any(o.is_interval_sweep() for o in parsed) or _other_sweeper(parsed):
         return [[o.input_line for o in parsed if not o.is_sweep_override()]]
+    return expand_sweep(parsed)
+
+
+def expand_sweep(parsed: list[Override]) -> list[list[str]]:
+    """The basic sweeper's jobs: the cartesian product of every override's values, in command
+    order (``pipeline.sweeper`` launches exactly these)."""
     values: dict[str, list[str]] = {}  # a repeated key keeps its place and takes its last values
     for override in parsed:
         key = override.get_key_element()
+        if override.is_interval_sweep():
+            raise ConfigError(f"{override.input_line}: interval sweeps need a sweeper that samples "
+                              "them (e.g. hydra/sweeper=optuna)")
         if override.is_sweep_override():
             values[key] = [f"{key}={value}" for value in override.sweep_string_iterator()]
         else:
@@ -60,7 +69,7 @@ def job_overrides(argv: list[str]) -> list[list[str]] | None:
 
 def _other_sweeper(parsed: list[Override]) -> bool:
     """The command picks a sweeper other than Hydra's basic one."""
-    return any(o.key_or_group == "hydra/sweeper" and o.value() != "basic" for o in parsed)
+    return any(o.key_or_group == "hydra/sweeper" and o.value() not in ("basic", "cdpr") for o in parsed)
 
 
 def _overrides(argv: list[str]) -> list[str] | None:
@@ -120,18 +129,20 @@ def check(argv: list[str]) -> None:
         structural = (*search_path, *(o.input_line for o in parsed if _structural(o)))
         if structural not in composed:
             try:
-                composed[structural] = compose(config_name="config", overrides=list(structural))
+                plain = compose(config_name="config", overrides=list(structural))
             except Exception as exc:  # composition errors come as Hydra and OmegaConf types
                 raise ConfigError(one_line(exc)) from exc
-        cfg = copy.deepcopy(composed[structural])
+            composed[structural] = plain, typed_schema(plain)  # typed once per composition
+        plain, full = (copy.deepcopy(c) for c in composed[structural])
         for override in parsed:
             if not _structural(override):
-                _apply(cfg, override)
-        return cfg
+                _apply(plain, override)  # a key this robot and analysis have
+                _apply(full, override)  # of the declared type
+        return masked(full, plain)
 
     with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3", job_name="preflight"):
         if multirun_base is not None:
-            typed_config(build(multirun_base))  # Hydra composes the sweep's own config first
+            build(multirun_base)  # Hydra composes the sweep's own config from these first
         for overrides in jobs:
             cfg = build(overrides)
             ids = None
@@ -139,7 +150,7 @@ def check(argv: list[str]) -> None:
                 if cfg.catalogue not in catalogues:
                     catalogues[cfg.catalogue] = load_catalogue(cfg.catalogue)
                 ids = catalogues[cfg.catalogue].index
-            validate(cfg, ids)
+            validate(cfg, ids, typed=True)
 
 
 def _search_path(argv: list[str]) -> tuple[str, ...]:

@@ -18,8 +18,10 @@ arguments are appended to every job (e.g. ``catalogue=my_motors.csv``).
 from __future__ import annotations
 
 import argparse
+import hashlib
 import logging
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -107,24 +109,58 @@ def sweep_command(study: StudySpec, extra: list[str], jobs_dir: Path,
     swept = [f"{key}={_sweep_values(key, values, fixed)}" for key, values in study.sweep.items()]
     excluded = ALWAYS_EXCLUDED + [_key(o) for o in fixed if _key(o) not in study.sweep]
     return [
-        "-m", f"hydra.sweep.dir={jobs_dir}",
+        "-m", f"hydra.sweep.dir='{jobs_dir}'",  # quoted: a study folder name may hold = and ,
         f"hydra.job.config.override_dirname.exclude_keys=[{','.join(excluded)}]",
         *LAUNCHERS[launcher], *study.overrides, *swept, *extra,
     ]
 
 
-def run_study(name: str, extra: list[str], out_root: Path = OUTPUT_DIR,
+def study_dir(name: str, extra: list[str], out_root: Path | None = None) -> Path:
+    """Where a study's results go. Given ``--out`` (``out_root``): ``out_root/NAME``. Otherwise
+    ``outputs/studies/NAME``, or with extra overrides that change results (not ``compute.*``)
+    ``outputs/studies/NAME+<overrides>``: a run with a user's catalogue never replaces the
+    paper's reproduction."""
+    if out_root is not None:
+        return Path(out_root) / name
+    differs = [o for o in extra if _key(o) not in ALWAYS_EXCLUDED]
+    if not differs:
+        return OUTPUT_DIR / name
+    slug = re.sub(r"[^A-Za-z0-9._,=+-]", "_", ",".join(differs))  # no quotes, slashes, spaces
+    if len(slug) > 120:  # a folder name stays well under the 255-byte limit
+        slug = slug[:100] + "-" + hashlib.sha256(slug.encode()).hexdigest()[:12]
+    return OUTPUT_DIR / f"{name}+{slug}"
+
+
+def claim_study_dir(out: Path, name: str, extra: list[str], force: bool) -> str:
+    """The provenance record of ``out`` (``study.yaml``: study and extra overrides). A folder
+    that holds another configuration's results is refused unless ``force``."""
+    record = out / "study.yaml"
+    wanted = OmegaConf.to_yaml({"study": name, "extra_overrides": extra})
+    if record.exists() and record.read_text() != wanted and not force:
+        held = OmegaConf.load(record)
+        raise ConfigError(f"{out}: holds study {held.get('study')} with overrides "
+                          f"{list(held.get('extra_overrides') or [])}; --force replaces them, "
+                          "--out DIR writes elsewhere")
+    return wanted
+
+
+def run_study(name: str, extra: list[str], out_root: Path | None = None,
               figures_only: bool = False, launcher: str = "joblib",
-              commands: list[list[str]] | None = None) -> list[Path]:
+              commands: list[list[str]] | None = None, force: bool = False) -> list[Path]:
     """Sweep (unless ``figures_only``), analyses and figures of one study; returns the files.
     The jobs of an interrupted run of the same study are reused (``_start_or_resume``).
     ``commands``: the study's sweep commands if already checked (:func:`checked_commands`)."""
     study = load_study(name)
-    out = out_root / name
+    out = study_dir(name, extra, out_root)
     cases = study.cases or {"": []}
     provenance = OmegaConf.to_yaml({"study": name, "extra_overrides": extra})
     if not figures_only:
+        provenance = claim_study_dir(out, name, extra, force)
         commands = commands or checked_commands(name, extra, out_root, launcher)
+        out.mkdir(parents=True, exist_ok=True)
+        tmp = out / f".study.yaml.{os.getpid()}.tmp"
+        tmp.write_text(provenance)
+        os.replace(tmp, out / "study.yaml")
         log.info("study %s: %s", name, study.title)
         _start_or_resume(out / "jobs", commands)
         for command in commands:
@@ -151,12 +187,12 @@ def run_study(name: str, extra: list[str], out_root: Path = OUTPUT_DIR,
     return written
 
 
-def checked_commands(name: str, extra: list[str], out_root: Path = OUTPUT_DIR,
+def checked_commands(name: str, extra: list[str], out_root: Path | None = None,
                      launcher: str = "joblib") -> list[list[str]]:
     """The sweep commands of a study (one per case), every job of them validated by the
     preflight: bad input fails here, before anything is written or removed."""
     study = load_study(name)
-    out = out_root / name
+    out = study_dir(name, extra, out_root)
     commands = [sweep_command(study, [*overrides, *extra], out / "jobs" / case, launcher)
                 for case, overrides in (study.cases or {"": []}).items()]
     for command in commands:
@@ -212,7 +248,11 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--all", action="store_true", help="run every study in studies/")
     parser.add_argument("--list", action="store_true", help="list the studies and exit")
     parser.add_argument("--figures-only", action="store_true", help="redo analyses and figures from Parquet")
-    parser.add_argument("--out", type=Path, default=OUTPUT_DIR, help="output root (default outputs/studies)")
+    parser.add_argument("--out", type=Path, default=None,
+                        help="output root (default outputs/studies, where extra overrides give "
+                             "the study its own folder NAME+<overrides>)")
+    parser.add_argument("--force", action="store_true",
+                        help="replace a study folder that holds another configuration's results")
     parser.add_argument("--launcher", choices=sorted(LAUNCHERS), default="joblib",
                         help="Hydra launcher: joblib runs 2 jobs at a time (default), basic one")
     args = parser.parse_intermixed_args(argv)
@@ -231,10 +271,11 @@ def main(argv: list[str] | None = None) -> None:
         for name in names:
             load_study(name)
             if not args.figures_only:
+                claim_study_dir(study_dir(name, extra, args.out), name, extra, args.force)
                 checked[name] = checked_commands(name, extra, args.out, args.launcher)
         for name in names:
             for path in run_study(name, extra, args.out, args.figures_only, args.launcher,
-                                  checked.get(name)):
+                                  checked.get(name), args.force):
                 log.info("wrote %s", path)
     except ConfigError as exc:
         print(f"error: {exc}", file=sys.stderr)

@@ -20,7 +20,7 @@ def test_sweep_expands_like_hydra_basic_sweeper():
         (["-m", "actuator=1,2,9"], "actuator=9"),
         (["-m", "robot.frame.d=3.2,0.3"], "robot.frame.d=0.3"),
         (["-m", "load.mass=abc", "load.mass=1,2"], "load.mass=abc"),  # Hydra merges it first
-        (["-m", "orientation={psi:x}"], "orientation.psi=x"),
+        (["-m", "orientation={psi:x}"], "orientation={psi:x}"),
         (["-m", "hydra/sweeper=nope", "actuator=1,2"], "nope"),
     ],
 )

@@ -76,7 +76,7 @@ def test_figures_are_drawn_from_the_parquet_results(choice_run, monkeypatch):
         points.to_parquet(points_path)
 
 
-def test_user_catalogue_of_20_synthetic_actuators(tmp_path):
+def test_user_catalogue_of_20_synthetic_actuators(choice_run):
     table1 = load_catalogue().reset_index()
     rng = np.random.default_rng(7)
     rows = table1.iloc[np.arange(20) % 5].copy()
@@ -84,10 +84,14 @@ def test_user_catalogue_of_20_synthetic_actuators(tmp_path):
         rows[column] = rows[column].to_numpy() * rng.uniform(0.7, 1.3, 20)
     rows["id"] = np.arange(101, 121)
     rows["name"] = [f"synthetic {i}" for i in rows["id"]]
-    rows.to_csv(tmp_path / "motors.csv", index=False)
-    proc = study(tmp_path, "actuator_choice", "catalogue=motors.csv")
+    cwd = choice_run.parents[2]  # beside the paper's reproduction, which must stay as it is
+    before = {str(p.relative_to(choice_run)): p.read_bytes() for p in choice_run.rglob("*.parquet")}
+    rows.to_csv(cwd / "motors.csv", index=False)
+    proc = study(cwd, "actuator_choice", "catalogue=motors.csv")
     assert proc.returncode == 0, proc.stderr
-    out = tmp_path / "outputs" / "studies" / "actuator_choice"
+    out = cwd / "outputs" / "studies" / "actuator_choice+catalogue=motors.csv"
+    assert {str(p.relative_to(choice_run)): p.read_bytes() for p in choice_run.rglob("*.parquet")} == before
+    assert "catalogue=motors.csv" in (out / "study.yaml").read_text()
     choice = pd.read_parquet(out / "choice.parquet")
     assert sorted(choice["actuator"]) == list(range(101, 121))
     assert (choice["accepted"] == (choice["feasible_pct"] >= 90.0)).all()
@@ -130,3 +134,17 @@ def test_unknown_study_and_unknown_key_in_a_study_file(tmp_path):
 def test_every_declared_study_parses():
     for name in available():
         assert isinstance(load_study(name), StudySpec)
+
+
+def test_a_folder_holding_another_configuration_is_not_replaced_without_force(tmp_path):
+    first = study(tmp_path, "design_mass", "--out", "mine", "choice.required_pct=80")
+    assert first.returncode == 0, first.stderr
+    summary = (tmp_path / "mine" / "design_mass" / "summary.parquet").read_bytes()
+    refused = study(tmp_path, "design_mass", "--out", "mine")
+    assert refused.returncode == 2 and refused.stderr.strip().splitlines() == [
+        "error: mine/design_mass: holds study design_mass with overrides "
+        "['choice.required_pct=80']; --force replaces them, --out DIR writes elsewhere"]
+    assert (tmp_path / "mine" / "design_mass" / "summary.parquet").read_bytes() == summary
+    forced = study(tmp_path, "design_mass", "--out", "mine", "--force")
+    assert forced.returncode == 0, forced.stderr
+    assert "extra_overrides: []" in (tmp_path / "mine" / "design_mass" / "study.yaml").read_text()
