@@ -49,6 +49,9 @@ def run_job(cfg: DictConfig) -> dict:
     except ConfigError as exc:
         print(f"error: {exc}", file=sys.stderr)
         raise SystemExit(2) from None
+    except OSError as exc:  # a full disk or a folder gone read-only while writing
+        print(f"error: cannot write {exc.filename or out}: {exc.strerror or exc}", file=sys.stderr)
+        raise SystemExit(2) from None
 
 
 @contextmanager

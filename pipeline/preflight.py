@@ -14,18 +14,20 @@ the same typed merge Hydra uses (the dataclass schema still rejects a bad key or
 from __future__ import annotations
 
 import copy
+import itertools
+import os
 import re
+import shutil
 from pathlib import Path
 
 from hydra import compose, initialize_config_dir
-import itertools
 from hydra.core.override_parser.overrides_parser import OverridesParser
 from hydra.core.override_parser.types import Override
 from omegaconf import DictConfig, OmegaConf
 from omegaconf.errors import ConfigAttributeError, ConfigKeyError
 
 from pipeline.actuators import load_catalogue
-from pipeline.config import masked, register, typed_schema, validate
+from pipeline.config import job_dir_name, masked, register, typed_schema, validate
 from pipeline.errors import ConfigError, one_line
 
 CONF_DIR = Path(__file__).resolve().parent.parent / "conf"
@@ -141,6 +143,7 @@ def check(argv: list[str]) -> None:
         return masked(full, plain)
 
     with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3", job_name="preflight"):
+        _check_output_folders(jobs, multirun_base, search_path)
         if multirun_base is not None:
             build(multirun_base)  # Hydra composes the sweep's own config from these first
         for overrides in jobs:
@@ -151,6 +154,67 @@ def check(argv: list[str]) -> None:
                     catalogues[cfg.catalogue] = load_catalogue(cfg.catalogue)
                 ids = catalogues[cfg.catalogue].index
             validate(cfg, ids, typed=True)
+
+
+NAME_MAX = 255  # bytes in one folder name (Linux, macOS)
+BYTES_PER_POSE = 200  # a points.parquet row with its margins, generously
+BYTES_PER_JOB = 512 * 1024  # Hydra's files, the log and the summary of one job
+
+
+def _check_output_folders(jobs: list[list[str]], multirun_base: list[str] | None,
+                          search_path: tuple[str, ...]) -> None:
+    """The folders Hydra will make (run dir, or one per job of a sweep) can be made and written
+    and their disk has room: a path through a file, a folder name over 255 bytes, a read-only
+    place or a full disk is one line naming the path, before anything is written."""
+    from pipeline.workspace import grid_size
+
+    overrides = [*search_path, *(jobs[0] if multirun_base is None else multirun_base)]
+    try:
+        hydra = compose(config_name="config", overrides=overrides, return_hydra_config=True).hydra
+        folders = [Path(hydra.run.dir)]
+        if multirun_base is not None:
+            naming = hydra.job.config.override_dirname
+            folders = [Path(hydra.sweep.dir) / job_dir_name(_override_dirname(job, naming), number)
+                       for number, job in enumerate(jobs)]
+        first = compose(config_name="config", overrides=[*search_path, *jobs[0]])
+        poses = grid_size(first)
+    except Exception:  # a composition or value error: the job checks below name it
+        return
+    for folder in folders:
+        _writable(folder)
+    needed = len(jobs) * (BYTES_PER_JOB + BYTES_PER_POSE * poses)  # a sweep varies values, not grids
+    probe = _existing_ancestor(folders[0])
+    free = shutil.disk_usage(probe).free
+    if free < needed:
+        raise ConfigError(f"{folders[0]}: needs about {needed / 2**20:.1f} MiB, {free / 2**20:.1f} MiB "
+                          f"free on its disk ({probe})")
+
+
+def _override_dirname(job: list[str], naming) -> str:
+    """Hydra's ``hydra.job.override_dirname`` of a job: its task overrides but the excluded
+    keys, sorted, joined with the item separator."""
+    lines = sorted(o.input_line for o in parse(job)
+                   if not o.is_hydra_override() and o.key_or_group not in naming.exclude_keys)
+    return naming.item_sep.join(line.replace("=", naming.kv_sep, 1) for line in lines)
+
+
+def _writable(folder: Path) -> None:
+    for part in folder.parts:
+        if len(os.fsencode(part)) > NAME_MAX:
+            raise ConfigError(f"{folder}: a folder name of {len(os.fsencode(part))} bytes (at most "
+                              f"{NAME_MAX}): choose a shorter hydra.run.dir, or sweep fewer or shorter values")
+    probe = _existing_ancestor(folder)
+    if not probe.is_dir():
+        raise ConfigError(f"{folder}: {probe} is a file, not a folder")
+    if not os.access(probe, os.W_OK | os.X_OK):
+        raise ConfigError(f"{folder}: {probe} is not writable")
+
+
+def _existing_ancestor(folder: Path) -> Path:
+    probe = folder.absolute()
+    while not probe.exists() and probe != probe.parent:
+        probe = probe.parent
+    return probe
 
 
 def _search_path(argv: list[str]) -> tuple[str, ...]:

@@ -1,0 +1,70 @@
+"""Output problems (issue 16, item 7): one line naming the path, exit 2, nothing written and no
+temporary file left, whether found before the job (preflight) or while it writes."""
+
+import subprocess
+import sys
+
+import pytest
+
+pytestmark = pytest.mark.slow
+
+
+def run(cwd, *args):
+    return subprocess.run([sys.executable, "-m", "pipeline", *args], cwd=cwd,
+                          capture_output=True, text=True, timeout=300)
+
+
+def one_line_exit_2(proc, needle):
+    lines = proc.stderr.strip().splitlines()
+    assert proc.returncode == 2 and len(lines) == 1 and needle in lines[0], proc.stderr
+
+
+@pytest.fixture
+def tiny_disk(tmp_path):
+    """A tmpfs of the given size mounted in tmp_path (needs root; skipped where it cannot)."""
+    mounted = []
+
+    def mount(size: str):
+        folder = tmp_path / f"disk{len(mounted)}"
+        folder.mkdir()
+        done = subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size}", "tmpfs", str(folder)],
+                              capture_output=True)
+        if done.returncode != 0:
+            pytest.skip("cannot mount a tmpfs here")
+        mounted.append(folder)
+        return folder
+    yield mount
+    for folder in mounted:
+        subprocess.run(["umount", str(folder)], check=False)
+
+
+@pytest.mark.parametrize("where, needle", [
+    ("afile/run", "afile is a file, not a folder"),
+    ("d" * 300, "a folder name of 300 bytes (at most 255)"),
+])
+def test_a_run_folder_that_cannot_exist_is_named_before_anything_is_written(tmp_path, where, needle):
+    (tmp_path / "afile").write_text("")
+    one_line_exit_2(run(tmp_path, f"hydra.run.dir={where}"), needle)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["afile"]
+
+
+def test_a_sweep_whose_job_folder_names_are_too_long_is_refused(tmp_path):
+    poses = ",".join(["[0.1,0.2,-1]"] * 40)
+    one_line_exit_2(run(tmp_path, "-m", f"poses=[{poses}],[[1,1,-1]]"), "(at most 255)")
+    assert not list(tmp_path.iterdir())
+
+
+def test_a_full_disk_is_refused_before_the_job(tiny_disk, tmp_path):
+    disk = tiny_disk("64k")
+    one_line_exit_2(run(tmp_path, f"hydra.run.dir={disk}/run"), "MiB free on its disk")
+    assert not list(disk.iterdir())
+
+
+def test_a_disk_that_fills_while_writing_stops_the_job_and_leaves_no_temporary_file(tiny_disk, tmp_path):
+    disk = tiny_disk("6m")  # passes the estimate; the per-cable columns then fill it
+    proc = run(tmp_path, f"hydra.run.dir={disk}/run", "grid.n=30", "grid.n_vel=6", "output.cables=true",
+               "compute.n_jobs=1")
+    one_line_exit_2(proc, "No space left on device")
+    left = {p.name for p in (disk / "run").iterdir()}
+    assert "points.parquet" not in left and "summary.parquet" not in left
+    assert not [name for name in left if name.endswith(".tmp")]
