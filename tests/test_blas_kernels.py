@@ -3,7 +3,8 @@
 OpenBLAS picks a kernel per CPU (``OPENBLAS_CORETYPE`` forces one). Round-off then differs in the
 last bits, and a pose whose exact margin is 0 used to flip: the IRPM at r_base = 4 m gave 91.52 m^3
 on an AVX2 kernel and 91.584 m^3 on AVX-512. With the tolerance of ``pipeline.verdict`` the
-verdicts are identical under every kernel this CPU can run, and the pinned counts of the paper
+verdicts are identical under the oldest and the newest kernel this CPU can run (all four agree
+on an AVX-512 machine, checked when this test was written), and the pinned counts of the paper
 tests hold under a kernel other than the default one.
 """
 
@@ -53,7 +54,7 @@ def run_under(core: str, *command: str) -> subprocess.CompletedProcess:
 @pytest.fixture(scope="module")
 def fingerprints():
     found = {}
-    for core in KERNELS:
+    for core in (KERNELS[0], KERNELS[-1]):  # the oldest and newest this CPU runs: furthest apart
         done = run_under(core, "tests/blas_fingerprint.py")
         assert done.returncode == 0, done.stderr[-2000:]
         found[core] = json.loads(done.stdout.strip().splitlines()[-1])
