@@ -143,7 +143,6 @@ def check(argv: list[str]) -> None:
         return masked(full, plain)
 
     with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3", job_name="preflight"):
-        _check_output_folders(jobs, multirun_base, search_path)
         if multirun_base is not None:
             build(multirun_base)  # Hydra composes the sweep's own config from these first
         for overrides in jobs:
@@ -154,6 +153,7 @@ def check(argv: list[str]) -> None:
                     catalogues[cfg.catalogue] = load_catalogue(cfg.catalogue)
                 ids = catalogues[cfg.catalogue].index
             validate(cfg, ids, typed=True)
+        _check_output_folders(jobs, multirun_base, search_path)  # values first: sizes are valid
 
 
 NAME_MAX = 255  # bytes in one folder name (Linux, macOS)
