@@ -12,6 +12,7 @@ import argparse
 import shutil
 import sys
 from pathlib import Path
+from urllib.parse import quote
 
 import pandas as pd
 
@@ -49,12 +50,12 @@ def build(studies_dir: Path = OUTPUT_DIR, out: Path = REPORT_DIR) -> Path:
     for name in available():
         study = load_study(name)
         figures = sorted((studies_dir / name / "figures").glob("*.png"))
-        lines += [f"### {study.title}", "", f"`{name}`: {study.source}.", ""]
+        lines += [f"### {md(study.title)}", "", f"`{name}`: {md(study.source)}.", ""]
         for figure in figures:
             target = tmp / "figures" / name / figure.name
             target.parent.mkdir(parents=True, exist_ok=True)
             shutil.copyfile(figure, target)
-            lines += [f"![{figure.stem}](figures/{name}/{figure.name})", ""]
+            lines += [f"![{md(figure.stem)}](figures/{quote(name)}/{quote(figure.name)})", ""]
     (tmp / "index.md").write_text("\n".join(lines))
     shutil.rmtree(out, ignore_errors=True)
     tmp.rename(out)
@@ -71,7 +72,7 @@ def _table2(studies_dir: Path) -> list[str]:
         lost = ", ".join(f"{c[5:]} {int(choice.loc[actuator, c])}" for c in choice.columns
                          if c.startswith("lost_") and not c.endswith("_pct") and choice.loc[actuator, c])
         diff = round(ours - paper, 2) + 0.0  # no "-0.00"
-        rows.append(f"| {actuator} | {paper:.2f} | {ours:.2f} | {diff:+.2f} | {lost or '–'} |")
+        rows.append(f"| {actuator} | {paper:.2f} | {ours:.2f} | {diff:+.2f} | {md(lost) or '–'} |")
     accepted = sorted(int(a) for a in choice.index[choice["accepted"]])
     rows += ["", f"Accepted at x = 90 %: paper {TABLE2_ACCEPTED}, ours {accepted}.", ""]
     return rows
@@ -87,7 +88,7 @@ def _lines_agreement(studies_dir: Path) -> list[str]:
             "| pinv columns, orientation | " + " | ".join(f"act. {a}" for a in table.columns) + " |",
             "| --- |" + " --- |" * len(table.columns)]
     for (reading, case), values in table.iterrows():
-        rows.append(f"| {reading}, {case} | " + " | ".join(f"{v:.2f}" for v in values) + " |")
+        rows.append(f"| {md(reading)}, {md(case)} | " + " | ".join(f"{v:.2f}" for v in values) + " |")
     return rows + [""]
 
 
@@ -120,7 +121,7 @@ def _tensions(studies_dir: Path) -> list[str]:
     for (reading, case), part in table.groupby(["wrench_rows", "case"], sort=False):
         cells = [f"{'–' if pd.isna(r.survive_pct) else f'{r.survive_pct:.1f}'} "
                  f"({r.n_paper} → {r.n_physical})" for r in part.sort_values("actuator").itertuples()]
-        rows.append(f"| {reading}, {case} | " + " | ".join(cells) + " |")
+        rows.append(f"| {md(reading)}, {md(case)} | " + " | ".join(md(c) for c in cells) + " |")
     return rows + ["", "Forces only is the paper's reading of eq. (20); forces and moments "
                    "(`full`) also keeps the carrier's orientation (docs/model.md section 7).", ""]
 
@@ -138,6 +139,16 @@ def main(argv: list[str] | None = None) -> None:
     except (OSError, ValueError) as exc:  # a corrupted or truncated Parquet file
         print(f"error: unreadable study results ({one_line(exc)}); rerun the studies", file=sys.stderr)
         raise SystemExit(2) from None
+
+
+_MARKUP = str.maketrans({"\\": "\\\\", "|": "\\|", "[": "\\[", "]": "\\]", "`": "\\`",
+                         "<": "&lt;", ">": "&gt;", "&": "&amp;"})
+
+
+def md(value) -> str:
+    """A value from a result or study file as inert Markdown text: no table cell break, link,
+    code span or HTML tag (``|``, ``[]``, backticks escaped, ``<>`` as entities)."""
+    return str(value).translate(_MARKUP)
 
 
 if __name__ == "__main__":

@@ -75,8 +75,8 @@ class StudySpec:
     name: Optional[str] = None
 
 
-def available() -> list[str]:
-    return sorted(path.stem for path in STUDIES_DIR.glob("*.yaml"))
+def available(directory: Path = STUDIES_DIR) -> list[str]:
+    return sorted(path.stem for path in directory.glob("*.yaml"))
 
 
 def load_study(name: str, directory: Path = STUDIES_DIR) -> StudySpec:
@@ -84,14 +84,18 @@ def load_study(name: str, directory: Path = STUDIES_DIR) -> StudySpec:
     from pipeline.figures import KINDS
 
     path = directory / f"{name}.yaml"
-    if not path.exists():
-        raise ConfigError(f"study {name!r} not found (available: {', '.join(available())})")
+    if name not in available(directory):  # a declared name, never a path to another file
+        raise ConfigError(f"study {name!r} not found (available: {', '.join(available(directory))})")
     try:
         spec = OmegaConf.merge(OmegaConf.structured(StudySpec), OmegaConf.load(path))
     except Exception as exc:  # OmegaConf key and type errors
         raise ConfigError(f"{path}: {one_line(exc)}") from exc
     study: StudySpec = OmegaConf.to_object(spec)
     study.name = name
+    for key in [*(_key(o) for o in study.overrides), *study.sweep,
+                *(_key(o) for case in study.cases.values() for o in case)]:
+        if re.split(r"[./]", key)[0] == "hydra":  # callbacks and plugins run code: not from data
+            raise ConfigError(f"{path}: {key}: a study file may not set Hydra's own settings")
     for analysis in study.analyses:
         if analysis not in ANALYSES:
             raise ConfigError(f"{path}: analyses: unknown {analysis!r} (known: {', '.join(ANALYSES)})")

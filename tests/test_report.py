@@ -71,3 +71,13 @@ def test_dvc_yaml_has_one_stage_per_study_and_a_report_on_all_of_them():
     assert {f"outputs/studies/{n}" for n in available()} <= set(stages["report"]["deps"])
     for dep in stages["study"]["do"]["deps"]:
         assert (STUDIES_DIR.parent / dep.replace("${item}", available()[0])).exists()
+
+
+def test_strings_from_result_files_cannot_break_the_report():
+    """A criterion, case or catalogue string in a Parquet file is inert text in the Markdown:
+    no table cell break, no link, no code span, no HTML tag."""
+    from pipeline.report import md
+
+    assert md("x | <script>alert(1)</script> [a](http://e) `c`") == (
+        "x \\| &lt;script&gt;alert(1)&lt;/script&gt; \\[a\\](http://e) \\`c\\`")
+    assert md("torque 8, tension_max 3") == "torque 8, tension_max 3"

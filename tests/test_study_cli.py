@@ -148,3 +148,17 @@ def test_a_folder_holding_another_configuration_is_not_replaced_without_force(tm
     forced = study(tmp_path, "design_mass", "--out", "mine", "--force")
     assert forced.returncode == 0, forced.stderr
     assert "extra_overrides: []" in (tmp_path / "mine" / "design_mass" / "study.yaml").read_text()
+
+
+def test_a_study_is_a_declared_name_and_cannot_set_hydra_callbacks(tmp_path):
+    """A path is not a study (it could point at any YAML file), and a study file may not set
+    Hydra's own settings: a callback or plugin there would run code from a data file."""
+    (tmp_path / "evil.yaml").write_text(
+        "title: t\nsource: s\noverrides: ['+hydra.callbacks.x._target_=os.system']\n")
+    proc = study(tmp_path, str(tmp_path / "evil"))
+    assert proc.returncode == 2 and "not found (available: " in proc.stderr
+    proc = study(tmp_path, "../" * 8 + str(tmp_path / "evil").lstrip("/"))
+    assert proc.returncode == 2 and "not found (available: " in proc.stderr
+    with pytest.raises(ConfigError, match="hydra.callbacks.x._target_: a study file may not set Hydra"):
+        load_study("evil", tmp_path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["evil.yaml"]
