@@ -74,3 +74,21 @@ def test_one_weak_cable_only_removes_poses_and_is_what_limits_them(make_cfg, cat
     assert summary["n_feasible"] == 36
     assert not (weak["feasible"] & ~strong["feasible"]).any()
     assert (weak.loc[strong["feasible"] & ~weak["feasible"], "limiting"] == "tension_max").all()
+
+
+def test_wirex_structure_matrix_is_ours_with_the_opposite_sign(make_cfg, catalogue):
+    """docs/model.md's conventions table: WireX builds A^T column by column with u_i from the
+    platform point to the anchor and solves A^T f + w = 0; ours is A t = w with u_i from the
+    anchor. Written here from WireX's description, pose by pose, on a tilted IRPM."""
+    problem, grid = build_problem(make_cfg("robot=irpm6", "robot.gamma_deg=30",
+                                           "orientation.theta=0.2"), catalogue)
+    positions = grid.positions[::97]
+    state = problem.spec.state(problem.robot, positions, problem.orientation)
+    rotation = rotation_matrix(*problem.orientation)
+    for n, r in enumerate(positions):
+        columns = []
+        for a, b in zip(problem.robot.anchors, problem.robot.attachments):
+            p = rotation @ b
+            u = (a - r - p) / np.linalg.norm(a - r - p)
+            columns.append(np.concatenate([u, np.cross(p, u)]))
+        np.testing.assert_allclose(np.stack(columns, axis=1), -state.structure_matrix[n], atol=1e-14)
