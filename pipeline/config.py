@@ -297,7 +297,7 @@ class OutputConfig:
 @dataclass
 class Config:
     """Every key a job can have. A job has the common keys (conf/config.yaml) plus those of its
-    analysis (conf/analysis/) and robot (conf/robot/); :func:`typed_config` checks them against
+    tension model (conf/tension/), analysis (conf/analysis/) and robot (conf/robot/); :func:`typed_config` checks them against
     this schema and keeps only those. ``analysis``: the chosen file of the analysis group.
     ``poses``: a list of [x, y, z] positions (m) checked instead of the robot's grid (null: grid).
     ``actuator`` is the integer id of a catalogue row; ``catalogue`` a CSV or Parquet path

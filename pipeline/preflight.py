@@ -21,6 +21,7 @@ import shutil
 from pathlib import Path
 
 from hydra import compose, initialize_config_dir
+from hydra.errors import MissingConfigException
 from hydra.core.override_parser.overrides_parser import OverridesParser
 from hydra.core.override_parser.types import Override
 from omegaconf import DictConfig, OmegaConf
@@ -132,6 +133,8 @@ def check(argv: list[str]) -> None:
         if structural not in composed:
             try:
                 plain = compose(config_name="config", overrides=list(structural))
+            except MissingConfigException as exc:  # a group option with no file
+                raise ConfigError(_missing_option(exc, parsed)) from exc
             except Exception as exc:  # composition errors come as Hydra and OmegaConf types
                 raise ConfigError(one_line(exc)) from exc
             composed[structural] = plain, typed_schema(plain)  # typed once per composition
@@ -232,6 +235,17 @@ def _search_path(argv: list[str]) -> tuple[str, ...]:
                 raise ConfigError(f"--config-dir={folder}: no such folder")
             return (f"hydra.searchpath=[file://{path}]",)
     return ()
+
+
+def _missing_option(exc: MissingConfigException, parsed: list[Override]) -> str:
+    """'group=option: no such option (options: ...)' for the override that named it."""
+    for override in parsed:
+        group = override.key_or_group
+        if (CONF_DIR / group).is_dir() and f"{group}/{override.value()}" in str(exc):
+            options = sorted(f.stem for f in (CONF_DIR / group).glob("*.yaml"))
+            return (f"{override.input_line}: no such option of the {group} group "
+                    f"(options: {', '.join(options)}; your own: --config-dir DIR with DIR/{group}/NAME.yaml)")
+    return one_line(exc)
 
 
 def _structural(override: Override) -> bool:

@@ -3,6 +3,7 @@ same physics (issue 15)."""
 
 import numpy as np
 import pytest
+from omegaconf import OmegaConf
 
 from pipeline.criteria import DYNAMICS, GATES, REGISTRY, STATICS
 from pipeline.verdict import classify
@@ -75,3 +76,22 @@ def test_fewer_cables_than_the_analysis_balances_are_refused(make_cfg, catalogue
         return
     with pytest.raises(ConfigError, match=f"robot: 4 cables; analysis={analysis} .* needs >= 6 cables"):
         validate(make_cfg(*four), catalogue.index)
+
+
+def test_tension_is_a_config_group_that_sets_its_own_keys_only(make_cfg):
+    """``tension=feasible`` (conf/tension/) is ``tension.model=feasible``; the robot's rating
+    (irpm6: 55 kN) survives the choice, and the group carries no other key."""
+    for robot in ("cpr8", "irpm6"):
+        by_group = make_cfg(f"robot={robot}", "tension=feasible")
+        by_key = make_cfg(f"robot={robot}", "tension.model=feasible")
+        assert OmegaConf.to_container(by_group) == OmegaConf.to_container(by_key)
+    assert make_cfg("robot=irpm6", "tension=feasible").tension.t_max == 55_000
+    assert set(make_cfg("tension=feasible").tension) == {"model", "t_min", "t_max", "residual_rtol"}
+
+
+def test_an_unknown_tension_option_is_refused_before_anything_runs():
+    from pipeline.errors import ConfigError
+    from pipeline.preflight import check
+
+    with pytest.raises(ConfigError, match="tension=lp"):
+        check(["-m", "tension=pinv,lp"])
