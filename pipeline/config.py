@@ -18,6 +18,46 @@ from omegaconf.errors import OmegaConfBaseException
 
 from pipeline.errors import ConfigError, one_line
 
+INF = float("inf")
+JOBLIB_BACKENDS = ("loky", "threading", "multiprocessing", "sequential", "dask")
+
+
+# Value rules sit next to the fields they constrain (scikit-learn's declared parameter
+# constraints): ``rule(check, default)`` declares a field, :func:`check_values` applies every
+# declared rule of a typed config once, and a schema's ``check_fields`` holds its rules between
+# fields. A check returns None when the value is fine, else what it must be.
+def rule(check, default=MISSING, factory=None):
+    """A dataclass field whose (non-null) value must pass ``check``."""
+    if factory is not None:
+        return field(default_factory=factory, metadata={"check": check})
+    return field(default=default, metadata={"check": check})
+
+
+def positive(value):
+    return None if 0 < value < INF else "must be > 0 and finite"
+
+
+def non_negative(value):
+    return None if 0 <= value < INF else "must be >= 0 and finite"
+
+
+def finite(value):
+    return None if abs(value) < INF else "must be finite"
+
+
+def at_least(bound: int):
+    return lambda value: None if value >= bound else f"must be >= {bound}"
+
+
+def vector(size: int, meaning: str):
+    """``size`` finite numbers."""
+    def check(values):
+        values = list(values)
+        if not all(isinstance(v, (int, float)) and abs(v) < INF for v in values):
+            return "every value must be a finite number"
+        return None if len(values) == size else f"needs {size} values ({meaning})"
+    return check
+
 
 class PinvColumns(Enum):
     """Which columns of J enter the pseudo-inverse of eq. (20); see docs/model.md."""
@@ -83,18 +123,18 @@ class Spacing(Enum):
 class FrameConfig:
     """Frame d * s * v (m): the theoretical workspace of Fig. 2."""
 
-    d: float = MISSING
-    s: float = MISSING
-    v: float = MISSING
+    d: float = rule(positive)
+    s: float = rule(positive)
+    v: float = rule(positive)
 
 
 @dataclass
 class CarrierConfig:
     """Load carrier l * w * h_o (m), eqs. (1)-(8)."""
 
-    l: float = MISSING
-    w: float = MISSING
-    h: float = MISSING
+    l: float = rule(positive)
+    w: float = rule(positive)
+    h: float = rule(positive)
 
 
 @dataclass
@@ -105,16 +145,36 @@ class Cpr8Config:
     name: str = "cpr8"
     frame: FrameConfig = field(default_factory=FrameConfig)
     carrier: CarrierConfig = field(default_factory=CarrierConfig)
-    lower_anchor_drop: Optional[float] = None
+    lower_anchor_drop: Optional[float] = rule(non_negative, None)
+
+    @staticmethod
+    def check_fields(robot: DictConfig) -> None:
+        from pipeline.robots import carrier_half_diagonal
+
+        de = carrier_half_diagonal(robot.carrier.l, robot.carrier.w, robot.carrier.h)
+        for axis in ("d", "s", "v"):
+            size = robot.frame[axis]
+            if size <= 2 * de:
+                raise ConfigError(
+                    f"robot.frame.{axis}={size}: carrier does not fit "
+                    f"(needs > 2 d_e = {2 * de:.4g} m for carrier {robot.carrier.l} x "
+                    f"{robot.carrier.w} x {robot.carrier.h} m)"
+                )
 
 
 @dataclass
 class SearchConfig:
     """Searched box (m) and grid step (m): points lo + k step up to hi on every axis."""
 
-    lo: list[float] = MISSING
-    hi: list[float] = MISSING
-    step: float = MISSING
+    lo: list[float] = rule(vector(3, "x, y, z"))
+    hi: list[float] = rule(vector(3, "x, y, z"))
+    step: float = rule(positive)
+
+    @staticmethod
+    def check_fields(search: DictConfig) -> None:
+        for axis, lo, hi in zip("xyz", search.lo, search.hi):
+            if not lo <= hi:
+                raise ConfigError(f"robot.search: {axis} from {lo} to {hi}: must be finite with lo <= hi")
 
 
 @dataclass
@@ -123,10 +183,10 @@ class Irpm6Config:
     (deg), longest cable l_max (m), the search box of section III."""
 
     name: str = "irpm6"
-    r_base: float = 6.0
-    r_end: float = 1.2
-    gamma_deg: float = 0.0
-    l_max: float = 15.0
+    r_base: float = rule(positive, 6.0)
+    r_end: float = rule(positive, 1.2)
+    gamma_deg: float = rule(lambda v: None if 0 <= v < 120 else "must be in [0, 120) (pairs would overlap)", 0.0)
+    l_max: float = rule(positive, 15.0)
     search: SearchConfig = field(default_factory=SearchConfig)
 
 
@@ -140,7 +200,8 @@ class PointsSearchConfig(SearchConfig):
 
 @dataclass
 class PointsConfig:
-    """A robot given by its points (``pipeline.robots.PointsRobot`` checks them): anchors
+    """A robot given by its points (``pipeline.robots.PointsRobot.from_config`` checks them
+    where it builds the robot): anchors
     (fixed frame) and attachments (platform frame), lists of [x, y, z] in m; optional cable
     names; the up direction; the longest cable l_max (m, null = none); the search box."""
 
@@ -149,7 +210,7 @@ class PointsConfig:
     attachments: Any = MISSING
     cable_names: Optional[list[str]] = None
     up: list[float] = field(default_factory=lambda: [0.0, 0.0, 1.0])
-    l_max: Optional[float] = None
+    l_max: Optional[float] = rule(positive, None)
     search: PointsSearchConfig = field(default_factory=PointsSearchConfig)
 
 
@@ -159,8 +220,8 @@ class TotalOrientationConfig:
     offsets on a grid of ``n`` values per angle in [-bound, bound] rad (n = 1: constant
     orientation)."""
 
-    bound: float = 0.0
-    n: int = 1
+    bound: float = rule(non_negative, 0.0)
+    n: int = rule(at_least(1), 1)
 
 
 @dataclass
@@ -168,9 +229,9 @@ class OrientationConfig:
     """Carrier orientation, Euler angles of eq. (9) in rad; ``total`` widens it to the
     total-orientation workspace around it."""
 
-    psi: float = 0.0
-    theta: float = 0.0
-    phi: float = 0.0
+    psi: float = rule(finite, 0.0)
+    theta: float = rule(finite, 0.0)
+    phi: float = rule(finite, 0.0)
     total: TotalOrientationConfig = field(default_factory=TotalOrientationConfig)
 
 
@@ -178,12 +239,12 @@ class OrientationConfig:
 class WrenchConfig:
     """Applied wrench f_ext of eq. (11) of the IRPM paper, N and N m (the paper gives kN)."""
 
-    fx: float = 0.0
-    fy: float = 0.0
-    fz: float = 100_000.0
-    mx: float = 0.0
-    my: float = 0.0
-    mz: float = 0.0
+    fx: float = rule(finite, 0.0)
+    fy: float = rule(finite, 0.0)
+    fz: float = rule(finite, 100_000.0)
+    mx: float = rule(finite, 0.0)
+    my: float = rule(finite, 0.0)
+    mz: float = rule(finite, 0.0)
 
 
 @dataclass
@@ -204,7 +265,7 @@ class TensionConfig:
     model: TensionModel = TensionModel.pinv
     t_min: Any = 0.0
     t_max: Any = None
-    residual_rtol: float = 1e-6
+    residual_rtol: float = rule(positive, 1e-6)
 
 
 @dataclass
@@ -213,8 +274,8 @@ class GridConfig:
     ``n_vel``: N of the velocity grid of eqs. (23)-(25); null ties it to ``n`` as in the paper.
     Set it for dense position grids: n_vel = n = 40 would test 33 371 velocities per pose."""
 
-    n: int = 6
-    n_vel: Optional[int] = None
+    n: int = rule(at_least(2), 6)
+    n_vel: Optional[int] = rule(at_least(1), None)
     spacing: Spacing = Spacing.linspace
 
 
@@ -222,9 +283,9 @@ class GridConfig:
 class MotionConfig:
     """Trapezoidal reference motion: V_cmax (m/s), t_acc and t_dec (s)."""
 
-    v_max: float = 1.3
-    t_acc: float = 1.82
-    t_dec: float = 1.82
+    v_max: float = rule(positive, 1.3)
+    t_acc: float = rule(positive, 1.82)
+    t_dec: float = rule(positive, 1.82)
 
 
 @dataclass
@@ -233,10 +294,10 @@ class LoadConfig:
     centre of mass (m, platform frame) and a constant external wrench [f_x f_y f_z M_x M_y M_z]
     (N, N m) the cables must also balance, in every analysis."""
 
-    mass: float = 2.0
-    gravity: float = 9.81
-    com: list[float] = field(default_factory=lambda: [0.0] * 3)
-    external: list[float] = field(default_factory=lambda: [0.0] * 6)
+    mass: float = rule(non_negative, 2.0)
+    gravity: float = rule(non_negative, 9.81)
+    com: list[float] = rule(vector(3, "x y z, m, platform frame"), factory=lambda: [0.0] * 3)
+    external: list[float] = rule(vector(6, "fx fy fz mx my mz"), factory=lambda: [0.0] * 6)
 
 
 @dataclass
@@ -244,15 +305,15 @@ class DriveConfig:
     """Design overrides of the catalogue's drive train, for every cable: winch radius R_i (m) and
     gear ratio N_V. null keeps each actuator's catalogue value."""
 
-    winch_radius: Optional[float] = None
-    gear_ratio: Optional[float] = None
+    winch_radius: Optional[float] = rule(positive, None)
+    gear_ratio: Optional[float] = rule(positive, None)
 
 
 @dataclass
 class ChoiceConfig:
     """CPR-ACM (section 4): an actuator is accepted when its feasible share x(i_a) >= required_pct."""
 
-    required_pct: float = 90.0
+    required_pct: float = rule(lambda v: None if 0 < v <= 100 else "must be in (0, 100]", 90.0)
 
 
 @dataclass
@@ -268,8 +329,8 @@ class ModelConfig:
     moment_arm: MomentArm = MomentArm.platform
     jdot: bool = False
     xi_in_torque_limit: bool = True
-    rank_rtol: float = 1e-9
-    margin_atol: float = 1e-9
+    rank_rtol: float = rule(positive, 1e-9)
+    margin_atol: float = rule(lambda v: None if 0 <= v <= 1e-3 else "must be in [0, 1e-3]", 1e-9)
 
 
 @dataclass
@@ -279,9 +340,9 @@ class ComputeConfig:
     ``scheduler`` (null: a local cluster of n_jobs workers). ``max_poses``: the most pose x
     orientation evaluations a job may take (checked before any work; raise it knowingly)."""
 
-    n_jobs: int = 2
-    backend: str = "loky"
-    chunk_size: int = 20_000
+    n_jobs: int = rule(lambda v: None if v != 0 else "must be a positive count or negative (joblib style)", 2)
+    backend: str = rule(lambda v: None if v in JOBLIB_BACKENDS else f"must be one of {', '.join(JOBLIB_BACKENDS)}", "loky")
+    chunk_size: int = rule(positive, 20_000)
     scheduler: Optional[str] = None
     max_poses: int = 50_000_000
 
@@ -333,30 +394,6 @@ def job_dir_name(override_dirname: str, job_num: int) -> str:
     return override_dirname.replace("/", "_") or f"job{job_num}"
 
 
-NON_NEGATIVE = ("load.mass", "load.gravity")
-FINITE = ("orientation.psi", "orientation.theta", "orientation.phi", "orientation.total.bound",
-          *(f"wrench.{c}" for c in ("fx", "fy", "fz", "mx", "my", "mz")))
-POSITIVE = (
-    "motion.v_max",
-    "motion.t_acc",
-    "motion.t_dec",
-    "robot.frame.d",
-    "robot.frame.s",
-    "robot.frame.v",
-    "robot.carrier.l",
-    "robot.carrier.w",
-    "robot.carrier.h",
-    "drive.winch_radius",
-    "drive.gear_ratio",
-    "robot.r_base",
-    "robot.r_end",
-    "robot.l_max",
-    "robot.search.step",
-    "model.rank_rtol",
-    "tension.residual_rtol",
-    "compute.chunk_size",
-)
-JOBLIB_BACKENDS = ("loky", "threading", "multiprocessing", "sequential", "dask")
 
 
 def unknown_keys(node: DictConfig, schema, prefix: str = "") -> None:
@@ -421,64 +458,50 @@ def _masked(full: DictConfig, present: DictConfig) -> dict:
 
 def validate(cfg: DictConfig, catalogue_ids=None, typed: bool = False) -> DictConfig:
     """The typed config (:func:`typed_config`; ``typed``: ``cfg`` already is), or ConfigError on
-    the first value the model cannot use: '<key>=<value>: <rule>'. ``catalogue_ids``: the ids
-    an ``actuator`` may take."""
+    the first value the model cannot use: '<key>=<value>: <rule>'. First every field's declared
+    rule (:func:`check_values`), then the rules that join several groups. ``catalogue_ids``:
+    the ids an ``actuator`` may take."""
+    from pipeline.workspace import build_robot
+
     cfg = cfg if typed else typed_config(cfg)
-    ROBOT_VALIDATORS[cfg.robot.name](cfg.robot)
-    for key in POSITIVE:
-        value = _select(cfg, key)
-        if value is not None and not 0 < value < float("inf"):
-            raise ConfigError(f"{key}={value}: must be > 0 and finite")
-    for key in NON_NEGATIVE:
-        value = _select(cfg, key)
-        if not 0 <= value < float("inf"):
-            raise ConfigError(f"{key}={value}: must be >= 0 and finite")
-    for key in FINITE:
-        value = _select(cfg, key)
-        if not abs(value) < float("inf"):
-            raise ConfigError(f"{key}={value}: must be finite")
-    for key in ("load.com", "load.external"):
-        values = list(_select(cfg, key))
-        if not all(isinstance(v, (int, float)) and abs(v) < float("inf") for v in values):
-            raise ConfigError(f"{key}={values}: every value must be a finite number")
+    check_values(cfg, Config)
+    check_values(cfg.robot, ROBOT_SCHEMAS[cfg.robot.name], "robot.")
+    robot = build_robot(cfg)  # a points robot checks its points as it is built
     if "moment_arm" in cfg.model and cfg.model.moment_arm.name == "base" and cfg.load.mass > 0:
         raise ConfigError(f"model.moment_arm=base: moments about the base are only read for a "
                           f"massless platform (load.mass={cfg.load.mass}); set load.mass=0 and put "
                           "the weight in wrench.*")
-    if "choice" in cfg and not 0 < cfg.choice.required_pct <= 100:
-        raise ConfigError(f"choice.required_pct={cfg.choice.required_pct}: must be in (0, 100]")
-    if not 0 <= cfg.model.margin_atol <= 1e-3:
-        raise ConfigError(f"model.margin_atol={cfg.model.margin_atol}: must be in [0, 1e-3]")
-    grid = cfg.get("grid", {})
-    if "n" in grid and grid.n < 2:
-        raise ConfigError(f"grid.n={grid.n}: must be >= 2")
-    if grid.get("n_vel") is not None and grid.n_vel < 1:
-        raise ConfigError(f"grid.n_vel={grid.n_vel}: must be >= 1")
-    if cfg.compute.n_jobs == 0:
-        raise ConfigError("compute.n_jobs=0: must be a positive count or negative (joblib style)")
-    if cfg.compute.backend not in JOBLIB_BACKENDS:
-        raise ConfigError(
-            f"compute.backend={cfg.compute.backend}: must be one of {', '.join(JOBLIB_BACKENDS)}"
-        )
     if cfg.compute.backend == "dask" and importlib.util.find_spec("distributed") is None:
         raise ConfigError("compute.backend=dask: needs Dask, pip install 'cdpr-studies[dask]'")
     if "actuator" in cfg and cfg.actuator not in set(catalogue_ids):
         ids = ", ".join(str(i) for i in sorted(catalogue_ids))
         raise ConfigError(f"actuator={cfg.actuator}: no such id in the catalogue (ids: {ids})")
-    _validate_tension(cfg)
+    _validate_tension(cfg, robot.n_cables)
     if cfg.poses is not None:
         from pipeline.robots import point_list
 
         point_list("poses", cfg.poses)
-    if len(cfg.load.external) != 6:
-        raise ConfigError(f"load.external={list(cfg.load.external)}: needs 6 values (fx fy fz mx my mz)")
-    if len(cfg.load.com) != 3:
-        raise ConfigError(f"load.com={list(cfg.load.com)}: needs 3 values (x y z, m, platform frame)")
-    total = cfg.orientation.total
-    if total.n < 1 or total.bound < 0:
-        raise ConfigError(f"orientation.total={OmegaConf.to_container(total)}: needs n >= 1, bound >= 0")
     _validate_size(cfg)
     return cfg
+
+
+def check_values(node: DictConfig, schema, prefix: str = "") -> None:
+    """Apply the rules ``schema`` declares (``rule`` fields, ``check_fields``) to the keys
+    ``node`` has, nested schemas first: ConfigError '<key>=<value>: <rule>' on the first
+    failure."""
+    for declared in fields(schema):
+        if declared.name not in node:
+            continue
+        value = node[declared.name]
+        default = declared.default_factory() if callable(declared.default_factory) else None
+        if is_dataclass(default) and isinstance(value, DictConfig):
+            check_values(value, type(default), f"{prefix}{declared.name}.")
+        elif value is not None and "check" in declared.metadata:
+            broken = declared.metadata["check"](value)
+            if broken:
+                raise ConfigError(f"{prefix}{declared.name}={_shown(value)}: {broken}")
+    if hasattr(schema, "check_fields"):
+        schema.check_fields(node)
 
 
 MAX_VELOCITY_CANDIDATES = 10_000_000  # (n_vel + 1)^3 grid velocities of eq. (23), built in memory
@@ -504,11 +527,10 @@ def _validate_size(cfg: DictConfig) -> None:
             "compute.max_poses knowingly")
 
 
-def _validate_tension(cfg: DictConfig) -> None:
-    from pipeline.workspace import analysis_name, build_robot, cable_rating
+def _validate_tension(cfg: DictConfig, n_cables: int) -> None:
+    from pipeline.workspace import analysis_name, cable_rating
 
     tension = cfg.tension
-    n_cables = build_robot(cfg).n_cables
     rows = 3 if "pinv_columns" in cfg.model and cfg.model.pinv_columns.name == "translational" else 6
     if n_cables < rows:
         what = "forces" if rows == 3 else "forces and moments"
@@ -549,49 +571,5 @@ def _shown(value):
     return OmegaConf.to_container(value) if isinstance(value, ListConfig) else value
 
 
-def _validate_cpr8(robot: DictConfig) -> None:
-    from pipeline.robots import carrier_half_diagonal
-
-    de = carrier_half_diagonal(robot.carrier.l, robot.carrier.w, robot.carrier.h)
-    for axis in ("d", "s", "v"):
-        size = robot.frame[axis]
-        if size <= 2 * de:
-            raise ConfigError(
-                f"robot.frame.{axis}={size}: carrier does not fit "
-                f"(needs > 2 d_e = {2 * de:.4g} m for carrier {robot.carrier.l} x "
-                f"{robot.carrier.w} x {robot.carrier.h} m)"
-            )
-    drop = robot.lower_anchor_drop
-    if drop is not None and not 0 <= drop < float("inf"):
-        raise ConfigError(f"robot.lower_anchor_drop={drop}: must be >= 0 and finite")
-
-
-def _validate_irpm6(robot: DictConfig) -> None:
-    if not 0 <= robot.gamma_deg < 120:
-        raise ConfigError(f"robot.gamma_deg={robot.gamma_deg}: must be in [0, 120) (pairs would overlap)")
-    search = robot.search
-    for key in ("lo", "hi"):
-        if len(search[key]) != 3:
-            raise ConfigError(f"robot.search.{key}={list(search[key])}: needs 3 values (x, y, z)")
-    for axis, lo, hi in zip("xyz", search.lo, search.hi):
-        if not lo <= hi or not abs(lo) + abs(hi) < float("inf"):
-            raise ConfigError(f"robot.search: {axis} from {lo} to {hi}: must be finite with lo <= hi")
-
-
-def _validate_points(robot: DictConfig) -> None:
-    from pipeline.robots import PointsRobot
-
-    PointsRobot.from_config(robot)
-
-
-ROBOT_VALIDATORS = {"cpr8": _validate_cpr8, "irpm6": _validate_irpm6, "points": _validate_points}
+# The robots a config can name: keys, types and value rules (pipeline.workspace.ROBOTS builds them).
 ROBOT_SCHEMAS = {"cpr8": Cpr8Config, "irpm6": Irpm6Config, "points": PointsConfig}
-
-
-def _select(cfg: DictConfig, dotted: str):
-    node = cfg
-    for part in dotted.split("."):
-        if part not in node:
-            return None
-        node = node[part]
-    return node

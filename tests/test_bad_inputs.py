@@ -1,12 +1,14 @@
 """Bad input end to end: every case exits non-zero with one line on stderr and adds no file
 under outputs/ (config values, override syntax, catalogue files, corrupted earlier results)."""
 
+import re
 import shutil
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
+from omegaconf import OmegaConf
 
 from pipeline.actuators import load_catalogue
 
@@ -79,7 +81,7 @@ CASES = [
     ("pipeline", ["catalogue=empty.csv"], "catalogue=empty.csv"),
     ("pipeline", ["catalogue=percent.csv"], "column efficiency: 85 must be a fraction in (0, 1]"),
     ("pipeline", ["orientation.psi=nan"], "orientation.psi=nan: must be finite"),
-    ("pipeline", ["orientation.total.bound=inf"], "orientation.total.bound=inf: must be finite"),
+    ("pipeline", ["orientation.total.bound=inf"], "orientation.total.bound=inf: must be >= 0 and finite"),
     ("pipeline", ["drive.winch_radius=inf"], "drive.winch_radius=inf"),
     ("pipeline", ["model.rank_rtol=inf"], "model.rank_rtol=inf"),
     ("pipeline", ["robot.lower_anchor_drop=inf"], "robot.lower_anchor_drop=inf"),
@@ -87,7 +89,7 @@ CASES = [
     ("pipeline", ["load.mass=inf"], "load.mass=inf"),
     ("pipeline", ["load.external=[0,0,nan,0,0,0]"], "load.external"),
     ("pipeline", ["robot=irpm6", "wrench.fx=nan"], "wrench.fx=nan"),
-    ("pipeline", ["robot=irpm6", "robot.search.hi=[6,6,inf]"], "z from 0.0 to inf"),
+    ("pipeline", ["robot=irpm6", "robot.search.hi=[6,6,inf]"], "robot.search.hi=[6.0, 6.0, inf]: every value must be a finite number"),
     ("pipeline", ["tension.model=feasible", "tension.t_max=inf"], "tension.t_max=inf"),
     ("pipeline", ["grid.n=1000000"], "compute.max_poses=50000000"),
     ("pipeline", ["grid.n_vel=100000"], "grid.n_vel=100000"),
@@ -124,3 +126,51 @@ def test_one_line_error_nonzero_exit_and_no_new_output(workdir, module, args, ex
 
 def test_the_catalogue_of_bad_inputs_has_at_least_25_cases():
     assert len(CASES) >= 25
+
+
+def test_every_declared_rule_is_applied(make_cfg):
+    """Each field's value rule sits next to its declaration (pipeline/config.py, ``rule``) and
+    ``check_values`` applies all of them: a default that breaks none passes, and each rule-bearing
+    field set to a value its rule refuses is named in the error."""
+    from dataclasses import fields, is_dataclass
+
+    from pipeline.config import Config, check_values
+    from pipeline.errors import ConfigError
+
+    def ruled(schema, prefix=""):
+        for f in fields(schema):
+            default = f.default_factory() if callable(f.default_factory) else None
+            if is_dataclass(default):
+                yield from ruled(type(default), f"{prefix}{f.name}.")
+            elif "check" in f.metadata:
+                yield f"{prefix}{f.name}", f.metadata["check"]
+
+    cfg = make_cfg()
+    check_values(cfg, Config)
+    rules = dict(ruled(Config))
+    assert len(rules) >= 25
+    tried = 0
+    for key, check in rules.items():
+        parent, _, leaf = key.rpartition(".")
+        if leaf not in (OmegaConf.select(cfg, parent) if parent else cfg):
+            continue  # a key of another analysis
+        for bad in (float("nan"), -1, 0, 1e9, [float("inf")]):
+            if not _refused(check, bad):
+                continue
+            node = make_cfg()
+            try:
+                OmegaConf.update(node, key, bad)
+            except Exception:  # a value of the wrong type for this field
+                continue
+            with pytest.raises(ConfigError, match=re.escape(f"{key}=")):
+                check_values(node, Config)
+            tried += 1
+            break
+    assert tried >= 20
+
+
+def _refused(check, value):
+    try:
+        return check(value) is not None
+    except TypeError:
+        return False
