@@ -39,7 +39,8 @@ class WorkspaceProblem:
 
 def evaluate_chunk(problem: WorkspaceProblem, positions: np.ndarray) -> dict[str, np.ndarray]:
     """Margins ``margin_<criterion>`` (n,), the worst over the orientation set, for positions
-    (n, 3); with ``problem.cables`` also the cable quantities at the nominal orientation."""
+    (n, 3); with ``problem.cables`` also the cable quantities at the nominal orientation; under
+    the feasible tension model ``lp_poses`` (n,): poses whose margins came from the LPs."""
     result = {}
     for number, orientation in enumerate(problem.orientations):
         state = problem.spec.state(problem.robot, positions, orientation)
@@ -52,4 +53,6 @@ def evaluate_chunk(problem: WorkspaceProblem, positions: np.ndarray) -> dict[str
         if hasattr(state, "jacobian_rank"):
             rank = state.jacobian_rank.astype(np.int8)
             result["jacobian_rank"] = np.minimum(result.get("jacobian_rank", rank), rank)
+        if hasattr(state, "tension_lp"):  # the feasible model's LP fallback (pipeline.tensions)
+            result["lp_poses"] = result.get("lp_poses", False) | state.tension_lp
     return result

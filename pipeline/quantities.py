@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipeline.criteria.forces import feasible_solution
+from pipeline.criteria.forces import feasible_distribution
 from pipeline.statics import PoseStatics
 
 
@@ -22,14 +22,14 @@ def cable_quantities(state, limits) -> dict[str, np.ndarray]:
     columns = {f"length_{name}": state.lengths[:, i] for i, name in enumerate(names)}
     if isinstance(state, PoseStatics):
         tensions = (state.tensions if state.spec.tension.model == "pinv"
-                    else feasible_solution(state, limits)[1][:, 0, :])
+                    else feasible_distribution(state, limits)[:, 0, :])
         columns.update({f"tension_{name}": tensions[:, i] for i, name in enumerate(names)})
         return columns
     radius = state.motion.winch_radius
     if state.motion.tension.model == "pinv":
         high, low = state.acceleration_range(*state.torque_affine)
     else:
-        chosen = feasible_solution(state, limits)[1]
+        chosen = feasible_distribution(state, limits)
         high, low = chosen.max(axis=1), chosen.min(axis=1)
     for i, name in enumerate(names):
         columns[f"tension_min_{name}"] = low[:, i] / radius[i]

@@ -80,8 +80,8 @@ def inverse_dynamics(
     if motion.tension.model == "feasible":
         other = (actuator.G_v * theta_ddot + actuator.L_v * theta_dot)[:, None, :]
         families = actuator_families(motion.tension, motion.winch_radius, actuator, other, other)
-        margins, chosen = feasible_tensions(state.structure, *state.wrench_pinv, wrench[:, None, :],
-                                            families, motion.tension.residual_rtol)
+        margins, chosen, _ = feasible_tensions(state.structure, *state.wrench_pinv, wrench[:, None, :],
+                                               families, motion.tension.residual_rtol, distribution=True)
         margins = {name: value[:, 0] for name, value in margins.items()}
         torque = chosen[:, 0, :]
     else:

@@ -15,6 +15,7 @@ One code path for every robot and analysis. The robot config only places points
 
 from __future__ import annotations
 
+import logging
 from collections import Counter
 from typing import Callable
 
@@ -33,6 +34,8 @@ from pipeline.robots import PointsRobot, cpr8, irpm6, point_list
 from pipeline.statics import StaticLimits, StaticsSpec
 from pipeline.tensions import TensionSpec
 from pipeline.verdict import classify
+
+log = logging.getLogger("pipeline")
 
 CPR_WWA_CRITERIA = ("speed", "torque", "acceleration", "voltage")  # eqs. (30), (32), (33), (34)
 FEASIBLE_GATES = ("unreachable", "slack")  # tension=feasible (pipeline.tensions)
@@ -215,16 +218,20 @@ def grid_workspace(
         chunk_size=bounded_chunk_size(problem, cfg.compute.chunk_size),
         scheduler=cfg.compute.scheduler,
     )
-    parts, n_feasible, lost = [], 0, Counter()
+    parts, n_feasible, lost, by_lp = [], 0, Counter(), 0
     for span, raw in chunks:
         points = tabulate(problem, grid.positions[span], raw)
         n_feasible += int(points["feasible"].sum())
+        by_lp += int(np.count_nonzero(raw.get("lp_poses", False)))
         lost.update(points.loc[~points["feasible"], "limiting"].astype(str))
         if sink is None:
             parts.append(points)
         else:
             sink(points)
     counts = {"n_points": grid.n_points, "n_feasible": n_feasible, "lost": lost}
+    if problem.spec.tension.model == "feasible":
+        log.info("feasible tension model: %d of %d poses by LP (poor conditioning or fallback), "
+                 "the rest by hyperplane shifting", by_lp, grid.n_points)
     table = pd.concat(parts, ignore_index=True) if sink is None else None
     return table, summarize(cfg, counts, grid.cell_volume, problem)
 

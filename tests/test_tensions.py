@@ -46,8 +46,8 @@ def test_symmetric_four_cable_point_mass_gets_the_analytic_tensions():
     state = motion.state(square_robot(), np.array([[0.0, 0.0, -depth]]), (0.0, 0.0, 0.0))
     length = np.sqrt(2 * HALF**2 + depth**2)
     tension = MASS * GRAVITY * length / (4 * depth)  # each cable carries a quarter of the weight
-    margins, chosen = feasible_tensions(state.structure, *state.wrench_pinv, state.required_wrenches,
-                                        tension_families(state, ACTUATOR), 1e-6)
+    margins, chosen, _ = feasible_tensions(state.structure, *state.wrench_pinv, state.required_wrenches,
+                                           tension_families(state, ACTUATOR), 1e-6, distribution=True)
     assert chosen[0, 0] / RADIUS == pytest.approx(np.full(4, tension), rel=1e-7)
     torque = RADIUS * tension
     assert margins["slack"][0, 0] == pytest.approx(torque / ACTUATOR.torque_limit, rel=1e-7)
@@ -129,7 +129,7 @@ def test_slack_agrees_with_an_independent_nonnegative_least_squares(columns, ori
     problem, grid = build_problem(make_cfg(f"model.pinv_columns={columns}", "tension.model=feasible",
                                            *angles), catalogue)
     state = problem.spec.state(problem.robot, grid.positions, problem.orientations[0])
-    margins, _ = feasible_tensions(state.structure, *state.wrench_pinv, state.required_wrenches,
+    margins, *_ = feasible_tensions(state.structure, *state.wrench_pinv, state.required_wrenches,
                                    tension_families(state, problem.limits), 1e-6)
     wrenches = state.required_wrenches
     residual = np.array([[nnls(s, w)[1] / np.linalg.norm(w) for w in wrenches] for s in state.structure])
@@ -145,13 +145,13 @@ def test_the_box_vertices_decide_every_acceleration_inside_it(make_cfg, catalogu
     problem, grid = build_problem(make_cfg("tension.model=feasible"), catalogue)
     state = problem.spec.state(problem.robot, grid.positions, problem.orientations[0])
     families = tension_families(state, problem.limits)
-    vertices, _ = feasible_tensions(state.structure, *state.wrench_pinv, state.required_wrenches,
+    vertices, *_ = feasible_tensions(state.structure, *state.wrench_pinv, state.required_wrenches,
                                     families[:1], 1e-6)
     rng = np.random.default_rng(0)
     box = state.wrench_accelerations
     inside = box.min(axis=0) + rng.random((12, 3)) * (box.max(axis=0) - box.min(axis=0))
     wrenches = load_wrenches(problem.spec, inside, problem.robot.up, state.rotation)[:, :3]
-    interior, _ = feasible_tensions(state.structure, *state.wrench_pinv, wrenches, families[:1], 1e-6)
+    interior, *_ = feasible_tensions(state.structure, *state.wrench_pinv, wrenches, families[:1], 1e-6)
     assert (interior["slack"].min(axis=1) >= vertices["slack"].min(axis=1) - 1e-9).all()
 
 

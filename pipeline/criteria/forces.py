@@ -14,22 +14,30 @@ from pipeline.tensions import Family, feasible_tensions
 
 def feasible_margins(state, limits) -> dict[str, np.ndarray]:
     """(n,) margins of the ``feasible`` tension model, the worst over the required wrenches:
-    ``unreachable`` and one per family of :func:`tension_families`."""
-    return feasible_solution(state, limits)[0]
-
-
-def feasible_solution(state, limits) -> tuple[dict[str, np.ndarray], np.ndarray]:
-    """:func:`feasible_margins` and the cable forces x (n, K, m) the LPs chose. Cached on the
-    state per limits: one set of LPs serves every criterion that reads it."""
-    cache = state.__dict__.setdefault("_feasible_solution", {})
+    ``unreachable`` and one per family of :func:`tension_families`, from hyperplane shifting
+    (LPs where it falls back, ``pipeline.tensions``). Cached on the state per limits: one
+    computation serves every criterion that reads it; ``state.tension_lp`` (n,) records the
+    poses the LPs solved."""
+    cache = state.__dict__.setdefault("_feasible_margins", {})
     key = id(limits)  # the problem's one limits object; arrays inside make it unhashable
     if key not in cache:
-        margins, chosen = feasible_tensions(
+        margins, _, by_lp = feasible_tensions(
             state.structure, *state.wrench_pinv, state.required_wrenches,
             tension_families(state, limits), tension_spec(state).residual_rtol,
         )
-        cache[key] = ({name: value.min(axis=1) for name, value in margins.items()}, chosen)
+        cache[key] = {name: value.min(axis=1) for name, value in margins.items()}
+        state.tension_lp = by_lp
     return cache[key]
+
+
+def feasible_distribution(state, limits) -> np.ndarray:
+    """The cable forces x (n, K, m) the ``feasible`` model chooses: the solution of the last
+    family's LP (the best voltage margin once every earlier criterion does its best), or
+    x = S^+ w where it is unique."""
+    return feasible_tensions(
+        state.structure, *state.wrench_pinv, state.required_wrenches,
+        tension_families(state, limits), tension_spec(state).residual_rtol, distribution=True,
+    )[1]
 
 
 def tension_families(state, limits) -> list[Family]:
