@@ -75,6 +75,26 @@ def _table2(studies_dir: Path) -> list[str]:
         rows.append(f"| {actuator} | {paper:.2f} | {ours:.2f} | {diff:+.2f} | {md(lost) or '–'} |")
     accepted = sorted(int(a) for a in choice.index[choice["accepted"]])
     rows += ["", f"Accepted at x = 90 %: paper {TABLE2_ACCEPTED}, ours {accepted}.", ""]
+    return rows + _pulling_choice(studies_dir, choice)
+
+
+def _pulling_choice(studies_dir: Path, paper_model: pd.DataFrame) -> list[str]:
+    """CPR-ACM again with cables that only pull (study ``actuator_choice_pulling``)."""
+    pulling = pd.read_parquet(studies_dir / "actuator_choice_pulling" / "choice.parquet").set_index("actuator")
+    rows = ["### The same choice when the cables can only pull", "",
+            "No paper number: `tension.model=feasible` (pulling tensions that meet the torque, "
+            "voltage and slack limits at every acceleration vertex) in place of eq. (20)'s "
+            "minimum-norm torques.", "",
+            "| actuator | eq. (20) % | pulling % | accepted (eq. 20 → pulling) | pulling: lost to |",
+            "| --- | --- | --- | --- | --- |"]
+    for actuator, row in pulling.iterrows():
+        before = paper_model.loc[actuator]
+        rows.append(f"| {actuator} | {before['feasible_pct']:.2f} | {row['feasible_pct']:.2f} | "
+                    f"{'yes' if before['accepted'] else 'no'} → {'yes' if row['accepted'] else 'no'} | "
+                    f"{md(row['rejected_by']) or '–'} |")
+    accepted = sorted(int(a) for a in pulling.index[pulling["accepted"]])
+    required = pulling["required_pct"].iloc[0]
+    rows += ["", f"Accepted at x = {required:g} % with pulling cables: {accepted or 'none'}.", ""]
     return rows
 
 

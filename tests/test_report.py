@@ -12,7 +12,8 @@ from pipeline.lines import simulate_lines
 from pipeline.study import STUDIES_DIR, available
 from pipeline.workspace import compute_workspace
 
-STUDIES = ["actuator_choice", "line_simulation", "irpm_fig13_end_ratio", "tension_comparison"]
+STUDIES = ["actuator_choice", "actuator_choice_pulling", "line_simulation", "irpm_fig13_end_ratio",
+           "tension_comparison"]
 
 
 @pytest.fixture
@@ -24,6 +25,10 @@ def studies(tmp_path, make_cfg, catalogue):
     summary.to_parquet(root / "actuator_choice" / "summary.parquet")
     choose(summary).to_parquet(root / "actuator_choice" / "choice.parquet")
     (root / "actuator_choice" / "figures" / "fig9.png").write_bytes(b"\x89PNG fake")
+    pulling = pd.DataFrame([compute_workspace(make_cfg("tension=feasible", f"actuator={a}"), catalogue)[1]
+                            for a in range(1, 6)])
+    pulling.to_parquet(root / "actuator_choice_pulling" / "summary.parquet")
+    choose(pulling).to_parquet(root / "actuator_choice_pulling" / "choice.parquet")
     lines = pd.DataFrame([simulate_lines(make_cfg("analysis=lines", f"actuator={a}"), catalogue)[2]
                           for a in (1, 2)]).assign(case="zero")
     lines.to_parquet(root / "line_simulation" / "summary.parquet")
@@ -50,6 +55,9 @@ def test_report_compares_paper_and_ours_and_carries_the_figures(studies, tmp_pat
     assert "| 4 | 87.04 | 85.19 | -1.85 | voltage 32 |" in text
     assert "| 2 | 96.30 | 96.30 | +0.00 | torque 8 |" in text
     assert "Accepted at x = 90 %: paper [1, 2], ours [1, 2]." in text
+    assert "| 1 | 100.00 | 66.67 | yes → no | slack 72 |" in text  # cables that only pull
+    assert "| 5 | 11.11 | 14.81 | no → no | slack 72, torque 112 |" in text
+    assert "Accepted at x = 90 % with pulling cables: none." in text
     assert "| translational, zero | 100.00 | 98.15 |" in text
     assert "| 0.2 | 183.2 | 64.8 |" in text
     assert "| translational, zero | 66.7 (216 → 144) |" in text
