@@ -41,7 +41,7 @@ CPR_WWA_CRITERIA = ("speed", "torque", "acceleration", "voltage")  # eqs. (30), 
 FEASIBLE_GATES = ("unreachable", "slack")  # tension=feasible (pipeline.tensions)
 DEFAULT_N_VEL = 6  # velocity grid of robots without an N x N x N position grid (section 3.1's N)
 CHUNK_BUDGET_FLOATS = 4_000_000  # largest (poses x cables x set size) array of one chunk: 32 MB
-LP_CHUNK_POSES = 1024  # tension.model=feasible: ~3 s of LPs per chunk, so progress is visible
+FEASIBLE_CHUNK_POSES = 4096  # tension.model=feasible: about 1 s per chunk, so progress is visible
 
 
 def build_problem(cfg: DictConfig, catalogue: pd.DataFrame) -> tuple[WorkspaceProblem, Grid]:
@@ -260,10 +260,10 @@ def tabulate(problem: WorkspaceProblem, positions: np.ndarray, raw: dict) -> pd.
 def bounded_chunk_size(problem: WorkspaceProblem, requested: int) -> int:
     """Poses per chunk: the requested size, lowered so that a chunk's largest intermediate
     array (poses x cables x velocity or acceleration set) stays within CHUNK_BUDGET_FLOATS,
-    and to LP_CHUNK_POSES when the cable forces come from LPs."""
+    and to FEASIBLE_CHUNK_POSES under the feasible tension model."""
     per_pose = problem.robot.n_cables * problem.spec.set_size()
     if problem.spec.tension.model == "feasible":
-        requested = min(requested, LP_CHUNK_POSES)
+        requested = min(requested, FEASIBLE_CHUNK_POSES)
     return max(1, min(requested, CHUNK_BUDGET_FLOATS // per_pose))
 
 
