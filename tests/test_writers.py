@@ -11,7 +11,7 @@ import pytest
 from pipeline.results import read_metadata
 
 pytestmark = pytest.mark.slow
-SLOW_JOB = ["tension.model=feasible", "grid.n=12", "compute.n_jobs=1"]  # ~5 s of LPs
+SLOW_JOB = ["tension.model=feasible", "output.cables=true", "grid.n=12", "compute.n_jobs=1"]  # ~5 s of LPs (per-pose tensions)
 
 
 def start(cwd, *args):
