@@ -5,7 +5,8 @@
     max_x  s   subject to   S x = w,   L <= x <= U (earlier families),
                             lower + s c <= x <= upper - s c (this family),   s <= 1.
 
-Here the same number is computed without an LP, batched over poses with numpy.
+Here the same number is computed without an LP: the normals and their products batched over
+poses with numpy, the search per pose compiled (``pipeline.crossings``).
 
 Wrench-space test (the hyperplane-shifting method). Let q be the rank of S (r x m) and work
 in its q-dimensional range. For a box B of cable forces (sides possibly infinite) the set S B
@@ -22,8 +23,8 @@ Shifting the hyperplanes. With this family shrunk by s and the earlier bounds fi
 of cable i that h reads is min(P_i, Q_i - s c_i): for a_i > 0, P_i = U_i, Q_i = upper_i; for
 a_i < 0, P_i = -L_i, Q_i = -lower_i. So h(n, s) = sum_i |a_i| min(P_i, Q_i - s c_i) is concave,
 piecewise linear and non-increasing in s, with one breakpoint per cable,
-beta_i = (Q_i - P_i) / c_i. Its crossing with n . w is found exactly from the breakpoints
-sorted per normal and cumulative sums (no iteration). The margin is the smallest crossing over
+beta_i = (Q_i - P_i) / c_i. Its crossing with n . w is found exactly by Newton's method from
+the right (``pipeline.crossings``), after an upper bound from one line per normal. The margin is the smallest crossing over
 the normals, capped by 1 and by the largest s at which every cable's interval is non-empty
 (past it the support formula no longer describes an empty box).
 

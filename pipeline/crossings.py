@@ -82,6 +82,15 @@ def search(a, target, lowers, uppers, scales, varies, relax_rtol, margins):
     return unsettled
 
 
+@njit(cache=True, inline="always")
+def _side(ai, earlier_lo, earlier_up, lo, up):
+    """(|a_i|, P_i, Q_i): the sides of cable i that h(n, s) reads, the upper ones where
+    a_i > 0, the negated lower ones where a_i < 0."""
+    if ai > 0.0:
+        return ai, earlier_up, up
+    return -ai, -earlier_lo, -lo
+
+
 @njit(cache=True)
 def _lines(a, earlier_lo, earlier_up, lo, up, c, level, slope, lines_from, flat_until):
     """Per normal j, the line level_j - s slope_j above h(n_j, s), reading P_i for the cables
@@ -89,13 +98,9 @@ def _lines(a, earlier_lo, earlier_up, lo, up, c, level, slope, lines_from, flat_
     for j in range(a.shape[0]):
         total, rate, start, stop = 0.0, 0.0, -np.inf, np.inf
         for i in range(a.shape[1]):
-            ai = a[j, i]
-            if ai == 0.0:
+            if a[j, i] == 0.0:
                 continue
-            if ai > 0.0:
-                w, prev, own = ai, earlier_up[i], up[i]
-            else:
-                w, prev, own = -ai, -earlier_lo[i], -lo[i]
+            w, prev, own = _side(a[j, i], earlier_lo[i], earlier_up[i], lo[i], up[i])
             turn = (own - prev) / c[i]
             if own >= BIG or turn >= 1.0 - FLAT_AT_ONE:
                 total += w * prev
@@ -114,13 +119,9 @@ def _descend(a, target, earlier_lo, earlier_up, lo, up, c, s):
     for _ in range(a.shape[0] + 2):
         h, slope = 0.0, 0.0
         for i in range(a.shape[0]):
-            ai = a[i]
-            if ai == 0.0:
+            if a[i] == 0.0:
                 continue
-            if ai > 0.0:
-                w, prev, own = ai, earlier_up[i], up[i]
-            else:
-                w, prev, own = -ai, -earlier_lo[i], -lo[i]
+            w, prev, own = _side(a[i], earlier_lo[i], earlier_up[i], lo[i], up[i])
             value = own - s * c[i]
             if value < prev:
                 h += w * value
