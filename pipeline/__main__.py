@@ -25,10 +25,11 @@ def main(cfg: DictConfig) -> None:
 
 
 def cli() -> None:
+    from pipeline.job import PREPARED
     from pipeline.preflight import check
 
     try:
-        check(sys.argv[1:])
+        PREPARED.update(check(sys.argv[1:]))
     except ConfigError as exc:
         print(f"error: {exc}", file=sys.stderr)
         raise SystemExit(2) from None

@@ -17,10 +17,10 @@ REPORTED = ["n_points", "n_feasible", "feasible_pct", "volume_m3"]
 
 class SweepSummary(Callback):
     """Concatenate the summary.parquet of every job of this sweep into <sweep dir>/summary.parquet,
-    with a ``job`` column naming each job's folder. With the basic launcher, jobs run in this
-    process and are collected as they end, so folders left by an earlier sweep into the same
-    directory are not included; with a launcher that runs jobs elsewhere (joblib), every job
-    folder of the sweep directory is read."""
+    with a ``job`` column naming each job's folder, in folder-name order whatever order the jobs
+    ran in. When jobs run in this process they are collected as they end, so folders left by an
+    earlier sweep into the same directory are not included; with a launcher that runs jobs
+    elsewhere (worker processes), every job folder of the sweep directory is read."""
 
     def __init__(self) -> None:
         self.job_dirs: list[Path] = []
@@ -31,7 +31,7 @@ class SweepSummary(Callback):
     def on_multirun_end(self, config: DictConfig, **kwargs) -> None:
         sweep_dir = Path(config.hydra.sweep.dir)
         rows = []
-        job_dirs = self.job_dirs or sorted(p.parent for p in sweep_dir.glob("*/summary.parquet"))
+        job_dirs = sorted(self.job_dirs or (p.parent for p in sweep_dir.glob("*/summary.parquet")))
         for job_dir in job_dirs:
             if (job_dir / "summary.parquet").exists():
                 row = pd.read_parquet(job_dir / "summary.parquet")

@@ -12,12 +12,13 @@ class ConfigError(ValueError):
 
 
 def one_line(exc: BaseException) -> str:
-    """Hydra/OmegaConf messages span several lines; keep the informative ones, joined."""
+    """Hydra/OmegaConf messages span several lines; keep the informative ones, joined, each once
+    (a cause's text is often already part of the message that wraps it)."""
     parts = []
     while exc is not None:
         for line in str(exc).splitlines():
             line = line.strip()
-            if line and not _NOISE.match(line) and line not in parts:
+            if line and not _NOISE.match(line) and not any(line in part for part in parts):
                 parts.append(line)
         exc = exc.__cause__
     return ": ".join(parts)

@@ -36,12 +36,20 @@ from pipeline.lines import simulate_lines
 from pipeline.workspace import analysis_name, compute_workspace
 
 log = logging.getLogger("pipeline")
+# The typed, validated config and catalogue of every job the preflight of this process checked,
+# by the YAML of the config Hydra composes for it (``pipeline.preflight.check``): a job run in
+# this process takes them from here instead of typing, validating and reading them again.
+PREPARED: dict[str, tuple[DictConfig, object]] = {}
 
 
 def run_job(cfg: DictConfig) -> dict:
     """Validate, compute the feasible workspace, write the Parquet files; returns the summary."""
-    catalogue = load_catalogue(cfg.catalogue) if "catalogue" in cfg else None
-    cfg = validate(cfg, None if catalogue is None else catalogue.index)
+    prepared = PREPARED.pop(OmegaConf.to_yaml(cfg), None)
+    if prepared is not None:
+        cfg, catalogue = prepared
+    else:
+        catalogue = load_catalogue(cfg.catalogue) if "catalogue" in cfg else None
+        cfg = validate(cfg, None if catalogue is None else catalogue.index)
     out = Path(HydraConfig.get().runtime.output_dir)
     try:
         with folder_lock(out):

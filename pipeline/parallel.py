@@ -17,7 +17,6 @@ import os
 from typing import Callable, Iterator
 
 import numpy as np
-from joblib import Parallel, delayed, effective_n_jobs, parallel_config
 
 log = logging.getLogger(__name__)
 
@@ -42,7 +41,7 @@ def iter_chunks(
 ) -> Iterator[tuple[slice, dict[str, np.ndarray]]]:
     """(slice, ``function(problem, positions[slice])``) for every chunk, in order, as each
     finishes: a caller can write results out chunk by chunk (bounded memory)."""
-    workers = effective_n_jobs(n_jobs)
+    workers = n_jobs if n_jobs > 0 else max((os.cpu_count() or 1) + 1 + n_jobs, 1)  # joblib's rule
     if backend != "dask" and workers > (os.cpu_count() or 1):  # more would only thrash memory
         log.warning("compute.n_jobs=%d: capped at the %d cores of this machine", n_jobs, os.cpu_count())
         workers = os.cpu_count() or 1
@@ -52,6 +51,8 @@ def iter_chunks(
             yield s, function(problem, positions[s])
             _progress(i, len(slices))
         return
+    from joblib import Parallel, delayed  # only here: 50 ms of imports a one-chunk job skips
+
     with _engine(backend, workers, scheduler) as joblib_backend:
         runner = Parallel(n_jobs=workers, backend=joblib_backend, return_as="generator")
         tasks = (delayed(function)(problem, positions[s]) for s in slices)
@@ -68,6 +69,7 @@ def _engine(backend: str, workers: int, scheduler: str | None):
         yield backend
         return
     from dask.distributed import Client, LocalCluster
+    from joblib import parallel_config
 
     if scheduler:
         client = Client(scheduler)

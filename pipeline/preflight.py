@@ -19,12 +19,13 @@ import os
 import re
 import shutil
 from pathlib import Path
+from typing import Any
 
 from hydra import compose, initialize_config_dir
 from hydra.errors import MissingConfigException
 from hydra.core.override_parser.overrides_parser import OverridesParser
 from hydra.core.override_parser.types import Override
-from omegaconf import DictConfig, OmegaConf
+from omegaconf import DictConfig, OmegaConf, open_dict
 from omegaconf.errors import ConfigAttributeError, ConfigKeyError
 
 from pipeline.actuators import load_catalogue
@@ -113,50 +114,74 @@ def parse(overrides: list[str]) -> list[Override]:
     return parsed
 
 
-def check(argv: list[str]) -> None:
-    """Raise ConfigError for the first job whose config cannot be composed or is invalid."""
+def check(argv: list[str]) -> dict[str, tuple[DictConfig, Any]]:
+    """Raise ConfigError for the first job whose config cannot be composed or is invalid. Returns
+    every job's typed, validated config and catalogue (None without an actuator), by the YAML of
+    its composed config (``pipeline.job.PREPARED``: a job run in this process is not typed twice)."""
     try:
         jobs = job_overrides(argv)
         multirun_base = _multirun_base(argv) if jobs is not None else None
     except Exception as exc:  # Hydra's override grammar errors have several types
         raise ConfigError(one_line(exc)) from exc
     if jobs is None:
-        return
+        return {}
     register()
     search_path = _search_path(argv)
-    composed: dict[tuple[str, ...], DictConfig] = {}
+    composed: dict[tuple[str, ...], tuple[DictConfig, DictConfig, DictConfig]] = {}
     catalogues = {}
+    prepared = {}
 
-    def build(overrides: list[str]) -> DictConfig:
+    def composed_for(overrides: list[str]) -> tuple[list[Override], tuple[DictConfig, ...]]:
+        """The job's parsed overrides, and (with Hydra's node, without, typed) for its files."""
         parsed = parse(overrides)
-        structural = (*search_path, *(o.input_line for o in parsed if _structural(o)))
-        if structural not in composed:
+        files = (*search_path, *(o.input_line for o in parsed if structural(o)))
+        if files not in composed:
             try:
-                plain = compose(config_name="config", overrides=list(structural))
+                hydra = compose(config_name="config", overrides=list(files), return_hydra_config=True)
             except MissingConfigException as exc:  # a group option with no file
                 raise ConfigError(_missing_option(exc, parsed)) from exc
             except Exception as exc:  # composition errors come as Hydra and OmegaConf types
                 raise ConfigError(one_line(exc)) from exc
-            composed[structural] = plain, typed_schema(plain)  # typed once per composition
-        plain, full = (copy.deepcopy(c) for c in composed[structural])
+            plain = copy.deepcopy(hydra)
+            with open_dict(plain):
+                del plain["hydra"]
+            composed[files] = hydra, plain, typed_schema(plain)  # typed once per composition
+        return parsed, composed[files]
+
+    def build(overrides: list[str]) -> tuple[DictConfig, DictConfig]:
+        """(the job's typed config, its config as Hydra composes it)"""
+        parsed, (_, plain, full) = composed_for(overrides)
+        plain, full = copy.deepcopy(plain), copy.deepcopy(full)
         for override in parsed:
-            if not _structural(override):
+            if not structural(override):
                 _apply(plain, override)  # a key this robot and analysis have
                 _apply(full, override)  # of the declared type
-        return masked(full, plain)
+        return masked(full, plain), plain
+
+    def hydra_node(overrides: list[str]) -> DictConfig:
+        parsed, (hydra, _, _) = composed_for(overrides)
+        hydra = copy.deepcopy(hydra)
+        for override in parsed:
+            if not structural(override):
+                _apply(hydra, override)
+        return hydra.hydra
 
     with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3", job_name="preflight"):
         if multirun_base is not None:
             build(multirun_base)  # Hydra composes the sweep's own config from these first
         for overrides in jobs:
-            cfg = build(overrides)
-            ids = None
+            cfg, plain = build(overrides)
+            catalogue = None
             if "catalogue" in cfg:  # analyses with an actuator
                 if cfg.catalogue not in catalogues:
                     catalogues[cfg.catalogue] = load_catalogue(cfg.catalogue)
-                ids = catalogues[cfg.catalogue].index
-            validate(cfg, ids, typed=True)
-        _check_output_folders(jobs, multirun_base, search_path)  # values first: sizes are valid
+                catalogue = catalogues[cfg.catalogue]
+            validate(cfg, None if catalogue is None else catalogue.index, typed=True)
+            prepared[OmegaConf.to_yaml(plain)] = cfg, catalogue
+        hydra = hydra_node(jobs[0] if multirun_base is None else multirun_base)
+    first = next(iter(prepared.values()))[0]
+    _check_output_folders(jobs, first, hydra, multirun_base is not None)
+    return prepared
 
 
 NAME_MAX = 255  # bytes in one folder name (Linux, macOS)
@@ -164,28 +189,22 @@ BYTES_PER_POSE = 200  # a points.parquet row with its margins, generously
 BYTES_PER_JOB = 512 * 1024  # Hydra's files, the log and the summary of one job
 
 
-def _check_output_folders(jobs: list[list[str]], multirun_base: list[str] | None,
-                          search_path: tuple[str, ...]) -> None:
+def _check_output_folders(jobs: list[list[str]], first: DictConfig, hydra: DictConfig,
+                          multirun: bool) -> None:
     """The folders Hydra will make (run dir, or one per job of a sweep) can be made and written
     and their disk has room: a path through a file, a folder name over 255 bytes, a read-only
-    place or a full disk is one line naming the path, before anything is written."""
+    place or a full disk is one line naming the path, before anything is written. ``first``:
+    the first job's valid config; ``hydra``: Hydra's node of the run or sweep config."""
     from pipeline.workspace import grid_size
 
-    overrides = [*search_path, *(jobs[0] if multirun_base is None else multirun_base)]
-    try:
-        hydra = compose(config_name="config", overrides=overrides, return_hydra_config=True).hydra
-        folders = [Path(hydra.run.dir)]
-        if multirun_base is not None:
-            naming = hydra.job.config.override_dirname
-            folders = [Path(hydra.sweep.dir) / job_dir_name(_override_dirname(job, naming), number)
-                       for number, job in enumerate(jobs)]
-        first = compose(config_name="config", overrides=[*search_path, *jobs[0]])
-        poses = grid_size(first)
-    except Exception:  # a composition or value error: the job checks below name it
-        return
+    folders = [Path(hydra.run.dir)]
+    if multirun:
+        naming = hydra.job.config.override_dirname
+        folders = [Path(hydra.sweep.dir) / job_dir_name(override_dirname(parse(job), naming), number)
+                   for number, job in enumerate(jobs)]
     for folder in folders:
         _writable(folder)
-    needed = len(jobs) * (BYTES_PER_JOB + BYTES_PER_POSE * poses)  # a sweep varies values, not grids
+    needed = len(jobs) * (BYTES_PER_JOB + BYTES_PER_POSE * grid_size(first))  # a sweep varies values, not grids
     probe = _existing_ancestor(folders[0])
     free = shutil.disk_usage(probe).free
     if free < needed:
@@ -193,12 +212,13 @@ def _check_output_folders(jobs: list[list[str]], multirun_base: list[str] | None
                           f"free on its disk ({probe})")
 
 
-def _override_dirname(job: list[str], naming) -> str:
-    """Hydra's ``hydra.job.override_dirname`` of a job: its task overrides but the excluded
-    keys, sorted, joined with the item separator."""
-    lines = sorted(o.input_line for o in parse(job)
+def override_dirname(parsed: list[Override], naming) -> str:
+    """Hydra's ``hydra.job.override_dirname`` of a job (its config loader's rule): the task
+    overrides but the excluded keys, sorted, joined with the item separator, every ``=``
+    replaced by the key-value separator. ``naming``: ``hydra.job.config.override_dirname``."""
+    lines = sorted(o.input_line for o in parsed
                    if not o.is_hydra_override() and o.key_or_group not in naming.exclude_keys)
-    return naming.item_sep.join(line.replace("=", naming.kv_sep, 1) for line in lines)
+    return naming.item_sep.join(lines).replace("=", naming.kv_sep)
 
 
 def _writable(folder: Path) -> None:
@@ -248,7 +268,7 @@ def _missing_option(exc: MissingConfigException, parsed: list[Override]) -> str:
     return one_line(exc)
 
 
-def _structural(override: Override) -> bool:
+def structural(override: Override) -> bool:
     """Overrides that change which config files are composed, or that Hydra must interpret."""
     key = override.key_or_group
     return (

@@ -21,7 +21,7 @@ from omegaconf import DictConfig, OmegaConf
 
 @dataclass
 class CdprSweeperConf:
-    _target_: str = "hydra_plugins.cdpr_sweeper.cdpr_sweeper.CdprSweeper"
+    _target_: str = "hydra_plugins.cdpr.sweeper.CdprSweeper"
 
 
 ConfigStore.instance().store(group="hydra/sweeper", name="cdpr", node=CdprSweeperConf,

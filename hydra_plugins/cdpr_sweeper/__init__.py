@@ -1,1 +1,0 @@
-"""Hydra sweeper plugin of cdpr-studies (Hydra discovers plugins in the ``hydra_plugins`` namespace)."""

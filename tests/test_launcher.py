@@ -1,0 +1,74 @@
+"""The ``cdpr`` launcher (one composition per set of config files, jobs derived from it) and the
+preflight's typed configs handed to the jobs give exactly what Hydra's basic launcher gives."""
+
+import subprocess
+import sys
+from pathlib import Path
+
+import yaml
+from hydra import compose, initialize_config_dir
+from omegaconf import OmegaConf
+
+from pipeline.config import validate
+from pipeline.preflight import CONF_DIR, check, job_overrides
+
+# group choices (composed per set of files), plain values (derived), and a dict value (merged
+# into the key, so every such job is composed in full): psi must not leak into the theta job
+SWEEP = ["tension=pinv,feasible", "actuator=1,2", "load.mass=1.5,2", "grid.n=4",
+         "orientation={psi:0.1},{theta:0.1}"]
+
+
+def sweep(folder: Path, *launcher: str) -> Path:
+    done = subprocess.run([sys.executable, "-m", "pipeline", "-m", *SWEEP, f"hydra.sweep.dir={folder}",
+                           *launcher], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    return folder
+
+
+def job_files(folder: Path) -> dict[str, bytes]:
+    """Every file of the sweep but logs, by relative path; Hydra's own config without the keys
+    that name the launcher or the sweep folder."""
+    files = {}
+    for path in sorted(folder.rglob("*")):
+        name = str(path.relative_to(folder))
+        if path.is_dir() or path.suffix == ".log" or path.name == ".lock":
+            continue
+        if path.name in ("hydra.yaml", "multirun.yaml"):
+            hydra = yaml.safe_load(path.read_text())["hydra"]
+            for key in ("launcher", "sweep"):
+                hydra.pop(key)
+            hydra["runtime"]["choices"].pop("hydra/launcher")
+            hydra["runtime"].pop("output_dir", None)
+            hydra["overrides"]["hydra"] = [o for o in hydra["overrides"]["hydra"]
+                                           if not o.startswith(("hydra/launcher", "hydra.sweep.dir", "hydra.launcher"))]
+            files[name] = yaml.safe_dump(hydra).encode()
+        else:
+            files[name] = path.read_bytes()
+    return files
+
+
+def test_cdpr_launcher_writes_what_the_basic_launcher_writes(tmp_path):
+    basic = job_files(sweep(tmp_path / "basic", "hydra/launcher=basic"))
+    assert len([n for n in basic if n.endswith("points.parquet")]) == 16
+    for name, launcher in (("serial", ["hydra/launcher=cdpr"]), ("pool", ["hydra.launcher.n_jobs=2"])):
+        ours = job_files(sweep(tmp_path / name, *launcher))
+        assert ours.keys() == basic.keys()
+        differing = [name for name in basic if ours[name] != basic[name]]
+        assert differing == [], launcher
+    theta = next(n for n in basic if "theta" in n and n.endswith("config.yaml"))
+    orientation = yaml.safe_load(basic[theta])["orientation"]
+    assert orientation["theta"] == 0.1 and orientation["psi"] == 0.0
+
+
+def test_prepared_configs_are_those_a_job_would_type_itself():
+    """Every job's entry in what the preflight hands over is keyed by the config Hydra composes
+    for that job and holds the config the job would otherwise type and validate."""
+    argv = ["-m", *SWEEP[:3], "robot=cpr8", "model.pinv_columns=full"]
+    prepared = check(argv)
+    jobs = job_overrides(argv)
+    assert len(jobs) == 8
+    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3", job_name="test"):
+        for overrides in jobs:
+            composed = compose(config_name="config", overrides=overrides)
+            typed, catalogue = prepared[OmegaConf.to_yaml(composed)]
+            assert OmegaConf.to_yaml(typed) == OmegaConf.to_yaml(validate(composed, catalogue.index))
