@@ -25,7 +25,7 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 from hydra import compose, initialize_config_dir  # noqa: E402
 
-from pipeline.actuators import load_catalogue  # noqa: E402
+from pipeline.catalogue import load_catalogue  # noqa: E402
 from pipeline.config import register, typed_config  # noqa: E402
 from pipeline.criteria.forces import tension_families, tension_spec  # noqa: E402
 from pipeline.kernel import evaluate_chunk  # noqa: E402

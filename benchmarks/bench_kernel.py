@@ -24,7 +24,7 @@ import time  # noqa: E402
 
 from hydra import compose, initialize_config_dir  # noqa: E402
 
-from pipeline.actuators import load_catalogue  # noqa: E402
+from pipeline.catalogue import load_catalogue  # noqa: E402
 from pipeline.config import register, typed_config  # noqa: E402
 from pipeline.kernel import evaluate_chunk  # noqa: E402
 from pipeline.parallel import iter_chunks  # noqa: E402

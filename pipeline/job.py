@@ -25,7 +25,7 @@ import pandas as pd
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, OmegaConf
 
-from pipeline.actuators import load_catalogue
+from pipeline.catalogue import load_catalogue
 from pipeline.config import validate
 from pipeline.errors import ConfigError
 from pipeline.results import (

@@ -4,9 +4,9 @@ A study (one paper figure or table) is a YAML file ``studies/NAME.yaml`` holding
 fixed overrides, the swept keys, the analyses that turn the sweep summary into tables, and the
 figures. Running it is always the same three steps:
 
-1. the sweep, as one ``python -m pipeline -m`` command (Hydra, the preflight, joblib chunks)
-   into ``outputs/studies/NAME/jobs/`` (one command per case, into ``jobs/CASE/``, when the
-   study declares ``cases``), gathered into ``outputs/studies/NAME/summary.parquet``;
+1. the sweep, as one ``python -m pipeline -m`` command (Hydra, the preflight) run in this
+   process, into ``outputs/studies/NAME/jobs/`` (one command per case, into ``jobs/CASE/``,
+   when the study declares ``cases``), gathered into ``outputs/studies/NAME/summary.parquet``;
 2. the analyses (``ANALYSES``), each written as ``outputs/studies/NAME/<analysis>.parquet``;
 3. the figures (``pipeline.figures``), drawn from those Parquet files only, into
    ``outputs/studies/NAME/figures/``.
@@ -23,7 +23,6 @@ import logging
 import os
 import re
 import shutil
-import subprocess
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -32,8 +31,9 @@ from typing import Callable, Optional
 import pandas as pd
 from omegaconf import OmegaConf
 
-from pipeline.actuators import load_catalogue
+from pipeline.catalogue import load_catalogue
 from pipeline.choice import acceptance, choose
+from pipeline.cli import launch
 from pipeline.errors import ConfigError
 from pipeline.figures import FigureSpec, StudyResults, render
 from pipeline.errors import one_line
@@ -45,10 +45,12 @@ STUDIES_DIR = CONF_DIR.parent / "studies"
 OUTPUT_DIR = Path("outputs") / "studies"
 ALWAYS_EXCLUDED = ["compute.n_jobs", "compute.backend", "compute.chunk_size", "compute.scheduler",
                    "compute.max_poses"]
-# Studies are many small jobs: run two jobs at a time, each on one core (one level of parallelism)
+# Studies are many small jobs: by default two at a time on two worker processes kept for every
+# sweep of the command, each job on one core (one level of parallelism); "serial": one after
+# another in this process, each with its own compute.n_jobs (large grids, Dask)
 LAUNCHERS = {
-    "joblib": ["hydra/launcher=joblib", "hydra.launcher.n_jobs=2", "compute.n_jobs=1"],
-    "basic": [],
+    "pool": ["hydra.launcher.n_jobs=2", "compute.n_jobs=1"],
+    "serial": ["hydra.launcher.n_jobs=1"],
 }
 ANALYSES: dict[str, Callable[[StudyResults], pd.DataFrame]] = {
     "choice": lambda results: choose(results.summary),
@@ -106,7 +108,7 @@ def load_study(name: str, directory: Path = STUDIES_DIR) -> StudySpec:
 
 
 def sweep_command(study: StudySpec, extra: list[str], jobs_dir: Path,
-                  launcher: str = "joblib") -> list[str]:
+                  launcher: str = "pool") -> list[str]:
     """The ``python -m pipeline`` arguments of a study's sweep. Job folders are named by the
     swept keys only (fixed and extra overrides are excluded from the folder name)."""
     fixed = [*study.overrides, *extra]
@@ -149,7 +151,7 @@ def claim_study_dir(out: Path, name: str, extra: list[str], force: bool) -> str:
 
 
 def run_study(name: str, extra: list[str], out_root: Path | None = None,
-              figures_only: bool = False, launcher: str = "joblib",
+              figures_only: bool = False, launcher: str = "pool",
               commands: list[list[str]] | None = None, force: bool = False) -> list[Path]:
     """Sweep (unless ``figures_only``), analyses and figures of one study; returns the files.
     The jobs of an interrupted run of the same study are reused (``_start_or_resume``).
@@ -168,9 +170,8 @@ def run_study(name: str, extra: list[str], out_root: Path | None = None,
         log.info("study %s: %s", name, study.title)
         _start_or_resume(out / "jobs", commands)
         for command in commands:
-            done = subprocess.run([sys.executable, "-m", "pipeline", *command])
-            if done.returncode != 0:
-                raise SystemExit(done.returncode)
+            launch(command)  # a failed job exits as python -m pipeline would
+            _log_to_console()  # Hydra set up logging for its jobs
         write_parquet(_gather(out / "jobs", cases), out / "summary.parquet", provenance)
     results = StudyResults(out)
     try:
@@ -192,7 +193,7 @@ def run_study(name: str, extra: list[str], out_root: Path | None = None,
 
 
 def checked_commands(name: str, extra: list[str], out_root: Path | None = None,
-                     launcher: str = "joblib") -> list[list[str]]:
+                     launcher: str = "pool") -> list[list[str]]:
     """The sweep commands of a study (one per case), every job of them validated by the
     preflight: bad input fails here, before anything is written or removed."""
     study = load_study(name)
@@ -242,6 +243,10 @@ def _sweep_values(key: str, values: str, fixed: list[str]) -> str:
     return ",".join(str(i) for i in load_catalogue(path).index)
 
 
+def _log_to_console() -> None:
+    logging.basicConfig(level=logging.INFO, format="[%(name)s] %(message)s", force=True)
+
+
 def _key(override: str) -> str:
     return override.split("=", 1)[0].lstrip("+~")
 
@@ -257,10 +262,11 @@ def main(argv: list[str] | None = None) -> None:
                              "the study its own folder NAME+<overrides>)")
     parser.add_argument("--force", action="store_true",
                         help="replace a study folder that holds another configuration's results")
-    parser.add_argument("--launcher", choices=sorted(LAUNCHERS), default="joblib",
-                        help="Hydra launcher: joblib runs 2 jobs at a time (default), basic one")
+    parser.add_argument("--launcher", choices=sorted(LAUNCHERS), default="pool",
+                        help="pool: 2 jobs at a time on worker processes (default); serial: one "
+                             "after another in this process, each with its compute.n_jobs")
     args = parser.parse_intermixed_args(argv)
-    logging.basicConfig(level=logging.INFO, format="[%(name)s] %(message)s")
+    _log_to_console()
     if args.list:
         for name in available():
             print(f"{name}: {load_study(name).title}")

@@ -12,7 +12,7 @@ import sys
 import numpy as np
 from hydra import compose, initialize_config_dir
 
-from pipeline.actuators import load_catalogue
+from pipeline.catalogue import load_catalogue
 from pipeline.config import register
 from pipeline.preflight import CONF_DIR
 from pipeline.workspace import compute_workspace

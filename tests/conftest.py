@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 from hydra import compose, initialize_config_dir
 
-from pipeline.actuators import load_catalogue
+from pipeline.catalogue import load_catalogue
 from pipeline.config import register, typed_config
 from pipeline.preflight import CONF_DIR
 

@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 from omegaconf import OmegaConf
 
-from pipeline.actuators import load_catalogue
+from pipeline.catalogue import load_catalogue
 
 pytestmark = pytest.mark.slow
 

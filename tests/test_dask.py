@@ -24,7 +24,7 @@ def test_kernel_chunks_on_a_local_dask_cluster_equal_the_local_result(make_cfg, 
 def test_small_study_on_dask_equals_the_local_study(tmp_path):
     for out, extra in (("local", []), ("dask", ["compute.backend=dask", "compute.chunk_size=50"])):
         proc = subprocess.run(
-            [sys.executable, "-m", "pipeline.study", "actuator_choice", "--launcher", "basic",
+            [sys.executable, "-m", "pipeline.study", "actuator_choice", "--launcher", "serial",
              "--out", out, *extra], cwd=tmp_path, capture_output=True, text=True, timeout=600)
         assert proc.returncode == 0, proc.stderr
     local = pd.read_parquet(tmp_path / "local" / "actuator_choice" / "choice.parquet")

@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from pipeline.actuators import load_catalogue
+from pipeline.catalogue import load_catalogue
 from pipeline.errors import ConfigError
 from pipeline.study import StudySpec, available, load_study, run_study
 

@@ -1,0 +1,48 @@
+"""The Hydra application: ``python -m pipeline [-m] [key=value ...]`` (``pipeline/__main__.py``).
+
+Every job's config is validated before Hydra starts (``pipeline.preflight``): a bad key or value
+exits with status 2 and one line on stderr, and no output folder is created.
+"""
+
+from __future__ import annotations
+
+import sys
+
+import hydra
+from omegaconf import DictConfig
+
+from pipeline.config import register
+from pipeline.errors import ConfigError
+from pipeline.preflight import CONF_DIR, check
+
+register()
+
+
+@hydra.main(version_base="1.3", config_path=str(CONF_DIR), config_name="config")
+def main(cfg: DictConfig) -> None:
+    from pipeline.job import run_job
+
+    run_job(cfg)
+
+
+def launch(argv: list[str]) -> None:
+    """Run a command the preflight has checked in this process, as if it were Hydra's command
+    line (``python -m pipeline.study`` runs its sweeps so: the code is imported, and the jobs'
+    worker processes started, once). Hydra reads its command line from ``sys.argv`` only."""
+    saved = sys.argv
+    sys.argv = [saved[0], *argv]
+    try:
+        main()
+    finally:
+        sys.argv = saved
+
+
+def cli() -> None:
+    from pipeline.job import PREPARED
+
+    try:
+        PREPARED.update(check(sys.argv[1:]))
+    except ConfigError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        raise SystemExit(2) from None
+    main()
