@@ -34,9 +34,9 @@ from omegaconf import OmegaConf
 from pipeline.catalogue import load_catalogue
 from pipeline.choice import acceptance, choose
 from pipeline.cli import launch
-from pipeline.errors import ConfigError
+from pipeline.errors import ConfigError, one_line
 from pipeline.figures import FigureSpec, StudyResults, render
-from pipeline.errors import one_line
+from pipeline.job import PREPARED
 from pipeline.preflight import CONF_DIR, check
 from pipeline.results import code_version, write_parquet
 from pipeline.survival import survival
@@ -152,25 +152,30 @@ def claim_study_dir(out: Path, name: str, extra: list[str], force: bool) -> str:
 
 def run_study(name: str, extra: list[str], out_root: Path | None = None,
               figures_only: bool = False, launcher: str = "pool",
-              commands: list[list[str]] | None = None, force: bool = False) -> list[Path]:
+              checked: list[tuple[list[str], dict]] | None = None, force: bool = False) -> list[Path]:
     """Sweep (unless ``figures_only``), analyses and figures of one study; returns the files.
     The jobs of an interrupted run of the same study are reused (``_start_or_resume``).
-    ``commands``: the study's sweep commands if already checked (:func:`checked_commands`)."""
+    ``checked``: the study's sweep commands if already checked (:func:`checked_commands`)."""
     study = load_study(name)
     out = study_dir(name, extra, out_root)
     cases = study.cases or {"": []}
     provenance = OmegaConf.to_yaml({"study": name, "extra_overrides": extra})
     if not figures_only:
         provenance = claim_study_dir(out, name, extra, force)
-        commands = commands or checked_commands(name, extra, out_root, launcher)
+        checked = checked or checked_commands(name, extra, out_root, launcher)
+        commands = [command for command, _ in checked]
         out.mkdir(parents=True, exist_ok=True)
         tmp = out / f".study.yaml.{os.getpid()}.tmp"
         tmp.write_text(provenance)
         os.replace(tmp, out / "study.yaml")
         log.info("study %s: %s", name, study.title)
         _start_or_resume(out / "jobs", commands)
-        for command in commands:
-            launch(command)  # a failed job exits as python -m pipeline would
+        for command, prepared in checked:
+            PREPARED.update(prepared)  # the jobs take the configs the preflight typed
+            try:
+                launch(command)  # a failed job exits as python -m pipeline would
+            finally:
+                PREPARED.clear()
             _log_to_console()  # Hydra set up logging for its jobs
         write_parquet(_gather(out / "jobs", cases), out / "summary.parquet", provenance)
     results = StudyResults(out)
@@ -193,16 +198,15 @@ def run_study(name: str, extra: list[str], out_root: Path | None = None,
 
 
 def checked_commands(name: str, extra: list[str], out_root: Path | None = None,
-                     launcher: str = "pool") -> list[list[str]]:
+                     launcher: str = "pool") -> list[tuple[list[str], dict]]:
     """The sweep commands of a study (one per case), every job of them validated by the
-    preflight: bad input fails here, before anything is written or removed."""
+    preflight: bad input fails here, before anything is written or removed. Each with the
+    typed configs of its jobs (``pipeline.job.PREPARED``)."""
     study = load_study(name)
     out = study_dir(name, extra, out_root)
     commands = [sweep_command(study, [*overrides, *extra], out / "jobs" / case, launcher)
                 for case, overrides in (study.cases or {"": []}).items()]
-    for command in commands:
-        check(command)
-    return commands
+    return [(command, check(command)) for command in commands]
 
 
 def _start_or_resume(jobs_dir: Path, commands: list[list[str]]) -> None:

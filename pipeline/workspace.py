@@ -223,7 +223,7 @@ def grid_workspace(
         points = tabulate(problem, grid.positions[span], raw)
         n_feasible += int(points["feasible"].sum())
         by_lp += int(np.count_nonzero(raw.get("lp_poses", False)))
-        lost.update(points.loc[~points["feasible"], "limiting"].astype(str))
+        lost.update(points.loc[~points["feasible"], "limiting"].value_counts().to_dict())  # 20x Counter of str
         if sink is None:
             parts.append(points)
         else:

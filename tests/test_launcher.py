@@ -72,3 +72,23 @@ def test_prepared_configs_are_those_a_job_would_type_itself():
             composed = compose(config_name="config", overrides=overrides)
             typed, catalogue = prepared[OmegaConf.to_yaml(composed)]
             assert OmegaConf.to_yaml(typed) == OmegaConf.to_yaml(validate(composed, catalogue.index))
+
+
+def test_a_pool_worker_is_sent_the_typed_config_of_its_job():
+    """The launcher finds each job's entry by the job's config without Hydra's node (what the
+    task function receives) and takes it out, so that it is sent to one worker only."""
+    from hydra_plugins.cdpr.launcher import _prepared
+
+    from pipeline.job import PREPARED
+
+    argv = ["-m", "robot=irpm6", "robot.gamma_deg=0,30"]
+    PREPARED.update(check(argv))
+    try:
+        with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3", job_name="test"):
+            for overrides in job_overrides(argv):
+                config = compose(config_name="config", overrides=overrides, return_hydra_config=True)
+                _, (typed, _) = _prepared(config)
+                assert typed.robot.gamma_deg == float(overrides[-1].split("=")[1])
+        assert PREPARED == {}
+    finally:
+        PREPARED.clear()

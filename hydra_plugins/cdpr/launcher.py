@@ -82,7 +82,8 @@ class CdprLauncher(Launcher):
 
         state = Singleton.get_state()
         return Parallel(n_jobs=self.n_jobs, backend="loky")(
-            delayed(_run)(config, self.hydra_context, self.task_function, state) for config in configs)
+            delayed(_run)(config, self.hydra_context, self.task_function, state, _prepared(config))
+            for config in configs)
 
     def job_config(self, idx: int, overrides: Sequence[str]) -> DictConfig:
         """The config Hydra's loader composes for these overrides, with job id and number."""
@@ -111,11 +112,29 @@ class CdprLauncher(Launcher):
         return config
 
 
+def _prepared(config: DictConfig) -> Optional[Tuple[str, Any]]:
+    """The preflight's typed config for this job (``pipeline.job.PREPARED``, by the YAML of the
+    job's config without Hydra's node), taken from this process to send to a worker."""
+    from pipeline.job import PREPARED
+
+    if not PREPARED:
+        return None
+    key = OmegaConf.to_yaml(OmegaConf.masked_copy(config, [k for k in config if k != "hydra"]))
+    entry = PREPARED.pop(key, None)
+    return None if entry is None else (key, entry)
+
+
 def _run(config: DictConfig, hydra_context: HydraContext, task_function: TaskFunction,
-         singleton_state: Optional[Dict[Any, Any]] = None) -> JobReturn:
-    """One job, as Hydra's launchers run it; in a worker process, with the parent's Hydra state."""
+         singleton_state: Optional[Dict[Any, Any]] = None,
+         prepared: Optional[Tuple[str, Any]] = None) -> JobReturn:
+    """One job, as Hydra's launchers run it; in a worker process, with the parent's Hydra state
+    and the job's typed config when the parent has it."""
     if singleton_state is not None:
         setup_globals()
         Singleton.set_state(singleton_state)
+    if prepared is not None:
+        from pipeline.job import PREPARED
+
+        PREPARED[prepared[0]] = prepared[1]
     return run_job(hydra_context=hydra_context, task_function=task_function, config=config,
                    job_dir_key="hydra.sweep.dir", job_subdir_key="hydra.sweep.subdir")

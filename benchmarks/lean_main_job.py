@@ -1,0 +1,19 @@
+"""The main job's five verdicts with nothing around them: one composition, the same kernel,
+no preflight, no Hydra run, no files. The reference of ``bench_process.py``; prints the
+feasible share of each actuator."""
+
+from hydra import compose, initialize_config_dir
+
+from pipeline.catalogue import load_catalogue
+from pipeline.config import register, typed_config
+from pipeline.preflight import CONF_DIR
+from pipeline.workspace import compute_workspace
+
+register()
+catalogue = load_catalogue()
+with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
+    base = compose("config")
+for actuator in catalogue.index:
+    base.actuator = int(actuator)
+    _, summary = compute_workspace(typed_config(base), catalogue)
+    print(actuator, f"{summary['feasible_pct']:.2f}")
