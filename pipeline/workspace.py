@@ -214,7 +214,8 @@ def grid_workspace(
     """:func:`compute_workspace` for an already built problem and grid."""
     chunks = iter_chunks(
         evaluate_chunk, problem, grid.positions,
-        n_jobs=cfg.compute.n_jobs, backend=cfg.compute.backend,
+        n_jobs=worth_workers(problem, grid.n_points, cfg.compute.n_jobs, cfg.compute.backend),
+        backend=cfg.compute.backend,
         chunk_size=bounded_chunk_size(problem, cfg.compute.chunk_size),
         scheduler=cfg.compute.scheduler,
     )
@@ -255,6 +256,30 @@ def tabulate(problem: WorkspaceProblem, positions: np.ndarray, raw: dict) -> pd.
     if "unreachable" in margins:  # |S S^+ w - w| / |w|, worst over the required wrenches
         points["wrench_residual"] = (1.0 - margins["unreachable"]) * problem.spec.tension.residual_rtol
     return points
+
+
+# Cost model of the choice between worker processes and this one (docs/performance.md): a
+# local worker costs about WORKER_START_S of CPU before its first chunk (process start and the
+# kernel's imports, numpy only) and two workers at best halve the kernel time, so they pay off
+# when the kernel alone would take more than 2 x WORKER_START_S here. Kernel speeds per core,
+# measured by benchmarks/bench_kernel.py and bench_feasible.py (lower ends of their ranges).
+WORKER_START_S = 0.4
+POSES_PER_SECOND = {"pinv": 200_000, "feasible": 3_000}
+
+
+def worth_workers(problem: WorkspaceProblem, n_points: int, n_jobs: int, backend: str) -> int:
+    """``n_jobs``, or 1 when the cost model says local workers would not pay for their start
+    (measured on 2 cores: 125 000 CPR-WWA poses took 1.13x the wall time and 1.44x the CPU on
+    two workers; 10^6 poses 0.7x the wall time). A Dask cluster is the user's explicit choice."""
+    if backend == "dask" or n_jobs == 1:
+        return n_jobs
+    evaluations = n_points * len(problem.orientations)
+    serial_s = evaluations / POSES_PER_SECOND[problem.spec.tension.model]
+    if serial_s > 2 * WORKER_START_S:
+        return n_jobs
+    log.info("compute.n_jobs=%d: %d pose evaluations take about %.2f s in this process, too little "
+             "for worker processes to pay for their start; running here", n_jobs, evaluations, serial_s)
+    return 1
 
 
 def bounded_chunk_size(problem: WorkspaceProblem, requested: int) -> int:

@@ -1,0 +1,30 @@
+"""Chunks on worker processes: chosen by the cost model, and giving the result of one process."""
+
+import pandas as pd
+
+from pipeline import workspace
+from pipeline.workspace import build_problem, compute_workspace, worth_workers
+
+
+def test_workers_only_when_the_kernel_outlasts_their_start(make_cfg, catalogue):
+    problem, _ = build_problem(make_cfg(), catalogue)
+    feasible, _ = build_problem(make_cfg("tension=feasible"), catalogue)
+    # 2 x 0.4 s of start at 200 000 (pinv) or 3 000 (feasible) poses/s: 160 000 and 2 400 poses
+    assert worth_workers(problem, 125_000, 2, "loky") == 1
+    assert worth_workers(problem, 170_000, 2, "loky") == 2
+    assert worth_workers(feasible, 2_000, 2, "loky") == 1
+    assert worth_workers(feasible, 3_000, -1, "loky") == -1
+    assert worth_workers(problem, 10, 2, "dask") == 2  # a cluster is the user's explicit choice
+    orientations = build_problem(make_cfg("orientation.total.bound=0.1", "orientation.total.n=3"), catalogue)[0]
+    assert len(orientations.orientations) == 27
+    assert worth_workers(orientations, 10_000, 2, "loky") == 2  # 270 000 evaluations
+
+
+def test_chunks_on_two_workers_equal_one_process(make_cfg, catalogue, monkeypatch):
+    serial, serial_summary = compute_workspace(make_cfg("grid.n=12", "compute.chunk_size=300"), catalogue)
+    monkeypatch.setattr(workspace, "WORKER_START_S", 0.0)  # workers even for 1 728 poses
+    cfg = make_cfg("grid.n=12", "compute.chunk_size=300", "compute.n_jobs=2")
+    parallel, summary = compute_workspace(cfg, catalogue)
+    pd.testing.assert_frame_equal(parallel, serial)
+    assert summary.pop("compute.n_jobs") == 2 and serial_summary.pop("compute.n_jobs") == 1
+    assert summary == serial_summary and summary["n_feasible"] == serial["feasible"].sum() > 0
