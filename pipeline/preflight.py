@@ -184,8 +184,19 @@ def check(argv: list[str]) -> dict[str, tuple[DictConfig, Any]]:
             prepared[OmegaConf.to_yaml(plain)] = cfg, catalogue
         hydra = hydra_node(jobs[0] if multirun_base is None else multirun_base)
     first = next(iter(prepared.values()))[0]
+    _check_launcher(hydra.launcher)
     _check_output_folders(jobs, first, hydra, multirun_base is not None)
     return prepared
+
+
+def _check_launcher(launcher: DictConfig) -> None:
+    """The ``cdpr`` launcher's setting (its own rule), before Hydra instantiates it."""
+    if str(launcher.get("_target_", "")).startswith("hydra_plugins.cdpr."):
+        from hydra_plugins.cdpr.launcher import n_jobs_rule
+
+        broken = n_jobs_rule(launcher.get("n_jobs"))
+        if broken:
+            raise ConfigError(f"hydra.launcher.n_jobs={launcher.get('n_jobs')}: {broken}")
 
 
 NAME_MAX = 255  # bytes in one folder name (Linux, macOS)

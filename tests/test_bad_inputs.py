@@ -62,6 +62,7 @@ CASES = [
     ("pipeline", ["grid.n=1"], "grid.n=1"),
     ("pipeline", ["compute.backend=spark"], "compute.backend=spark"),
     ("pipeline", ["compute.n_jobs=0"], "compute.n_jobs=0"),
+    ("pipeline", ["-m", "actuator=1,2", "hydra.launcher.n_jobs=0"], "hydra.launcher.n_jobs=0"),
     ("pipeline", ["choice.required_pct=150"], "choice.required_pct=150"),
     ("pipeline", ["orientation.total.n=0"], "orientation.total"),
     ("pipeline", ["actuator=[1,2"], "actuator=[1,2"),

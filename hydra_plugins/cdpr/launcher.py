@@ -12,14 +12,15 @@ overrides, or a plain override whose value is a dict (merged into the key, so no
 the next job's value), is composed in full. The ``.hydra`` files and results equal the basic
 launcher's (tests/test_launcher.py).
 
-``n_jobs`` > 1 runs the jobs on a pool of worker processes (loky's reusable executor, the one
-joblib uses): a process that runs many sweeps (``python -m pipeline.study``) starts its workers
-once, and each worker imports the code once. Jobs composed here are sent to the workers whole.
-Built on Hydra's public plugin interface (Launcher, ``hydra.core.utils.run_job``).
+``n_jobs`` > 1 runs the jobs on a pool of worker processes (at most one per core; loky's
+reusable executor, the one joblib uses): a process that runs many sweeps
+(``python -m pipeline.study``) starts its workers once, and each worker imports the code once.
+Jobs composed here are sent to the workers whole, with the preflight's typed config. Built on Hydra's public plugin interface (Launcher, ``hydra.core.utils.run_job``).
 """
 
 import copy
 import logging
+import os
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Dict, Optional, Sequence, Tuple
@@ -40,6 +41,14 @@ class CdprLauncherConf:
     n_jobs: int = 1  # jobs at a time; > 1: that many worker processes, kept for the next sweep
 
 
+def n_jobs_rule(n_jobs: Any) -> Optional[str]:
+    """What is wrong with an ``n_jobs`` (None: nothing); the preflight applies it too, so that a
+    bad value is one line before any folder is made."""
+    if isinstance(n_jobs, bool) or not isinstance(n_jobs, int) or n_jobs < 1:
+        return "must be a whole number >= 1 (jobs at a time)"
+    return None
+
+
 ConfigStore.instance().store(group="hydra/launcher", name="cdpr", node=CdprLauncherConf,
                              provider="cdpr-studies")
 
@@ -48,8 +57,9 @@ class CdprLauncher(Launcher):
     """Jobs composed once per set of config files, run here one after another or on a pool."""
 
     def __init__(self, n_jobs: int = 1) -> None:
-        if not isinstance(n_jobs, int) or n_jobs < 1:
-            raise ValueError(f"hydra.launcher.n_jobs={n_jobs}: must be a whole number >= 1")
+        broken = n_jobs_rule(n_jobs)
+        if broken:
+            raise ValueError(f"hydra.launcher.n_jobs={n_jobs}: {broken}")
         self.n_jobs = n_jobs
         self.config: Optional[DictConfig] = None
         self.hydra_context: Optional[HydraContext] = None
@@ -66,13 +76,16 @@ class CdprLauncher(Launcher):
         setup_globals()
         configure_log(self.config.hydra.hydra_logging, self.config.hydra.verbose)
         Path(str(self.config.hydra.sweep.dir)).mkdir(parents=True, exist_ok=True)
+        workers = min(self.n_jobs, os.cpu_count() or 1)  # more would only thrash memory
+        if workers < self.n_jobs:
+            log.warning("hydra.launcher.n_jobs=%d: capped at the %d cores of this machine", self.n_jobs, workers)
         log.info("Launching %d jobs %s", len(job_overrides),
-                 "locally" if self.n_jobs == 1 else f"on {self.n_jobs} worker processes")
+                 "locally" if workers == 1 else f"on {workers} worker processes")
         for idx, overrides in enumerate(job_overrides, start=initial_job_idx):
             log.info("\t#%d : %s", idx, " ".join(filter_overrides(overrides)))
         configs = (self.job_config(idx, list(overrides))
                    for idx, overrides in enumerate(job_overrides, start=initial_job_idx))
-        if self.n_jobs == 1 or len(job_overrides) == 1:
+        if workers == 1 or len(job_overrides) == 1:
             runs = []
             for config in configs:
                 runs.append(_run(config, self.hydra_context, self.task_function))
@@ -81,7 +94,7 @@ class CdprLauncher(Launcher):
         from joblib import Parallel, delayed
 
         state = Singleton.get_state()
-        return Parallel(n_jobs=self.n_jobs, backend="loky")(
+        return Parallel(n_jobs=workers, backend="loky")(
             delayed(_run)(config, self.hydra_context, self.task_function, state, _prepared(config))
             for config in configs)
 
