@@ -29,7 +29,7 @@ from pipeline.catalogue import load_catalogue  # noqa: E402
 from pipeline.config import register, typed_config  # noqa: E402
 from pipeline.criteria.forces import tension_families, tension_spec  # noqa: E402
 from pipeline.kernel import evaluate_chunk  # noqa: E402
-from pipeline.preflight import CONF_DIR  # noqa: E402
+from pipeline.resources import CONF_DIR  # noqa: E402
 from pipeline.tensions import feasible_tensions  # noqa: E402
 from pipeline.workspace import bounded_chunk_size, build_problem  # noqa: E402
 

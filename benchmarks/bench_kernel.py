@@ -28,7 +28,7 @@ from pipeline.catalogue import load_catalogue  # noqa: E402
 from pipeline.config import register, typed_config  # noqa: E402
 from pipeline.kernel import evaluate_chunk  # noqa: E402
 from pipeline.parallel import iter_chunks  # noqa: E402
-from pipeline.preflight import CONF_DIR  # noqa: E402
+from pipeline.resources import CONF_DIR  # noqa: E402
 from pipeline.reference import literal_margins  # noqa: E402
 from pipeline.workspace import bounded_chunk_size, build_problem  # noqa: E402
 

@@ -53,3 +53,4 @@ class SweepSummary(Callback):
         shown = [c for c in varying if c not in ("actuator_name",)] + REPORTED
         log.info("sweep summary (%s):\n%s", sweep_dir / "summary.parquet",
                  table[shown].to_string(index=False))
+        log.info("results in %s (%d job folders)", sweep_dir, len(table))

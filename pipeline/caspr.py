@@ -18,7 +18,6 @@ cable); anything else, or a file that is not such XML, stops with one line and e
 from __future__ import annotations
 
 import argparse
-import os
 import re
 import sys
 import xml.etree.ElementTree as ElementTree
@@ -27,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from pipeline.errors import ConfigError
+from pipeline.results import code_version, write_text
 
 
 def read_cables(path: Path, cable_set: str | None = None) -> dict:
@@ -172,6 +172,7 @@ def _quoted(name: str) -> str:
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="python -m pipeline.caspr", description=__doc__.split("\n\n")[0])
+    parser.add_argument("--version", action="version", version=f"cdpr-studies {code_version()}")
     parser.add_argument("cables", type=Path, help="CASPR <name>_cables.xml")
     parser.add_argument("--bodies", type=Path, help="CASPR <name>_bodies.xml (mass, centre of mass)")
     parser.add_argument("--cable-set", help="cable_set id (default: the file's default_cable_set)")
@@ -199,12 +200,7 @@ def main(argv: list[str] | None = None) -> None:
         text = robot_yaml(cables, body, args.step, args.cables.name, box)
         try:
             out.parent.mkdir(parents=True, exist_ok=True)
-            tmp = out.with_name(f".{out.name}.{os.getpid()}.tmp")
-            try:
-                tmp.write_text(text)
-                os.replace(tmp, out)
-            finally:
-                tmp.unlink(missing_ok=True)
+            write_text(out, text)
         except OSError as exc:
             raise ConfigError(f"--out={out}: cannot write ({exc.strerror or exc})") from None
     except ConfigError as exc:

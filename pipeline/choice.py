@@ -46,6 +46,19 @@ def choose(summary: pd.DataFrame) -> pd.DataFrame:
     return out.reset_index(drop=True)
 
 
+def verdict(choice: pd.DataFrame) -> str:
+    """CPR-ACM's answer in one line, from a :func:`choose` table: which actuators are accepted
+    at x % and what removes the workspace of the others."""
+    accepted = choice[choice["accepted"]]
+    rejected = choice[~choice["accepted"]]
+    shares = "; ".join(f"{row.actuator} {row.feasible_pct:.2f} %"
+                       + (f" (lost to {row.rejected_by})" if row.rejected_by else "")
+                       for row in rejected.itertuples())
+    return (f"actuator choice at x >= {choice['required_pct'].iloc[0]:g} %: "
+            f"accept {', '.join(map(str, accepted['actuator'])) or 'none'}"
+            + (f"; reject {shares}" if shares else ""))
+
+
 def acceptance(summary: pd.DataFrame) -> pd.DataFrame:
     """CPR-ACM repeated for every value of one swept design variable (winch radius, gear ratio,
     mass, v_max): one row per (actuator, value) with x(i_a), the verdict and the main loss."""

@@ -13,7 +13,8 @@ from omegaconf import DictConfig
 
 from pipeline.config import register
 from pipeline.errors import ConfigError
-from pipeline.preflight import CONF_DIR, check
+from pipeline.preflight import check
+from pipeline.resources import CONF_DIR
 
 register()
 
@@ -40,6 +41,11 @@ def launch(argv: list[str]) -> None:
 def cli() -> None:
     from pipeline.job import PREPARED
 
+    if sys.argv[1:] == ["--version"]:  # the project's version (Hydra's flag prints Hydra's)
+        from pipeline.results import code_version
+
+        print(f"cdpr-studies {code_version()} (Hydra {hydra.__version__})")
+        return
     try:
         PREPARED.update(check(sys.argv[1:]))
     except ConfigError as exc:

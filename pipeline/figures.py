@@ -2,8 +2,9 @@
 
 Each figure kind is a function ``(spec, results, out_dir) -> [paths]`` registered in ``KINDS``;
 a study declares its figures as :class:`FigureSpec` entries (``studies/*.yaml``). Every figure
-uses the shipped style ``pipeline.styles.paper`` and the Agg backend, so reruns give identical
-PNG files.
+uses the shipped style ``pipeline.styles.paper`` and is drawn on a bare matplotlib ``Figure``
+(Agg when saved), so reruns give identical PNG files and importing this module leaves a
+notebook's pyplot backend alone.
 """
 
 from __future__ import annotations
@@ -13,14 +14,12 @@ from pathlib import Path
 from typing import Any, Callable, Optional
 
 import matplotlib
+import numpy as np
+import pandas as pd
+import seaborn as sns
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import pandas as pd  # noqa: E402
-import seaborn as sns  # noqa: E402
-
-from pipeline.criteria import COLOURS  # noqa: E402
+from pipeline.criteria import COLOURS
 
 STYLE = "pipeline.styles.paper"
 FEASIBLE_COLOUR = "#009E73"
@@ -83,7 +82,7 @@ def render(spec: FigureSpec, results: StudyResults, out_dir: Path) -> list[Path]
     table = _select(results.summary, spec.select)
     groups = table.groupby(spec.per, sort=True) if spec.per else [(None, table)]
     written = []
-    with plt.style.context(STYLE):
+    with matplotlib.style.context(STYLE):
         for _, part in groups:
             written.extend(KINDS[spec.kind](spec, part, results, out_dir))
     return written
@@ -92,7 +91,8 @@ def render(spec: FigureSpec, results: StudyResults, out_dir: Path) -> list[Path]
 def choice_bar(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
     """Fig. 9: feasible share per actuator, accepted ones shaded as in Table 2, x % as a line."""
     choice = results.table("choice").sort_values("actuator")
-    fig, ax = plt.subplots()
+    fig = Figure()
+    ax = fig.subplots()
     colours = ["0.45" if ok else "0.82" for ok in choice["accepted"]]
     labels = [f"{a}\n{p:g} W" for a, p in zip(choice["actuator"], choice["actuator_power_W"])]
     at = np.arange(len(choice))
@@ -111,7 +111,8 @@ def limiting_bar(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, o
     """Share of the grid that is feasible and lost to each constraint, stacked per actuator."""
     choice = results.table("choice").sort_values("actuator")
     lost = [c for c in choice.columns if c.startswith("lost_") and c.endswith("_pct")]
-    fig, ax = plt.subplots()
+    fig = Figure()
+    ax = fig.subplots()
     labels = np.arange(len(choice))
     ax.set_xticks(labels, choice["actuator"].astype(str))
     bottom = choice["feasible_pct"].to_numpy()
@@ -152,7 +153,7 @@ def cloud(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir:
 
 
 def _cloud_figure(spec: FigureSpec, panels: list, job: pd.Series, out_dir: Path) -> Path:
-    fig = plt.figure(figsize=(5.6 * len(panels), 4.6))
+    fig = Figure(figsize=(5.6 * len(panels), 4.6))
     for i, (points, column, title) in enumerate(panels, start=1):
         ax = fig.add_subplot(1, len(panels), i, projection="3d")
         _cloud_panel(ax, points, column, spec.invert_z)
@@ -195,11 +196,12 @@ def timeseries(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out
         samples = results.samples(job["job"])
         line = samples[samples["line"] == spec.line]
         cables = sum(c.startswith("theta_dot_") for c in samples.columns)
-        fig, axes = plt.subplots(3, 1, sharex=True, figsize=(6.4, 7.0))
+        fig = Figure(figsize=(6.4, 7.0))
+        axes = fig.subplots(3, 1, sharex=True)
         for ax, (quantity, limit, label) in zip(axes, rows):
             for cable in range(1, cables + 1):
                 ax.plot(line["t"], line[f"{quantity}_{cable}"], lw=1, label=str(cable),
-                        color=plt.cm.tab10(cable - 1))
+                        color=matplotlib.colormaps["tab10"](cable - 1))
             for sign in (1, -1):
                 ax.axhline(sign * job[limit], color="0.2", linestyle="--", lw=0.9)
             ax.set_ylabel(label)
@@ -216,8 +218,8 @@ def survival_bar(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, o
     labelled with the share of the former that survives; one panel per case and wrench rows."""
     data = results.table("survival")
     cases, rows = data["case"].unique(), sorted(data["wrench_rows"].unique(), reverse=True)
-    fig, axes = plt.subplots(len(rows), len(cases), figsize=(4.2 * len(cases), 3.3 * len(rows)),
-                             squeeze=False, sharey=True, layout="constrained")
+    fig = Figure(figsize=(4.2 * len(cases), 3.3 * len(rows)), layout="constrained")
+    axes = fig.subplots(len(rows), len(cases), squeeze=False, sharey=True)
     for (row, col), ax in np.ndenumerate(axes):
         part = data[(data["wrench_rows"] == rows[row]) & (data["case"] == cases[col])]
         part = part.sort_values("actuator")
@@ -243,7 +245,8 @@ def survival_bar(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, o
 def curve(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
     """Volume (or share) versus a swept parameter, one line per ``hue`` value (Figs. 13-15)."""
     data = pd.DataFrame({"x": _column(table, spec.x), "y": _column(table, spec.y)})
-    fig, ax = plt.subplots()
+    fig = Figure()
+    ax = fig.subplots()
     if spec.hue:  # colour and marker both vary, so coinciding lines stay distinguishable
         data[spec.hue] = table[spec.hue].astype(str).to_numpy()
         sns.lineplot(data=data, x="x", y="y", hue=spec.hue, style=spec.hue, markers=True,
@@ -262,8 +265,8 @@ def curve(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir:
 def heatmap(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
     """``value`` over two swept keys ``x`` and ``y``, one panel per ``facet`` value (Figs. 16-29)."""
     facets = sorted(table[spec.facet].unique()) if spec.facet else [None]
-    fig, axes = plt.subplots(1, len(facets), figsize=(2.6 * len(facets) + 0.8, 2.9),
-                             squeeze=False, sharey=True)
+    fig = Figure(figsize=(2.6 * len(facets) + 0.8, 2.9))
+    axes = fig.subplots(1, len(facets), squeeze=False, sharey=True)
     values = _column(table, spec.value)
     vmin, vmax = float(values.min()), float(values.max())
     for ax, facet in zip(axes[0], facets):
@@ -332,5 +335,4 @@ def _box(ax, row: pd.Series) -> None:
 def _save(fig, path: Path) -> Path:
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, metadata={"Software": None})
-    plt.close(fig)
     return path

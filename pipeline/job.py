@@ -23,6 +23,7 @@ from pathlib import Path
 
 import pandas as pd
 from hydra.core.hydra_config import HydraConfig
+from hydra.types import RunMode
 from omegaconf import DictConfig, OmegaConf
 
 from pipeline.catalogue import load_catalogue
@@ -50,16 +51,27 @@ def run_job(cfg: DictConfig) -> dict:
     else:
         catalogue = load_catalogue(cfg.catalogue) if "catalogue" in cfg else None
         cfg = validate(cfg, None if catalogue is None else catalogue.index)
-    out = Path(HydraConfig.get().runtime.output_dir)
+    hydra = HydraConfig.get()
+    out = Path(hydra.runtime.output_dir)
     try:
-        with folder_lock(out):
-            return _run_locked(cfg, catalogue, out)
+        summary = execute(cfg, catalogue, out)
     except ConfigError as exc:
         print(f"error: {exc}", file=sys.stderr)
         raise SystemExit(2) from None
-    except OSError as exc:  # a full disk or a folder gone read-only while writing
-        print(f"error: cannot write {exc.filename or out}: {exc.strerror or exc}", file=sys.stderr)
-        raise SystemExit(2) from None
+    if hydra.mode == RunMode.RUN:  # a sweep says where its folder is when it ends (callbacks)
+        log.info("results in %s", out)
+    return summary
+
+
+def execute(cfg: DictConfig, catalogue, out: Path) -> dict:
+    """Run one validated job into the existing folder ``out`` under its lock (or reuse it when
+    finished); returns the summary. Output errors (a full disk, a folder gone read-only while
+    writing) are raised as ConfigError naming the path."""
+    try:
+        with folder_lock(out):
+            return _run_locked(cfg, catalogue, out)
+    except OSError as exc:
+        raise ConfigError(f"cannot write {exc.filename or out}: {exc.strerror or exc}") from None
 
 
 @contextmanager

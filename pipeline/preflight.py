@@ -32,8 +32,7 @@ from omegaconf.errors import ConfigAttributeError, ConfigKeyError
 from pipeline.catalogue import load_catalogue
 from pipeline.config import job_dir_name, masked, register, typed_schema, validate
 from pipeline.errors import ConfigError, one_line
-
-CONF_DIR = Path(__file__).resolve().parent.parent / "conf"
+from pipeline.resources import CONF_DIR
 NO_JOB_FLAGS = {"--help", "-h", "--hydra-help", "--info", "-i", "--cfg", "-c", "--version",
                 "--shell-completion", "-sc", "--resolve", "-p", "--package"}
 FLAGS_WITH_VALUE = {"--config-path", "-cp", "--config-name", "-cn", "--config-dir", "-cd",

@@ -148,6 +148,7 @@ def _tensions(studies_dir: Path) -> list[str]:
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="python -m pipeline.report", description=__doc__.split("\n\n")[0])
+    parser.add_argument("--version", action="version", version=f"cdpr-studies {code_version()}")
     parser.add_argument("--studies", type=Path, default=OUTPUT_DIR, help="study outputs (default outputs/studies)")
     parser.add_argument("--out", type=Path, default=REPORT_DIR, help="report folder (default outputs/report)")
     args = parser.parse_args(argv)

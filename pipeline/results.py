@@ -7,6 +7,7 @@ import json
 import os
 import secrets
 import subprocess
+from contextlib import contextmanager
 from functools import lru_cache
 from importlib import metadata
 from pathlib import Path
@@ -22,17 +23,20 @@ DIGESTS_KEY = "cdpr.digests"  # in a job's summary: sha256 of every data file th
 
 @lru_cache(maxsize=1)
 def code_version() -> str:
-    """Package version, plus the git commit (and '.dirty') when run from a checkout."""
+    """Package version, plus the git commit (and '.dirty') when run from a checkout of this
+    repository (not when installed in a virtual environment inside another one)."""
     try:
         version = metadata.version("cdpr-studies")
     except metadata.PackageNotFoundError:
         version = "0+unknown"
     here = Path(__file__).resolve().parent
     try:
-        sha = subprocess.run(
-            ["git", "rev-parse", "--short=12", "HEAD"], cwd=here, capture_output=True,
-            text=True, check=True,
-        ).stdout.strip()
+        top, sha = subprocess.run(
+            ["git", "rev-parse", "--show-toplevel", "--short=12", "HEAD"], cwd=here,
+            capture_output=True, text=True, check=True,
+        ).stdout.split()
+        if Path(top).resolve() != here.parent:  # installed inside another repository's tree
+            return version
         dirty = subprocess.run(
             ["git", "status", "--porcelain", "--untracked-files=no", "--", "pipeline", "conf"],
             cwd=here.parent, capture_output=True, text=True, check=True,
@@ -56,7 +60,7 @@ class ParquetSink:
 
     def __init__(self, path: Path, config_yaml: str, extra: dict | None = None):
         self.path = Path(path)
-        self.tmp = self.path.with_name(f".{self.path.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp")
+        self.tmp = _temporary(self.path)
         self.config_yaml = config_yaml
         self.extra = extra or {}
         self.writer: pq.ParquetWriter | None = None
@@ -82,6 +86,35 @@ class ParquetSink:
                 os.replace(self.tmp, self.path)
         finally:
             self.tmp.unlink(missing_ok=True)
+
+
+def _temporary(path: Path) -> Path:
+    """A temporary name beside ``path`` unique to this writer (process id and a random part)."""
+    return path.with_name(f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp")
+
+
+@contextmanager
+def replacing(path: Path):
+    """Yield a temporary path to write; it becomes ``path`` when the block ends without an error
+    and is removed otherwise, so no half-written file ever carries the final name."""
+    tmp = _temporary(Path(path))
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
+def write_text(path: Path, text: str) -> None:
+    """A small text file (YAML records), written via :func:`replacing`."""
+    with replacing(path) as tmp:
+        tmp.write_text(text)
+
+
+def write_csv(frame: pd.DataFrame, path: Path) -> None:
+    """A table as CSV for a spreadsheet (beside its Parquet file), written via :func:`replacing`."""
+    with replacing(path) as tmp:
+        frame.to_csv(tmp, index=False)
 
 
 def read_metadata(path: Path) -> dict[str, str]:

@@ -20,7 +20,6 @@ from __future__ import annotations
 import argparse
 import hashlib
 import logging
-import os
 import re
 import shutil
 import sys
@@ -32,16 +31,16 @@ import pandas as pd
 from omegaconf import OmegaConf
 
 from pipeline.catalogue import load_catalogue
-from pipeline.choice import acceptance, choose
+from pipeline.choice import acceptance, choose, verdict
 from pipeline.cli import launch
 from pipeline.errors import ConfigError, one_line
 from pipeline.figures import FigureSpec, StudyResults, render
 from pipeline.job import PREPARED
-from pipeline.preflight import CONF_DIR, check
-from pipeline.results import code_version, write_parquet
+from pipeline.preflight import check
+from pipeline.resources import STUDIES_DIR
+from pipeline.results import code_version, write_csv, write_parquet, write_text
 from pipeline.survival import survival
 
-STUDIES_DIR = CONF_DIR.parent / "studies"
 OUTPUT_DIR = Path("outputs") / "studies"
 ALWAYS_EXCLUDED = ["compute.n_jobs", "compute.backend", "compute.chunk_size", "compute.scheduler",
                    "compute.max_poses"]
@@ -165,9 +164,7 @@ def run_study(name: str, extra: list[str], out_root: Path | None = None,
         checked = checked or checked_commands(name, extra, out_root, launcher)
         commands = [command for command, _ in checked]
         out.mkdir(parents=True, exist_ok=True)
-        tmp = out / f".study.yaml.{os.getpid()}.tmp"
-        tmp.write_text(provenance)
-        os.replace(tmp, out / "study.yaml")
+        write_text(out / "study.yaml", provenance)
         log.info("study %s: %s", name, study.title)
         _start_or_resume(out / "jobs", commands)
         for command, prepared in checked:
@@ -189,8 +186,12 @@ def run_study(name: str, extra: list[str], out_root: Path | None = None,
     written = [out / "summary.parquet"]
     for analysis in study.analyses:
         path = out / f"{analysis}.parquet"
-        write_parquet(ANALYSES[analysis](results), path, provenance)
-        written.append(path)
+        table = ANALYSES[analysis](results)
+        write_parquet(table, path, provenance)
+        write_csv(table, path.with_suffix(".csv"))  # the same table for a spreadsheet
+        written.extend([path, path.with_suffix(".csv")])
+        if analysis == "choice":
+            log.info("study %s: %s", name, verdict(table))
     shutil.rmtree(out / "figures", ignore_errors=True)  # no figure of an earlier run lingers
     for figure in study.figures:
         written.extend(render(figure, results, out / "figures"))
@@ -220,9 +221,7 @@ def _start_or_resume(jobs_dir: Path, commands: list[list[str]]) -> None:
         return
     shutil.rmtree(jobs_dir, ignore_errors=True)
     jobs_dir.mkdir(parents=True)
-    tmp = record.with_name(".commands.yaml.tmp")
-    tmp.write_text(wanted)
-    os.replace(tmp, record)
+    write_text(record, wanted)
 
 
 def _gather(jobs_dir: Path, cases: dict[str, list[str]]) -> pd.DataFrame:
@@ -257,6 +256,7 @@ def _key(override: str) -> str:
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="python -m pipeline.study", description=__doc__.split("\n\n")[0])
+    parser.add_argument("--version", action="version", version=f"cdpr-studies {code_version()}")
     parser.add_argument("items", nargs="*", help="study names, then key=value overrides for every job")
     parser.add_argument("--all", action="store_true", help="run every study in studies/")
     parser.add_argument("--list", action="store_true", help="list the studies and exit")

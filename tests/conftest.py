@@ -7,7 +7,7 @@ from hydra import compose, initialize_config_dir
 
 from pipeline.catalogue import load_catalogue
 from pipeline.config import register, typed_config
-from pipeline.preflight import CONF_DIR
+from pipeline.resources import CONF_DIR
 
 register()
 

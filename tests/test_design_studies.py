@@ -4,7 +4,7 @@ in-process over the values declared in studies/design_*.yaml."""
 import pytest
 from omegaconf import OmegaConf
 
-from pipeline.study import STUDIES_DIR
+from pipeline.resources import STUDIES_DIR
 from pipeline.workspace import compute_workspace
 
 ACCEPTED = {  # study -> {actuator: accepted values}

@@ -10,7 +10,8 @@ from hydra import compose, initialize_config_dir
 from omegaconf import OmegaConf
 
 from pipeline.config import validate
-from pipeline.preflight import CONF_DIR, check, job_overrides
+from pipeline.preflight import check, job_overrides
+from pipeline.resources import CONF_DIR
 
 # group choices (composed per set of files), plain values (derived), and a dict value (merged
 # into the key, so every such job is composed in full): psi must not leak into the theta job

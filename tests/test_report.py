@@ -1,5 +1,7 @@
 """The reproduction report is built from study Parquet files only; dvc.yaml covers every study."""
 
+from pathlib import Path
+
 import pandas as pd
 import pytest
 import yaml
@@ -9,11 +11,13 @@ from pipeline.choice import choose
 from pipeline.figures import StudyResults
 from pipeline.survival import survival
 from pipeline.lines import simulate_lines
-from pipeline.study import STUDIES_DIR, available
+from pipeline.study import available
 from pipeline.workspace import compute_workspace
 
 STUDIES = ["actuator_choice", "actuator_choice_pulling", "line_simulation", "irpm_fig13_end_ratio",
            "tension_comparison"]
+
+REPO = Path(__file__).resolve().parent.parent
 
 
 @pytest.fixture
@@ -72,13 +76,13 @@ def test_report_names_the_studies_without_results(tmp_path):
 
 
 def test_dvc_yaml_has_one_stage_per_study_and_a_report_on_all_of_them():
-    dvc = yaml.safe_load((STUDIES_DIR.parent / "dvc.yaml").read_text())
+    dvc = yaml.safe_load((REPO / "dvc.yaml").read_text())
     stages = dvc["stages"]
     assert stages["study"]["foreach"] == available()
     assert stages["study"]["do"]["cmd"] == "python -m pipeline.study ${item}"
     assert {f"outputs/studies/{n}" for n in available()} <= set(stages["report"]["deps"])
     for dep in stages["study"]["do"]["deps"]:
-        assert (STUDIES_DIR.parent / dep.replace("${item}", available()[0])).exists()
+        assert (REPO / dep.replace("${item}", available()[0])).exists()
 
 
 def test_strings_from_result_files_cannot_break_the_report():
