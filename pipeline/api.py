@@ -1,0 +1,132 @@
+"""The Python API, for notebooks and scripts: the command line's jobs and studies without its
+command line (docs/api.md).
+
+    from pipeline import api
+    ws = api.workspace(["actuator=3", "orientation.psi=0.5"])
+    ws.summary["feasible_pct"], ws.points.head()
+    choice = api.actuator_choice(["choice.required_pct=80"])
+    print(choice.verdict)
+    study = api.load_study("actuator_choice")      # a study the command line finished
+
+Overrides are the command line's ``key=value`` (and ``group=option``) strings. Bad input
+raises :class:`pipeline.errors.ConfigError` with the command line's one-line message, before
+anything is written; it never exits the interpreter. Importing this module changes no global
+state: no matplotlib backend, no logging handlers.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from datetime import datetime
+from pathlib import Path
+from typing import Iterable
+
+import pandas as pd
+
+from pipeline.choice import choose, verdict
+from pipeline.errors import ConfigError
+from pipeline.figures import StudyResults
+from pipeline.job import execute
+from pipeline.preflight import check
+from pipeline.results import read_metadata
+from pipeline.study import OUTPUT_DIR, study_dir
+from pipeline.workspace import analysis_name
+
+API_DIR = Path("outputs") / "api"
+
+__all__ = ["ConfigError", "Workspace", "Choice", "workspace", "actuator_choice", "load_study"]
+
+
+@dataclass(frozen=True)
+class Workspace:
+    """One finished job: its folder, summary (one row as a dict), per-pose table, and the
+    resolved config and code version recorded in its files."""
+    folder: Path
+    summary: dict
+    points: pd.DataFrame
+    config: str
+    version: str
+
+    @classmethod
+    def read(cls, folder: Path) -> "Workspace":
+        """A finished job's folder, written by the command line or by :func:`workspace`."""
+        folder = Path(folder)
+        meta = read_metadata(folder / "summary.parquet")
+        summary = pd.read_parquet(folder / "summary.parquet").iloc[0].to_dict()
+        return cls(folder, summary, pd.read_parquet(folder / "points.parquet"),
+                   meta.get("cdpr.config", ""), meta.get("cdpr.version", ""))
+
+
+@dataclass(frozen=True)
+class Choice:
+    """CPR-ACM (section 4 of Filipovic & Kevac): one CPR-WWA job per catalogue actuator."""
+    table: pd.DataFrame  # pipeline.choice.choose: rank, x(i_a), accepted, losses per constraint
+    verdict: str
+    workspaces: dict[int, Workspace]
+
+
+def workspace(overrides: Iterable[str] = (), folder: str | Path | None = None,
+              config_dir: str | Path | None = None) -> Workspace:
+    """Check and run one job, as ``python -m pipeline OVERRIDES`` would, into ``folder``
+    (default ``outputs/api/<date-time>``); a finished job with the same config and code in
+    that folder is reused. ``config_dir``: a folder with the user's own ``robot/NAME.yaml``
+    (the command line's ``--config-dir``). Raises ConfigError for bad input (nothing written)."""
+    overrides = _listed(overrides, config_dir)
+    folder = Path(folder) if folder is not None else _new_folder()
+    ((cfg, catalogue),) = check([*overrides, f"hydra.run.dir={folder}"]).values()
+    return _run(cfg, catalogue, folder)
+
+
+def actuator_choice(overrides: Iterable[str] = (), folder: str | Path | None = None,
+                    config_dir: str | Path | None = None) -> Choice:
+    """CPR-ACM over every actuator of the configured catalogue (``catalogue=...`` for the
+    user's own): one job per actuator in ``folder/actuator=<id>``, then the ranking and the
+    verdict at ``choice.required_pct``. Raises ConfigError for bad input (nothing written)."""
+    overrides = _listed(overrides, config_dir)
+    if any(o.split("=", 1)[0].lstrip("+~") == "actuator" for o in overrides):
+        raise ConfigError("actuator=...: the choice runs every actuator of the catalogue; "
+                          "use workspace() for one")
+    folder = Path(folder) if folder is not None else _new_folder()
+    ((cfg, catalogue),) = check([*overrides, f"hydra.run.dir={folder}"]).values()
+    if catalogue is None:
+        raise ConfigError(f"analysis={analysis_name(cfg)}: no actuators to choose from "
+                          "(the choice needs analysis=cpr_wwa)")
+    ids = ",".join(str(i) for i in catalogue.index)
+    jobs = check(["-m", f"actuator={ids}", *overrides, f"hydra.sweep.dir={folder}"])
+    done = {}
+    for job_cfg, job_catalogue in jobs.values():  # every job checked before the first runs
+        done[int(job_cfg.actuator)] = _run(job_cfg, job_catalogue, folder / f"actuator={job_cfg.actuator}")
+    table = choose(pd.DataFrame([ws.summary for ws in done.values()]))
+    return Choice(table, verdict(table), done)
+
+
+def load_study(name: str, out_root: str | Path | None = None,
+               overrides: Iterable[str] = ()) -> StudyResults:
+    """The results of a study the command line ran (``python -m pipeline.study NAME
+    OVERRIDES``): its summary, analysis tables and per-job points."""
+    directory = study_dir(name, _listed(overrides), Path(out_root) if out_root else None)
+    if not (directory / "summary.parquet").exists():
+        raise ConfigError(f"study {name}: no results in {directory}; run `cdpr-study {name}` first"
+                          + ("" if out_root else f" (or give out_root; default {OUTPUT_DIR})"))
+    return StudyResults(directory)
+
+
+def _run(cfg, catalogue, folder: Path) -> Workspace:
+    folder.mkdir(parents=True, exist_ok=True)
+    execute(cfg, catalogue, folder)
+    return Workspace.read(folder)
+
+
+def _listed(overrides: Iterable[str], config_dir: str | Path | None = None) -> list[str]:
+    """The overrides as a list of strings (one bare string is one override), refusing
+    command-line flags, with ``--config-dir`` for ``config_dir``."""
+    listed = [overrides] if isinstance(overrides, str) else [str(o) for o in overrides]
+    flags = [o for o in listed if o.startswith("-")]
+    if flags:
+        raise ConfigError(f"{flags[0]}: the API takes key=value overrides only (one job per "
+                          "call: loop over values for a sweep; config_dir= for --config-dir)")
+    return listed if config_dir is None else ["--config-dir", str(config_dir), *listed]
+
+
+def _new_folder() -> Path:
+    return API_DIR / datetime.now().strftime("%Y-%m-%d_%H-%M-%S-%f")

@@ -1,0 +1,102 @@
+"""The Python API (pipeline.api, docs/api.md): the command line's jobs in a notebook, the same
+numbers, the same one-line errors as exceptions, no global side effects."""
+
+import pathlib
+import re
+import subprocess
+import sys
+
+import pandas as pd
+import pytest
+
+from pipeline import api
+from pipeline.results import file_digest
+
+DOCS = pathlib.Path(__file__).resolve().parent.parent / "docs" / "api.md"
+
+
+def test_importing_the_api_keeps_the_notebook_backend_and_logging():
+    """A notebook's pyplot backend and logging handlers are not touched by the import."""
+    code = ("import logging, matplotlib; matplotlib.use('svg'); import pipeline.api, pipeline.figures; "
+            "assert matplotlib.get_backend() == 'svg', matplotlib.get_backend(); "
+            "assert not logging.getLogger().handlers, logging.getLogger().handlers")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+
+
+def test_workspace_gives_table_2_and_the_command_line_points(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    ws = api.workspace(["actuator=3"], folder="a3")
+    assert ws.folder == pathlib.Path("a3")
+    assert (ws.summary["n_feasible"], ws.summary["n_points"]) == (184, 216)  # Table 2: 85.19 %
+    assert ws.points["feasible"].sum() == 184 and len(ws.points) == 216
+    assert "actuator: 3" in ws.config and ws.version.startswith("0.")
+    cli = subprocess.run([sys.executable, "-m", "pipeline", "actuator=3", "hydra.run.dir=cli"],
+                         capture_output=True, text=True, timeout=300)
+    assert cli.returncode == 0, cli.stderr
+    pd.testing.assert_frame_equal(pd.read_parquet("cli/points.parquet"), ws.points)
+    before = file_digest(pathlib.Path("a3/points.parquet")), (tmp_path / "a3/points.parquet").stat().st_mtime_ns
+    again = api.workspace(["actuator=3"], folder="a3")  # finished: reused, not rewritten
+    assert again.summary == ws.summary
+    assert (file_digest(pathlib.Path("a3/points.parquet")),
+            (tmp_path / "a3/points.parquet").stat().st_mtime_ns) == before
+
+
+def test_actuator_choice_on_the_users_catalogue(tmp_path, monkeypatch):
+    """Table 1 plus a 6th, weaker motor (actuator 5 with half its torque): one job per id."""
+    monkeypatch.chdir(tmp_path)
+    table = pd.read_csv(pathlib.Path(api.__file__).parent / "data" / "actuators_table1.csv")
+    weak = table[table["id"] == 5].copy()
+    weak["id"], weak["name"], weak["torque_Nm"] = 6, "half actuator 5", weak["torque_Nm"] / 2
+    pd.concat([table, weak]).to_csv("mine.csv", index=False)
+    choice = api.actuator_choice(["catalogue=mine.csv", "choice.required_pct=85"], folder="choice")
+    assert sorted(choice.workspaces) == [1, 2, 3, 4, 5, 6]
+    accepted = choice.table.set_index("actuator")["accepted"]
+    assert accepted.to_dict() == {1: True, 2: True, 3: True, 4: True, 5: False, 6: False}
+    share = choice.table.set_index("actuator")["feasible_pct"]
+    assert share[6] <= share[5]  # less torque never reaches more of the grid
+    assert choice.verdict.startswith("actuator choice at x >= 85 %: accept 1, 2, 3, 4; reject 5 ")
+    assert sorted(p.name for p in pathlib.Path("choice").iterdir()) == [f"actuator={i}" for i in range(1, 7)]
+
+
+@pytest.mark.parametrize("call, overrides, message", [
+    ("workspace", ["actuator=9"], "actuator=9: no such id in the catalogue"),
+    ("workspace", ["orientation.psi=nan"], "orientation.psi=nan: must be finite"),
+    ("workspace", ["-m", "actuator=1,2"], "-m: the API takes key=value overrides only"),
+    ("workspace", ["grid.nn=3"], "grid.nn"),
+    ("workspace", ["robot=nosuch"], "robot=nosuch: no such option of the robot group"),
+    ("actuator_choice", ["actuator=2"], "actuator=...: the choice runs every actuator"),
+    ("actuator_choice", ["robot=irpm6"], "no actuators to choose from"),
+    ("actuator_choice", ["catalogue=missing.csv"], "catalogue=missing.csv"),
+])
+def test_bad_input_raises_config_error_and_writes_nothing(tmp_path, monkeypatch, call, overrides, message):
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(api.ConfigError, match=re.escape(message)):
+        getattr(api, call)(overrides, folder="out")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_load_study_reads_a_finished_study_or_says_how_to_make_it(tmp_path):
+    with pytest.raises(api.ConfigError, match="study actuator_choice: no results in .*cdpr-study actuator_choice"):
+        api.load_study("actuator_choice", out_root=tmp_path)
+    from pipeline.study import main
+
+    main(["actuator_choice", "--out", str(tmp_path), "--launcher", "serial"])
+    results = api.load_study("actuator_choice", out_root=tmp_path)
+    choice = results.table("choice")
+    assert sorted(choice.loc[choice["accepted"], "actuator"]) == [1, 2]
+    csv = pd.read_csv(tmp_path / "actuator_choice" / "choice.csv")  # the spreadsheet copy
+    pd.testing.assert_frame_equal(csv[["actuator", "feasible_pct", "accepted"]],
+                                  choice[["actuator", "feasible_pct", "accepted"]])
+    assert len(results.points("actuator=5")) == 216
+
+
+def test_the_docs_example_runs(tmp_path, monkeypatch, capsys):
+    """Every ```python block of docs/api.md, in order, in an empty folder."""
+    monkeypatch.chdir(tmp_path)
+    code = "\n".join(re.findall(r"```python\n(.*?)```", DOCS.read_text(), re.S))
+    assert "api.workspace" in code and "api.actuator_choice" in code
+    exec(compile(code, str(DOCS), "exec"), {})
+    printed = capsys.readouterr().out
+    assert "85.19 % feasible" in printed and "accept 1, 2; reject 3" in printed
+    assert "orientation.psi=nan: must be finite" in printed
