@@ -9,6 +9,7 @@ notebook's pyplot backend alone.
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Optional
@@ -20,9 +21,11 @@ import seaborn as sns
 from matplotlib.figure import Figure
 
 from pipeline.criteria import COLOURS
+from pipeline.results import write_csv
 
 STYLE = "pipeline.styles.paper"
 FEASIBLE_COLOUR = "#009E73"
+SERIES_DIR = "series"  # beside figures/: the curves' numbers as CSV
 PANEL_TITLES = {"feasible_grid": "CPR-WWA grid", "feasible": "simulated lines"}
 
 
@@ -259,7 +262,32 @@ def curve(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir:
     if spec.hue or spec.hline is not None:
         ax.legend(title=spec.hue)
     _labels(ax, spec, spec.x, spec.y, table.iloc[0])
-    return [_save(fig, out_dir / _fill(spec.file, table.iloc[0]))]
+    png = _save(fig, out_dir / _fill(spec.file, table.iloc[0]))
+    return [png, _series(data, spec, out_dir.parent / SERIES_DIR / png.with_suffix(".csv").name)]
+
+
+def _series(data: pd.DataFrame, spec: FigureSpec, path: Path) -> Path:
+    """A curve's numbers as CSV (``series/`` beside ``figures/``), one x column and one y
+    column per ``hue`` value (``actuator_1``, ``robot_gamma_deg_30``): what DVC's plots
+    (dvc.yaml) and a spreadsheet read. Column names are plain words, as Vega-Lite reads a dot
+    in a field name as nesting."""
+    if spec.hue:
+        wide = data.pivot_table(index="x", columns=spec.hue, values="y", aggfunc="mean")
+        wide.columns = [f"{_field(spec.hue)}_{_field(value)}" for value in wide.columns]
+    else:
+        wide = data.groupby("x")["y"].mean().to_frame(_field(spec.y))
+    path.parent.mkdir(parents=True, exist_ok=True)
+    write_csv(wide.rename_axis(_field(spec.x)).reset_index(), path)
+    return path
+
+
+def _field(text) -> str:
+    if isinstance(text, str):
+        try:
+            text = float(text)
+        except ValueError:
+            return re.sub(r"\W+", "_", text).strip("_")
+    return format(text, "g").replace(".", "p").replace("-", "m")
 
 
 def heatmap(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import hashlib
+import json
 import logging
 import re
 import shutil
@@ -34,7 +35,7 @@ from pipeline.catalogue import load_catalogue
 from pipeline.choice import acceptance, choose, verdict
 from pipeline.cli import launch
 from pipeline.errors import ConfigError, one_line
-from pipeline.figures import FigureSpec, StudyResults, render
+from pipeline.figures import SERIES_DIR, FigureSpec, StudyResults, render
 from pipeline.job import PREPARED
 from pipeline.preflight import check
 from pipeline.resources import STUDIES_DIR
@@ -184,18 +185,48 @@ def run_study(name: str, extra: list[str], out_root: Path | None = None,
         raise ConfigError(f"{out / 'summary.parquet'}: not a readable Parquet file ({exc}); "
                           "rerun the study") from exc
     written = [out / "summary.parquet"]
+    tables = {}
     for analysis in study.analyses:
         path = out / f"{analysis}.parquet"
-        table = ANALYSES[analysis](results)
+        table = tables[analysis] = ANALYSES[analysis](results)
         write_parquet(table, path, provenance)
         write_csv(table, path.with_suffix(".csv"))  # the same table for a spreadsheet
         written.extend([path, path.with_suffix(".csv")])
         if analysis == "choice":
             log.info("study %s: %s", name, verdict(table))
-    shutil.rmtree(out / "figures", ignore_errors=True)  # no figure of an earlier run lingers
+    write_text(out / "metrics.json", json.dumps(metrics(results.summary, tables), indent=2, sort_keys=True))
+    written.append(out / "metrics.json")
+    for folder in ("figures", SERIES_DIR):  # no figure or series of an earlier run lingers
+        shutil.rmtree(out / folder, ignore_errors=True)
     for figure in study.figures:
         written.extend(render(figure, results, out / "figures"))
     return written
+
+
+MAX_JOBS_LISTED = 24  # metrics per job up to this many jobs, else their range
+
+
+def metrics(summary: pd.DataFrame, tables: dict[str, pd.DataFrame]) -> dict:
+    """A study's headline numbers (``metrics.json``, read by ``dvc metrics``): the feasible
+    share and volume per job (their min, median and max for a large sweep), the actuators
+    the choice accepts, the accepted (actuator, value) pairs of a design study."""
+    found: dict = {"jobs": len(summary)}
+    for column in ("feasible_pct", "volume_m3"):
+        values = [None if pd.isna(v) else round(float(v), 6) for v in summary[column]]
+        if len(summary) <= MAX_JOBS_LISTED:
+            found[column] = dict(zip(summary["job"].astype(str), values))
+        else:
+            found[column] = {"min": round(float(summary[column].min()), 6),
+                             "median": round(float(summary[column].median()), 6),
+                             "max": round(float(summary[column].max()), 6)}
+    if "choice" in tables:
+        choice = tables["choice"]
+        accepted = choice.loc[choice["accepted"], "actuator"].tolist()
+        found["accepted"] = ", ".join(map(str, accepted)) or "none"
+        found["n_accepted"] = len(accepted)
+    if "acceptance" in tables:
+        found["n_accepted_pairs"] = int(tables["acceptance"]["accepted"].sum())
+    return found
 
 
 def checked_commands(name: str, extra: list[str], out_root: Path | None = None,
