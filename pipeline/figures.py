@@ -22,6 +22,7 @@ from matplotlib.figure import Figure
 
 from pipeline.criteria import COLOURS
 from pipeline.results import write_csv
+from pipeline.views import write_view
 
 STYLE = "pipeline.styles.paper"
 FEASIBLE_COLOUR = "#009E73"
@@ -164,7 +165,9 @@ def _cloud_figure(spec: FigureSpec, panels: list, job: pd.Series, out_dir: Path)
         if title:
             ax.set_title(title, fontsize=9)
     fig.suptitle(_fill(spec.title or "", job), fontsize=10)
-    return _save(fig, out_dir / _fill(spec.file, job))
+    png = _save(fig, out_dir / _fill(spec.file, job))
+    write_view(panels, _fill(spec.title or "", job), spec.invert_z, png.with_suffix(".json"))
+    return png
 
 
 def _cloud_panel(ax, points: pd.DataFrame, column: str, invert_z: bool) -> None:

@@ -1,4 +1,5 @@
-"""The reproduction report: ``python -m pipeline.report`` -> ``outputs/report/index.md``.
+"""The reproduction report: ``python -m pipeline.report`` -> ``outputs/report/index.md`` and the
+same as a web page with interactive 3-D views, ``outputs/report/index.html`` (``pipeline.webpage``).
 
 Built from the studies' Parquet files and figures only (run the studies first, e.g.
 ``python -m pipeline.study --all`` or ``dvc repro``). For every number the papers publish that
@@ -20,6 +21,7 @@ from pipeline.paper import TABLE2_ACCEPTED, TABLE2_FEASIBLE_PCT
 from pipeline.errors import one_line
 from pipeline.results import code_version
 from pipeline.study import OUTPUT_DIR, available, load_study
+from pipeline.webpage import View, write_page
 
 REPORT_DIR = Path("outputs") / "report"
 
@@ -56,7 +58,12 @@ def build(studies_dir: Path = OUTPUT_DIR, out: Path = REPORT_DIR) -> Path:
             target.parent.mkdir(parents=True, exist_ok=True)
             shutil.copyfile(figure, target)
             lines += [f"![{md(figure.stem)}](figures/{quote(name)}/{quote(figure.name)})", ""]
-    (tmp / "index.md").write_text("\n".join(lines))
+            if figure.with_suffix(".json").exists():  # a cloud: its interactive view
+                lines.append(View(figure.with_suffix(".json"), "(rotate, zoom, hover for the margins)"))
+    (tmp / "index.md").write_text("\n".join(
+        "*Interactive 3-D view of this figure: index.html.*\n" if isinstance(line, View) else line
+        for line in lines))
+    write_page(lines, tmp, "Reproduction report")
     shutil.rmtree(out, ignore_errors=True)
     tmp.rename(out)
     return out / "index.md"

@@ -1,5 +1,8 @@
 """The reproduction report is built from study Parquet files only; dvc.yaml covers every study."""
 
+import re
+import subprocess
+import sys
 from pathlib import Path
 
 import pandas as pd
@@ -10,6 +13,7 @@ import pipeline.report
 from pipeline.choice import choose
 from pipeline.figures import StudyResults
 from pipeline.survival import survival
+from pipeline.views import write_view
 from pipeline.lines import simulate_lines
 from pipeline.study import available
 from pipeline.workspace import compute_workspace
@@ -28,7 +32,11 @@ def studies(tmp_path, make_cfg, catalogue):
     summary = pd.DataFrame([compute_workspace(make_cfg(f"actuator={a}"), catalogue)[1] for a in range(1, 6)])
     summary.to_parquet(root / "actuator_choice" / "summary.parquet")
     choose(summary).to_parquet(root / "actuator_choice" / "choice.parquet")
-    (root / "actuator_choice" / "figures" / "fig9.png").write_bytes(b"\x89PNG fake")
+    _png(root / "actuator_choice" / "figures" / "fig9.png")
+    _png(root / "actuator_choice" / "figures" / "fig8_workspace_actuator5.png")
+    points, _ = compute_workspace(make_cfg("actuator=5"), catalogue)
+    write_view([(points, "feasible", None)], "actuator 5", False,
+               root / "actuator_choice" / "figures" / "fig8_workspace_actuator5.json")
     pulling = pd.DataFrame([compute_workspace(make_cfg("tension=feasible", f"actuator={a}"), catalogue)[1]
                             for a in range(1, 6)])
     pulling.to_parquet(root / "actuator_choice_pulling" / "summary.parquet")
@@ -66,7 +74,49 @@ def test_report_compares_paper_and_ours_and_carries_the_figures(studies, tmp_pat
     assert "| 0.2 | 183.2 | 64.8 |" in text
     assert "| translational, zero | 66.7 (216 → 144) |" in text
     assert "![fig9](figures/actuator_choice/fig9.png)" in text
-    assert (tmp_path / "report" / "figures" / "actuator_choice" / "fig9.png").read_bytes() == b"\x89PNG fake"
+    assert (tmp_path / "report" / "figures" / "actuator_choice" / "fig9.png").read_bytes() == (
+        studies / "actuator_choice" / "figures" / "fig9.png").read_bytes()
+    assert "*Interactive 3-D view of this figure: index.html.*" in text
+
+
+def _png(path):
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(2, 1))
+    fig.subplots().plot([0, 1], [0, 1])
+    fig.savefig(path)
+
+
+def test_html_page_has_the_tables_figures_and_views_and_needs_no_network(studies, tmp_path, monkeypatch):
+    monkeypatch.setattr(pipeline.report, "available", lambda: STUDIES)
+    pipeline.report.build(studies, tmp_path / "report")
+    page = (tmp_path / "report" / "index.html").read_text()
+    assert "<td>4</td>\n<td>87.04</td>\n<td>85.19</td>" in page.replace(' style="text-align:right"', "")
+    assert '<img src="figures/actuator_choice/fig9.png" alt="fig9"' in page
+    assert page.count('<figure class="view"') == 1
+    assert '"lost to torque (192)"' in page  # actuator 5: 24 feasible, 192 lost to the torque limit
+    assert (tmp_path / "report" / "plotly.min.js").stat().st_size > 1_000_000  # shipped, not fetched
+    assert not re.findall(r'(?:src|href)="(?:https?:)?//', page)
+
+
+@pytest.mark.slow
+def test_html_page_opens_in_headless_chromium(studies, tmp_path, monkeypatch):
+    """scripts/check_report.py: every image loads, the 3-D view draws, no JavaScript error;
+    and it fails when an image is missing. Chromium comes from scripts/install_chromium.sh."""
+    monkeypatch.setattr(pipeline.report, "available", lambda: STUDIES)
+    pipeline.report.build(studies, tmp_path / "report")
+    install = subprocess.run(["bash", str(REPO / "scripts" / "install_chromium.sh")],
+                             capture_output=True, text=True, timeout=900)
+    assert install.returncode == 0, install.stderr
+    check = [sys.executable, str(REPO / "scripts" / "check_report.py"), str(tmp_path / "report")]
+    done = subprocess.run([*check, "--screenshot", str(tmp_path / "shot.png")],
+                          capture_output=True, text=True, timeout=900)
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "(0 broken), 1 of 1 3-D views drawn, 0 errors" in done.stdout
+    assert (tmp_path / "shot.png").read_bytes()[:4] == b"\x89PNG"
+    (tmp_path / "report" / "figures" / "actuator_choice" / "fig9.png").unlink()
+    broken = subprocess.run(check, capture_output=True, text=True, timeout=900)
+    assert broken.returncode == 1 and "(1 broken)" in broken.stdout
 
 
 def test_report_names_the_studies_without_results(tmp_path):

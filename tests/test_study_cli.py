@@ -35,8 +35,8 @@ def test_choice_command_accepts_actuators_1_and_2_and_draws_every_figure(choice_
     figures = sorted(p.name for p in (choice_run / "figures").iterdir())
     assert figures == sorted(
         ["fig9_feasible_share_by_actuator.png", "limiting_constraints_by_actuator.png"]
-        + [f"fig8_workspace_actuator{a}.png" for a in range(1, 6)]
-    )
+        + [f"fig8_workspace_actuator{a}.{kind}" for a in range(1, 6) for kind in ("png", "json")]
+    )  # each workspace picture with its interactive view (pipeline/views.py)
 
 
 def test_figures_are_drawn_from_the_parquet_results(choice_run, monkeypatch):
@@ -70,7 +70,8 @@ def test_figures_are_drawn_from_the_parquet_results(choice_run, monkeypatch):
             3, "feasible_pct"] == 42.0
         changed = {name for name in before if after[name] != before[name]}
         assert changed == {"fig9_feasible_share_by_actuator.png",
-                           "limiting_constraints_by_actuator.png", "fig8_workspace_actuator4.png"}
+                           "limiting_constraints_by_actuator.png", "fig8_workspace_actuator4.png",
+                           "fig8_workspace_actuator4.json"}
     finally:
         summary.to_parquet(summary_path)
         points.to_parquet(points_path)
