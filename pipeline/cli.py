@@ -46,9 +46,25 @@ def cli() -> None:
 
         print(f"cdpr-studies {code_version()} (Hydra {hydra.__version__})")
         return
+    if "--help" in sys.argv[1:] or "-h" in sys.argv[1:]:  # the keys of this composition, with meanings
+        _help([a for a in sys.argv[1:] if a not in ("--help", "-h")])
+        return
     try:
         PREPARED.update(check(sys.argv[1:]))
     except ConfigError as exc:
         print(f"error: {exc}", file=sys.stderr)
         raise SystemExit(2) from None
     main()
+
+
+def _help(argv: list[str]) -> None:
+    from pipeline.helppage import page
+    from pipeline.results import code_version
+
+    try:
+        ((typed, _),) = check([a for a in argv if a not in ("-m", "--multirun")]).values()
+    except (ConfigError, ValueError) as exc:  # ValueError: a sweep, several jobs
+        print(f"error: {exc if isinstance(exc, ConfigError) else 'give one value per key with --help'}",
+              file=sys.stderr)
+        raise SystemExit(2) from None
+    print(page(argv, typed, code_version()), end="")

@@ -358,12 +358,11 @@ class OutputConfig:
 
 @dataclass
 class Config:
-    """Every key a job can have. A job has the common keys (conf/config.yaml) plus those of its
-    tension model (conf/tension/), analysis (conf/analysis/) and robot (conf/robot/); :func:`typed_config` checks them against
-    this schema and keeps only those. ``analysis``: the chosen file of the analysis group.
-    ``poses``: a list of [x, y, z] positions (m) checked instead of the robot's grid (null: grid).
-    ``actuator`` is the integer id of a catalogue row; ``catalogue`` a CSV or Parquet path
-    (null = the shipped Table 1 of the CPR-8 paper)."""
+    """The job: ``analysis`` (cpr_wwa, statics or lines), ``actuator`` (the id of a catalogue
+    row), ``catalogue`` (a CSV or Parquet path; null = Table 1 of the CPR-8 paper, shipped),
+    ``poses`` (a list of [x, y, z] positions in m checked instead of the robot's grid; null =
+    the grid). A job has the keys of conf/config.yaml plus those of its tension, analysis and
+    robot files, and only those (:func:`typed_config` checks them against this schema)."""
 
     robot: Any = MISSING
     analysis: Analysis = Analysis.cpr_wwa

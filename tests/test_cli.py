@@ -99,3 +99,26 @@ def test_bad_input_one_line_error_nonzero_exit_no_files(tmp_path, args, key):
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("error: ") and key in lines[0], proc.stderr
     assert list(tmp_path.iterdir()) == []
+
+
+def test_help_lists_the_choices_and_every_key_with_its_meaning(tmp_path):
+    """The page is built from the schemas' docstrings for the composition asked for."""
+    done = run(tmp_path, "--help")
+    assert done.returncode == 0, done.stderr
+    page = done.stdout
+    assert "  robot: cpr8, irpm6, points (or your own robot/NAME.yaml with --config-dir DIR)" in page
+    assert "schema" not in page.split("keys of this composition")[0]  # no internal names
+    assert "motion: Trapezoidal reference motion: V_cmax (m/s), t_acc and t_dec (s)." in " ".join(page.split())
+    assert "  motion.v_max = 1.3" in page and "  actuator = 1" in page
+    assert "``" not in page and ":func:" not in page
+    irpm = run(tmp_path, "--help", "robot=irpm6", "robot.gamma_deg=30").stdout
+    assert "  robot.gamma_deg = 30.0" in irpm and "pair angle gamma (deg)" in " ".join(irpm.split())
+    assert "  actuator =" not in irpm and "  tension.t_max = 55000.0" in irpm
+    bad = run(tmp_path, "--help", "robot=nosuch")
+    assert bad.returncode == 2 and bad.stderr.startswith("error: robot=nosuch: no such option")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_version_names_the_project(tmp_path):
+    done = run(tmp_path, "--version")
+    assert done.returncode == 0 and done.stdout.startswith("cdpr-studies 0.1.0")
