@@ -20,10 +20,10 @@ register()
 
 
 @hydra.main(version_base="1.3", config_path=str(CONF_DIR), config_name="config")
-def main(cfg: DictConfig) -> None:
+def main(cfg: DictConfig) -> dict:
     from pipeline.job import run_job
 
-    run_job(cfg)
+    return run_job(cfg)  # the summary: the launcher's progress line reports it
 
 
 def launch(argv: list[str]) -> None:

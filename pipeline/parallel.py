@@ -18,7 +18,10 @@ from typing import Callable, Iterator
 
 import numpy as np
 
+from pipeline.progress import Progress
+
 log = logging.getLogger(__name__)
+CHUNK_REPORT_S = 10.0  # a line about the chunks at most this often (and at the end)
 
 
 def chunk_slices(n_items: int, n_jobs: int, chunk_size: int) -> list[slice]:
@@ -46,19 +49,28 @@ def iter_chunks(
         log.warning("compute.n_jobs=%d: capped at the %d cores of this machine", n_jobs, os.cpu_count())
         workers = os.cpu_count() or 1
     slices = chunk_slices(len(positions), workers, chunk_size)
+    progress = Progress("chunks", len(slices), log, every=CHUNK_REPORT_S)
     if len(slices) <= 1 or workers == 1:
-        for i, s in enumerate(slices, start=1):
+        for s in slices:
             yield s, function(problem, positions[s])
-            _progress(i, len(slices))
+            progress.step()
         return
     from joblib import Parallel, delayed  # only here: 50 ms of imports a one-chunk job skips
 
     with _engine(backend, workers, scheduler) as joblib_backend:
         runner = Parallel(n_jobs=workers, backend=joblib_backend, return_as="generator")
         tasks = (delayed(function)(problem, positions[s]) for s in slices)
-        for i, (s, part) in enumerate(zip(slices, runner(tasks)), start=1):
+        for s, part in zip(slices, runner(tasks)):
             yield s, part
-            _progress(i, len(slices))
+            progress.step()
+
+
+def _verbose(name: str) -> bool:
+    """Whether the run asked for ``name``'s log lines (``hydra.verbose=true`` or ``=[name]``)."""
+    from hydra.core.hydra_config import HydraConfig
+
+    verbose = HydraConfig.get().verbose if HydraConfig.initialized() else False
+    return verbose is True or (not isinstance(verbose, (bool, str)) and name in verbose) or verbose == name
 
 
 @contextlib.contextmanager
@@ -71,6 +83,9 @@ def _engine(backend: str, workers: int, scheduler: str | None):
     from dask.distributed import Client, LocalCluster
     from joblib import parallel_config
 
+    if not _verbose("distributed"):  # dozens of INFO lines per cluster otherwise
+        logging.getLogger("distributed").setLevel(logging.WARNING)
+
     if scheduler:
         client = Client(scheduler)
     else:
@@ -82,8 +97,3 @@ def _engine(backend: str, workers: int, scheduler: str | None):
         yield None
     if not scheduler:
         cluster.close()
-
-
-def _progress(done: int, total: int) -> None:
-    if total > 1:
-        log.info("chunk %d/%d done (%.0f%%)", done, total, 100.0 * done / total)

@@ -16,6 +16,7 @@ One code path for every robot and analysis. The robot config only places points
 from __future__ import annotations
 
 import logging
+import os
 from collections import Counter
 from typing import Callable
 
@@ -30,6 +31,7 @@ from pipeline.grid import Grid, box_grid, step_grid
 from pipeline.kernel import WorkspaceProblem, evaluate_chunk
 from pipeline.motion import acceleration_set, cartesian_cube, extreme_points, velocity_set
 from pipeline.parallel import iter_chunks
+from pipeline.progress import clock_text
 from pipeline.robots import PointsRobot, cpr8, irpm6, point_list
 from pipeline.statics import StaticLimits, StaticsSpec
 from pipeline.tensions import TensionSpec
@@ -212,9 +214,11 @@ def grid_workspace(
     sink: Callable[[pd.DataFrame], None] | None = None,
 ) -> tuple[pd.DataFrame | None, dict]:
     """:func:`compute_workspace` for an already built problem and grid."""
+    workers = worth_workers(problem, grid.n_points, cfg.compute.n_jobs, cfg.compute.backend)
+    announce_cost(cfg, problem, grid.n_points, workers)
     chunks = iter_chunks(
         evaluate_chunk, problem, grid.positions,
-        n_jobs=worth_workers(problem, grid.n_points, cfg.compute.n_jobs, cfg.compute.backend),
+        n_jobs=workers,
         backend=cfg.compute.backend,
         chunk_size=bounded_chunk_size(problem, cfg.compute.chunk_size),
         scheduler=cfg.compute.scheduler,
@@ -263,8 +267,19 @@ def tabulate(problem: WorkspaceProblem, positions: np.ndarray, raw: dict) -> pd.
 # kernel's imports, numpy only) and two workers at best halve the kernel time, so they pay off
 # when the kernel alone would take more than 2 x WORKER_START_S here. Kernel speeds per core,
 # measured by benchmarks/bench_kernel.py and bench_feasible.py (lower ends of their ranges).
+# The speeds hold for the paper's set of REFERENCE_SET velocities per pose (grid.n_vel = 6);
+# a pose's cost grows with its set. A job estimated above LONG_JOB_S is announced with a warning.
 WORKER_START_S = 0.4
 POSES_PER_SECOND = {"pinv": 200_000, "feasible": 3_000}
+REFERENCE_SET = 93
+LONG_JOB_S = 30.0
+
+
+def estimated_seconds(problem: WorkspaceProblem, n_points: int) -> float:
+    """The kernel's time for ``n_points`` positions on one core here, by the cost model."""
+    evaluations = n_points * len(problem.orientations)
+    per_pose = max(1.0, problem.spec.set_size() / REFERENCE_SET)
+    return evaluations * per_pose / POSES_PER_SECOND[problem.spec.tension.model]
 
 
 def worth_workers(problem: WorkspaceProblem, n_points: int, n_jobs: int, backend: str) -> int:
@@ -273,13 +288,27 @@ def worth_workers(problem: WorkspaceProblem, n_points: int, n_jobs: int, backend
     two workers; 10^6 poses 0.7x the wall time). A Dask cluster is the user's explicit choice."""
     if backend == "dask" or n_jobs == 1:
         return n_jobs
-    evaluations = n_points * len(problem.orientations)
-    serial_s = evaluations / POSES_PER_SECOND[problem.spec.tension.model]
+    serial_s = estimated_seconds(problem, n_points)
     if serial_s > 2 * WORKER_START_S:
         return n_jobs
-    log.info("compute.n_jobs=%d: %d pose evaluations take about %.2f s in this process, too little "
-             "for worker processes to pay for their start; running here", n_jobs, evaluations, serial_s)
+    log.debug("compute.n_jobs=%d: about %.2f s of kernel, too little for worker processes to pay "
+              "for their start; running here", n_jobs, serial_s)
     return 1
+
+
+def announce_cost(cfg: DictConfig, problem: WorkspaceProblem, n_points: int, workers: int) -> None:
+    """A warning before a job the cost model expects to take long, with the key that matters."""
+    cores = min(max(workers, 1), os.cpu_count() or 1)
+    seconds = estimated_seconds(problem, n_points) / cores
+    if seconds < LONG_JOB_S:
+        return
+    hint = ""
+    if "n_vel" in cfg.get("grid", {}) and cfg.grid.n_vel is None and problem.spec.set_size() > REFERENCE_SET:
+        hint = (f"; grid.n_vel is null, so each pose tests {problem.spec.set_size()} velocities "
+                f"(grid.n_vel=6 tests {REFERENCE_SET}, as the paper's grid)")
+    log.warning("this job evaluates %d poses x %d orientations: about %s on %d core%s by the cost "
+                "model%s", n_points, len(problem.orientations), clock_text(seconds), cores,
+                "" if cores == 1 else "s", hint)
 
 
 def bounded_chunk_size(problem: WorkspaceProblem, requested: int) -> int:

@@ -43,7 +43,7 @@ def test_single_run_with_parallel_chunks(tmp_path):
     (job,) = (tmp_path / "outputs" / "runs").iterdir()
     assert len(pd.read_parquet(job / "points.parquet")) == 12**3
     log = (job / "pipeline.log").read_text()
-    assert "chunk 4/4 done (100%)" in log
+    assert "chunks 4/4 (100%), 0:0" in log  # the last chunk is always reported
     assert "actuator 4" in log
 
 

@@ -27,12 +27,13 @@ from typing import Any, Dict, Optional, Sequence, Tuple
 
 from hydra.core.config_store import ConfigStore
 from hydra.core.singleton import Singleton
-from hydra.core.utils import JobReturn, configure_log, filter_overrides, run_job, setup_globals
+from hydra.core.utils import JobReturn, JobStatus, configure_log, filter_overrides, run_job, setup_globals
 from hydra.plugins.launcher import Launcher
 from hydra.types import HydraContext, TaskFunction
 from omegaconf import DictConfig, OmegaConf, open_dict
 
 log = logging.getLogger(__name__)
+LISTED_JOBS = 10  # jobs named before a sweep starts; every job is named as it ends
 
 
 @dataclass
@@ -79,24 +80,32 @@ class CdprLauncher(Launcher):
         workers = min(self.n_jobs, os.cpu_count() or 1)  # more would only thrash memory
         if workers < self.n_jobs:
             log.warning("hydra.launcher.n_jobs=%d: capped at the %d cores of this machine", self.n_jobs, workers)
+        from pipeline.progress import Progress
+
         log.info("Launching %d jobs %s", len(job_overrides),
                  "locally" if workers == 1 else f"on {workers} worker processes")
-        for idx, overrides in enumerate(job_overrides, start=initial_job_idx):
-            log.info("\t#%d : %s", idx, " ".join(filter_overrides(overrides)))
+        if len(job_overrides) <= LISTED_JOBS:  # a long sweep is named job by job as they end
+            for idx, overrides in enumerate(job_overrides, start=initial_job_idx):
+                log.info("\t#%d : %s", idx, " ".join(filter_overrides(overrides)))
+        progress = Progress("jobs", len(job_overrides), log)
         configs = (self.job_config(idx, list(overrides))
                    for idx, overrides in enumerate(job_overrides, start=initial_job_idx))
+        runs = []
         if workers == 1 or len(job_overrides) == 1:
-            runs = []
             for config in configs:
                 runs.append(_run(config, self.hydra_context, self.task_function))
                 configure_log(self.config.hydra.hydra_logging, self.config.hydra.verbose)
+                progress.step(_outcome(runs[-1]))
             return runs
         from joblib import Parallel, delayed
 
         state = Singleton.get_state()
-        return Parallel(n_jobs=workers, backend="loky")(
-            delayed(_run)(config, self.hydra_context, self.task_function, state, _prepared(config))
-            for config in configs)
+        for ret in Parallel(n_jobs=workers, backend="loky", return_as="generator")(
+                delayed(_run)(config, self.hydra_context, self.task_function, state, _prepared(config))
+                for config in configs):
+            runs.append(ret)
+            progress.step(_outcome(ret))
+        return runs
 
     def job_config(self, idx: int, overrides: Sequence[str]) -> DictConfig:
         """The config Hydra's loader composes for these overrides, with job id and number."""
@@ -123,6 +132,18 @@ class CdprLauncher(Launcher):
             config.hydra.job.id = idx
             config.hydra.job.num = idx
         return config
+
+
+def _outcome(ret: JobReturn) -> str:
+    """A finished job for the progress line: its overrides and feasible count."""
+    name = " ".join(filter_overrides(ret.overrides or [])) or "job"
+    if ret.status != JobStatus.COMPLETED:
+        return f"{name}: failed"
+    summary = ret.return_value
+    if isinstance(summary, dict) and "n_feasible" in summary:
+        return (f"{name}: {summary['n_feasible']}/{summary['n_points']} feasible "
+                f"({summary['feasible_pct']:.2f} %)")
+    return name
 
 
 def _prepared(config: DictConfig) -> Optional[Tuple[str, Any]]:

@@ -1,0 +1,74 @@
+"""Progress lines (pipeline.progress) and the warning before a long job (the cost model)."""
+
+import logging
+
+import pytest
+
+from pipeline.preflight import check
+from pipeline.progress import Progress, clock_text
+from pipeline.workspace import announce_cost, build_problem, estimated_seconds
+
+
+class Clock:
+    def __init__(self):
+        self.now = 0.0
+
+    def __call__(self):
+        return self.now
+
+
+def test_chunks_are_reported_at_most_every_interval_and_at_the_end(caplog):
+    clock = Clock()
+    progress = Progress("chunks", 100, logging.getLogger("t"), every=10.0, clock=clock)
+    with caplog.at_level(logging.INFO, logger="t"):
+        for _ in range(100):
+            clock.now += 1.0  # 1 s per chunk: a line every 10 chunks
+            progress.step()
+    lines = [r.getMessage() for r in caplog.records]
+    assert len(lines) == 10
+    assert lines[0] == "chunks 10/100 (10%), 0:10 elapsed, about 1:30 left"
+    assert lines[-1] == "chunks 100/100 (100%), 1:40 elapsed"
+
+
+def test_jobs_are_reported_one_line_each_with_their_result(caplog):
+    clock = Clock()
+    progress = Progress("jobs", 3, logging.getLogger("t"), clock=clock)
+    with caplog.at_level(logging.INFO, logger="t"):
+        for result in ("a", "b", "c"):
+            clock.now += 20.0
+            progress.step(result)
+    assert [r.getMessage() for r in caplog.records] == [
+        "jobs 1/3 (33%), 0:20 elapsed, about 0:40 left: a",
+        "jobs 2/3 (67%), 0:40 elapsed, about 0:20 left: b",
+        "jobs 3/3 (100%), 1:00 elapsed: c"]
+
+
+def test_a_single_step_is_not_reported(caplog):
+    with caplog.at_level(logging.INFO, logger="t"):
+        Progress("chunks", 1, logging.getLogger("t")).step()
+    assert not caplog.records
+
+
+@pytest.mark.parametrize("seconds, text", [(0, "0:00"), (59.6, "1:00"), (3599, "59:59"), (3723, "1:02:03")])
+def test_clock_text(seconds, text):
+    assert clock_text(seconds) == text
+
+
+def test_a_dense_grid_without_n_vel_is_announced_with_the_key_to_change(caplog):
+    """40^3 poses with grid.n_vel null test 33 371 velocities each: about a minute on 2 cores
+    by the cost model, so a warning names grid.n_vel; with grid.n_vel=6 the job is quiet."""
+    ((cfg, catalogue),) = check(["grid.n=40"]).values()
+    problem, grid = build_problem(cfg, catalogue)
+    assert problem.spec.set_size() == 33371
+    assert estimated_seconds(problem, grid.n_points) == pytest.approx(64000 * 33371 / 93 / 200_000)
+    with caplog.at_level(logging.WARNING, logger="pipeline"):
+        announce_cost(cfg, problem, grid.n_points, 2)
+    (record,) = caplog.records
+    assert record.getMessage().startswith("this job evaluates 64000 poses x 1 orientations: about 0:57 on 2 cores")
+    assert "grid.n_vel is null, so each pose tests 33371 velocities" in record.getMessage()
+    caplog.clear()
+    ((quick, _),) = check(["grid.n=40", "grid.n_vel=6"]).values()
+    problem, grid = build_problem(quick, catalogue)
+    with caplog.at_level(logging.WARNING, logger="pipeline"):
+        announce_cost(quick, problem, grid.n_points, 2)
+    assert not caplog.records
