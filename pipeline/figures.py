@@ -39,7 +39,8 @@ class FigureSpec:
     take the listed values; ``hline`` is a number or a summary column; ``invert_z`` draws z
     downwards; ``panels`` the feasibility columns a cloud shows side by side, or, with
     ``panels_from`` (e.g. ``tension.model``), that column's values, one job each per ``per``
-    group; ``line`` the simulated line of a time series."""
+    group; ``line`` the simulated line of a time series; ``caption`` what the figure shows and
+    what to conclude (``{column}`` fields as in ``title``), printed under it in the report."""
 
     kind: str
     file: str
@@ -58,6 +59,7 @@ class FigureSpec:
     panels_from: Optional[str] = None
     line: int = 0
     select: dict[str, Any] = field(default_factory=dict)
+    caption: Optional[str] = None
 
 
 class StudyResults:
@@ -108,7 +110,7 @@ def choice_bar(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out
     ax.set_ylim(0, 110)
     _labels(ax, spec, "actuator (catalogue power)", "feasible workspace x(i_a) (%)")
     ax.legend(loc="upper right")
-    return [_save(fig, out_dir / spec.file)]
+    return [_save(fig, spec, out_dir)]
 
 
 def limiting_bar(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
@@ -131,7 +133,7 @@ def limiting_bar(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, o
     ax.set_ylim(0, 100)
     _labels(ax, spec, "actuator", "share of the geometric workspace grid (%)")
     ax.legend(loc="upper left", bbox_to_anchor=(1.0, 1.0))
-    return [_save(fig, out_dir / spec.file)]
+    return [_save(fig, spec, out_dir)]
 
 
 def cloud(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
@@ -165,7 +167,7 @@ def _cloud_figure(spec: FigureSpec, panels: list, job: pd.Series, out_dir: Path)
         if title:
             ax.set_title(title, fontsize=9)
     fig.suptitle(_fill(spec.title or "", job), fontsize=10)
-    png = _save(fig, out_dir / _fill(spec.file, job))
+    png = _save(fig, spec, out_dir, job)
     write_view(panels, _fill(spec.title or "", job), spec.invert_z, png.with_suffix(".json"))
     return png
 
@@ -215,7 +217,7 @@ def timeseries(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out
                        bbox_to_anchor=(0.5, 1.0))
         axes[-1].set_xlabel("t (s)")
         fig.suptitle(_fill(spec.title or "", job), fontsize=10, y=1.02)
-        written.append(_save(fig, out_dir / _fill(spec.file, job)))
+        written.append(_save(fig, spec, out_dir, job))
     return written
 
 
@@ -245,7 +247,7 @@ def survival_bar(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, o
     axes[0, -1].legend(loc="upper right", fontsize=7)
     if spec.title:
         fig.suptitle(spec.title, fontsize=10)
-    return [_save(fig, out_dir / spec.file)]
+    return [_save(fig, spec, out_dir)]
 
 
 def curve(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
@@ -263,9 +265,9 @@ def curve(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir:
         level = float(table[spec.hline].iloc[0]) if isinstance(spec.hline, str) else spec.hline
         ax.axhline(level, color="0.3", linestyle="--", lw=1, label=f"required {level:g}")
     if spec.hue or spec.hline is not None:
-        ax.legend(title=spec.hue)
+        ax.legend(title=label(spec.hue) if spec.hue else None)
     _labels(ax, spec, spec.x, spec.y, table.iloc[0])
-    png = _save(fig, out_dir / _fill(spec.file, table.iloc[0]))
+    png = _save(fig, spec, out_dir, table.iloc[0])
     return [png, _series(data, spec, out_dir.parent / SERIES_DIR / png.with_suffix(".csv").name)]
 
 
@@ -296,10 +298,12 @@ def _field(text) -> str:
 def heatmap(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
     """``value`` over two swept keys ``x`` and ``y``, one panel per ``facet`` value (Figs. 16-29)."""
     facets = sorted(table[spec.facet].unique()) if spec.facet else [None]
-    fig = Figure(figsize=(2.6 * len(facets) + 0.8, 2.9))
+    fig = Figure(figsize=(2.6 * len(facets) + 0.8, 3.1), layout="constrained")  # no title overlap
     axes = fig.subplots(1, len(facets), squeeze=False, sharey=True)
     values = _column(table, spec.value)
     vmin, vmax = float(values.min()), float(values.max())
+    if vmax == vmin:  # one value everywhere (e.g. no pose holds any of these wrenches): one colour
+        vmin, vmax = vmin - 0.5, vmax + 0.5
     for ax, facet in zip(axes[0], facets):
         part = table if facet is None else table[table[spec.facet] == facet]
         grid = pd.DataFrame({"x": _column(part, spec.x), "y": _column(part, spec.y),
@@ -308,12 +312,14 @@ def heatmap(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_di
         grid = grid.rename(index="{:g}".format, columns="{:g}".format)
         sns.heatmap(grid, ax=ax, vmin=vmin, vmax=vmax, cmap="viridis", annot=True, fmt=".0f",
                     annot_kws={"fontsize": 6}, cbar=ax is axes[0][-1], square=False)
-        ax.set_title("" if facet is None else f"{spec.facet} = {facet:g}", fontsize=8)
+        ax.set_title("" if facet is None else f"{label(spec.facet)} = {facet:g}", fontsize=8)
         ax.set_xlabel(spec.xlabel or spec.x)
         ax.set_ylabel(spec.ylabel or spec.y if ax is axes[0][0] else "")
     if spec.title:
-        fig.suptitle(_fill(spec.title, table.iloc[0]), fontsize=10)
-    return [_save(fig, out_dir / _fill(spec.file, table.iloc[0]))]
+        fig.suptitle(_fill(spec.title, table.iloc[0])
+                     + (f" (every value {float(values.iloc[0]):g})" if values.nunique() == 1 else ""),
+                     fontsize=10)
+    return [_save(fig, spec, out_dir, table.iloc[0])]
 
 
 KINDS: dict[str, Callable[[FigureSpec, pd.DataFrame, StudyResults, Path], list[Path]]] = {
@@ -325,6 +331,17 @@ KINDS: dict[str, Callable[[FigureSpec, pd.DataFrame, StudyResults, Path], list[P
     "curve": curve,
     "heatmap": heatmap,
 }
+
+
+# Config keys as a reader names them (legend titles, panel titles).
+LABELS = {"robot.gamma_deg": "γ (deg)", "robot.r_end": "r_end (m)", "robot.r_base": "r_base (m)",
+          "load.mass": "load mass (kg)", "motion.v_max": "V_cmax (m/s)",
+          "drive.winch_radius": "winch radius R_i (m)", "drive.gear_ratio": "gear ratio N_V",
+          "tension.model": "tension model", "case": "orientation"}
+
+
+def label(key: str) -> str:
+    return LABELS.get(key, key)
 
 
 def _column(table: pd.DataFrame, expression: str) -> pd.Series:
@@ -363,7 +380,22 @@ def _box(ax, row: pd.Series) -> None:
                 ax.plot(*edge.T, color="0.4", lw=0.6)
 
 
-def _save(fig, path: Path) -> Path:
+def _save(fig, spec: FigureSpec, out_dir: Path, row: pd.Series | None = None) -> Path:
+    """Save as ``spec.file`` (its fields filled from ``row``), with the filled caption as the
+    PNG's Description (the report prints it under the figure: :func:`caption`)."""
+    fill = (lambda text: text) if row is None else (lambda text: _fill(text, row))
+    path = out_dir / fill(spec.file)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, metadata={"Software": None})
+    meta = {"Software": None}
+    if spec.caption:
+        meta["Description"] = " ".join(fill(spec.caption).split())
+    fig.savefig(path, metadata=meta)
     return path
+
+
+def caption(png: Path) -> str | None:
+    """The caption a figure was saved with (None for a figure without one)."""
+    from PIL import Image
+
+    with Image.open(png) as image:
+        return image.text.get("Description")

@@ -17,6 +17,8 @@ from urllib.parse import quote
 
 import pandas as pd
 
+from pipeline.choice import verdict
+from pipeline.figures import caption, label
 from pipeline.paper import TABLE2_ACCEPTED, TABLE2_FEASIBLE_PCT
 from pipeline.errors import one_line
 from pipeline.results import code_version
@@ -52,12 +54,16 @@ def build(studies_dir: Path = OUTPUT_DIR, out: Path = REPORT_DIR) -> Path:
     for name in available():
         study = load_study(name)
         figures = sorted((studies_dir / name / "figures").glob("*.png"))
-        lines += [f"### {md(study.title)}", "", f"`{name}`: {md(study.source)}.", ""]
+        lines += [f"### {md(study.title)}", "", f"`{name}`: {md(study.source)}.", "",
+                  *_answer(studies_dir / name)]
         for figure in figures:
             target = tmp / "figures" / name / figure.name
             target.parent.mkdir(parents=True, exist_ok=True)
             shutil.copyfile(figure, target)
-            lines += [f"![{md(figure.stem)}](figures/{quote(name)}/{quote(figure.name)})", ""]
+            text = caption(figure)
+            lines += [f"![{md(text or figure.stem)}](figures/{quote(name)}/{quote(figure.name)})", ""]
+            if text:
+                lines += [f"*{md(text)}*", ""]
             if figure.with_suffix(".json").exists():  # a cloud: its interactive view
                 lines.append(View(figure.with_suffix(".json"), "(rotate, zoom, hover for the margins)"))
     (tmp / "index.md").write_text("\n".join(
@@ -67,6 +73,24 @@ def build(studies_dir: Path = OUTPUT_DIR, out: Path = REPORT_DIR) -> Path:
     shutil.rmtree(out, ignore_errors=True)
     tmp.rename(out)
     return out / "index.md"
+
+
+def _answer(directory: Path) -> list[str]:
+    """A study's answer in words, from its analysis tables: the actuator choice's verdict, the
+    values of a design variable at which each actuator is accepted."""
+    lines = []
+    if (directory / "choice.parquet").exists():
+        lines += [md(verdict(pd.read_parquet(directory / "choice.parquet"))).capitalize() + ".", ""]
+    if (directory / "acceptance.parquet").exists():
+        table = pd.read_parquet(directory / "acceptance.parquet")
+        parts = []
+        for actuator, part in table.groupby("actuator", sort=True):
+            values = part.loc[part["accepted"], "value"]
+            parts.append(f"actuator {actuator} at " + (", ".join(f"{v:g}" for v in values) if len(values)
+                                                        else "none of the values tried"))
+        lines += [f"Accepted (x ≥ {table['required_pct'].iloc[0]:g} %) by "
+                  f"{md(label(table['parameter'].iloc[0]))}: " + "; ".join(parts) + ".", ""]
+    return lines
 
 
 def _table2(studies_dir: Path) -> list[str]:

@@ -79,12 +79,35 @@ def test_report_compares_paper_and_ours_and_carries_the_figures(studies, tmp_pat
     assert "*Interactive 3-D view of this figure: index.html.*" in text
 
 
-def _png(path):
+def _png(path, caption=None):
     from matplotlib.figure import Figure
 
     fig = Figure(figsize=(2, 1))
     fig.subplots().plot([0, 1], [0, 1])
-    fig.savefig(path)
+    fig.savefig(path, metadata={"Description": caption} if caption else None)
+
+
+def test_the_report_gives_each_studys_answer_and_the_figures_captions(studies, tmp_path, monkeypatch,
+                                                                      make_cfg, catalogue):
+    """Captions come from the figures (their PNG Description, written by pipeline.figures),
+    answers from the analysis tables: the choice's verdict, a design study's accepted values."""
+    from pipeline.choice import acceptance
+
+    _png(studies / "actuator_choice" / "figures" / "fig9.png", "Feasible share | per actuator")
+    design = studies / "design_mass"
+    (design / "figures").mkdir(parents=True)
+    summary = pd.DataFrame([{**compute_workspace(make_cfg(f"actuator={a}", f"load.mass={m}"), catalogue)[1],
+                             "job": f"{a}-{m}"} for a in (1, 3) for m in (0.5, 4.0)])
+    summary.to_parquet(design / "summary.parquet")
+    acceptance(summary).to_parquet(design / "acceptance.parquet")
+    monkeypatch.setattr(pipeline.report, "available", lambda: [*STUDIES, "design_mass"])
+    text = pipeline.report.build(studies, tmp_path / "report").read_text()
+    assert ("Actuator choice at x &gt;= 90 %: accept 1, 2; reject 3 85.19 % (lost to torque 32); "
+            "4 85.19 % (lost to voltage 32); 5 11.11 % (lost to torque 192).") in text
+    assert "Accepted (x ≥ 90 %) by load mass (kg): actuator 1 at 0.5, 4; actuator 3 at 0.5." in text
+    assert "![Feasible share \\| per actuator](figures/actuator_choice/fig9.png)" in text
+    assert "*Feasible share \\| per actuator*" in text
+
 
 
 def test_html_page_has_the_tables_figures_and_views_and_needs_no_network(studies, tmp_path, monkeypatch):

@@ -23,7 +23,7 @@ def files(root: Path) -> dict[str, bytes]:
     """Every Parquet and PNG file under root, by relative path (logs and Hydra's own YAML,
     which carry timestamps, are not results)."""
     return {str(p.relative_to(root)): p.read_bytes() for p in sorted(root.rglob("*"))
-            if p.suffix in (".parquet", ".png")}
+            if p.suffix in (".parquet", ".png", ".json", ".csv")}
 
 
 def test_rerun_gives_byte_identical_parquet_and_figures(tmp_path):
@@ -31,7 +31,8 @@ def test_rerun_gives_byte_identical_parquet_and_figures(tmp_path):
         proc = study(tmp_path, "actuator_choice", "--out", out)
         assert proc.returncode == 0, proc.stderr
     first, second = files(tmp_path / "a"), files(tmp_path / "b")
-    assert len(first) == 5 * 2 + 1 + 2 + 7  # jobs, sweep summary, study summary + choice, figures
+    # jobs, sweep summary, study summary + choice (+ CSV), 7 figures, 5 views, metrics.json
+    assert len(first) == 5 * 2 + 1 + 2 + 1 + 7 + 5 + 1
     assert first == second
 
 

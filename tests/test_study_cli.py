@@ -37,6 +37,10 @@ def test_choice_command_accepts_actuators_1_and_2_and_draws_every_figure(choice_
         ["fig9_feasible_share_by_actuator.png", "limiting_constraints_by_actuator.png"]
         + [f"fig8_workspace_actuator{a}.{kind}" for a in range(1, 6) for kind in ("png", "json")]
     )  # each workspace picture with its interactive view (pipeline/views.py)
+    from pipeline.figures import caption
+
+    assert caption(choice_run / "figures" / "fig8_workspace_actuator5.png").endswith(
+        "24 of 216 points are feasible.")  # the study's caption, filled from the job
 
 
 def test_figures_are_drawn_from_the_parquet_results(choice_run, monkeypatch):

@@ -206,7 +206,8 @@ def test_comparison_study_reports_the_surviving_share_per_actuator_and_orientati
     assert (losses == table["n_paper"] - table["n_survive"]).all()
     figures = sorted(p.name for p in (out / "figures").iterdir())
     assert figures == sorted(["survival_by_actuator.png"] + [
-        f"tension_{case}_actuator{a}.png" for case in ("zero", "rot05") for a in range(1, 6)])
+        f"tension_{case}_actuator{a}.{kind}" for case in ("zero", "rot05") for a in range(1, 6)
+        for kind in ("png", "json")])  # each cloud with its interactive view
 
 
 def test_forces_only_loses_the_outer_ring_of_the_lower_layers_to_slack(make_cfg, catalogue):
