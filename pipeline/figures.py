@@ -26,6 +26,7 @@ from pipeline.views import write_view
 
 STYLE = "pipeline.styles.paper"
 FEASIBLE_COLOUR = "#009E73"
+MANY_BARS = 10  # a choice bar chart with more actuators turns its labels upright
 SERIES_DIR = "series"  # beside figures/: the curves' numbers as CSV
 PANEL_TITLES = {"feasible_grid": "CPR-WWA grid", "feasible": "simulated lines"}
 
@@ -40,7 +41,8 @@ class FigureSpec:
     downwards; ``panels`` the feasibility columns a cloud shows side by side, or, with
     ``panels_from`` (e.g. ``tension.model``), that column's values, one job each per ``per``
     group; ``line`` the simulated line of a time series; ``caption`` what the figure shows and
-    what to conclude (``{column}`` fields as in ``title``), printed under it in the report."""
+    what to conclude (``{column}`` fields as in ``title``), printed under it in the report;
+    ``bars`` draws a curve's categories (actuator ids) as grouped bars."""
 
     kind: str
     file: str
@@ -60,6 +62,7 @@ class FigureSpec:
     line: int = 0
     select: dict[str, Any] = field(default_factory=dict)
     caption: Optional[str] = None
+    bars: bool = False
 
 
 class StudyResults:
@@ -97,17 +100,21 @@ def render(spec: FigureSpec, results: StudyResults, out_dir: Path) -> list[Path]
 def choice_bar(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
     """Fig. 9: feasible share per actuator, accepted ones shaded as in Table 2, x % as a line."""
     choice = results.table("choice").sort_values("actuator")
-    fig = Figure()
+    many = len(choice) > MANY_BARS  # a user catalogue: upright labels would overlap
+    width, height = matplotlib.rcParams["figure.figsize"]
+    fig = Figure(figsize=(max(width, 0.42 * len(choice)), height + (0.8 if many else 0.0)))
     ax = fig.subplots()
     colours = ["0.45" if ok else "0.82" for ok in choice["accepted"]]
-    labels = [f"{a}\n{p:g} W" for a, p in zip(choice["actuator"], choice["actuator_power_W"])]
+    separator = " " if many else "\n"
+    labels = [f"{a}{separator}{p:g} W" for a, p in zip(choice["actuator"], choice["actuator_power_W"])]
     at = np.arange(len(choice))
     bars = ax.bar(at, choice["feasible_pct"], color=colours, edgecolor="black", linewidth=0.6)
-    ax.set_xticks(at, labels)
-    ax.bar_label(bars, fmt="%.2f", padding=2, fontsize=8)
+    ax.set_xticks(at, labels, rotation=90 if many else 0, fontsize=7 if many else None)
+    ax.bar_label(bars, fmt="%.1f" if many else "%.2f", padding=2, fontsize=6 if many else 8,
+                 rotation=90 if many else 0)
     required = float(choice["required_pct"].iloc[0])
     ax.axhline(required, color="#D55E00", linestyle="--", label=f"required x = {required:g} %")
-    ax.set_ylim(0, 110)
+    ax.set_ylim(0, 125 if many else 110)  # many: room for upright value labels under the legend
     _labels(ax, spec, "actuator (catalogue power)", "feasible workspace x(i_a) (%)")
     ax.legend(loc="upper right")
     return [_save(fig, spec, out_dir)]
@@ -255,7 +262,13 @@ def curve(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir:
     data = pd.DataFrame({"x": _column(table, spec.x), "y": _column(table, spec.y)})
     fig = Figure()
     ax = fig.subplots()
-    if spec.hue:  # colour and marker both vary, so coinciding lines stay distinguishable
+    if spec.bars:  # categories on x (actuator ids): grouped bars, no line between them
+        if spec.hue:
+            data[spec.hue] = table[spec.hue].astype(str).to_numpy()
+        sns.barplot(data=data, x="x", y="y", hue=spec.hue, ax=ax, errorbar=None,
+                    edgecolor="black", linewidth=0.4)
+        ax.set_ylim(0, 1.2 * float(data["y"].max()))  # room for the legend above the bars
+    elif spec.hue:  # colour and marker both vary, so coinciding lines stay distinguishable
         data[spec.hue] = table[spec.hue].astype(str).to_numpy()
         sns.lineplot(data=data, x="x", y="y", hue=spec.hue, style=spec.hue, markers=True,
                      dashes=False, ax=ax, errorbar=None)
@@ -265,7 +278,8 @@ def curve(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir:
         level = float(table[spec.hline].iloc[0]) if isinstance(spec.hline, str) else spec.hline
         ax.axhline(level, color="0.3", linestyle="--", lw=1, label=f"required {level:g}")
     if spec.hue or spec.hline is not None:
-        ax.legend(title=label(spec.hue) if spec.hue else None)
+        ax.legend(title=label(spec.hue) if spec.hue else None,
+                  **({"loc": "upper center", "ncol": data[spec.hue].nunique()} if spec.bars and spec.hue else {}))
     _labels(ax, spec, spec.x, spec.y, table.iloc[0])
     png = _save(fig, spec, out_dir, table.iloc[0])
     return [png, _series(data, spec, out_dir.parent / SERIES_DIR / png.with_suffix(".csv").name)]
