@@ -161,7 +161,7 @@ def _irpm(studies_dir: Path) -> list[str]:
 
 def _tensions(studies_dir: Path) -> list[str]:
     table = pd.read_parquet(studies_dir / "tension_comparison" / "survival.parquet")
-    rows = ["## CPR-8, the paper's torques against cables that can only pull (issue 8)", "",
+    rows = ["## CPR-8, the paper's torques against cables that can only pull", "",
             "No paper number: the papers never check the sign of a tension. Share of the "
             "minimum-norm (pinv) feasible points that stay feasible when the tensions must pull "
             "(`tension.model=feasible`), in %, and the feasible counts pinv → pulling of 216:", "",

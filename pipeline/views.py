@@ -52,10 +52,10 @@ def _traces(points: pd.DataFrame, column: str, legend: bool) -> list[dict]:
     if len(infeasible) > room:
         infeasible = infeasible.iloc[np.sort(np.random.default_rng(0).choice(len(infeasible), room, replace=False))]
     if limiting in points:
-        groups += [(str(name), group, COLOURS.get(str(name), "#777777"), "x")
+        groups += [(str(name), group, COLOURS.get(str(name), "#777777"), "diamond")
                    for name, group in infeasible.groupby(limiting, observed=True)]
     else:
-        groups.append(("infeasible", infeasible, "#777777", "x"))
+        groups.append(("infeasible", infeasible, "#777777", "diamond"))
     total = {name: int(count) for name, count in (
         points.loc[~feasible, limiting].astype(str).value_counts().items() if limiting in points
         else [("infeasible", int((~feasible).sum()))])}
