@@ -20,12 +20,11 @@ import pandas as pd
 import seaborn as sns
 from matplotlib.figure import Figure
 
-from pipeline.criteria import COLOURS
+from pipeline.criteria import COLOURS, FEASIBLE_COLOUR
 from pipeline.results import write_csv
 from pipeline.views import write_view
 
 STYLE = "pipeline.styles.paper"
-FEASIBLE_COLOUR = "#009E73"
 MANY_BARS = 10  # a choice bar chart with more actuators turns its labels upright
 SERIES_DIR = "series"  # beside figures/: the curves' numbers as CSV
 PANEL_TITLES = {"feasible_grid": "CPR-WWA grid", "feasible": "simulated lines"}

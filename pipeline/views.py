@@ -12,11 +12,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from pipeline.criteria import COLOURS
+from pipeline.criteria import COLOURS, FEASIBLE_COLOUR
 from pipeline.results import write_text
 
 MAX_POINTS = 6000  # per panel: the page stays light with ~40 views
-FEASIBLE_COLOUR = "#009E73"
 
 
 def write_view(panels: list[tuple[pd.DataFrame, str, str | None]], title: str, invert_z: bool,

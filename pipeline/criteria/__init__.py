@@ -48,3 +48,4 @@ REGISTRY: dict[str, Criterion] = {c.name: c for c in (
 GATES = tuple(sorted((c.name for c in REGISTRY.values() if c.gate is not None),
                      key=lambda name: REGISTRY[name].gate))
 COLOURS = {c.name: c.colour for c in REGISTRY.values()}
+FEASIBLE_COLOUR = "#009E73"  # feasible points and shares, in every figure and view
