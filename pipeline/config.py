@@ -120,6 +120,14 @@ class Spacing(Enum):
     centred = "centred"
 
 
+class LineSamples(Enum):
+    """Which straight lines' samples ``analysis=lines`` writes to samples.parquet: the first
+    (line O''-F'', the one Fig. 6 draws; 0.1 MB a job) or all 72 (7 MB a job)."""
+
+    first = "first"
+    all = "all"
+
+
 @dataclass
 class FrameConfig:
     """Frame d * s * v (m): the theoretical workspace of Fig. 2."""
@@ -349,6 +357,15 @@ class ComputeConfig:
 
 
 @dataclass
+class LinesConfig:
+    """Straight-line simulations (analysis=lines, section 3.1.3 of the CPR-8 paper): samples =
+    first writes the samples of line O''-F'' only (what Fig. 6 draws), all those of every line.
+    The verdicts of every line are in points.parquet either way."""
+
+    samples: LineSamples = LineSamples.first
+
+
+@dataclass
 class OutputConfig:
     """``cables``: add per-pose cable lengths and tensions to points.parquet
     (``pipeline.quantities``)."""
@@ -380,6 +397,7 @@ class Config:
     model: ModelConfig = field(default_factory=ModelConfig)
     compute: ComputeConfig = field(default_factory=ComputeConfig)
     output: OutputConfig = field(default_factory=OutputConfig)
+    lines: LinesConfig = field(default_factory=LinesConfig)
     poses: Any = None
 
 

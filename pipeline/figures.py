@@ -21,6 +21,7 @@ import seaborn as sns
 from matplotlib.figure import Figure
 
 from pipeline.criteria import COLOURS, FEASIBLE_COLOUR
+from pipeline.errors import ConfigError
 from pipeline.results import write_csv
 from pipeline.views import write_view
 
@@ -209,6 +210,9 @@ def timeseries(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out
     for _, job in table.iterrows():
         samples = results.samples(job["job"])
         line = samples[samples["line"] == spec.line]
+        if line.empty:
+            raise ConfigError(f"{job['job']}: no samples of line {spec.line} (only line 0 is "
+                             "written unless lines.samples=all)")
         cables = sum(c.startswith("theta_dot_") for c in samples.columns)
         fig = Figure(figsize=(6.4, 7.0))
         axes = fig.subplots(3, 1, sharex=True)

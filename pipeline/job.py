@@ -98,6 +98,8 @@ def _run_locked(cfg: DictConfig, catalogue, out: Path) -> dict:
         return done
     if analysis_name(cfg) == "lines":
         samples, points, summary = simulate_lines(cfg, catalogue)
+        if cfg.lines.samples.name == "first":  # the verdicts of every line are in points.parquet
+            samples = samples[samples["line"] == 0].reset_index(drop=True)
         write_parquet(samples, out / "samples.parquet", config_yaml)
         log.info("%d lines, %d samples; simulated %d vs grid %d feasible points, agreement %.1f%%",
                  summary["n_lines"], summary["n_samples"], summary["n_feasible"],

@@ -68,6 +68,8 @@ CASES = [
     ("pipeline", ["actuator=[1,2"], "actuator=[1,2"),
     ("pipeline", ["load.mass=1,2"], "load.mass"),
     ("pipeline", ["analysis=dynamics"], "dynamics"),
+    ("pipeline", ["analysis=lines", "lines.samples=some"], "lines.samples=some"),
+    ("pipeline", ["lines.samples=all"], "lines.samples=all: no such key"),
     ("pipeline", ["tension.model=lp"], "tension.model"),
     ("pipeline", ["load.external=[0,0,-5]"], "load.external"),
     ("pipeline", ["tension.model=feasible", "tension.t_min=-5"], "tension.t_min=-5"),

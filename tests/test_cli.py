@@ -69,6 +69,15 @@ def test_line_simulation_job_writes_samples(tmp_path):
     summary = pd.read_parquet(job / "summary.parquet").iloc[0]
     assert (summary["n_feasible"], summary["n_feasible_grid"]) == (204, 208)
     assert "agreement 98.1%" in (job / "pipeline.log").read_text()
+    assert samples["line"].unique().tolist() == [0]  # lines.samples=first: line O''-F'' (Fig. 6)
+    assert summary["n_lines"] == 72 and summary["lines.samples"] == "first"
+    every = run(tmp_path, "analysis=lines", "actuator=2", "lines.samples=all", "hydra.run.dir=all")
+    assert every.returncode == 0, every.stderr
+    all_samples = pd.read_parquet(tmp_path / "all" / "samples.parquet")
+    assert all_samples["line"].nunique() == 72 and len(all_samples) == summary["n_samples"]
+    pd.testing.assert_frame_equal(all_samples[all_samples["line"] == 0].reset_index(drop=True), samples)
+    pd.testing.assert_frame_equal(pd.read_parquet(tmp_path / "all" / "points.parquet"),
+                                  pd.read_parquet(job / "points.parquet"))  # the same verdicts
 
 
 @pytest.mark.parametrize(
