@@ -42,7 +42,8 @@ class FigureSpec:
     ``panels_from`` (e.g. ``tension.model``), that column's values, one job each per ``per``
     group; ``line`` the simulated line of a time series; ``caption`` what the figure shows and
     what to conclude (``{column}`` fields as in ``title``), printed under it in the report;
-    ``bars`` draws a curve's categories (actuator ids) as grouped bars."""
+    ``bars`` draws a curve's categories (actuator ids) as grouped bars; ``legend`` titles a
+    curve's legend (default: the ``hue`` key in words)."""
 
     kind: str
     file: str
@@ -63,6 +64,7 @@ class FigureSpec:
     select: dict[str, Any] = field(default_factory=dict)
     caption: Optional[str] = None
     bars: bool = False
+    legend: Optional[str] = None
 
 
 class StudyResults:
@@ -235,11 +237,11 @@ def survival_bar(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, o
     """Issue 8: per actuator, the minimum-norm (paper) and the physically valid feasible share,
     labelled with the share of the former that survives; one panel per case and wrench rows."""
     data = results.table("survival")
-    cases, rows = data["case"].unique(), sorted(data["wrench_rows"].unique(), reverse=True)
+    cases, rows = data["case_label"].unique(), sorted(data["wrench_rows"].unique(), reverse=True)
     fig = Figure(figsize=(4.2 * len(cases), 3.3 * len(rows)), layout="constrained")
     axes = fig.subplots(len(rows), len(cases), squeeze=False, sharey=True)
     for (row, col), ax in np.ndenumerate(axes):
-        part = data[(data["wrench_rows"] == rows[row]) & (data["case"] == cases[col])]
+        part = data[(data["wrench_rows"] == rows[row]) & (data["case_label"] == cases[col])]
         part = part.sort_values("actuator")
         at = np.arange(len(part))
         ax.bar(at - 0.2, part["paper_pct"], 0.4, color="0.7", edgecolor="black", lw=0.4,
@@ -281,7 +283,7 @@ def curve(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir:
         level = float(table[spec.hline].iloc[0]) if isinstance(spec.hline, str) else spec.hline
         ax.axhline(level, color="0.3", linestyle="--", lw=1, label=f"required {level:g}")
     if spec.hue or spec.hline is not None:
-        ax.legend(title=label(spec.hue) if spec.hue else None,
+        ax.legend(title=spec.legend or (label(spec.hue) if spec.hue else None),
                   **({"loc": "upper center", "ncol": data[spec.hue].nunique()} if spec.bars and spec.hue else {}))
     _labels(ax, spec, spec.x, spec.y, table.iloc[0])
     png = _save(fig, spec, out_dir, table.iloc[0])
@@ -354,7 +356,7 @@ KINDS: dict[str, Callable[[FigureSpec, pd.DataFrame, StudyResults, Path], list[P
 LABELS = {"robot.gamma_deg": "γ (deg)", "robot.r_end": "r_end (m)", "robot.r_base": "r_base (m)",
           "load.mass": "load mass (kg)", "motion.v_max": "V_cmax (m/s)",
           "drive.winch_radius": "winch radius R_i (m)", "drive.gear_ratio": "gear ratio N_V",
-          "tension.model": "tension model", "case": "orientation"}
+          "tension.model": "tension model"}
 
 
 def label(key: str) -> str:

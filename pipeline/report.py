@@ -131,7 +131,7 @@ def _pulling_choice(studies_dir: Path, paper_model: pd.DataFrame) -> list[str]:
 
 def _lines_agreement(studies_dir: Path) -> list[str]:
     summary = pd.read_parquet(studies_dir / "line_simulation" / "summary.parquet")
-    table = summary.pivot_table(index=["model.pinv_columns", "case"], columns="actuator",
+    table = summary.pivot_table(index=["model.pinv_columns", "case_label"], columns="actuator",
                                 values="agreement_pct")
     rows = ["## CPR-8, straight lines against the grid (Figs. 4b, 5b, 6)", "",
             "The paper publishes no number here (Fig. 5's share is withheld); it states that "
@@ -169,7 +169,7 @@ def _tensions(studies_dir: Path) -> list[str]:
                 f"act. {a}" for a in sorted(table["actuator"].unique())) + " |",
             "| --- |" + " --- |" * table["actuator"].nunique()]
     table = table.sort_values("wrench_rows", ascending=False, kind="stable")  # the paper's first
-    for (reading, case), part in table.groupby(["wrench_rows", "case"], sort=False):
+    for (reading, case), part in table.groupby(["wrench_rows", "case_label"], sort=False):
         cells = [f"{'–' if pd.isna(r.survive_pct) else f'{r.survive_pct:.1f}'} "
                  f"({r.n_paper} → {r.n_physical})" for r in part.sort_values("actuator").itertuples()]
         rows.append(f"| {md(reading)}, {md(case)} | " + " | ".join(md(c) for c in cells) + " |")

@@ -65,13 +65,17 @@ class StudySpec:
     """A study file. ``sweep`` maps a key to Hydra sweep values (``"0,15,30,45"``,
     ``"range(1,6)"``); the value ``catalogue`` sweeps ``actuator`` over every id of the
     configured catalogue. ``cases`` (name -> overrides) repeats the sweep once per case, for
-    settings that are not a cartesian product (e.g. the radii pairs of one paper figure each)."""
+    settings that are not a cartesian product (e.g. the radii pairs of one paper figure each);
+    ``case_labels`` (name -> words) is what a reader calls a case, in the summary's
+    ``case_label`` column for titles, captions, legends and report tables (default: the name,
+    which stays the folder name)."""
 
     title: str
     source: str
     overrides: list[str] = field(default_factory=list)
     sweep: dict[str, str] = field(default_factory=dict)
     cases: dict[str, list[str]] = field(default_factory=dict)
+    case_labels: dict[str, str] = field(default_factory=dict)
     analyses: list[str] = field(default_factory=list)
     figures: list[FigureSpec] = field(default_factory=list)
     name: Optional[str] = None
@@ -98,6 +102,10 @@ def load_study(name: str, directory: Path = STUDIES_DIR) -> StudySpec:
                 *(_key(o) for case in study.cases.values() for o in case)]:
         if re.split(r"[./]", key)[0] == "hydra":  # callbacks and plugins run code: not from data
             raise ConfigError(f"{path}: {key}: a study file may not set Hydra's own settings")
+    for case in study.case_labels:
+        if case not in study.cases:
+            raise ConfigError(f"{path}: case_labels: {case!r} is not a case (cases: "
+                              f"{', '.join(study.cases) or 'none'})")
     for analysis in study.analyses:
         if analysis not in ANALYSES:
             raise ConfigError(f"{path}: analyses: unknown {analysis!r} (known: {', '.join(ANALYSES)})")
@@ -175,7 +183,7 @@ def run_study(name: str, extra: list[str], out_root: Path | None = None,
             finally:
                 PREPARED.clear()
             _log_to_console()  # Hydra set up logging for its jobs
-        write_parquet(_gather(out / "jobs", cases), out / "summary.parquet", provenance)
+        write_parquet(_gather(out / "jobs", cases, study.case_labels), out / "summary.parquet", provenance)
     results = StudyResults(out)
     try:
         results.summary  # noqa: B018  (read once: a missing or corrupt file fails here, clearly)
@@ -255,14 +263,16 @@ def _start_or_resume(jobs_dir: Path, commands: list[list[str]]) -> None:
     write_text(record, wanted)
 
 
-def _gather(jobs_dir: Path, cases: dict[str, list[str]]) -> pd.DataFrame:
-    """The sweep summaries of every case, with ``case`` and ``job`` (relative to jobs/)."""
+def _gather(jobs_dir: Path, cases: dict[str, list[str]], labels: dict[str, str]) -> pd.DataFrame:
+    """The sweep summaries of every case, with ``case``, ``case_label`` and ``job`` (relative
+    to jobs/)."""
     parts = []
     for case in cases:
         part = pd.read_parquet((jobs_dir / case if case else jobs_dir) / "summary.parquet")
         if case:
             part["job"] = case + "/" + part["job"]
         part.insert(0, "case", case)
+        part.insert(1, "case_label", labels.get(case, case))
         parts.append(part)
     return pd.concat(parts, ignore_index=True)
 

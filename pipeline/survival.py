@@ -39,7 +39,7 @@ def _compare(paper_job, paper: pd.DataFrame, job, physical: pd.DataFrame) -> dic
         raise ValueError(f"jobs {paper_job['job']} and {job['job']} are not on the same grid")
     was, now = paper["feasible"].to_numpy(), physical["feasible"].to_numpy()
     row = {
-        "case": job["case"], "actuator": job["actuator"], "actuator_name": job["actuator_name"],
+        "case": job["case"], "case_label": job["case_label"], "actuator": job["actuator"], "actuator_name": job["actuator_name"],
         "wrench_rows": job["model.pinv_columns"], "job": job["job"], "paper_job": paper_job["job"],
         "n_points": len(paper), "n_paper": int(was.sum()), "n_physical": int(now.sum()),
         "n_survive": int((was & now).sum()), "n_gained": int((now & ~was).sum()),

@@ -42,7 +42,7 @@ def studies(tmp_path, make_cfg, catalogue):
     pulling.to_parquet(root / "actuator_choice_pulling" / "summary.parquet")
     choose(pulling).to_parquet(root / "actuator_choice_pulling" / "choice.parquet")
     lines = pd.DataFrame([simulate_lines(make_cfg("analysis=lines", f"actuator={a}"), catalogue)[2]
-                          for a in (1, 2)]).assign(case="zero")
+                          for a in (1, 2)]).assign(case="zero", case_label="zero orientation")
     lines.to_parquet(root / "line_simulation" / "summary.parquet")
     irpm = pd.DataFrame([compute_workspace(make_cfg("robot=irpm6", f"robot.r_end={r}",
                                                     f"robot.gamma_deg={g}"), catalogue)[1]
@@ -53,7 +53,7 @@ def studies(tmp_path, make_cfg, catalogue):
         points, row = compute_workspace(make_cfg(f"tension.model={model}"), catalogue)
         (root / "tension_comparison" / "jobs" / model).mkdir(parents=True)
         points.to_parquet(root / "tension_comparison" / "jobs" / model / "points.parquet")
-        rows.append({**row, "job": model, "case": "zero"})
+        rows.append({**row, "job": model, "case": "zero", "case_label": "zero orientation"})
     pd.DataFrame(rows).to_parquet(root / "tension_comparison" / "summary.parquet")
     comparison = survival(StudyResults(root / "tension_comparison"))
     comparison.to_parquet(root / "tension_comparison" / "survival.parquet")
@@ -70,9 +70,9 @@ def test_report_compares_paper_and_ours_and_carries_the_figures(studies, tmp_pat
     assert "| 1 | 100.00 | 66.67 | yes → no | slack 72 |" in text  # cables that only pull
     assert "| 5 | 11.11 | 14.81 | no → no | slack 72, torque 112 |" in text
     assert "Accepted at x = 90 % with pulling cables: none." in text
-    assert "| translational, zero | 100.00 | 98.15 |" in text
+    assert "| translational, zero orientation | 100.00 | 98.15 |" in text
     assert "| 0.2 | 183.2 | 64.8 |" in text
-    assert "| translational, zero | 66.7 (216 → 144) |" in text
+    assert "| translational, zero orientation | 66.7 (216 → 144) |" in text
     assert "![fig9](figures/actuator_choice/fig9.png)" in text
     assert (tmp_path / "report" / "figures" / "actuator_choice" / "fig9.png").read_bytes() == (
         studies / "actuator_choice" / "figures" / "fig9.png").read_bytes()

@@ -141,6 +141,17 @@ def test_every_declared_study_parses():
         assert isinstance(load_study(name), StudySpec)
 
 
+def test_every_case_has_words_for_a_reader_and_a_label_names_a_case(tmp_path):
+    """Case names are folder names (``rot05``); titles, captions and tables use the labels."""
+    for name in available():
+        spec = load_study(name)
+        assert sorted(spec.case_labels) == sorted(spec.cases), name
+    (tmp_path / "label.yaml").write_text(
+        "title: t\nsource: s\ncases: {zero: []}\ncase_labels: {rot05: 'ψ = 0.5 rad'}\n")
+    with pytest.raises(ConfigError, match="case_labels: 'rot05' is not a case \\(cases: zero\\)"):
+        load_study("label", tmp_path)
+
+
 def test_a_folder_holding_another_configuration_is_not_replaced_without_force(tmp_path):
     first = study(tmp_path, "design_mass", "--out", "mine", "choice.required_pct=80")
     assert first.returncode == 0, first.stderr

@@ -14,6 +14,7 @@ from pipeline.actuators import ActuatorModel
 from pipeline.criteria import REGISTRY
 from pipeline.criteria.forces import tension_families
 from pipeline.dynamics import Load, MotionSpec, load_wrenches
+from pipeline.figures import caption
 from pipeline.geometry import CableRobot
 from pipeline.kernel import WorkspaceProblem, evaluate_chunk
 from pipeline.verdict import classify
@@ -208,6 +209,10 @@ def test_comparison_study_reports_the_surviving_share_per_actuator_and_orientati
     assert figures == sorted(["survival_by_actuator.png"] + [
         f"tension_{case}_actuator{a}.{kind}" for case in ("zero", "rot05") for a in range(1, 6)
         for kind in ("png", "json")])  # each cloud with its interactive view
+    assert caption(out / "figures" / "tension_rot05_actuator2.png") == (
+        "Actuator 2, ψ = θ = φ = 0.5 rad, forces only: the feasible points with the paper's "
+        "minimum-norm torques (left) and with pulling cables (right).")
+    assert set(table["case_label"]) == {"zero orientation", "ψ = θ = φ = 0.5 rad"}
 
 
 def test_forces_only_loses_the_outer_ring_of_the_lower_layers_to_slack(make_cfg, catalogue):
