@@ -96,6 +96,15 @@ class MomentArm(Enum):
     base = "base"
 
 
+class CableDirection(Enum):
+    """Where a cable of the IRPM statics pulls: from its anchor towards its attachment point
+    (physical) or towards the platform's reference point (the platform a point for the cables'
+    directions and lengths, moment arms R d_i kept; docs/model.md section 5)."""
+
+    attachment = "attachment"
+    centre = "centre"
+
+
 class TensionModel(Enum):
     """Cable forces the criteria check: minimum-norm (the papers' eq. 20 / eq. 10, any sign) or
     pulling cables only, chosen by linear programming (``pipeline.tensions``)."""
@@ -336,6 +345,7 @@ class ModelConfig:
     acceleration_set: AccelerationSet = AccelerationSet.corners
     inertia: Inertia = Inertia.paper
     moment_arm: MomentArm = MomentArm.platform
+    cable_direction: CableDirection = CableDirection.attachment
     jdot: bool = False
     xi_in_torque_limit: bool = True
     rank_rtol: float = rule(positive, 1e-9)

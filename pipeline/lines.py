@@ -26,7 +26,8 @@ DT = 0.01  # s, time step of the simulated lines
 
 def simulate_lines(cfg: DictConfig, catalogue: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame, dict]:
     """(samples, points, summary): every line sample, the grid points with both verdicts, and
-    the CPR-WWA summary extended with the simulated count and the agreement."""
+    the CPR-WWA summary extended with the simulated count, the agreement and, per criterion,
+    the smallest margin along line O''-F'' (``line0_margin_*``: Fig. 6's verdict per limit)."""
     problem, grid = build_problem(cfg, catalogue)
     points, summary = grid_workspace(cfg, problem, grid)
     lines = _lines(grid.positions)
@@ -74,6 +75,8 @@ def simulate_lines(cfg: DictConfig, catalogue: pd.DataFrame) -> tuple[pd.DataFra
         feasible_pct=100.0 * points["feasible"].mean(), agreement_pct=100.0 * agree.mean(),
         limit_speed=act.speed_limit, limit_torque=act.torque_limit,
         limit_acceleration=act.accel_limit, limit_voltage=act.voltage_limit,
+        **{f"line0_margin_{name}": float(samples.loc[samples["line"] == 0, f"margin_{name}"].min())
+           for name in problem.criteria},
     )
     summary["volume_m3"] = summary["n_feasible"] * grid.cell_volume
     return samples, points, summary

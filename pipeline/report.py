@@ -18,6 +18,7 @@ from urllib.parse import quote
 import pandas as pd
 
 from pipeline.choice import verdict
+from pipeline.evidence import POINTS, scores
 from pipeline.figures import caption, label
 from pipeline.paper import TABLE2_ACCEPTED, TABLE2_FEASIBLE_PCT
 from pipeline.errors import one_line
@@ -48,6 +49,7 @@ def build(studies_dir: Path = OUTPUT_DIR, out: Path = REPORT_DIR) -> Path:
         *_lines_agreement(studies_dir),
         *_irpm(studies_dir),
         *_tensions(studies_dir),
+        *_evidence(studies_dir),
         "## Figures",
         "",
     ]
@@ -175,6 +177,38 @@ def _tensions(studies_dir: Path) -> list[str]:
         rows.append(f"| {md(reading)}, {md(case)} | " + " | ".join(md(c) for c in cells) + " |")
     return rows + ["", "Forces only is the paper's reading of eq. (20); forces and moments "
                    "(`full`) also keeps the carrier's orientation (docs/model.md section 7).", ""]
+
+
+def _evidence(studies_dir: Path) -> list[str]:
+    """Every published fact against every reading (studies ``evidence_cpr8``, ``evidence_irpm``),
+    with each reading's joint score; the default reading's column first."""
+    rows = ["## The readings against all the published evidence", "",
+            "One row per published fact, one column per reading (the `model.*` switches that "
+            "differ from the defaults). ✓ the model agrees with the paper, ✗ it does not; a count "
+            "that does not agree says how many grid points it is off. Score: facts matched, then "
+            "the grid points off on the others (fewer is better); docs/model.md sections 4 and 5 "
+            "give the reasons for the defaults.", ""]
+    for name, paper in (("evidence_cpr8", "CPR-8 (Filipovic & Kevac 2018)"),
+                        ("evidence_irpm", "IRPM (Hamed & Zohoor)")):
+        table = pd.read_parquet(studies_dir / name / "evidence.parquet")
+        score = scores(table)
+        readings = [*score.loc[score["default"], "reading"], *score.loc[~score["default"], "reading"]]
+        rows += [f"### {paper}", "",
+                 "| fact | source | " + " | ".join(md(r) for r in readings) + " |",
+                 "| --- | --- |" + " --- |" * len(readings)]
+        for (fact, source, statement), part in table.groupby(["fact", "source", "statement"], sort=False):
+            cells = part.set_index("reading").loc[readings]
+            rows.append(f"| {md(statement)} | {md(source)} | " + " | ".join(
+                md(("✓ " if c.matches else "✗ ") + c.value
+                   + (f", {c.distance:.0f} off" if not c.matches and c.unit == POINTS else ""))
+                for c in cells.itertuples()) + " |")
+        by = score.set_index("reading").loc[readings]
+        rows += ["| **score** | | " + " | ".join(
+            f"**{r.matched} of {r.facts}**, {r.points:g} points" for r in by.itertuples()) + " |", ""]
+        best = score.iloc[0]
+        rows += [f"Best joint score: {md(best['reading'])} ({best['matched']} of {best['facts']} "
+                 f"facts, {best['points']:g} grid points off).", ""]
+    return rows
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -27,12 +27,18 @@ class StaticsSpec:
     ``moment_arm``: ``"platform"`` takes a_i = R d_i, moments about the platform's reference
     point O_M, where section IV applies the wrench; ``"base"`` takes eq. (9) literally,
     a_i = r + R d_i, moments about the base centre O_F (docs/model.md compares them).
+    ``cable_direction``: ``"attachment"`` takes each cable from its anchor to its attachment
+    point (eq. 1); ``"centre"`` from its anchor to the platform's reference point (directions and
+    lengths of a point platform, moment arms kept): with no applied moment the moment rows of
+    A s = f_ext are then r_end times rows that do not depend on r_end, so the tensions and the
+    volume do not either (the IRPM paper's conclusions 1, 4 and 5; docs/model.md section 5).
     ``rank_rtol``: a pose is singular when the gram ratio of A (``PoseStatics.gram_ratio``)
     falls below it. ``tension``: minimum-norm tensions (``pinv``, eq. 10) or pulling cables
     only (``feasible``, ``pipeline.tensions``; for six cables the same verdict).
     """
 
     moment_arm: str = "platform"
+    cable_direction: str = "attachment"
     rank_rtol: float = 1e-9
     tension: TensionSpec = field(default_factory=TensionSpec)
     load: Load = field(default_factory=Load)
@@ -63,6 +69,14 @@ class PoseStatics(PoseGeometry):
     def __init__(self, robot: CableRobot, positions: np.ndarray, orientation, spec: StaticsSpec):
         super().__init__(robot, positions, orientation)
         self.spec = spec
+
+    @cached_property
+    def vectors(self) -> np.ndarray:
+        """(n, m, 3) cable vectors from each anchor to its attachment point (eq. 1) or, with
+        ``cable_direction="centre"``, to the platform's reference point."""
+        if self.spec.cable_direction == "centre":
+            return self.positions[:, None, :] - self.robot.anchors[None, :, :]
+        return super().vectors
 
     @cached_property
     def structure_matrix(self) -> np.ndarray:

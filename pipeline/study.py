@@ -35,9 +35,10 @@ from pipeline.catalogue import load_catalogue
 from pipeline.choice import acceptance, choose, verdict
 from pipeline.cli import launch
 from pipeline.errors import ConfigError, one_line
+from pipeline.evidence import evidence, scores
 from pipeline.figures import SERIES_DIR, FigureSpec, StudyResults, render
 from pipeline.job import PREPARED
-from pipeline.preflight import check
+from pipeline.preflight import check, parse
 from pipeline.resources import STUDIES_DIR
 from pipeline.results import code_version, write_csv, write_parquet, write_text
 from pipeline.survival import survival
@@ -56,6 +57,7 @@ ANALYSES: dict[str, Callable[[StudyResults], pd.DataFrame]] = {
     "choice": lambda results: choose(results.summary),
     "acceptance": lambda results: acceptance(results.summary),
     "survival": survival,
+    "evidence": lambda results: evidence(results.summary),
 }
 log = logging.getLogger("pipeline.study")
 
@@ -68,7 +70,8 @@ class StudySpec:
     settings that are not a cartesian product (e.g. the radii pairs of one paper figure each);
     ``case_labels`` (name -> words) is what a reader calls a case, in the summary's
     ``case_label`` column for titles, captions, legends and report tables (default: the name,
-    which stays the folder name)."""
+    which stays the folder name). ``extra_overrides: false``: the study checks published facts
+    on the papers' own settings, so a command may add ``compute.*`` overrides only."""
 
     title: str
     source: str
@@ -76,6 +79,7 @@ class StudySpec:
     sweep: dict[str, str] = field(default_factory=dict)
     cases: dict[str, list[str]] = field(default_factory=dict)
     case_labels: dict[str, str] = field(default_factory=dict)
+    extra_overrides: bool = True
     analyses: list[str] = field(default_factory=list)
     figures: list[FigureSpec] = field(default_factory=list)
     name: Optional[str] = None
@@ -118,10 +122,12 @@ def load_study(name: str, directory: Path = STUDIES_DIR) -> StudySpec:
 def sweep_command(study: StudySpec, extra: list[str], jobs_dir: Path,
                   launcher: str = "pool") -> list[str]:
     """The ``python -m pipeline`` arguments of a study's sweep. Job folders are named by the
-    swept keys only (fixed and extra overrides are excluded from the folder name)."""
+    swept keys only: those of ``sweep`` and any override of ``extra`` (a case's) that sweeps,
+    e.g. ``robot.r_end=1.2,6``; fixed values are excluded from the folder name."""
     fixed = [*study.overrides, *extra]
     swept = [f"{key}={_sweep_values(key, values, fixed)}" for key, values in study.sweep.items()]
-    excluded = ALWAYS_EXCLUDED + [_key(o) for o in fixed if _key(o) not in study.sweep]
+    excluded = ALWAYS_EXCLUDED + [o.key_or_group for o in parse(fixed)
+                                  if o.key_or_group not in study.sweep and not o.is_sweep_override()]
     return [
         "-m", f"hydra.sweep.dir='{jobs_dir}'",  # quoted: a study folder name may hold = and ,
         f"hydra.job.config.override_dirname.exclude_keys=[{','.join(excluded)}]",
@@ -234,6 +240,10 @@ def metrics(summary: pd.DataFrame, tables: dict[str, pd.DataFrame]) -> dict:
         found["n_accepted"] = len(accepted)
     if "acceptance" in tables:
         found["n_accepted_pairs"] = int(tables["acceptance"]["accepted"].sum())
+    if "evidence" in tables:
+        found["evidence"] = {row.reading: {"matched": int(row.matched), "facts": int(row.facts),
+                                           "points": round(float(row.points), 6)}
+                             for row in scores(tables["evidence"]).itertuples()}
     return found
 
 
@@ -243,6 +253,10 @@ def checked_commands(name: str, extra: list[str], out_root: Path | None = None,
     preflight: bad input fails here, before anything is written or removed. Each with the
     typed configs of its jobs (``pipeline.job.PREPARED``)."""
     study = load_study(name)
+    changed = [o for o in extra if _key(o) not in ALWAYS_EXCLUDED]
+    if changed and not study.extra_overrides:
+        raise ConfigError(f"{changed[0]}: study {name} checks the papers' published facts on "
+                          "their own settings; it takes compute.* overrides only")
     out = study_dir(name, extra, out_root)
     commands = [sweep_command(study, [*overrides, *extra], out / "jobs" / case, launcher)
                 for case, overrides in (study.cases or {"": []}).items()]

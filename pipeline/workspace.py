@@ -128,6 +128,7 @@ def _cpr_wwa(cfg: DictConfig, catalogue: pd.DataFrame, robot):
 def _statics(cfg: DictConfig, catalogue: pd.DataFrame, robot):
     spec = StaticsSpec(
         moment_arm=_name(cfg.model.moment_arm),
+        cable_direction=_name(cfg.model.cable_direction),
         rank_rtol=cfg.model.rank_rtol,
         tension=tension_spec(cfg),
         load=load_spec(cfg),

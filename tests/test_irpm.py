@@ -41,6 +41,26 @@ def test_tensions_balance_the_wrench_at_every_regular_pose(make_cfg, catalogue):
     np.testing.assert_allclose(state.tensions[regular][:50], exact, rtol=1e-8, atol=1e-6)
 
 
+def test_cables_towards_the_centre_make_the_tensions_independent_of_r_end(make_cfg, catalogue):
+    """model.cable_direction=centre: u_i does not depend on r_end and the moment rows of A scale
+    with it, so with no applied moment the tensions and the gram ratio are the same for every
+    r_end (docs/model.md section 5); towards the attachment points they are not."""
+    states = {}
+    for direction in ("centre", "attachment"):
+        for r_end in (1.2, 6.0):
+            problem, grid = build_problem(make_cfg("robot=irpm6", f"robot.r_end={r_end}", "robot.gamma_deg=15",
+                                                   f"model.cable_direction={direction}",
+                                                   "wrench.fx=30000"), catalogue)
+            states[direction, r_end] = problem.spec.state(problem.robot, grid.positions[1000:3000],
+                                                          problem.orientation)
+    small, large = states["centre", 1.2], states["centre", 6.0]
+    np.testing.assert_allclose(small.tensions, large.tensions, rtol=1e-9, atol=1e-6)
+    np.testing.assert_allclose(small.gram_ratio, large.gram_ratio, rtol=1e-9, atol=1e-15)
+    np.testing.assert_allclose(large.structure_matrix[:, 3:] / 6.0, small.structure_matrix[:, 3:] / 1.2,
+                               atol=1e-12)
+    assert np.abs(states["attachment", 1.2].tensions - states["attachment", 6.0].tensions).max() > 1e3
+
+
 def test_base_plane_layer_is_reported_singular_never_nan(irpm):
     points, summary = irpm()
     top = points["z"] == 0.0

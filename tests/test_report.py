@@ -19,7 +19,7 @@ from pipeline.study import available
 from pipeline.workspace import compute_workspace
 
 STUDIES = ["actuator_choice", "actuator_choice_pulling", "line_simulation", "irpm_fig13_end_ratio",
-           "tension_comparison"]
+           "tension_comparison", "evidence_cpr8", "evidence_irpm"]
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -57,6 +57,14 @@ def studies(tmp_path, make_cfg, catalogue):
     pd.DataFrame(rows).to_parquet(root / "tension_comparison" / "summary.parquet")
     comparison = survival(StudyResults(root / "tension_comparison"))
     comparison.to_parquet(root / "tension_comparison" / "survival.parquet")
+    for name, fact, unit in (("evidence_cpr8", "Table 2", "grid points"), ("evidence_irpm", "Fig. 13", "comparisons")):
+        pd.DataFrame([{"fact": "f", "source": fact, "statement": "a | claim", "reading": reading,
+                       "value": value, "matches": matches, "distance": distance, "unit": unit,
+                       "default": reading == "default"}
+                      for reading, value, matches, distance in (("default", "216 of 216", True, 0.0),
+                                                                ("jdot=true", "212 of 216", False, 4.0))
+                      ]).to_parquet(root / name / "evidence.parquet")
+        pd.DataFrame({"job": ["x"]}).to_parquet(root / name / "summary.parquet")
     return root
 
 
@@ -73,6 +81,11 @@ def test_report_compares_paper_and_ours_and_carries_the_figures(studies, tmp_pat
     assert "| translational, zero orientation | 100.00 | 98.15 |" in text
     assert "| 0.2 | 183.2 | 64.8 |" in text
     assert "| translational, zero orientation | 66.7 (216 → 144) |" in text
+    assert "| fact | source | default | jdot=true |" in text  # the evidence, default first
+    assert "| a \\| claim | Table 2 | ✓ 216 of 216 | ✗ 212 of 216, 4 off |" in text
+    assert "| a \\| claim | Fig. 13 | ✓ 216 of 216 | ✗ 212 of 216 |" in text  # pairs: no points off
+    assert "| **score** | | **1 of 1**, 0 points | **0 of 1**, 4 points |" in text
+    assert "Best joint score: default (1 of 1 facts, 0 grid points off)." in text
     assert "![fig9](figures/actuator_choice/fig9.png)" in text
     assert (tmp_path / "report" / "figures" / "actuator_choice" / "fig9.png").read_bytes() == (
         studies / "actuator_choice" / "figures" / "fig9.png").read_bytes()

@@ -1,0 +1,171 @@
+"""The evidence tables (pipeline/evidence.py): every published fact against each reading, from
+the jobs the declared studies evidence_cpr8 and evidence_irpm run (computed here in-process,
+one job per case and swept value, as the study would)."""
+
+import copy
+import itertools
+from pathlib import Path
+
+import pandas as pd
+import pytest
+from omegaconf import OmegaConf
+
+from pipeline.errors import ConfigError
+from pipeline.evidence import FACTS, MARGIN, POINTS, evidence, reading_name, scores
+from pipeline.lines import simulate_lines
+from pipeline.study import checked_commands, load_study, sweep_command
+from pipeline.workspace import analysis_name, compute_workspace
+
+
+def study_summary(name, make_cfg, catalogue, readings=None) -> pd.DataFrame:
+    """The summary a run of study ``name`` gathers (``case`` and the job's flattened config),
+    for the cases whose reading part is in ``readings`` (all when None)."""
+    spec = load_study(name)
+    rows = []
+    for case, overrides in spec.cases.items():
+        if readings is not None and case.split("-", 1)[1] not in readings:
+            continue
+        fixed = [o for o in overrides if "," not in o]
+        swept = [o.strip("'").split("=", 1) for o in overrides if "," in o]
+        swept += [(key, "1,2,3,4,5" if values == "catalogue" else values) for key, values in spec.sweep.items()]
+        base = make_cfg(*spec.overrides, *fixed)
+        keys = [key for key, _ in swept]
+        for values in itertools.product(*(v.split(",") for _, v in swept)):
+            cfg = copy.deepcopy(base)
+            for key, value in zip(keys, values):
+                OmegaConf.update(cfg, key, float(value) if "." in value or key.startswith("robot.") else int(value))
+            if analysis_name(cfg) == "lines":
+                summary = simulate_lines(cfg, catalogue)[2]
+            else:
+                summary = compute_workspace(cfg, catalogue)[1]
+            rows.append({"case": case, **summary})
+    return pd.DataFrame(rows)
+
+
+@pytest.fixture(scope="module")
+def cpr8_jobs(make_cfg, catalogue):
+    return study_summary("evidence_cpr8", make_cfg, catalogue)
+
+
+@pytest.fixture(scope="module")
+def cpr8(cpr8_jobs):
+    return evidence(cpr8_jobs)
+
+
+def cell(table, fact, reading):
+    row = table[(table["fact"] == fact) & (table["reading"] == reading)]
+    assert len(row) == 1, (fact, reading)
+    return row.iloc[0]
+
+
+def test_cpr8_table_has_every_published_fact_for_every_reading(cpr8):
+    assert len(cpr8) == 12 * len(FACTS["cpr8"]) == 12 * 17
+    for fact in ("table2_actuator_1", "table2_actuator_2", "table2_actuator_3", "table2_accepted",
+                 "fig4b_lines_whole", "fig4_agreement", "fig5_smaller", "fig5_agreement",
+                 "fig6a_speed", "fig6a_torque", "fig6a_voltage", "fig6b_speed"):
+        for reading in ("default", "pinv_columns=full"):
+            assert cell(cpr8, fact, reading)["matches"], (fact, reading)
+
+
+@pytest.mark.parametrize("reading, expected", [
+    # fact -> (value, matches, distance); the two readings of eq. (20) pull apart here
+    ("default", {"table2_actuator_4": ("85.19 % (184)", False, 4), "table2_actuator_5": ("11.11 % (24)", False, 8),
+                 "fig5b_much_smaller": ("95.4 % (206)", False, 12), "fig6b_torque": ("peak 0.600 × limit", False, 0.400),
+                 "fig6b_voltage": ("peak 0.993 × limit", True, 0)}),
+    ("pinv_columns=full", {"table2_actuator_4": ("85.19 % (184)", False, 4), "table2_actuator_5": ("0.00 % (0)", False, 16),
+                           "fig5b_much_smaller": ("83.8 % (181)", True, 0), "fig6b_torque": ("peak 1.705 × limit", True, 0),
+                           "fig6b_voltage": ("peak 1.046 × limit", False, 0.046)}),
+])
+def test_where_table2_and_the_other_evidence_pull_apart(cpr8, reading, expected):
+    for fact, (value, matches, distance) in expected.items():
+        got = cell(cpr8, fact, reading)
+        assert (got["value"], got["matches"]) == (value, matches), fact
+        assert got["distance"] == pytest.approx(distance, abs=1e-3), fact
+
+
+def test_cpr8_scores_rank_the_readings(cpr8):
+    score = scores(cpr8).set_index("reading")
+    assert score.loc["default", ["matched", "points"]].tolist() == [13, 24]
+    assert score.loc["pinv_columns=full", ["matched", "points"]].tolist() == [14, 20]
+    assert score.index[0] == "pinv_columns=full"  # ties (colon, newton) keep the earlier default
+    assert score.loc["xi_in_torque_limit=false", "points"] == 133
+    assert (score["facts"] == 17).all()
+
+
+GRID = {  # case reading -> feasible grid points of 216, actuators 1-5, zero and 0.5 rad (docs/model.md section 4)
+    "translational": ([216, 208, 184, 184, 24], [207, 193, 183, 183, 24]),
+    "translational_include": ([216, 192, 184, 184, 24], [207, 187, 183, 180, 24]),
+    "translational_colon": ([216, 208, 184, 184, 28], [207, 193, 183, 183, 26]),
+    "translational_jdot": ([212, 204, 184, 184, 24], [200, 191, 183, 182, 24]),
+    "translational_noxi": ([216, 216, 184, 184, 120], [213, 204, 185, 183, 108]),
+    "translational_newton": ([216, 208, 184, 184, 24], [207, 193, 183, 183, 24]),
+    "full": ([216, 208, 184, 184, 0], [182, 120, 30, 9, 0]),
+    "full_include": ([216, 192, 184, 160, 0], [176, 73, 30, 3, 0]),
+    "full_colon": ([216, 208, 184, 184, 0], [182, 125, 37, 12, 0]),
+    "full_jdot": ([212, 204, 184, 180, 0], [177, 119, 30, 9, 0]),
+    "full_noxi": ([216, 216, 184, 184, 12], [193, 166, 64, 9, 0]),
+    "full_newton": ([216, 208, 184, 184, 0], [182, 120, 30, 10, 0]),
+}
+
+
+def test_grid_counts_under_each_reading_match_the_documented_table(cpr8_jobs):
+    got = cpr8_jobs.sort_values("actuator").groupby("case", sort=False)["n_feasible_grid"].apply(list)
+    for reading, (zero, rotated) in GRID.items():
+        assert got[f"zero-{reading}"] == zero, reading
+        assert got[f"rot05-{reading}"] == rotated, reading
+    assert set(got.index) == {f"{s}-{r}" for s in ("zero", "rot05") for r in GRID}
+
+
+def test_irpm_conclusions_hold_exactly_with_cables_towards_the_centre(make_cfg, catalogue):
+    table = evidence(study_summary("evidence_irpm", make_cfg, catalogue, readings={"attachment", "centre"}))
+    centre = table[table["reading"] == "cable_direction=centre"].set_index("fact")
+    default = table[table["reading"] == "default"].set_index("fact")
+    for g, count in ((0, 2734), (15, 1788), (30, 934), (45, 242)):
+        assert centre.loc[f"same_count_gamma_{g}", "value"] == f"{count}-{count} points"
+        assert not default.loc[f"same_count_gamma_{g}", "matches"]
+    assert default.loc["same_count_gamma_0", "value"] == "2734-2955 points"  # 175.0-189.1 m³
+    assert centre.loc["forces_no_effect", "matches"] and not default.loc["forces_no_effect", "matches"]
+    assert default.loc["forces_no_effect", "distance"] == 321
+    for fact in ("smaller_gamma_larger", "no_maximum_at_ratio_1"):  # the same in both readings
+        assert centre.loc[fact, "value"] == default.loc[fact, "value"]
+    assert default.loc["smaller_gamma_larger", "value"] == "35 of 39 pairs"
+    assert default.loc["moments_larger_end", "value"] == "2 of 4 pairs"
+    assert centre.loc["moments_larger_end", "value"] == "3 of 4 pairs"
+    score = scores(table).set_index("reading")
+    assert score.loc["cable_direction=centre", ["matched", "points"]].tolist() == [6, 0]
+    assert score.loc["default", ["matched", "points"]].tolist() == [1, 1046]
+
+
+def test_a_fact_without_its_jobs_is_an_error_not_a_match():
+    jobs = pd.DataFrame({"case": "fig13-x", "robot.name": "irpm6", "catalogue": None,
+                         "model.moment_arm": "platform", "model.cable_direction": "attachment",
+                         "robot.gamma_deg": [0.0, 0.0, 15.0, 15.0, 30.0, 30.0, 45.0, 45.0],
+                         "robot.r_end": [1.2, 6.0] * 4, "robot.r_base": 6.0, "n_feasible": 10})
+    with pytest.raises(ValueError, match="evidence: no jobs for set fig14, fig15"):
+        evidence(jobs)
+    with pytest.raises(ValueError, match="evidence: set fig13 needs two sizes or more"):
+        evidence(jobs.iloc[:-1])
+    with pytest.raises(ConfigError, match="no published facts for robot=points"):
+        evidence(jobs.assign(**{"robot.name": "points"}))
+
+
+def test_reading_names_and_units():
+    assert reading_name({"model.pinv_columns": "translational", "model.jdot": False}) == "default"
+    assert reading_name({"model.jdot": True, "model.inertia": "newton"}) == "jdot=true, inertia=newton"
+    units = {fact.unit for facts in FACTS.values() for fact in facts}
+    assert {POINTS, MARGIN} <= units
+
+
+def test_evidence_studies_take_compute_overrides_only():
+    with pytest.raises(ConfigError, match="^catalogue=mine.csv: study evidence_cpr8 checks the papers'"):
+        checked_commands("evidence_cpr8", ["catalogue=mine.csv"])
+    with pytest.raises(ConfigError, match="^model.pinv_columns=full: study evidence_irpm"):
+        checked_commands("evidence_irpm", ["compute.n_jobs=1", "model.pinv_columns=full"])
+
+
+def test_a_case_that_sweeps_names_its_jobs_by_the_swept_key():
+    spec = load_study("evidence_irpm")
+    command = sweep_command(spec, spec.cases["fig13-centre"], Path("j"))
+    excluded = next(c for c in command if c.startswith("hydra.job.config.override_dirname.exclude_keys"))
+    assert "robot.r_end" not in excluded and "robot.r_base" in excluded
+    assert "model.cable_direction" in excluded
