@@ -27,7 +27,7 @@ from pipeline.choice import choose, verdict
 from pipeline.errors import ConfigError
 from pipeline.figures import StudyResults
 from pipeline.job import execute
-from pipeline.preflight import check
+from pipeline.preflight import check, quoted
 from pipeline.results import read_metadata
 from pipeline.study import OUTPUT_DIR, study_dir
 from pipeline.workspace import analysis_name
@@ -73,7 +73,7 @@ def workspace(overrides: Iterable[str] = (), folder: str | Path | None = None,
     (the command line's ``--config-dir``). Raises ConfigError for bad input (nothing written)."""
     overrides = _listed(overrides, config_dir)
     folder = Path(folder) if folder is not None else _new_folder()
-    ((cfg, catalogue),) = check([*overrides, f"hydra.run.dir={folder}"]).values()
+    ((cfg, catalogue),) = check([*overrides, f"hydra.run.dir={quoted(folder)}"]).values()
     return _run(cfg, catalogue, folder)
 
 
@@ -87,12 +87,12 @@ def actuator_choice(overrides: Iterable[str] = (), folder: str | Path | None = N
         raise ConfigError("actuator=...: the choice runs every actuator of the catalogue; "
                           "use workspace() for one")
     folder = Path(folder) if folder is not None else _new_folder()
-    ((cfg, catalogue),) = check([*overrides, f"hydra.run.dir={folder}"]).values()
+    ((cfg, catalogue),) = check([*overrides, f"hydra.run.dir={quoted(folder)}"]).values()
     if catalogue is None:
         raise ConfigError(f"analysis={analysis_name(cfg)}: no actuators to choose from "
                           "(the choice needs analysis=cpr_wwa)")
     ids = ",".join(str(i) for i in catalogue.index)
-    jobs = check(["-m", f"actuator={ids}", *overrides, f"hydra.sweep.dir={folder}"])
+    jobs = check(["-m", f"actuator={ids}", *overrides, f"hydra.sweep.dir={quoted(folder)}"])
     done = {}
     for job_cfg, job_catalogue in jobs.values():  # every job checked before the first runs
         done[int(job_cfg.actuator)] = _run(job_cfg, job_catalogue, folder / f"actuator={job_cfg.actuator}")

@@ -102,6 +102,13 @@ def _multirun_base(argv: list[str]) -> list[str] | None:
     return [o.input_line for o in parse(_overrides(argv)) if not o.is_sweep_override()]
 
 
+def quoted(value) -> str:
+    """``value`` as a quoted value of Hydra's override grammar, so a folder name may hold
+    ``=``, ``,``, spaces and quotes (``hydra.run.dir=`` + ``quoted(folder)``)."""
+    text = re.sub(r"(\\+)(?='|$)", r"\1\1", str(value))  # backslashes escape only before a quote
+    return "'" + text.replace("'", "\\'") + "'"
+
+
 def parse(overrides: list[str]) -> list[Override]:
     """Hydra's parse of each override; a grammar error names the override it is in."""
     return [override for text in overrides for override in _parse_one(text)]

@@ -38,7 +38,7 @@ from pipeline.errors import ConfigError, one_line
 from pipeline.evidence import evidence, scores
 from pipeline.figures import SERIES_DIR, FigureSpec, StudyResults, render
 from pipeline.job import PREPARED
-from pipeline.preflight import check, parse
+from pipeline.preflight import check, parse, quoted
 from pipeline.resources import STUDIES_DIR
 from pipeline.results import code_version, write_csv, write_parquet, write_text
 from pipeline.survival import survival
@@ -129,7 +129,7 @@ def sweep_command(study: StudySpec, extra: list[str], jobs_dir: Path,
     excluded = ALWAYS_EXCLUDED + [o.key_or_group for o in parse(fixed)
                                   if o.key_or_group not in study.sweep and not o.is_sweep_override()]
     return [
-        "-m", f"hydra.sweep.dir='{jobs_dir}'",  # quoted: a study folder name may hold = and ,
+        "-m", f"hydra.sweep.dir={quoted(jobs_dir)}",  # a study folder name may hold = and ,
         f"hydra.job.config.override_dirname.exclude_keys=[{','.join(excluded)}]",
         *LAUNCHERS[launcher], *study.overrides, *swept, *extra,
     ]

@@ -42,6 +42,17 @@ def test_workspace_gives_table_2_and_the_command_line_points(tmp_path, monkeypat
             (tmp_path / "a3/points.parquet").stat().st_mtime_ns) == before
 
 
+def test_a_folder_name_may_hold_the_override_grammars_characters(tmp_path, monkeypatch):
+    """The folder goes to Hydra quoted (pipeline.preflight.quoted): =, commas, quotes, spaces."""
+    monkeypatch.chdir(tmp_path)
+    for name in ("grid=centred,n=6", "it's here", "trailing\\"):
+        ws = api.workspace(["actuator=1"], folder=name)
+        assert ws.folder == pathlib.Path(name) and (tmp_path / name / "points.parquet").exists()
+    choice = api.actuator_choice(folder="a=b,c")
+    assert sorted(p.name for p in (tmp_path / "a=b,c").iterdir())[:2] == ["actuator=1", "actuator=2"]
+    assert choice.verdict.startswith("actuator choice at x >= 90 %: accept 1, 2")
+
+
 def test_actuator_choice_on_the_users_catalogue(tmp_path, monkeypatch):
     """Table 1 plus a 6th, weaker motor (actuator 5 with half its torque): one job per id."""
     monkeypatch.chdir(tmp_path)
