@@ -52,7 +52,7 @@ def random_robot(seed: int = 8) -> list[str]:
 
 
 CASES = {
-    "CPR-8 20^3, forces only, zero orientation": ["grid.n=20", "grid.n_vel=6"],
+    "CPR-8 20^3, forces only, zero orientation": ["grid.n=20", "grid.n_vel=6", "model.pinv_columns=translational"],
     "CPR-8 20^3, with moments, zero orientation": ["grid.n=20", "grid.n_vel=6", "model.pinv_columns=full"],
     "CPR-8 20^3, with moments, 0.5 rad": ["grid.n=20", "grid.n_vel=6", "model.pinv_columns=full",
                                           "orientation.psi=0.5", "orientation.theta=0.5",

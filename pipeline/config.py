@@ -61,7 +61,8 @@ def vector(size: int, meaning: str):
 
 
 class PinvColumns(Enum):
-    """Which columns of J enter the pseudo-inverse of eq. (20); see docs/model.md."""
+    """Which columns of J enter the pseudo-inverse of eq. (20): all six (full, the default) or
+    the three position columns (translational); docs/model.md section 4."""
 
     translational = "translational"
     full = "full"
@@ -340,7 +341,7 @@ class ModelConfig:
     ``margin_atol``: margins within it of zero are exactly 0 and satisfied (``pipeline.verdict``),
     so a pose on a limit gets the same verdict on every CPU."""
 
-    pinv_columns: PinvColumns = PinvColumns.translational
+    pinv_columns: PinvColumns = PinvColumns.full
     velocity_boundary: VelocityBoundary = VelocityBoundary.exclude
     acceleration_set: AccelerationSet = AccelerationSet.corners
     inertia: Inertia = Inertia.paper
@@ -510,7 +511,7 @@ def validate(cfg: DictConfig, catalogue_ids=None, typed: bool = False) -> DictCo
     if "actuator" in cfg and cfg.actuator not in set(catalogue_ids):
         ids = ", ".join(str(i) for i in sorted(catalogue_ids))
         raise ConfigError(f"actuator={cfg.actuator}: no such id in the catalogue (ids: {ids})")
-    _validate_tension(cfg, robot.n_cables)
+    _validate_tension(cfg, robot)
     if cfg.poses is not None:
         from pipeline.robots import point_list
 
@@ -561,15 +562,21 @@ def _validate_size(cfg: DictConfig) -> None:
             "compute.max_poses knowingly")
 
 
-def _validate_tension(cfg: DictConfig, n_cables: int) -> None:
+def _validate_tension(cfg: DictConfig, robot) -> None:
+    """Enough cables for the wrench rows the analysis balances: CPR-WWA's moment rows
+    (``pinv_columns=full``) vanish for a point platform (every attachment at its reference
+    point), the statics' do not (its gram ratio would make every pose singular)."""
     from pipeline.workspace import analysis_name, cable_rating
 
-    tension = cfg.tension
-    rows = 3 if "pinv_columns" in cfg.model and cfg.model.pinv_columns.name == "translational" else 6
+    tension, n_cables = cfg.tension, robot.n_cables
+    forces_only = "pinv_columns" in cfg.model and (
+        cfg.model.pinv_columns.name == "translational" or not robot.attachments.any())
+    rows = 3 if forces_only else 6
     if n_cables < rows:
         what = "forces" if rows == 3 else "forces and moments"
+        hint = "; model.pinv_columns=translational balances forces only" if "pinv_columns" in cfg.model else ""
         raise ConfigError(f"robot: {n_cables} cables; analysis={analysis_name(cfg)} balances {what} "
-                          f"({rows} rows of the structure matrix) and needs >= {rows} cables")
+                          f"({rows} rows of the structure matrix) and needs >= {rows} cables{hint}")
     t_min = _limit_values("tension.t_min", tension.t_min, n_cables)
     if not (t_min >= 0).all():
         raise ConfigError(f"tension.t_min={_shown(tension.t_min)}: must be >= 0 (a cable cannot push)")

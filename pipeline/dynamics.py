@@ -43,8 +43,10 @@ class Load:
 class MotionSpec:
     """What the carrier must do at every pose: velocity set, acceleration set, load, model options.
 
-    ``pinv_columns``: ``"translational"`` solves eq. (20) with the three position columns of J
-    (orientation held constant, no moment balance); ``"full"`` uses all six columns of eq. (19).
+    ``pinv_columns``: ``"full"`` uses all six columns of eq. (19), so the moments balance too
+    (the default: the best fit to all the published evidence, docs/model.md section 4);
+    ``"translational"`` solves eq. (20) with the three position columns of J (orientation held
+    constant, no moment balance; the best fit to Table 2 alone).
     ``rank_rtol``: singular values below ``rank_rtol * sigma_max`` are treated as zero in the
     pseudo-inverse (the CPR-8 Jacobian has rank 5 at zero orientation).
     ``jdot``: add the centripetal term (J-dot p-dot) of the shaft acceleration.
@@ -62,7 +64,7 @@ class MotionSpec:
     accelerations: np.ndarray
     load: Load
     winch_radius: np.ndarray
-    pinv_columns: str = "translational"
+    pinv_columns: str = "full"
     rank_rtol: float = 1e-9
     jdot: bool = False
     velocity_extremes: np.ndarray | None = None

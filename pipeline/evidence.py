@@ -87,14 +87,23 @@ def reading_name(switches: dict) -> str:
     return ", ".join(differ) or "default"
 
 
+def describe_reading(model) -> str:
+    """A job's readings in one line: ``default`` or the switches that differ, then every switch
+    it has (``default: pinv_columns=full, ..., xi_in_torque_limit=true``)."""
+    switches = {f"model.{key}": value for key, value in model.items() if key not in SETTINGS}
+    return f"{reading_name(switches)}: " + ", ".join(f"{key[6:]}={_text(v)}" for key, v in switches.items())
+
+
 def scores(table: pd.DataFrame) -> pd.DataFrame:
     """Per reading: facts matched of all, and the grid points it is away on the count facts
-    it misses; best first (more facts, then fewer points)."""
+    it misses; best first (more facts, then fewer points; on a tie the default first: a change
+    of default needs a better score)."""
     points = table["distance"].where(table["unit"] == POINTS, 0.0)
     score = table.assign(points=points).groupby("reading", sort=False).agg(
         matched=("matches", "sum"), facts=("matches", "size"), points=("points", "sum"),
         default=("default", "any"))
-    return score.sort_values(["matched", "points"], ascending=[False, True], kind="stable").reset_index()
+    return score.sort_values(["matched", "points", "default"], ascending=[False, True, False],
+                             kind="stable").reset_index()
 
 
 def _text(value) -> str:

@@ -29,6 +29,7 @@ from omegaconf import DictConfig, OmegaConf
 from pipeline.catalogue import load_catalogue
 from pipeline.config import validate
 from pipeline.errors import ConfigError
+from pipeline.evidence import describe_reading
 from pipeline.results import (
     CONFIG_KEY, DIGESTS_KEY, VERSION_KEY, ParquetSink, code_version, digests_json, file_digest,
     read_metadata, write_parquet,
@@ -96,6 +97,7 @@ def _run_locked(cfg: DictConfig, catalogue, out: Path) -> dict:
     if done is not None:
         log.info("reused the finished job in %s (same config and code version)", out)
         return done
+    log.info("reading: %s (docs/model.md, sections 4-5)", describe_reading(cfg.model))
     if analysis_name(cfg) == "lines":
         samples, points, summary = simulate_lines(cfg, catalogue)
         if cfg.lines.samples.name == "first":  # the verdicts of every line are in points.parquet

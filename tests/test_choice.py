@@ -30,7 +30,7 @@ def test_losses_add_up_to_the_infeasible_count(summary):
 
 def test_rejections_are_explained_20w_loses_to_voltage_50w_to_torque(summary):
     reasons = choose(summary).set_index("actuator")["rejected_by"]
-    assert reasons.to_dict() == {1: "", 2: "", 3: "torque 32", 4: "voltage 32", 5: "torque 192"}
+    assert reasons.to_dict() == {1: "", 2: "", 3: "torque 32", 4: "voltage 32", 5: "torque 216"}
 
 
 def test_required_share_moves_the_verdict(summary):

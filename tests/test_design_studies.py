@@ -8,9 +8,9 @@ from pipeline.resources import STUDIES_DIR
 from pipeline.workspace import compute_workspace
 
 ACCEPTED = {  # study -> {actuator: accepted values}
-    "design_winch_radius": {1: [0.075, 0.08, 0.09, 0.1, 0.12], 2: [0.075, 0.08], 3: [], 4: [], 5: []},
-    "design_gear_ratio": {1: [15, 20, 25, 30], 2: [25], 3: [], 4: [], 5: []},
-    "design_mass": {1: [0.5, 1, 1.5, 2, 3, 4], 2: [0.5, 1, 1.5, 2], 3: [0.5], 4: [0.5], 5: []},
+    "design_winch_radius": {1: [0.075, 0.08, 0.09, 0.1, 0.12], 2: [0.08], 3: [], 4: [], 5: []},
+    "design_gear_ratio": {1: [20, 25, 30], 2: [25], 3: [], 4: [], 5: []},
+    "design_mass": {1: [0.5, 1, 1.5, 2, 3], 2: [0.5, 1, 1.5, 2], 3: [0.5], 4: [0.5], 5: []},
     "design_v_max": {1: [0.4, 0.6, 0.8, 1.0, 1.3], 2: [0.4, 0.6, 0.8, 1.0, 1.3], 3: [], 4: [], 5: []},
 }
 

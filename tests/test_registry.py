@@ -61,10 +61,12 @@ def test_a_job_has_only_the_keys_of_its_robot_and_analysis(make_cfg, catalogue):
 
 
 @pytest.mark.parametrize("analysis, extra, needs", [
-    ("statics", [], 6), ("cpr_wwa", [], 3), ("cpr_wwa", ["model.pinv_columns=full"], 6)])
+    ("statics", [], 6), ("cpr_wwa", [], 3), ("cpr_wwa", ["model.pinv_columns=translational"], 3),
+    ("cpr_wwa", ["robot.attachments=[[0.1,0,0],[0,0,0],[0,0,0],[0,0,0]]"], 6)])
 def test_fewer_cables_than_the_analysis_balances_are_refused(make_cfg, catalogue, analysis, extra, needs):
-    """Four cables to a point: the statics' six wrench rows (and CPR-WWA's with moments) would
-    make every pose singular; CPR-WWA with forces only is a meaningful problem."""
+    """Four cables to a point: the statics' six wrench rows would make every pose singular;
+    CPR-WWA balances forces only there (its moment rows vanish at a point platform, whatever
+    model.pinv_columns says). Four cables to a platform with moment arms cannot balance six."""
     from pipeline.config import validate
     from pipeline.errors import ConfigError
 
@@ -76,6 +78,16 @@ def test_fewer_cables_than_the_analysis_balances_are_refused(make_cfg, catalogue
         return
     with pytest.raises(ConfigError, match=f"robot: 4 cables; analysis={analysis} .* needs >= 6 cables"):
         validate(make_cfg(*four), catalogue.index)
+
+
+def test_a_point_platform_gets_the_same_verdicts_with_and_without_moment_rows(make_cfg, catalogue):
+    four = ["robot=points", "robot.anchors=[[-1,-1,2],[1,-1,2],[1,1,2],[-1,1,2]]",
+            "robot.attachments=[[0,0,0],[0,0,0],[0,0,0],[0,0,0]]", "robot.search.lo=[-0.5,-0.5,0.5]",
+            "robot.search.hi=[0.5,0.5,1.5]", "robot.search.step=0.25", "analysis=cpr_wwa", "load.mass=0.5"]
+    full, _ = compute_workspace(make_cfg(*four), catalogue)
+    forces, _ = compute_workspace(make_cfg(*four, "model.pinv_columns=translational"), catalogue)
+    assert full["feasible"].tolist() == forces["feasible"].tolist() and full["feasible"].any()
+    assert full["limiting"].tolist() == forces["limiting"].tolist()
 
 
 def test_tension_is_a_config_group_that_sets_its_own_keys_only(make_cfg):

@@ -37,7 +37,8 @@ def studies(tmp_path, make_cfg, catalogue):
     points, _ = compute_workspace(make_cfg("actuator=5"), catalogue)
     write_view([(points, "feasible", None)], "actuator 5", False,
                root / "actuator_choice" / "figures" / "fig8_workspace_actuator5.json")
-    pulling = pd.DataFrame([compute_workspace(make_cfg("tension=feasible", f"actuator={a}"), catalogue)[1]
+    pulling = pd.DataFrame([compute_workspace(make_cfg("tension=feasible", f"actuator={a}",
+                                                       "model.pinv_columns=translational"), catalogue)[1]
                             for a in range(1, 6)])
     pulling.to_parquet(root / "actuator_choice_pulling" / "summary.parquet")
     choose(pulling).to_parquet(root / "actuator_choice_pulling" / "choice.parquet")
@@ -50,10 +51,12 @@ def studies(tmp_path, make_cfg, catalogue):
     irpm.to_parquet(root / "irpm_fig13_end_ratio" / "summary.parquet")
     rows = []
     for model in ("pinv", "feasible"):
-        points, row = compute_workspace(make_cfg(f"tension.model={model}"), catalogue)
-        (root / "tension_comparison" / "jobs" / model).mkdir(parents=True)
-        points.to_parquet(root / "tension_comparison" / "jobs" / model / "points.parquet")
-        rows.append({**row, "job": model, "case": "zero", "case_label": "zero orientation"})
+        for a in range(1, 6):
+            points, row = compute_workspace(make_cfg(f"tension.model={model}", f"actuator={a}",
+                                                     "model.pinv_columns=translational"), catalogue)
+            (root / "tension_comparison" / "jobs" / f"{model}{a}").mkdir(parents=True)
+            points.to_parquet(root / "tension_comparison" / "jobs" / f"{model}{a}" / "points.parquet")
+            rows.append({**row, "job": f"{model}{a}", "case": "zero", "case_label": "zero orientation"})
     pd.DataFrame(rows).to_parquet(root / "tension_comparison" / "summary.parquet")
     comparison = survival(StudyResults(root / "tension_comparison"))
     comparison.to_parquet(root / "tension_comparison" / "survival.parquet")
@@ -78,7 +81,7 @@ def test_report_compares_paper_and_ours_and_carries_the_figures(studies, tmp_pat
     assert "| 1 | 100.00 | 66.67 | yes → no | slack 72 |" in text  # cables that only pull
     assert "| 5 | 11.11 | 14.81 | no → no | slack 72, torque 112 |" in text
     assert "Accepted at x = 90 % with pulling cables: none." in text
-    assert "| translational, zero orientation | 100.00 | 98.15 |" in text
+    assert "| full, zero orientation | 100.00 | 94.44 |" in text
     assert "| 0.2 | 183.2 | 64.8 |" in text
     assert "| translational, zero orientation | 66.7 (216 → 144) |" in text
     assert "| fact | source | default | jdot=true |" in text  # the evidence, default first
@@ -116,8 +119,8 @@ def test_the_report_gives_each_studys_answer_and_the_figures_captions(studies, t
     monkeypatch.setattr(pipeline.report, "available", lambda: [*STUDIES, "design_mass"])
     text = pipeline.report.build(studies, tmp_path / "report").read_text()
     assert ("Actuator choice at x &gt;= 90 %: accept 1, 2; reject 3 85.19 % (lost to torque 32); "
-            "4 85.19 % (lost to voltage 32); 5 11.11 % (lost to torque 192).") in text
-    assert "Accepted (x ≥ 90 %) by load mass (kg): actuator 1 at 0.5, 4; actuator 3 at 0.5." in text
+            "4 85.19 % (lost to voltage 32); 5 0.00 % (lost to torque 216).") in text
+    assert "Accepted (x ≥ 90 %) by load mass (kg): actuator 1 at 0.5; actuator 3 at 0.5." in text
     assert "![Feasible share \\| per actuator](figures/actuator_choice/fig9.png)" in text
     assert "*Feasible share \\| per actuator*" in text
 
@@ -130,7 +133,7 @@ def test_html_page_has_the_tables_figures_and_views_and_needs_no_network(studies
     assert "<td>4</td>\n<td>87.04</td>\n<td>85.19</td>" in page.replace(' style="text-align:right"', "")
     assert '<img src="figures/actuator_choice/fig9.png" alt="fig9"' in page
     assert page.count('<figure class="view"') == 1
-    assert '"lost to torque (192)"' in page  # actuator 5: 24 feasible, 192 lost to the torque limit
+    assert '"lost to torque (216)"' in page  # actuator 5: no pose holds, 216 lost to the torque limit
     assert (tmp_path / "report" / "plotly.min.js").stat().st_size > 1_000_000  # shipped, not fetched
     assert not re.findall(r'(?:src|href)="(?:https?:)?//', page)
 

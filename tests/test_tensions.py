@@ -21,6 +21,8 @@ from pipeline.verdict import classify
 from pipeline.tensions import TensionSpec, feasible_tensions
 from pipeline.workspace import build_problem, compute_workspace
 
+FORCES = "model.pinv_columns=translational"  # forces only: the paper's reading of eq. (20) for Table 2
+
 MASS, GRAVITY, HALF, RADIUS = 2.0, 9.81, 1.0, 0.05
 ACTUATOR = ActuatorModel(id=0, name="test", power=1.0, G_v=0.0, L_v=0.0, S_v=2.0,
                          speed_limit=10.0, torque_limit=1.0, accel_limit=100.0,
@@ -107,7 +109,7 @@ def test_cpr8_lp_never_loses_a_pose_whose_minimum_norm_torques_are_valid(make_cf
     for orientation in (0.0, 0.5):
         angles = [f"orientation.{a}={orientation}" for a in ("psi", "theta", "phi")]
         for actuator in (1, 5):
-            cfg = [f"actuator={actuator}", *angles]
+            cfg = [f"actuator={actuator}", *angles, FORCES]
             problem, grid = build_problem(make_cfg(*cfg), catalogue)
             state = problem.spec.state(problem.robot, grid.positions, problem.orientations[0])
             pulling = (state.shaft_torque >= 0).all(axis=(1, 2))
@@ -143,7 +145,7 @@ def test_slack_agrees_with_an_independent_nonnegative_least_squares(columns, ori
 def test_the_box_vertices_decide_every_acceleration_inside_it(make_cfg, catalogue):
     """The capacity margin is concave in the wrench: at random accelerations inside the box it
     is never below its minimum over the eight vertices (tested for slack, the first family)."""
-    problem, grid = build_problem(make_cfg("tension.model=feasible"), catalogue)
+    problem, grid = build_problem(make_cfg("tension.model=feasible", FORCES), catalogue)
     state = problem.spec.state(problem.robot, grid.positions, problem.orientations[0])
     families = tension_families(state, problem.limits)
     vertices, *_ = feasible_tensions(state.structure, *state.wrench_pinv, state.required_wrenches,
@@ -162,14 +164,14 @@ def test_zero_orientation_with_moment_rows_is_unreachable_as_the_rank_5_jacobian
     assert summary["lost_unreachable"] == 216
     assert (points["limiting"] == "unreachable").all()
     assert points["wrench_residual"].min() > 1e-3  # a relative residual, far above 1e-6
-    forces, _ = compute_workspace(make_cfg("tension.model=feasible"), catalogue)
+    forces, _ = compute_workspace(make_cfg("tension.model=feasible", FORCES), catalogue)
     assert forces["wrench_residual"].max() < 1e-12
 
 
 def test_lines_use_the_lp_torques_and_agree_with_the_grid(make_cfg, catalogue):
     from pipeline.lines import simulate_lines
 
-    samples, points, summary = simulate_lines(make_cfg("analysis=lines", "tension.model=feasible"),
+    samples, points, summary = simulate_lines(make_cfg("analysis=lines", "tension.model=feasible", FORCES),
                                               catalogue)
     assert summary["n_feasible_grid"] == 144 and summary["agreement_pct"] == pytest.approx(100.0)
     ok = samples[samples["margin_slack"] >= 0]
@@ -216,7 +218,7 @@ def test_comparison_study_reports_the_surviving_share_per_actuator_and_orientati
 
 
 def test_forces_only_loses_the_outer_ring_of_the_lower_layers_to_slack(make_cfg, catalogue):
-    points, summary = compute_workspace(make_cfg("tension.model=feasible"), catalogue)
+    points, summary = compute_workspace(make_cfg("tension.model=feasible", FORCES), catalogue)
     lost = points[~points["feasible"]]
     assert summary["lost_slack"] == len(lost) == 72
     xs, ys = np.unique(points["x"]), np.unique(points["y"])
@@ -242,11 +244,11 @@ def test_with_moment_balance_few_or_no_poses_can_even_hang_still(orientation, ha
 def test_verdicts_do_not_depend_on_how_poses_are_chunked_or_batched(make_cfg, catalogue, monkeypatch):
     import pipeline.tensions
 
-    whole, _ = compute_workspace(make_cfg("tension.model=feasible", "actuator=3"), catalogue)
+    whole, _ = compute_workspace(make_cfg("tension.model=feasible", "actuator=3", FORCES), catalogue)
     monkeypatch.setattr(pipeline.tensions, "LP_BLOCKS", 40)
-    split, _ = compute_workspace(make_cfg("tension.model=feasible", "actuator=3",
+    split, _ = compute_workspace(make_cfg("tension.model=feasible", "actuator=3", FORCES,
                                           "compute.chunk_size=37"), catalogue)
-    assert (whole["feasible"] == split["feasible"]).all()
+    assert (whole["feasible"] == split["feasible"]).all() and whole["feasible"].any()
     for name in ("slack", "torque", "voltage"):
         assert split[f"margin_{name}"].to_numpy() == pytest.approx(whole[f"margin_{name}"], abs=1e-7)
 
