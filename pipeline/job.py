@@ -127,6 +127,18 @@ def _run_locked(cfg: DictConfig, catalogue, out: Path) -> dict:
     return summary
 
 
+def changed_files(out: Path, meta: dict | None = None) -> list[str]:
+    """The data files of the finished job in ``out`` that are missing or no longer have the
+    digest its summary recorded (``meta``: the summary's metadata, read if not given); a job
+    that recorded none reports so."""
+    meta = read_metadata(out / "summary.parquet") if meta is None else meta
+    recorded = json.loads(meta.get(DIGESTS_KEY, "{}"))
+    if not recorded:
+        return ["its data files are not recorded"]
+    return [name for name, digest in recorded.items()
+            if not (out / name).exists() or file_digest(out / name) != digest]
+
+
 def finished_summary(out: Path, config_yaml: str) -> dict | None:
     """The summary of a job already finished in ``out`` with this config and code, whose data
     files still have the digests it recorded; else None (and a log line when something in the
@@ -138,12 +150,9 @@ def finished_summary(out: Path, config_yaml: str) -> dict | None:
         meta = read_metadata(path)
         if meta.get(CONFIG_KEY) != config_yaml or meta.get(VERSION_KEY) != code_version():
             return None
-        recorded = json.loads(meta.get(DIGESTS_KEY, "{}"))
-        changed = [name for name, digest in recorded.items()
-                   if not (out / name).exists() or file_digest(out / name) != digest]
-        if changed or not recorded:
-            log.warning("recomputing %s: %s changed since the job finished", out,
-                        ", ".join(changed) or "its data files are not recorded")
+        changed = changed_files(out, meta)
+        if changed:
+            log.warning("recomputing %s: %s changed since the job finished", out, ", ".join(changed))
             return None
         return pd.read_parquet(path).iloc[0].to_dict()
     except (OSError, ValueError) as exc:  # pyarrow's errors derive from these

@@ -37,7 +37,7 @@ from pipeline.cli import launch
 from pipeline.errors import ConfigError, one_line
 from pipeline.evidence import evidence, scores
 from pipeline.figures import SERIES_DIR, FigureSpec, StudyResults, render
-from pipeline.job import PREPARED
+from pipeline.job import PREPARED, changed_files
 from pipeline.preflight import check, parse, quoted
 from pipeline.resources import STUDIES_DIR
 from pipeline.results import code_version, write_csv, write_parquet, write_text
@@ -198,6 +198,8 @@ def run_study(name: str, extra: list[str], out_root: Path | None = None,
     except (OSError, ValueError) as exc:  # pyarrow's ArrowInvalid is a ValueError
         raise ConfigError(f"{out / 'summary.parquet'}: not a readable Parquet file ({exc}); "
                           "rerun the study") from exc
+    if figures_only:  # redraw from intact results only, before any old figure is removed
+        _check_jobs(out / "jobs", results.summary["job"])
     written = [out / "summary.parquet"]
     tables = {}
     for analysis in study.analyses:
@@ -215,6 +217,19 @@ def run_study(name: str, extra: list[str], out_root: Path | None = None,
     for figure in study.figures:
         written.extend(render(figure, results, out / "figures"))
     return written
+
+
+def _check_jobs(jobs_dir: Path, jobs) -> None:
+    """Every job's data files as it finished them (their recorded digests), or ConfigError
+    naming the first that changed."""
+    for job in jobs:
+        try:
+            changed = changed_files(jobs_dir / job)
+        except (OSError, ValueError) as exc:  # a missing or corrupt summary.parquet
+            changed = [f"summary.parquet ({one_line(exc)})"]
+        if changed:
+            raise ConfigError(f"{jobs_dir / job}: {', '.join(changed)} changed since the job "
+                              "finished; rerun the study without --figures-only to recompute it")
 
 
 MAX_JOBS_LISTED = 24  # metrics per job up to this many jobs, else their range

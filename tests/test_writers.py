@@ -65,3 +65,30 @@ def test_a_damaged_finished_job_is_recomputed_not_reused(tmp_path, damage):
     assert "recomputing" in (job / "pipeline.log").read_text()
     pd.testing.assert_frame_equal(pd.read_parquet(job / "points.parquet"), good)
     assert pd.read_parquet(job / "summary.parquet")["n_points"].tolist() == [64]
+
+
+@pytest.mark.parametrize("damage", ["flip_points", "truncate_summary"])
+def test_figures_only_refuses_a_damaged_job_and_keeps_the_old_figures(tmp_path, damage):
+    """--figures-only draws from the finished jobs as they are: a job file changed since it
+    finished is named (one line, exit 2) before any old figure is removed; a full rerun then
+    recomputes it."""
+    study = [sys.executable, "-m", "pipeline.study", "design_v_max", "--out", "out"]
+    first = subprocess.run(study, cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert first.returncode == 0, first.stderr
+    out = tmp_path / "out" / "design_v_max"
+    figures = {p.name: p.read_bytes() for p in (out / "figures").iterdir()}
+    job = out / "jobs" / "actuator=2,motion.v_max=0.8"
+    name = "points.parquet" if damage == "flip_points" else "summary.parquet"
+    data = bytearray((job / name).read_bytes())
+    if damage == "flip_points":
+        data[len(data) // 2] ^= 0xFF
+    (job / name).write_bytes(bytes(data if damage == "flip_points" else data[:300]))
+    redraw = subprocess.run([*study, "--figures-only"], cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert redraw.returncode == 2
+    (line,) = redraw.stderr.strip().splitlines()
+    assert line.startswith(f"error: out/design_v_max/jobs/actuator=2,motion.v_max=0.8: {name}")
+    assert line.endswith("rerun the study without --figures-only to recompute it")
+    assert {p.name: p.read_bytes() for p in (out / "figures").iterdir()} == figures
+    again = subprocess.run(study, cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert again.returncode == 0, again.stderr
+    assert {p.name: p.read_bytes() for p in (out / "figures").iterdir()} == figures
