@@ -65,20 +65,21 @@ def test_figures_are_drawn_from_the_parquet_results(choice_run, monkeypatch):
     edited.loc[edited["actuator"] == 3, "feasible_pct"] = 42.0
     edited.to_parquet(summary_path)
     points_path = choice_run / "jobs" / "actuator=4" / "points.parquet"
-    points = pd.read_parquet(points_path)
-    points.assign(feasible=True).to_parquet(points_path)
+    points, finished = pd.read_parquet(points_path), points_path.read_bytes()
     try:
         run_study("actuator_choice", [], out_root, figures_only=True)
         after = {p.name: p.read_bytes() for p in figures.iterdir()}
         assert pd.read_parquet(choice_run / "choice.parquet").set_index("actuator").loc[
             3, "feasible_pct"] == 42.0
         changed = {name for name in before if after[name] != before[name]}
-        assert changed == {"fig9_feasible_share_by_actuator.png",
-                           "limiting_constraints_by_actuator.png", "fig8_workspace_actuator4.png",
-                           "fig8_workspace_actuator4.json"}
+        assert changed == {"fig9_feasible_share_by_actuator.png", "limiting_constraints_by_actuator.png"}
+        points.assign(feasible=True).to_parquet(points_path)  # a job file no longer as it finished
+        with pytest.raises(ConfigError, match="actuator=4: points.parquet changed since the job finished"):
+            run_study("actuator_choice", [], out_root, figures_only=True)
+        assert {p.name: p.read_bytes() for p in figures.iterdir()} == after
     finally:
         summary.to_parquet(summary_path)
-        points.to_parquet(points_path)
+        points_path.write_bytes(finished)
 
 
 def test_user_catalogue_of_20_synthetic_actuators(choice_run):
