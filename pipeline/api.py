@@ -39,11 +39,12 @@ __all__ = ["ConfigError", "Workspace", "Choice", "workspace", "actuator_choice",
 
 @dataclass(frozen=True)
 class Workspace:
-    """One finished job: its folder, summary (one row as a dict), per-pose table, and the
-    resolved config and code version recorded in its files."""
+    """One finished job: its folder, summary (one row as a dict), per-pose table (None for a
+    job run with ``output.points=false``), and the resolved config and code version recorded
+    in its files."""
     folder: Path
     summary: dict
-    points: pd.DataFrame
+    points: pd.DataFrame | None
     config: str
     version: str
 
@@ -53,7 +54,8 @@ class Workspace:
         folder = Path(folder)
         meta = read_metadata(folder / "summary.parquet")
         summary = pd.read_parquet(folder / "summary.parquet").iloc[0].to_dict()
-        return cls(folder, summary, pd.read_parquet(folder / "points.parquet"),
+        points = folder / "points.parquet"
+        return cls(folder, summary, pd.read_parquet(points) if points.exists() else None,
                    meta.get("cdpr.config", ""), meta.get("cdpr.version", ""))
 
 

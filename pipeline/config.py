@@ -379,9 +379,12 @@ class LinesConfig:
 @dataclass
 class OutputConfig:
     """``cables``: add per-pose cable lengths and tensions to points.parquet
-    (``pipeline.quantities``)."""
+    (``pipeline.quantities``). ``points``: write the per-pose table points.parquet (false: the
+    summary only, for sweeps whose figures read summaries; a study that draws clouds or
+    compares poses refuses it)."""
 
     cables: bool = False
+    points: bool = True
 
 
 @dataclass
@@ -506,6 +509,9 @@ def validate(cfg: DictConfig, catalogue_ids=None, typed: bool = False) -> DictCo
         raise ConfigError(f"model.moment_arm=base: moments about the base are only read for a "
                           f"massless platform (load.mass={cfg.load.mass}); set load.mass=0 and put "
                           "the weight in wrench.*")
+    if cfg.output.cables and not cfg.output.points:
+        raise ConfigError("output.cables=true: the cables go into points.parquet, which "
+                          "output.points=false does not write")
     if cfg.compute.backend == "dask" and importlib.util.find_spec("distributed") is None:
         raise ConfigError("compute.backend=dask: needs Dask, pip install 'cdpr-studies[dask]'")
     if "actuator" in cfg and cfg.actuator not in set(catalogue_ids):

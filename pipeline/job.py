@@ -106,12 +106,17 @@ def _run_locked(cfg: DictConfig, catalogue, out: Path) -> dict:
         log.info("%d lines, %d samples; simulated %d vs grid %d feasible points, agreement %.1f%%",
                  summary["n_lines"], summary["n_samples"], summary["n_feasible"],
                  summary["n_feasible_grid"], summary["agreement_pct"])
-        write_parquet(points, out / "points.parquet", config_yaml)
-        written = [out / "samples.parquet", out / "points.parquet"]
-    else:  # streamed chunk by chunk: memory bounded by a chunk, not by the grid
+        written = [out / "samples.parquet"]
+        if cfg.output.points:
+            write_parquet(points, out / "points.parquet", config_yaml)
+            written.append(out / "points.parquet")
+    elif cfg.output.points:  # streamed chunk by chunk: memory bounded by a chunk, not by the grid
         with ParquetSink(out / "points.parquet", config_yaml) as sink:
             _, summary = compute_workspace(cfg, catalogue, sink.write)
         written = [out / "points.parquet"]
+    else:  # the summary only: each chunk's rows are counted, then dropped
+        _, summary = compute_workspace(cfg, catalogue, lambda chunk: None)
+        written = []
     write_parquet(pd.DataFrame([summary]), out / "summary.parquet", config_yaml,
                   {DIGESTS_KEY: digests_json(written)})
     lost = ", ".join(
@@ -130,11 +135,11 @@ def _run_locked(cfg: DictConfig, catalogue, out: Path) -> dict:
 def changed_files(out: Path, meta: dict | None = None) -> list[str]:
     """The data files of the finished job in ``out`` that are missing or no longer have the
     digest its summary recorded (``meta``: the summary's metadata, read if not given); a job
-    that recorded none reports so."""
+    whose summary has no record of them reports so."""
     meta = read_metadata(out / "summary.parquet") if meta is None else meta
-    recorded = json.loads(meta.get(DIGESTS_KEY, "{}"))
-    if not recorded:
+    if DIGESTS_KEY not in meta:  # "{}" is recorded by a job that writes its summary only
         return ["its data files are not recorded"]
+    recorded = json.loads(meta[DIGESTS_KEY])
     return [name for name, digest in recorded.items()
             if not (out / name).exists() or file_digest(out / name) != digest]
 

@@ -232,6 +232,7 @@ def _check_jobs(jobs_dir: Path, jobs) -> None:
                               "finished; rerun the study without --figures-only to recompute it")
 
 
+NEEDS_POINTS = {"cloud", "survival"}  # figure kinds and analyses that read jobs/*/points.parquet
 MAX_JOBS_LISTED = 24  # metrics per job up to this many jobs, else their range
 
 
@@ -275,7 +276,13 @@ def checked_commands(name: str, extra: list[str], out_root: Path | None = None,
     out = study_dir(name, extra, out_root)
     commands = [sweep_command(study, [*overrides, *extra], out / "jobs" / case, launcher)
                 for case, overrides in (study.cases or {"": []}).items()]
-    return [(command, check(command)) for command in commands]
+    checked = [(command, check(command)) for command in commands]
+    needs = [f.kind for f in study.figures if f.kind in NEEDS_POINTS] + [
+        a for a in study.analyses if a in NEEDS_POINTS]
+    if needs and any(not cfg.output.points for _, jobs in checked for cfg, _ in jobs.values()):
+        raise ConfigError(f"output.points=false: study {name} reads every job's points.parquet "
+                          f"({', '.join(dict.fromkeys(needs))})")
+    return checked
 
 
 def _start_or_resume(jobs_dir: Path, commands: list[list[str]]) -> None:

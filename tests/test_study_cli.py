@@ -179,3 +179,14 @@ def test_a_study_is_a_declared_name_and_cannot_set_hydra_callbacks(tmp_path):
     with pytest.raises(ConfigError, match="hydra.callbacks.x._target_: a study file may not set Hydra"):
         load_study("evil", tmp_path)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["evil.yaml"]
+
+
+def test_a_study_that_reads_points_refuses_a_summary_only_run():
+    from pipeline.study import checked_commands
+
+    with pytest.raises(ConfigError, match=r"^output.points=false: study tension_comparison reads every "
+                                          r"job's points.parquet \(cloud, survival\)$"):
+        checked_commands("tension_comparison", ["output.points=false"])
+    with pytest.raises(ConfigError, match=r"study actuator_choice reads every job's points.parquet \(cloud\)"):
+        checked_commands("actuator_choice", ["output.points=false"])
+    assert len(checked_commands("design_mass", ["output.points=false"])) == 1

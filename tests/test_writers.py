@@ -92,3 +92,26 @@ def test_figures_only_refuses_a_damaged_job_and_keeps_the_old_figures(tmp_path, 
     again = subprocess.run(study, cwd=tmp_path, capture_output=True, text=True, timeout=600)
     assert again.returncode == 0, again.stderr
     assert {p.name: p.read_bytes() for p in (out / "figures").iterdir()} == figures
+
+
+def test_a_summary_only_job_writes_no_points_and_is_reused(tmp_path):
+    """output.points=false: the summary only (the same counts), recorded as such, so a rerun
+    reuses it instead of recomputing; output.cables needs the points table."""
+    run = ["robot=irpm6", "robot.search.step=1", "hydra.run.dir=job"]
+    assert start(tmp_path, *run, "hydra.run.dir=full").wait(timeout=300) == 0
+    assert start(tmp_path, *run, "output.points=false").wait(timeout=300) == 0
+    job = tmp_path / "job"
+    assert not (job / "points.parquet").exists() and (job / "summary.parquet").exists()
+    full = pd.read_parquet(tmp_path / "full" / "summary.parquet").iloc[0]
+    lean = pd.read_parquet(job / "summary.parquet").iloc[0]
+    assert (lean["n_feasible"], lean["n_points"]) == (full["n_feasible"], full["n_points"])
+    assert read_metadata(job / "summary.parquet")["cdpr.digests"] == "{}"
+    again = start(tmp_path, *run, "output.points=false")
+    assert again.wait(timeout=300) == 0
+    assert "reused the finished job" in (job / "pipeline.log").read_text()
+    refused = start(tmp_path, "output.points=false", "output.cables=true", "hydra.run.dir=c")
+    _, err = refused.communicate(timeout=300)
+    assert refused.returncode == 2 and err.strip().splitlines() == [
+        "error: output.cables=true: the cables go into points.parquet, which output.points=false "
+        "does not write"]
+    assert not (tmp_path / "c").exists()
