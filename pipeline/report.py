@@ -18,7 +18,7 @@ from urllib.parse import quote
 import pandas as pd
 
 from pipeline.choice import verdict
-from pipeline.evidence import POINTS, scores
+from pipeline.evidence import POINTS, describe_reading, scores
 from pipeline.figures import caption, label
 from pipeline.paper import TABLE2_ACCEPTED, TABLE2_FEASIBLE_PCT
 from pipeline.errors import one_line
@@ -95,8 +95,14 @@ def _answer(directory: Path) -> list[str]:
     return lines
 
 
+def _model(summary: pd.DataFrame) -> dict:
+    """The ``model.*`` switches of a study's jobs (the same for every job), without the prefix."""
+    return {key[6:]: summary[key].iloc[0] for key in summary.columns if key.startswith("model.")}
+
+
 def _table2(studies_dir: Path) -> list[str]:
     choice = pd.read_parquet(studies_dir / "actuator_choice" / "choice.parquet").set_index("actuator")
+    choice_summary = pd.read_parquet(studies_dir / "actuator_choice" / "summary.parquet")
     rows = ["## CPR-8, Table 2 (Filipovic & Kevac 2018)", "",
             "| actuator | paper x(i_a) % | ours % | difference (pp) | lost to |",
             "| --- | --- | --- | --- | --- |"]
@@ -107,7 +113,10 @@ def _table2(studies_dir: Path) -> list[str]:
         diff = round(ours - paper, 2) + 0.0  # no "-0.00"
         rows.append(f"| {actuator} | {paper:.2f} | {ours:.2f} | {diff:+.2f} | {md(lost) or '–'} |")
     accepted = sorted(int(a) for a in choice.index[choice["accepted"]])
-    rows += ["", f"Accepted at x = 90 %: paper {TABLE2_ACCEPTED}, ours {accepted}.", ""]
+    rows += ["", f"Accepted at x = 90 %: paper {TABLE2_ACCEPTED}, ours {accepted}.", "",
+             f"Reading: {md(describe_reading(_model(choice_summary)))}. The readings are chosen on "
+             "all the published evidence, not on Table 2 alone (section \"The readings against "
+             "all the published evidence\" below; docs/model.md section 4).", ""]
     return rows + _pulling_choice(studies_dir)
 
 
