@@ -9,7 +9,7 @@ import pandas as pd
 from hydra.experimental.callback import Callback
 from omegaconf import DictConfig, OmegaConf
 
-from pipeline.results import write_parquet
+from pipeline.results import varying_settings, write_parquet
 
 log = logging.getLogger("pipeline")
 REPORTED = ["n_points", "n_feasible", "feasible_pct", "volume_m3"]
@@ -40,11 +40,7 @@ class SweepSummary(Callback):
         if not rows:
             return
         table = pd.concat(rows, ignore_index=True)
-        varying = [
-            c for c in table.columns
-            if c not in REPORTED and c != "job" and table[c].astype(str).nunique() > 1
-            and not c.startswith("lost_")
-        ]
+        varying = varying_settings(table, ignore=("job",))
         table = table.sort_values(varying, kind="stable").reset_index(drop=True) if varying else table
         sweep_yaml = OmegaConf.to_yaml(
             {"overrides": list(config.hydra.overrides.task), "jobs": len(table)}

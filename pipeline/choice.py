@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import pandas as pd
 
+from pipeline.results import varying_settings
+
 
 def choose(summary: pd.DataFrame) -> pd.DataFrame:
     """Rank the actuators of a CPR-WWA sweep summary and accept those with x(i_a) >= x.
@@ -62,10 +64,7 @@ def verdict(choice: pd.DataFrame) -> str:
 def acceptance(summary: pd.DataFrame) -> pd.DataFrame:
     """CPR-ACM repeated for every value of one swept design variable (winch radius, gear ratio,
     mass, v_max): one row per (actuator, value) with x(i_a), the verdict and the main loss."""
-    result = {"job", "actuator", "actuator_name", "actuator_power_W", "n_points", "n_feasible",
-              "feasible_pct", "volume_m3"}
-    varying = [c for c in summary.columns if c not in result and not c.startswith(("lost_", "box."))
-               and summary[c].astype(str).nunique() > 1]
+    varying = varying_settings(summary, ignore=("job", "actuator"))
     if len(varying) != 1:
         raise ValueError(f"acceptance needs exactly one swept design variable, got {varying or 'none'}")
     (parameter,) = varying

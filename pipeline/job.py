@@ -124,10 +124,12 @@ def _run_locked(cfg: DictConfig, catalogue, out: Path) -> dict:
     )
     subject = (f"actuator {cfg.actuator} ({summary['actuator_name']})"
                if "actuator_name" in summary else f"{cfg.robot.name} {summary['analysis']}")
+    headroom = ", ".join(f"{key[len('least_margin_'):]} {100 * value:.1f}%" for key, value in summary.items()
+                         if key.startswith("least_margin_") and value == value)  # NaN: none feasible
     log.info(
-        "%s: %d/%d feasible = %.2f%% (%.4f m^3); lost to %s", subject,
+        "%s: %d/%d feasible = %.2f%% (%.4f m^3); lost to %s%s", subject,
         summary["n_feasible"], summary["n_points"], summary["feasible_pct"], summary["volume_m3"],
-        lost,
+        lost, f"; headroom of the feasible poses: {headroom}" if headroom else "",
     )
     return summary
 

@@ -135,3 +135,18 @@ def file_digest(path: Path) -> str:
 def digests_json(paths: list[Path]) -> str:
     """The ``cdpr.digests`` metadata of a job's summary: file name -> sha256."""
     return json.dumps({p.name: file_digest(p) for p in paths}, sort_keys=True)
+
+
+# A job summary's result columns (summarize, and simulate_lines' additions); the rest is config
+RESULT_COLUMNS = {"analysis", "actuator_name", "actuator_power_W", "n_orientations", "n_points",
+                  "n_feasible", "feasible_pct", "volume_m3", "n_lines", "n_samples",
+                  "n_feasible_grid", "agreement_pct"}
+RESULT_PREFIXES = ("box.", "lost_", "least_margin_", "limit_", "line0_margin_")
+
+
+def varying_settings(table: pd.DataFrame, ignore=()) -> list[str]:
+    """The config columns of a table of job summaries whose value differs between the jobs
+    (what their sweep varied), in column order, except ``ignore``."""
+    return [c for c in table.columns
+            if c not in RESULT_COLUMNS and c not in ignore and not c.startswith(RESULT_PREFIXES)
+            and table[c].astype(str).nunique() > 1]

@@ -225,16 +225,20 @@ def grid_workspace(
         scheduler=cfg.compute.scheduler,
     )
     parts, n_feasible, lost, by_lp = [], 0, Counter(), 0
+    least = dict.fromkeys(problem.criteria, np.inf)
     for span, raw in chunks:
         points = tabulate(problem, grid.positions[span], raw)
         n_feasible += int(points["feasible"].sum())
+        for name in problem.criteria:  # the feasible poses' headroom to each limit
+            least[name] = np.min(points[f"margin_{name}"].to_numpy(), initial=least[name],
+                                 where=points["feasible"].to_numpy())
         by_lp += int(np.count_nonzero(raw.get("lp_poses", False)))
         lost.update(points.loc[~points["feasible"], "limiting"].value_counts().to_dict())  # 20x Counter of str
         if sink is None:
             parts.append(points)
         else:
             sink(points)
-    counts = {"n_points": grid.n_points, "n_feasible": n_feasible, "lost": lost}
+    counts = {"n_points": grid.n_points, "n_feasible": n_feasible, "lost": lost, "least": least}
     if problem.spec.tension.model == "feasible":
         log.info("feasible tension model: %d of %d poses by LP (poor conditioning or fallback), "
                  "the rest by hyperplane shifting", by_lp, grid.n_points)
@@ -324,7 +328,9 @@ def bounded_chunk_size(problem: WorkspaceProblem, requested: int) -> int:
 
 def summarize(cfg: DictConfig, counts: dict, cell_volume: float, problem) -> dict:
     """Flattened config (every swept key is a column) plus counts, percentage and volume;
-    ``counts``: n_points, n_feasible and ``lost`` (limiting criterion -> infeasible points)."""
+    ``counts``: n_points, n_feasible, ``lost`` (limiting criterion -> infeasible points) and
+    ``least`` (criterion -> its smallest margin over the feasible poses: ``least_margin_*``, the
+    headroom the feasible workspace keeps to each limit; NaN when no pose is feasible)."""
     n_points, n_feasible = counts["n_points"], counts["n_feasible"]
     row = flatten(OmegaConf.to_container(cfg, resolve=True, enum_to_str=True))
     row["analysis"] = analysis_name(cfg)
@@ -342,6 +348,9 @@ def summarize(cfg: DictConfig, counts: dict, cell_volume: float, problem) -> dic
     )
     for name in problem.criteria:
         row[f"lost_{name}"] = int(counts["lost"].get(name, 0))
+    for name in problem.criteria:
+        least = counts["least"][name]
+        row[f"least_margin_{name}"] = float(least) if np.isfinite(least) else np.nan
     return row
 
 

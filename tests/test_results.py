@@ -1,5 +1,6 @@
 """Parquet output: streamed by chunks equals the in-memory table; nothing half-written."""
 
+import numpy as np
 import pandas as pd
 import pyarrow.parquet as pq
 import pytest
@@ -18,6 +19,11 @@ def test_points_streamed_chunk_by_chunk_equal_the_in_memory_table(tmp_path, make
     pd.testing.assert_frame_equal(pd.read_parquet(tmp_path / "points.parquet"), table)
     assert read_metadata(tmp_path / "points.parquet")["cdpr.config"] == "config: x\n"
     assert summary["n_feasible"] == table["feasible"].sum() == 1332
+    for name in ("speed", "torque", "acceleration", "voltage"):  # headroom, reduced over the chunks
+        assert summary[f"least_margin_{name}"] == table.loc[table["feasible"], f"margin_{name}"].min()
+    assert summary["least_margin_speed"] == pytest.approx(0.0929, abs=1e-4)  # actuator 4, 12^3 poses
+    _, none = compute_workspace(make_cfg("grid.n=4", "actuator=5"), catalogue)
+    assert none["n_feasible"] == 0 and np.isnan(none["least_margin_torque"])
 
 
 def test_a_failed_write_leaves_no_file_under_either_name(tmp_path):
