@@ -341,7 +341,27 @@ def heatmap(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_di
     return [_save(fig, spec, out_dir, table.iloc[0])]
 
 
+def pareto(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
+    """An optimise study's trials (``x``, ``y`` objectives): those that meet the requirement
+    coloured by ``hue`` (the actuator), the others as grey crosses, the Pareto front joined."""
+    fig = Figure()
+    ax = fig.subplots()
+    missed = table[~table["meets"]]
+    ax.scatter(missed[spec.x], missed[spec.y], marker="x", s=14, color="0.75", lw=0.8,
+               label=f"below the requirement ({len(missed)})")
+    met = table[table["meets"]]
+    for value, part in met.groupby(spec.hue, sort=True):
+        ax.scatter(part[spec.x], part[spec.y], s=18, label=f"{label(spec.hue)} {value} ({len(part)})")
+    front = met[met["pareto"]].sort_values(spec.x)
+    ax.plot(front[spec.x], front[spec.y], color="black", lw=1, drawstyle="steps-post",
+            label=f"Pareto front ({len(front)})")
+    ax.legend(fontsize=7)
+    _labels(ax, spec, spec.x, spec.y)
+    return [_save(fig, spec, out_dir)]
+
+
 KINDS: dict[str, Callable[[FigureSpec, pd.DataFrame, StudyResults, Path], list[Path]]] = {
+    "pareto": pareto,
     "choice_bar": choice_bar,
     "limiting_bar": limiting_bar,
     "cloud": cloud,

@@ -83,6 +83,14 @@ def _answer(directory: Path) -> list[str]:
     lines = []
     if (directory / "choice.parquet").exists():
         lines += [md(verdict(pd.read_parquet(directory / "choice.parquet"))).capitalize() + ".", ""]
+    if (directory / "best_drive.parquet").exists():
+        table = pd.read_parquet(directory / "best_drive.parquet")
+        parts = [f"actuator {r.actuator}: R_i = {r.winch_radius_m:g} m, N_V = {r.gear_ratio:g} "
+                 f"({r.best_feasible_pct:.2f} %, {r.motor_torque_demand_Nm:.3g} N m at the motor)"
+                 if r.found else f"actuator {r.actuator}: none of its {r.trials} trials (best "
+                 f"{r.best_feasible_pct:.2f} %)" for r in table.itertuples()]
+        lines += ["The least motor torque that reaches the required share, per actuator: "
+                  + "; ".join(parts) + ".", ""]
     if (directory / "acceptance.parquet").exists():
         table = pd.read_parquet(directory / "acceptance.parquet")
         parts = []

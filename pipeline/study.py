@@ -37,7 +37,8 @@ from pipeline.cli import launch
 from pipeline.errors import ConfigError, one_line
 from pipeline.evidence import evidence, scores
 from pipeline.figures import SERIES_DIR, FigureSpec, StudyResults, render
-from pipeline.job import PREPARED, changed_files
+from pipeline.job import PREPARED, changed_files, execute
+from pipeline.optimise import OptimiseSpec, best_drive, corner_overrides, optimise, record, trial_folder
 from pipeline.preflight import check, parse, quoted
 from pipeline.resources import STUDIES_DIR
 from pipeline.results import code_version, write_csv, write_parquet, write_text
@@ -58,6 +59,7 @@ ANALYSES: dict[str, Callable[[StudyResults], pd.DataFrame]] = {
     "acceptance": lambda results: acceptance(results.summary),
     "survival": survival,
     "evidence": lambda results: evidence(results.summary),
+    "best_drive": lambda results: best_drive(results.summary),
 }
 log = logging.getLogger("pipeline.study")
 
@@ -71,7 +73,9 @@ class StudySpec:
     ``case_labels`` (name -> words) is what a reader calls a case, in the summary's
     ``case_label`` column for titles, captions, legends and report tables (default: the name,
     which stays the folder name). ``extra_overrides: false``: the study checks published facts
-    on the papers' own settings, so a command may add ``compute.*`` overrides only."""
+    on the papers' own settings, so a command may add ``compute.*`` overrides only.
+    ``optimise`` (:class:`pipeline.optimise.OptimiseSpec`) replaces the sweep by trials that an
+    optimiser proposes: no ``sweep`` or ``cases`` then."""
 
     title: str
     source: str
@@ -80,6 +84,7 @@ class StudySpec:
     cases: dict[str, list[str]] = field(default_factory=dict)
     case_labels: dict[str, str] = field(default_factory=dict)
     extra_overrides: bool = True
+    optimise: Optional[OptimiseSpec] = None
     analyses: list[str] = field(default_factory=list)
     figures: list[FigureSpec] = field(default_factory=list)
     name: Optional[str] = None
@@ -106,6 +111,10 @@ def load_study(name: str, directory: Path = STUDIES_DIR) -> StudySpec:
                 *(_key(o) for case in study.cases.values() for o in case)]:
         if re.split(r"[./]", key)[0] == "hydra":  # callbacks and plugins run code: not from data
             raise ConfigError(f"{path}: {key}: a study file may not set Hydra's own settings")
+    if study.optimise is not None:
+        if study.sweep or study.cases:
+            raise ConfigError(f"{path}: optimise: a study either sweeps or optimises (drop sweep and cases)")
+        study.optimise.check(str(path))
     for case in study.case_labels:
         if case not in study.cases:
             raise ConfigError(f"{path}: case_labels: {case!r} is not a case (cases: "
@@ -181,15 +190,21 @@ def run_study(name: str, extra: list[str], out_root: Path | None = None,
         out.mkdir(parents=True, exist_ok=True)
         write_text(out / "study.yaml", provenance)
         log.info("study %s: %s", name, study.title)
-        _start_or_resume(out / "jobs", commands)
-        for command, prepared in checked:
-            PREPARED.update(prepared)  # the jobs take the configs the preflight typed
-            try:
-                launch(command)  # a failed job exits as python -m pipeline would
-            finally:
-                PREPARED.clear()
-            _log_to_console()  # Hydra set up logging for its jobs
-        write_parquet(_gather(out / "jobs", cases, study.case_labels), out / "summary.parquet", provenance)
+        if study.optimise is not None:
+            _start_or_resume(out / "jobs", [[OmegaConf.to_yaml(record(study.optimise, extra))]])
+            ((cfg, catalogue),) = checked[0][1].values()
+            summary = _trials(study, extra, out / "jobs", catalogue, cfg.choice.required_pct)
+        else:
+            _start_or_resume(out / "jobs", commands)
+            for command, prepared in checked:
+                PREPARED.update(prepared)  # the jobs take the configs the preflight typed
+                try:
+                    launch(command)  # a failed job exits as python -m pipeline would
+                finally:
+                    PREPARED.clear()
+                _log_to_console()  # Hydra set up logging for its jobs
+            summary = _gather(out / "jobs", cases, study.case_labels)
+        write_parquet(summary, out / "summary.parquet", provenance)
     results = StudyResults(out)
     try:
         results.summary  # noqa: B018  (read once: a missing or corrupt file fails here, clearly)
@@ -256,6 +271,11 @@ def metrics(summary: pd.DataFrame, tables: dict[str, pd.DataFrame]) -> dict:
         found["n_accepted"] = len(accepted)
     if "acceptance" in tables:
         found["n_accepted_pairs"] = int(tables["acceptance"]["accepted"].sum())
+    if "best_drive" in tables:
+        found["best_drive"] = {str(row.actuator): ({"winch_radius_m": row.winch_radius_m, "gear_ratio": row.gear_ratio,
+                                                    "motor_torque_demand_Nm": round(row.motor_torque_demand_Nm, 6)}
+                                                   if row.found else "none")
+                               for row in tables["best_drive"].itertuples()}
     if "evidence" in tables:
         found["evidence"] = {row.reading: {"matched": int(row.matched), "facts": int(row.facts),
                                            "points": round(float(row.points), 6)}
@@ -274,6 +294,12 @@ def checked_commands(name: str, extra: list[str], out_root: Path | None = None,
         raise ConfigError(f"{changed[0]}: study {name} checks the papers' published facts on "
                           "their own settings; it takes compute.* overrides only")
     out = study_dir(name, extra, out_root)
+    if study.optimise is not None:  # the lowest and highest designs stand for every trial
+        ((_, catalogue),) = check([*study.overrides, *extra, f"hydra.run.dir={quoted(out)}"]).values()
+        ids = [] if catalogue is None else [int(i) for i in catalogue.index]
+        return [(["optimise"], check([*study.overrides, *extra, *corner,
+                                     f"hydra.run.dir={quoted(trial_folder(out / 'jobs', 0))}"]))
+                for corner in corner_overrides(study.optimise, ids)]
     commands = [sweep_command(study, [*overrides, *extra], out / "jobs" / case, launcher)
                 for case, overrides in (study.cases or {"": []}).items()]
     checked = [(command, check(command)) for command in commands]
@@ -297,6 +323,28 @@ def _start_or_resume(jobs_dir: Path, commands: list[list[str]]) -> None:
     shutil.rmtree(jobs_dir, ignore_errors=True)
     jobs_dir.mkdir(parents=True)
     write_text(record, wanted)
+
+
+def _trials(study: StudySpec, extra: list[str], jobs_dir: Path, catalogue, required_pct: float) -> pd.DataFrame:
+    """The optimiser's trials, each an ordinary job in ``jobs/trial_NNNN`` (a finished one with
+    the same config is reused), one summary row each (:func:`pipeline.optimise.optimise`)."""
+    quiet, progress = logging.getLogger("pipeline"), logging.getLogger("pipeline.study")
+
+    def run_trial(number: int, overrides: list[str]) -> dict:
+        folder = trial_folder(jobs_dir, number)
+        ((cfg, job_catalogue),) = check([*study.overrides, *extra, *overrides,
+                                         f"hydra.run.dir={quoted(folder)}"]).values()
+        folder.mkdir(parents=True, exist_ok=True)
+        return {"job": folder.name, **execute(cfg, job_catalogue, folder)}
+
+    levels = quiet.level, progress.level
+    quiet.setLevel(logging.WARNING)  # one line per 20 trials, not three per job
+    progress.setLevel(logging.INFO)
+    try:
+        return optimise(study.optimise, run_trial, catalogue, required_pct)
+    finally:
+        quiet.setLevel(levels[0])
+        progress.setLevel(levels[1])
 
 
 def _gather(jobs_dir: Path, cases: dict[str, list[str]], labels: dict[str, str]) -> pd.DataFrame:

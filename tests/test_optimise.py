@@ -1,0 +1,126 @@
+"""The optimise study kind (pipeline/optimise.py): declared design variables and objectives,
+Optuna's seeded sampler, each trial an ordinary job; bad input refused before anything runs."""
+
+import subprocess
+import sys
+from dataclasses import replace
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import pipeline.study
+from pipeline.catalogue import load_catalogue
+from pipeline.errors import ConfigError
+from pipeline.optimise import OptimiseSpec, corner_overrides, pareto_front
+from pipeline.study import load_study, run_study
+
+STUDY = "title: t\nsource: s\noptimise:\n{body}\n"
+GOOD = {"variables": "{actuator: catalogue, drive.winch_radius: {low: 0.03, high: 0.12}}"}
+
+
+@pytest.mark.parametrize("body, message", [
+    ("  variables: {drive.winch_radius: {low: 0.12, high: 0.03}}",
+     "optimise.variables.drive.winch_radius: an empty range [0.12, 0.03]"),
+    ("  variables: {drive.gear_ratio: {low: 5, high: 10, step: 20}}",
+     "optimise.variables.drive.gear_ratio: an empty range [5, 10] by 20"),
+    ("  variables: {drive.gear_ratio: {low: 5, high: .inf}}", "low, high and step must be finite numbers"),
+    ("  variables: {actuator: []}", "optimise.variables.actuator: an empty list of values"),
+    ("  variables: {drive.gear_ratio: catalogue}", "only 'actuator' takes the catalogue's ids"),
+    (f"  variables: {GOOD['variables']}\n  objectives: [cheapest]",
+     "optimise.objectives: unknown 'cheapest' (known: feasible_pct, motor_torque_demand_Nm"),
+    (f"  variables: {GOOD['variables']}\n  budget: 0", "optimise.budget=0: must be in [1, 10000]"),
+    (f"  variables: {GOOD['variables']}\n  budget: -5", "optimise.budget=-5: must be in [1, 10000]"),
+    (f"  variables: {GOOD['variables']}\n  sampler: grid", "optimise.sampler='grid': must be one of nsga2, tpe"),
+])
+def test_a_bad_optimise_block_is_refused_when_the_study_is_loaded(tmp_path, body, message):
+    (tmp_path / "bad.yaml").write_text(STUDY.format(body=body))
+    with pytest.raises(ConfigError, match=message.replace("[", r"\[").replace("(", r"\(")):
+        load_study("bad", tmp_path)
+
+
+def test_a_study_either_sweeps_or_optimises(tmp_path):
+    (tmp_path / "both.yaml").write_text(STUDY.format(body=f"  variables: {GOOD['variables']}")
+                                        + "sweep: {actuator: catalogue}\n")
+    with pytest.raises(ConfigError, match="a study either sweeps or optimises"):
+        load_study("both", tmp_path)
+
+
+def test_an_actuator_id_outside_the_catalogue_is_refused():
+    ids = [int(i) for i in load_catalogue().index]
+    spec = OptimiseSpec(variables={"actuator": [1, 9], "drive.gear_ratio": {"low": 5, "high": 60}})
+    with pytest.raises(ConfigError, match=r"optimise.variables.actuator: id 9 is not in the catalogue \(ids: 1, 2, 3, 4, 5\)"):
+        corner_overrides(spec, ids)
+    spec = replace(spec, variables={"actuator": "catalogue", "drive.gear_ratio": {"low": 5, "high": 60}})
+    assert corner_overrides(spec, ids) == [["actuator=1", "drive.gear_ratio=5"], ["actuator=5", "drive.gear_ratio=60"]]
+
+
+def test_bad_extra_overrides_stop_the_study_before_anything_is_written(tmp_path):
+    proc = subprocess.run([sys.executable, "-m", "pipeline.study", "drive_pareto", "catalogue=missing.csv"],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 2 and proc.stderr.startswith("error: catalogue=missing.csv")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_pareto_front_is_the_set_no_trial_dominates():
+    rng = np.random.default_rng(3)
+    table = pd.DataFrame({"feasible_pct": rng.integers(0, 5, 60) * 25.0,
+                          "motor_torque_demand_Nm": rng.integers(0, 6, 60) / 10, "meets": rng.random(60) < 0.8})
+    front = pareto_front(table, ["feasible_pct", "motor_torque_demand_Nm"])
+    for i, row in table.iterrows():  # brute force: maximise the share, minimise the torque
+        others = table[table["meets"]]
+        better = ((others["feasible_pct"] >= row["feasible_pct"])
+                  & (others["motor_torque_demand_Nm"] <= row["motor_torque_demand_Nm"])
+                  & ((others["feasible_pct"] > row["feasible_pct"])
+                     | (others["motor_torque_demand_Nm"] < row["motor_torque_demand_Nm"])))
+        assert front[i] == (row["meets"] and not better.any()), i
+
+
+@pytest.fixture(scope="module")
+def small_run(tmp_path_factory):
+    """The declared drive_pareto study with 16 trials on a 4^3 grid, run twice (the second
+    reuses every trial's job)."""
+    root = tmp_path_factory.mktemp("optimise")
+    spec = load_study("drive_pareto")
+    small = replace(spec, optimise=replace(spec.optimise, budget=16))
+    patch = pytest.MonkeyPatch()
+    patch.setattr(pipeline.study, "load_study", lambda name, directory=None: small)
+    try:
+        run_study("drive_pareto", ["grid.n=4", "grid.n_vel=4"], root)
+        out = root / "drive_pareto"
+        first = pd.read_parquet(out / "summary.parquet")
+        stamps = {p: p.stat().st_mtime_ns for p in (out / "jobs").glob("trial_*/summary.parquet")}
+        run_study("drive_pareto", ["grid.n=4", "grid.n_vel=4"], root)
+    finally:
+        patch.undo()
+    return out, first, stamps
+
+
+def test_a_seeded_rerun_proposes_the_same_trials_and_reuses_their_jobs(small_run):
+    out, first, stamps = small_run
+    again = pd.read_parquet(out / "summary.parquet")
+    pd.testing.assert_frame_equal(first, again)
+    assert len(first) == 16 and first["trial"].tolist() == list(range(16))
+    assert len(stamps) == 16
+    assert all(path.stat().st_mtime_ns == stamp for path, stamp in stamps.items())
+    assert (out / "figures" / "pareto_front.png").exists() and (out / "best_drive.csv").exists()
+
+
+def test_each_trial_is_the_job_its_variables_name(small_run, make_cfg, catalogue):
+    """The objectives from the trial's own job: the peak motor torque is the largest share of
+    eq. (32)'s limit over the feasible poses times the rated torque."""
+    from pipeline.workspace import compute_workspace
+
+    out, trials, _ = small_run
+    meeting = trials[trials["feasible_pct"] > 0].iloc[0]
+    points, summary = compute_workspace(make_cfg(
+        "grid.n=4", "grid.n_vel=4", f"actuator={meeting['actuator']}",
+        f"drive.winch_radius={meeting['drive.winch_radius']}", f"drive.gear_ratio={meeting['drive.gear_ratio']}"),
+        catalogue)
+    assert summary["feasible_pct"] == meeting["feasible_pct"]
+    used = (1 - points.loc[points["feasible"], "margin_torque"]).max()
+    rated = catalogue.loc[meeting["actuator"], "torque_Nm"]
+    assert meeting["motor_torque_demand_Nm"] == pytest.approx(used * rated)
+    assert meeting["winch_radius_m"] == meeting["drive.winch_radius"]
+    assert trials["meets"].tolist() == (trials["feasible_pct"] >= 90).tolist()
+    assert trials.loc[trials["pareto"], "meets"].all()
