@@ -116,7 +116,8 @@ def corner_overrides(spec: OptimiseSpec, ids: list[int]) -> list[list[str]]:
     corners: list[list[str]] = [[], []]
     for key, domain in spec.variables.items():
         kind, *values = _domain(key, domain, "")
-        options = sorted(ids) if kind == "catalogue" else (values[0] if kind == "choices" else values[:2])
+        options = sorted(ids) if kind == "catalogue" else values[:2] if kind == "range" else (
+            sorted(values[0]) if all(isinstance(v, (int, float)) for v in values[0]) else values[0])
         if key == "actuator":
             unknown = [v for v in options if v not in ids]
             if unknown:

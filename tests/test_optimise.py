@@ -53,6 +53,8 @@ def test_an_actuator_id_outside_the_catalogue_is_refused():
         corner_overrides(spec, ids)
     spec = replace(spec, variables={"actuator": "catalogue", "drive.gear_ratio": {"low": 5, "high": 60}})
     assert corner_overrides(spec, ids) == [["actuator=1", "drive.gear_ratio=5"], ["actuator=5", "drive.gear_ratio=60"]]
+    spec = replace(spec, variables={"actuator": [4, 2], "load.mass": [3.0, 0.5, 1.0]})  # the extremes of a list
+    assert corner_overrides(spec, ids) == [["actuator=2", "load.mass=0.5"], ["actuator=4", "load.mass=3.0"]]
 
 
 def test_bad_extra_overrides_stop_the_study_before_anything_is_written(tmp_path):
