@@ -337,9 +337,17 @@ class ChoiceConfig:
 
 @dataclass
 class ModelConfig:
-    """Readings of the ambiguous equations (docs/model.md gives each one's numbers).
-    ``margin_atol``: margins within it of zero are exactly 0 and satisfied (``pipeline.verdict``),
-    so a pose on a limit gets the same verdict on every CPU."""
+    """Readings of the ambiguous equations; each default is the best fit to all the published
+    evidence (studies evidence_cpr8 and evidence_irpm), except ``cable_direction``, whose better
+    fit describes another robot (docs/model.md sections 4-5 give every reading's numbers). ``pinv_columns``: eq. (20) with all six columns of J (full) or forces
+    only (translational); ``velocity_boundary``: |v| = V_cmax in the set of eq. (26) or not;
+    ``acceleration_set``: the box's corners or MATLAB's colon (eqs. 27-29); ``inertia``: eq.
+    (31)'s sign as printed (paper) or Newton's; ``jdot``: the centripetal term of the shaft
+    acceleration; ``xi_in_torque_limit``: xi in eq. (32); ``moment_arm`` and ``cable_direction``:
+    the IRPM's eqs. (8)-(9) (moments about the platform or the base; cables towards their
+    attachment points or the platform's centre). ``rank_rtol``: singular values below it (times
+    the largest) count as zero. ``margin_atol``: margins within it of zero are exactly 0 and
+    satisfied (``pipeline.verdict``), so a pose on a limit gets the same verdict on every CPU."""
 
     pinv_columns: PinvColumns = PinvColumns.full
     velocity_boundary: VelocityBoundary = VelocityBoundary.exclude
