@@ -77,6 +77,8 @@ def load_catalogue(path: str | Path | None = None) -> pd.DataFrame:
                 raise ConfigError(f"catalogue={source}: row {row}, column {column}: {value:g} must "
                                   "be a fraction in (0, 1] (per cent? divide by 100)")
         out[column] = values.astype(float)
+    for column in table.columns.difference(["id", "name", *NUMERIC_COLUMNS], sort=False):
+        out[column] = table[column].to_numpy()  # the user's own columns (a price, a mass), as text
     return out.set_index("id")
 
 

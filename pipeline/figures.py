@@ -43,7 +43,8 @@ class FigureSpec:
     group; ``line`` the simulated line of a time series; ``caption`` what the figure shows and
     what to conclude (``{column}`` fields as in ``title``), printed under it in the report;
     ``bars`` draws a curve's categories (actuator ids) as grouped bars; ``legend`` titles a
-    curve's legend (default: the ``hue`` key in words)."""
+    curve's legend (default: the ``hue`` key in words); ``table`` draws from an analysis table
+    of the study (e.g. ``exact_drive``: its rows name their jobs) instead of the summary."""
 
     kind: str
     file: str
@@ -65,6 +66,7 @@ class FigureSpec:
     caption: Optional[str] = None
     bars: bool = False
     legend: Optional[str] = None
+    table: Optional[str] = None
 
 
 class StudyResults:
@@ -90,7 +92,7 @@ class StudyResults:
 def render(spec: FigureSpec, results: StudyResults, out_dir: Path) -> list[Path]:
     """Draw one declared figure (one file per ``per`` value) into ``out_dir``; returns the files."""
     out_dir.mkdir(parents=True, exist_ok=True)
-    table = _select(results.summary, spec.select)
+    table = _select(results.summary if spec.table is None else results.table(spec.table), spec.select)
     groups = table.groupby(spec.per, sort=True) if spec.per else [(None, table)]
     written = []
     with matplotlib.style.context(STYLE):

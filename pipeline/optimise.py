@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
 
@@ -22,6 +22,7 @@ import numpy as np
 import pandas as pd
 from omegaconf import OmegaConf
 
+from pipeline.catalogue import NUMERIC_COLUMNS
 from pipeline.errors import ConfigError
 
 log = logging.getLogger("pipeline.study")
@@ -52,6 +53,35 @@ OBJECTIVES: dict[str, tuple[str, str, Callable[[pd.Series, pd.Series], float]]] 
     "gear_ratio": ("minimize", "gear ratio N_V",
                    lambda row, actuator: _drive(row, actuator, "drive.gear_ratio", "gear_ratio")),
 }
+CATALOGUE = "catalogue."  # catalogue.COLUMN: minimise a column of the user's catalogue (e.g. a price)
+
+
+def objective(name: str) -> tuple[str, str, Callable[[pd.Series, pd.Series], float]]:
+    """(direction, what it is, value) of an objective: one of :data:`OBJECTIVES`, or
+    ``catalogue.COLUMN``, the actuator's value in that column (minimised)."""
+    if name in OBJECTIVES:
+        return OBJECTIVES[name]
+    column = name[len(CATALOGUE):]
+    return "minimize", f"{column} (catalogue)", lambda row, actuator: float(actuator[column])
+
+
+def check_catalogue_objectives(spec: "OptimiseSpec", catalogue: pd.DataFrame) -> None:
+    """ConfigError unless every ``catalogue.COLUMN`` objective names a column of ``catalogue``
+    holding a finite number for every actuator."""
+    for name in spec.objectives:
+        if name in OBJECTIVES:
+            continue
+        column = name[len(CATALOGUE):]
+        if column not in catalogue.columns:
+            extra = [c for c in catalogue.columns if c not in ("name", *NUMERIC_COLUMNS)]
+            raise ConfigError(f"optimise.objectives: {name}: the catalogue has no column {column!r} "
+                              f"(its extra columns: {', '.join(extra) or 'none'})")
+        values = pd.to_numeric(catalogue[column], errors="coerce")
+        bad = ~np.isfinite(values.to_numpy(dtype=float))
+        if bad.any():
+            actuator = catalogue.index[np.flatnonzero(bad)[0]]
+            raise ConfigError(f"optimise.objectives: {name}: actuator {actuator}: "
+                              f"{catalogue.loc[actuator, column]!r} is not a number")
 
 
 @dataclass
@@ -73,18 +103,20 @@ class OptimiseSpec:
         if not self.variables:
             raise ConfigError(f"{where}: optimise.variables: none given")
         for key, domain in self.variables.items():
-            _domain(key, domain, where)
-        unknown = [o for o in self.objectives if o not in OBJECTIVES]
+            variable_domain(key, domain, where)
+        unknown = [o for o in self.objectives if o not in OBJECTIVES and not (
+            o.startswith(CATALOGUE) and len(o) > len(CATALOGUE))]
         if unknown or not self.objectives:
             what = f"unknown {unknown[0]!r}" if unknown else "none given"
-            raise ConfigError(f"{where}: optimise.objectives: {what} (known: {', '.join(OBJECTIVES)})")
+            raise ConfigError(f"{where}: optimise.objectives: {what} (known: {', '.join(OBJECTIVES)}, "
+                              f"{CATALOGUE}COLUMN)")
         if not 0 < self.budget <= 10_000:
             raise ConfigError(f"{where}: optimise.budget={self.budget}: must be in [1, 10000]")
         if self.sampler not in SAMPLERS:
             raise ConfigError(f"{where}: optimise.sampler={self.sampler!r}: must be one of {', '.join(SAMPLERS)}")
 
 
-def _domain(key: str, domain: Any, where: str) -> Any:
+def variable_domain(key: str, domain: Any, where: str) -> Any:
     """A variable's values as ``("choices", list)`` or ``("range", low, high, step)``."""
     if domain == "catalogue":
         if key != "actuator":
@@ -110,12 +142,13 @@ def _domain(key: str, domain: Any, where: str) -> Any:
     raise ConfigError(f"{where}: optimise.variables.{key}: catalogue, a list, or {{low, high, step}}")
 
 
-def corner_overrides(spec: OptimiseSpec, ids: list[int]) -> list[list[str]]:
-    """The overrides of the lowest and the highest design, for the preflight (every value a
-    trial can take lies between them); ConfigError for an actuator id not in the catalogue."""
+def corner_overrides(variables: dict[str, Any], ids: list[int]) -> list[list[str]]:
+    """The overrides of the lowest and the highest design of ``variables`` (an optimise or
+    search block's), for the preflight (every value a trial can take lies between them);
+    ConfigError for an actuator id not in the catalogue."""
     corners: list[list[str]] = [[], []]
-    for key, domain in spec.variables.items():
-        kind, *values = _domain(key, domain, "")
+    for key, domain in variables.items():
+        kind, *values = variable_domain(key, domain, "")
         options = sorted(ids) if kind == "catalogue" else values[:2] if kind == "range" else (
             sorted(values[0]) if all(isinstance(v, (int, float)) for v in values[0]) else values[0])
         if key == "actuator":
@@ -137,21 +170,21 @@ def optimise(spec: OptimiseSpec, run_trial: Callable[[int, list[str]], dict],
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     sampler = (optuna.samplers.NSGAIISampler(seed=spec.seed) if spec.sampler == "nsga2" else
                optuna.samplers.TPESampler(seed=spec.seed))
-    study = optuna.create_study(directions=[OBJECTIVES[o][0] for o in spec.objectives], sampler=sampler)
+    study = optuna.create_study(directions=[objective(o)[0] for o in spec.objectives], sampler=sampler)
     rows = []
 
-    def objective(trial) -> list[float]:
+    def run(trial) -> list[float]:
         overrides = [f"{key}={_suggest(trial, key, domain, catalogue)}" for key, domain in spec.variables.items()]
         row = pd.Series(run_trial(trial.number, overrides))
         actuator = catalogue.loc[int(row["actuator"])]
-        measured = {name: value(row, actuator) for name, (_, _, value) in OBJECTIVES.items()}
+        measured = {name: objective(name)[2](row, actuator) for name in dict.fromkeys([*OBJECTIVES, *spec.objectives])}
         trial.set_constraint("required_pct", float(required_pct - row["feasible_pct"]))  # <= 0: meets x
         rows.append({"trial": trial.number, **row.to_dict(), **measured})
         if (trial.number + 1) % 20 == 0 or trial.number + 1 == spec.budget:
             log.info("optimise: trial %d/%d", trial.number + 1, spec.budget)
         return [measured[o] for o in spec.objectives]
 
-    study.optimize(objective, n_trials=spec.budget)
+    study.optimize(run, n_trials=spec.budget)
     table = pd.DataFrame(rows)
     table["meets"] = table["feasible_pct"] >= required_pct
     table["pareto"] = pareto_front(table, spec.objectives) & table["meets"]
@@ -159,7 +192,7 @@ def optimise(spec: OptimiseSpec, run_trial: Callable[[int, list[str]], dict],
 
 
 def _suggest(trial, key: str, domain: Any, catalogue: pd.DataFrame):
-    kind, *values = _domain(key, domain, "")
+    kind, *values = variable_domain(key, domain, "")
     if kind == "catalogue":
         return trial.suggest_categorical(key, [int(i) for i in catalogue.index])
     if kind == "choices":
@@ -173,7 +206,7 @@ def _suggest(trial, key: str, domain: Any, catalogue: pd.DataFrame):
 def pareto_front(table: pd.DataFrame, objectives: list[str]) -> np.ndarray:
     """Rows of ``table`` that meet the requirement and that no other such row dominates (at
     least as good in every objective, better in one)."""
-    signs = np.array([1.0 if OBJECTIVES[o][0] == "minimize" else -1.0 for o in objectives])
+    signs = np.array([1.0 if objective(o)[0] == "minimize" else -1.0 for o in objectives])
     costs = table[objectives].to_numpy(dtype=float) * signs
     meets = table["meets"].to_numpy() if "meets" in table else np.ones(len(table), dtype=bool)
     front = meets.copy()
@@ -200,11 +233,6 @@ def best_drive(summary: pd.DataFrame) -> pd.DataFrame:
                      "winch_radius_m": float(best["winch_radius_m"]), "gear_ratio": float(best["gear_ratio"]),
                      "motor_torque_demand_Nm": float(best["motor_torque_demand_Nm"])})
     return pd.DataFrame(rows)
-
-
-def record(spec: OptimiseSpec, extra: list[str]) -> dict:
-    """What makes two runs the same (``jobs/commands.yaml``): the spec and the overrides."""
-    return {"optimise": asdict(spec), "extra_overrides": list(extra)}
 
 
 def trial_folder(jobs_dir: Path, number: int) -> Path:

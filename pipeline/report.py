@@ -20,6 +20,7 @@ import pandas as pd
 from pipeline.choice import verdict
 from pipeline.evidence import POINTS, describe_reading, scores
 from pipeline.figures import caption, label
+from pipeline.optimise import OBJECTIVES
 from pipeline.paper import TABLE2_ACCEPTED, TABLE2_FEASIBLE_PCT
 from pipeline.errors import one_line
 from pipeline.results import code_version
@@ -91,6 +92,8 @@ def _answer(directory: Path) -> list[str]:
                  f"{r.best_feasible_pct:.2f} %)" for r in table.itertuples()]
         lines += ["The least motor torque that reaches the required share, per actuator: "
                   + "; ".join(parts) + ".", ""]
+    if (directory / "exact_drive.parquet").exists():
+        lines += _exact_drive(pd.read_parquet(directory / "exact_drive.parquet"))
     if (directory / "acceptance.parquet").exists():
         table = pd.read_parquet(directory / "acceptance.parquet")
         parts = []
@@ -101,6 +104,29 @@ def _answer(directory: Path) -> list[str]:
         lines += [f"Accepted (x ≥ {table['required_pct'].iloc[0]:g} %) by "
                   f"{md(label(table['parameter'].iloc[0]))}: " + "; ".join(parts) + ".", ""]
     return lines
+
+
+def _exact_drive(table: pd.DataFrame) -> list[str]:
+    """The search's answer per actuator (``pipeline.search``) next to the optimiser's best."""
+    objective = table["objective_name"].iloc[0]
+    words = OBJECTIVES[objective][1]
+    with_optimiser = "agree" in table
+    rows = [f"Exact to the grid, the least {md(words)} that reaches the required share, per "
+            "actuator (every ratio N_V / R_i of the ranges either evaluated or excluded by a bound; "
+            "docs/studies.md):", "",
+            "| actuator | R_i (m) | N_V | share % | " + md(words) + " | ratios evaluated"
+            + (" | optimiser's best | grid steps apart |" if with_optimiser else " |"),
+            "| --- | --- | --- | --- | --- | ---" + (" | --- | --- |" if with_optimiser else " |")]
+    for r in table.to_dict("records"):
+        cells = ([f"{r['winch_radius_m']:g}", f"{r['gear_ratio']:g}", f"{r['feasible_pct']:.2f}",
+                  f"{r[objective]:.4g}"] if r["found"] else ["none reaches it", "–", "–", "–"])
+        cells.append(f"{r['evaluated']} of {r['candidates']}")
+        if with_optimiser:
+            best = r.get(f"optimiser_{objective}")
+            cells += [f"{best:.4g}" if r["optimiser_found"] else "none",
+                      f"{r['steps_apart']:g}" if r["found"] and r["optimiser_found"] else "–"]
+        rows.append(f"| {r['actuator']} | " + " | ".join(cells) + " |")
+    return rows + [""]
 
 
 def _model(summary: pd.DataFrame) -> dict:

@@ -24,7 +24,7 @@ import logging
 import re
 import shutil
 import sys
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Callable, Optional
 
@@ -38,10 +38,13 @@ from pipeline.errors import ConfigError, one_line
 from pipeline.evidence import evidence, scores
 from pipeline.figures import SERIES_DIR, FigureSpec, StudyResults, render
 from pipeline.job import PREPARED, changed_files, execute
-from pipeline.optimise import OptimiseSpec, best_drive, corner_overrides, optimise, record, trial_folder
+from pipeline.optimise import (OptimiseSpec, best_drive, check_catalogue_objectives, corner_overrides, optimise,
+                               trial_folder)
 from pipeline.preflight import check, parse, quoted
 from pipeline.resources import STUDIES_DIR
 from pipeline.results import code_version, write_csv, write_parquet, write_text
+from pipeline.search import SearchSpec, exact_drive, search
+from pipeline.workspace import analysis_name
 from pipeline.survival import survival
 
 OUTPUT_DIR = Path("outputs") / "studies"
@@ -60,6 +63,7 @@ ANALYSES: dict[str, Callable[[StudyResults], pd.DataFrame]] = {
     "survival": survival,
     "evidence": lambda results: evidence(results.summary),
     "best_drive": lambda results: best_drive(results.summary),
+    "exact_drive": lambda results: exact_drive(results.table("search"), results.summary),
 }
 log = logging.getLogger("pipeline.study")
 
@@ -75,7 +79,8 @@ class StudySpec:
     which stays the folder name). ``extra_overrides: false``: the study checks published facts
     on the papers' own settings, so a command may add ``compute.*`` overrides only.
     ``optimise`` (:class:`pipeline.optimise.OptimiseSpec`) replaces the sweep by trials that an
-    optimiser proposes: no ``sweep`` or ``cases`` then."""
+    optimiser proposes; ``search`` (:class:`pipeline.search.SearchSpec`), alone or with it, by
+    the exact search over the drive train (``search.parquet``): no ``sweep`` or ``cases`` then."""
 
     title: str
     source: str
@@ -85,6 +90,7 @@ class StudySpec:
     case_labels: dict[str, str] = field(default_factory=dict)
     extra_overrides: bool = True
     optimise: Optional[OptimiseSpec] = None
+    search: Optional[SearchSpec] = None
     analyses: list[str] = field(default_factory=list)
     figures: list[FigureSpec] = field(default_factory=list)
     name: Optional[str] = None
@@ -111,10 +117,18 @@ def load_study(name: str, directory: Path = STUDIES_DIR) -> StudySpec:
                 *(_key(o) for case in study.cases.values() for o in case)]:
         if re.split(r"[./]", key)[0] == "hydra":  # callbacks and plugins run code: not from data
             raise ConfigError(f"{path}: {key}: a study file may not set Hydra's own settings")
+    designs = [name for name in ("optimise", "search") if getattr(study, name) is not None]
+    if designs and (study.sweep or study.cases):
+        raise ConfigError(f"{path}: {designs[0]}: a study either sweeps or optimises and searches "
+                          "(drop sweep and cases)")
     if study.optimise is not None:
-        if study.sweep or study.cases:
-            raise ConfigError(f"{path}: optimise: a study either sweeps or optimises (drop sweep and cases)")
         study.optimise.check(str(path))
+    if study.search is not None:
+        study.search.check(str(path))
+        if study.optimise is not None and {key: value for key, value in study.optimise.variables.items()
+                                           if key != "actuator"} != study.search.variables:
+            raise ConfigError(f"{path}: search.variables: must be the optimise block's drive "
+                              "variables, so that the two answer the same question")
     for case in study.case_labels:
         if case not in study.cases:
             raise ConfigError(f"{path}: case_labels: {case!r} is not a case (cases: "
@@ -190,10 +204,15 @@ def run_study(name: str, extra: list[str], out_root: Path | None = None,
         out.mkdir(parents=True, exist_ok=True)
         write_text(out / "study.yaml", provenance)
         log.info("study %s: %s", name, study.title)
-        if study.optimise is not None:
-            _start_or_resume(out / "jobs", [[OmegaConf.to_yaml(record(study.optimise, extra))]])
+        if study.optimise is not None or study.search is not None:
+            _start_or_resume(out / "jobs", [[OmegaConf.to_yaml({
+                "optimise": study.optimise and asdict(study.optimise),
+                "search": study.search and asdict(study.search), "extra_overrides": extra})]])
             ((cfg, catalogue),) = checked[0][1].values()
-            summary = _trials(study, extra, out / "jobs", catalogue, cfg.choice.required_pct)
+            summary, searched = _designs(study, extra, out / "jobs", catalogue, cfg)
+            if searched is not None:
+                write_parquet(searched, out / "search.parquet", provenance)
+                write_csv(searched, out / "search.csv")
         else:
             _start_or_resume(out / "jobs", commands)
             for command, prepared in checked:
@@ -214,7 +233,9 @@ def run_study(name: str, extra: list[str], out_root: Path | None = None,
         raise ConfigError(f"{out / 'summary.parquet'}: not a readable Parquet file ({exc}); "
                           "rerun the study") from exc
     if figures_only:  # redraw from intact results only, before any old figure is removed
-        _check_jobs(out / "jobs", results.summary["job"])
+        searched = out / "search.parquet"
+        _check_jobs(out / "jobs", dict.fromkeys([*results.summary["job"], *(
+            pd.read_parquet(searched, columns=["job"])["job"].dropna() if searched.exists() else [])]))
     written = [out / "summary.parquet"]
     tables = {}
     for analysis in study.analyses:
@@ -276,6 +297,13 @@ def metrics(summary: pd.DataFrame, tables: dict[str, pd.DataFrame]) -> dict:
                                                     "motor_torque_demand_Nm": round(row.motor_torque_demand_Nm, 6)}
                                                    if row.found else "none")
                                for row in tables["best_drive"].itertuples()}
+    if "exact_drive" in tables:
+        found["exact_drive"] = {str(row["actuator"]): {
+            **({key: round(float(row[key]), 6) for key in ("winch_radius_m", "gear_ratio", row["objective_name"])}
+               if row["found"] else {"found": "none"}),
+            "evaluated": int(row["evaluated"]), "candidates": int(row["candidates"]),
+            **({"agrees_with_optimiser": bool(row["agree"])} if "agree" in row else {})}
+            for row in tables["exact_drive"].to_dict("records")}
     if "evidence" in tables:
         found["evidence"] = {row.reading: {"matched": int(row.matched), "facts": int(row.facts),
                                            "points": round(float(row.points), 6)}
@@ -294,12 +322,19 @@ def checked_commands(name: str, extra: list[str], out_root: Path | None = None,
         raise ConfigError(f"{changed[0]}: study {name} checks the papers' published facts on "
                           "their own settings; it takes compute.* overrides only")
     out = study_dir(name, extra, out_root)
-    if study.optimise is not None:  # the lowest and highest designs stand for every trial
-        ((_, catalogue),) = check([*study.overrides, *extra, f"hydra.run.dir={quoted(out)}"]).values()
+    if study.optimise is not None or study.search is not None:  # the lowest and highest designs
+        ((cfg, catalogue),) = check([*study.overrides, *extra, f"hydra.run.dir={quoted(out)}"]).values()
         ids = [] if catalogue is None else [int(i) for i in catalogue.index]
-        return [(["optimise"], check([*study.overrides, *extra, *corner,
-                                     f"hydra.run.dir={quoted(trial_folder(out / 'jobs', 0))}"]))
-                for corner in corner_overrides(study.optimise, ids)]
+        if study.optimise is not None and catalogue is not None:
+            check_catalogue_objectives(study.optimise, catalogue)
+        variables = study.optimise.variables if study.optimise is not None else {
+            "actuator": study.search.actuators, **study.search.variables}
+        corners = [(["design"], check([*study.overrides, *extra, *corner,
+                                       f"hydra.run.dir={quoted(trial_folder(out / 'jobs', 0))}"]))
+                   for corner in corner_overrides(variables, ids)]
+        if study.search is not None:
+            _check_searchable(cfg, name)
+        return corners
     commands = [sweep_command(study, [*overrides, *extra], out / "jobs" / case, launcher)
                 for case, overrides in (study.cases or {"": []}).items()]
     checked = [(command, check(command)) for command in commands]
@@ -309,6 +344,19 @@ def checked_commands(name: str, extra: list[str], out_root: Path | None = None,
         raise ConfigError(f"output.points=false: study {name} reads every job's points.parquet "
                           f"({', '.join(dict.fromkeys(needs))})")
     return checked
+
+
+def _check_searchable(cfg, name: str) -> None:
+    """The search is exact for CPR-WWA with minimum-norm tensions (``pipeline.search``) and
+    reads every job's margins: ConfigError otherwise."""
+    if analysis_name(cfg) != "cpr_wwa":
+        raise ConfigError(f"analysis={analysis_name(cfg)}: study {name} searches the drive train; "
+                          "only analysis=cpr_wwa has one")
+    if cfg.tension.model.name != "pinv":
+        raise ConfigError(f"tension.model={cfg.tension.model.name}: study {name}'s search is exact for "
+                          "minimum-norm tensions only (tension=pinv); use an optimise block")
+    if not cfg.output.points:
+        raise ConfigError(f"output.points=false: study {name}'s search reads every job's margins")
 
 
 def _start_or_resume(jobs_dir: Path, commands: list[list[str]]) -> None:
@@ -325,26 +373,42 @@ def _start_or_resume(jobs_dir: Path, commands: list[list[str]]) -> None:
     write_text(record, wanted)
 
 
-def _trials(study: StudySpec, extra: list[str], jobs_dir: Path, catalogue, required_pct: float) -> pd.DataFrame:
-    """The optimiser's trials, each an ordinary job in ``jobs/trial_NNNN`` (a finished one with
-    the same config is reused), one summary row each (:func:`pipeline.optimise.optimise`)."""
+def _designs(study: StudySpec, extra: list[str], jobs_dir: Path, catalogue,
+             cfg) -> tuple[pd.DataFrame, pd.DataFrame | None]:
+    """The optimiser's trials (``jobs/trial_NNNN``) and the search's jobs
+    (``jobs/search_a<id>_r<R_i>_n<N_V>``), each an ordinary job (a finished one with the same
+    config is reused). Returns the summary (one row per trial, else per search job) and the
+    search's table (:func:`pipeline.search.search`), or None without a search block."""
     quiet, progress = logging.getLogger("pipeline"), logging.getLogger("pipeline.study")
+    required = cfg.choice.required_pct
+    searched_rows = []
 
-    def run_trial(number: int, overrides: list[str]) -> dict:
-        folder = trial_folder(jobs_dir, number)
-        ((cfg, job_catalogue),) = check([*study.overrides, *extra, *overrides,
-                                         f"hydra.run.dir={quoted(folder)}"]).values()
+    def run(folder: Path, overrides: list[str]) -> dict:
+        ((job_cfg, job_catalogue),) = check([*study.overrides, *extra, *overrides,
+                                             f"hydra.run.dir={quoted(folder)}"]).values()
         folder.mkdir(parents=True, exist_ok=True)
-        return {"job": folder.name, **execute(cfg, job_catalogue, folder)}
+        return {"job": folder.name, **execute(job_cfg, job_catalogue, folder)}
+
+    def run_searched(actuator: int, overrides: list[str]) -> tuple[dict, pd.DataFrame]:
+        folder = jobs_dir / "_".join([f"search_a{actuator}", *(
+            ("r" if key == "drive.winch_radius" else "n") + value
+            for key, value in (o.split("=", 1) for o in overrides))])
+        searched_rows.append(run(folder, [f"actuator={actuator}", *overrides]))
+        return searched_rows[-1], pd.read_parquet(folder / "points.parquet")
 
     levels = quiet.level, progress.level
-    quiet.setLevel(logging.WARNING)  # one line per 20 trials, not three per job
+    quiet.setLevel(logging.WARNING)  # one line per 20 trials or per actuator, not three per job
     progress.setLevel(logging.INFO)
     try:
-        return optimise(study.optimise, run_trial, catalogue, required_pct)
+        summary = None if study.optimise is None else optimise(
+            study.optimise, lambda number, overrides: run(trial_folder(jobs_dir, number), overrides),
+            catalogue, required)
+        searched = None if study.search is None else search(
+            study.search, catalogue, required, run_searched, cfg.model.margin_atol)
     finally:
         quiet.setLevel(levels[0])
         progress.setLevel(levels[1])
+    return (pd.DataFrame(searched_rows) if summary is None else summary), searched
 
 
 def _gather(jobs_dir: Path, cases: dict[str, list[str]], labels: dict[str, str]) -> pd.DataFrame:

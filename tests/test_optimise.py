@@ -1,6 +1,7 @@
 """The optimise study kind (pipeline/optimise.py): declared design variables and objectives,
 Optuna's seeded sampler, each trial an ordinary job; bad input refused before anything runs."""
 
+import re
 import subprocess
 import sys
 from dataclasses import replace
@@ -50,11 +51,11 @@ def test_an_actuator_id_outside_the_catalogue_is_refused():
     ids = [int(i) for i in load_catalogue().index]
     spec = OptimiseSpec(variables={"actuator": [1, 9], "drive.gear_ratio": {"low": 5, "high": 60}})
     with pytest.raises(ConfigError, match=r"optimise.variables.actuator: id 9 is not in the catalogue \(ids: 1, 2, 3, 4, 5\)"):
-        corner_overrides(spec, ids)
+        corner_overrides(spec.variables, ids)
     spec = replace(spec, variables={"actuator": "catalogue", "drive.gear_ratio": {"low": 5, "high": 60}})
-    assert corner_overrides(spec, ids) == [["actuator=1", "drive.gear_ratio=5"], ["actuator=5", "drive.gear_ratio=60"]]
+    assert corner_overrides(spec.variables, ids) == [["actuator=1", "drive.gear_ratio=5"], ["actuator=5", "drive.gear_ratio=60"]]
     spec = replace(spec, variables={"actuator": [4, 2], "load.mass": [3.0, 0.5, 1.0]})  # the extremes of a list
-    assert corner_overrides(spec, ids) == [["actuator=2", "load.mass=0.5"], ["actuator=4", "load.mass=3.0"]]
+    assert corner_overrides(spec.variables, ids) == [["actuator=2", "load.mass=0.5"], ["actuator=4", "load.mass=3.0"]]
 
 
 def test_bad_extra_overrides_stop_the_study_before_anything_is_written(tmp_path):
@@ -126,3 +127,54 @@ def test_each_trial_is_the_job_its_variables_name(small_run, make_cfg, catalogue
     assert meeting["winch_radius_m"] == meeting["drive.winch_radius"]
     assert trials["meets"].tolist() == (trials["feasible_pct"] >= 90).tolist()
     assert trials.loc[trials["pareto"], "meets"].all()
+
+
+def priced_catalogue(tmp_path, prices) -> str:
+    """Table 1 with the user's own price column."""
+    from pipeline.catalogue import TABLE1
+
+    table = pd.read_csv(TABLE1, dtype=str)
+    table["price_EUR"] = prices
+    path = tmp_path / "priced.csv"
+    table.to_csv(path, index=False)
+    return str(path)
+
+
+def priced_study(monkeypatch):
+    """drive_pareto asked for the cheapest actuator and gear ratio (8 trials), its front drawn."""
+    from pipeline.figures import FigureSpec
+
+    spec = load_study("drive_pareto")
+    study = replace(spec, search=None, analyses=["best_drive"], optimise=OptimiseSpec(
+        variables={"actuator": "catalogue", "drive.gear_ratio": {"low": 15, "high": 35}},
+        objectives=["feasible_pct", "catalogue.price_EUR"], budget=8),
+        figures=[FigureSpec(kind="pareto", file="front.png", x="catalogue.price_EUR", y="feasible_pct", hue="actuator")])
+    monkeypatch.setattr(pipeline.study, "load_study", lambda name, directory=None: study)
+
+
+def test_a_column_of_the_users_catalogue_is_an_objective(tmp_path, monkeypatch):
+    """optimise.objectives: [feasible_pct, catalogue.price_EUR]: each trial carries its
+    actuator's price, the front is the cheapest design for each share."""
+    prices = ["900", "400", "250", "150", "90"]
+    priced_study(monkeypatch)
+    run_study("drive_pareto", [f"catalogue={priced_catalogue(tmp_path, prices)}", "grid.n=4", "grid.n_vel=3"],
+              tmp_path / "out")
+    trials = pd.read_parquet(tmp_path / "out" / "drive_pareto" / "summary.parquet")
+    assert trials["catalogue.price_EUR"].tolist() == [float(prices[a - 1]) for a in trials["actuator"]]
+    again = trials.assign(pareto=pareto_front(trials, ["feasible_pct", "catalogue.price_EUR"]) & trials["meets"])
+    assert trials["pareto"].tolist() == again["pareto"].tolist()
+    assert (tmp_path / "out" / "drive_pareto" / "figures" / "front.png").stat().st_size > 0
+
+
+@pytest.mark.parametrize("prices, objective, message", [
+    (["900", "400", "n/a", "150", "90"], "catalogue.price_EUR", "optimise.objectives: catalogue.price_EUR: actuator 3: 'n/a' is not a number"),
+    (["900", "400", "250", "150", "90"], "catalogue.cost", "catalogue.cost: the catalogue has no column 'cost' (its extra columns: price_EUR)"),
+])
+def test_a_catalogue_objective_needs_a_number_for_every_actuator(tmp_path, monkeypatch, prices, objective, message):
+    priced_study(monkeypatch)
+    study = pipeline.study.load_study("drive_pareto")
+    study.optimise.objectives = ["feasible_pct", objective]
+    with pytest.raises(ConfigError, match=re.escape(message)):
+        pipeline.study.checked_commands("drive_pareto", [f"catalogue={priced_catalogue(tmp_path, prices)}"],
+                                        tmp_path / "out")
+    assert not (tmp_path / "out").exists()
