@@ -25,13 +25,13 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 from hydra import compose, initialize_config_dir  # noqa: E402
 
-from pipeline.catalogue import load_catalogue  # noqa: E402
-from pipeline.config import register, typed_config  # noqa: E402
-from pipeline.criteria.forces import tension_families, tension_spec  # noqa: E402
-from pipeline.kernel import evaluate_chunk  # noqa: E402
-from pipeline.resources import CONF_DIR  # noqa: E402
-from pipeline.tensions import feasible_tensions  # noqa: E402
-from pipeline.workspace import bounded_chunk_size, build_problem  # noqa: E402
+from pipeline.model.catalogue import load_catalogue  # noqa: E402
+from pipeline.app.config import register, typed_config  # noqa: E402
+from pipeline.workspace.criteria.forces import tension_families, tension_spec  # noqa: E402
+from pipeline.workspace.kernel import evaluate_chunk  # noqa: E402
+from pipeline.app.resources import CONF_DIR  # noqa: E402
+from pipeline.model.tensions import feasible_tensions  # noqa: E402
+from pipeline.workspace.compute import bounded_chunk_size, build_problem  # noqa: E402
 
 LP_SAMPLE = 10  # the LPs run on every 10th pose
 

@@ -1,5 +1,5 @@
-"""``python -m pipeline [-m] [key=value ...]``: the Hydra application of ``pipeline.cli``."""
+"""``python -m pipeline [-m] [key=value ...]``: the Hydra application of ``pipeline.app.cli``."""
 
-from pipeline.cli import cli
+from pipeline.app.cli import cli
 
 cli()

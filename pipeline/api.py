@@ -23,14 +23,14 @@ from typing import Iterable
 
 import pandas as pd
 
-from pipeline.choice import choose, verdict
+from pipeline.analyses.choice import choose, verdict
 from pipeline.errors import ConfigError
-from pipeline.figures import StudyResults
-from pipeline.job import execute
-from pipeline.preflight import check, quoted
-from pipeline.results import read_metadata
+from pipeline.analyses.figures import StudyResults
+from pipeline.app.job import execute
+from pipeline.app.preflight import check, quoted
+from pipeline.app.results import read_metadata
 from pipeline.study import OUTPUT_DIR, study_dir
-from pipeline.workspace import analysis_name
+from pipeline.workspace.compute import analysis_name
 
 API_DIR = Path("outputs") / "api"
 
@@ -62,7 +62,7 @@ class Workspace:
 @dataclass(frozen=True)
 class Choice:
     """CPR-ACM (section 4 of Filipovic & Kevac): one CPR-WWA job per catalogue actuator."""
-    table: pd.DataFrame  # pipeline.choice.choose: rank, x(i_a), accepted, losses per constraint
+    table: pd.DataFrame  # pipeline.analyses.choice.choose: rank, x(i_a), accepted, losses per constraint
     verdict: str
     workspaces: dict[int, Workspace]
 

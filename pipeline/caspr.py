@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from pipeline.errors import ConfigError
-from pipeline.results import code_version, write_text
+from pipeline.app.results import code_version, write_text
 
 
 def read_cables(path: Path, cable_set: str | None = None) -> dict:

@@ -1,5 +1,5 @@
 """The reproduction report: ``python -m pipeline.report`` -> ``outputs/report/index.md`` and the
-same as a web page with interactive 3-D views, ``outputs/report/index.html`` (``pipeline.webpage``).
+same as a web page with interactive 3-D views, ``outputs/report/index.html`` (``pipeline.analyses.webpage``).
 
 Built from the studies' Parquet files and figures only (run the studies first, e.g.
 ``python -m pipeline.study --all`` or ``dvc repro``). For every number the papers publish that
@@ -17,15 +17,16 @@ from urllib.parse import quote
 
 import pandas as pd
 
-from pipeline.choice import verdict
-from pipeline.evidence import POINTS, describe_reading, scores
-from pipeline.figures import caption, label
-from pipeline.optimise import OBJECTIVES
-from pipeline.paper import TABLE2_ACCEPTED, TABLE2_FEASIBLE_PCT
+from pipeline.analyses.choice import verdict
+from pipeline.analyses.evidence import POINTS, scores
+from pipeline.app.readings import describe_reading
+from pipeline.analyses.figures import caption, label
+from pipeline.analyses.optimise import OBJECTIVES
+from pipeline.analyses.paper import TABLE2_ACCEPTED, TABLE2_FEASIBLE_PCT
 from pipeline.errors import one_line
-from pipeline.results import code_version
+from pipeline.app.results import code_version
 from pipeline.study import OUTPUT_DIR, available, load_study
-from pipeline.webpage import View, write_page
+from pipeline.analyses.webpage import View, write_page
 
 REPORT_DIR = Path("outputs") / "report"
 
@@ -107,7 +108,7 @@ def _answer(directory: Path) -> list[str]:
 
 
 def _exact_drive(table: pd.DataFrame) -> list[str]:
-    """The search's answer per actuator (``pipeline.search``) next to the optimiser's best."""
+    """The search's answer per actuator (``pipeline.analyses.search``) next to the optimiser's best."""
     objective = table["objective_name"].iloc[0]
     words = OBJECTIVES[objective][1]
     with_optimiser = "agree" in table

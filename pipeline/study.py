@@ -8,7 +8,7 @@ figures. Running it is always the same three steps:
    process, into ``outputs/studies/NAME/jobs/`` (one command per case, into ``jobs/CASE/``,
    when the study declares ``cases``), gathered into ``outputs/studies/NAME/summary.parquet``;
 2. the analyses (``ANALYSES``), each written as ``outputs/studies/NAME/<analysis>.parquet``;
-3. the figures (``pipeline.figures``), drawn from those Parquet files only, into
+3. the figures (``pipeline.analyses.figures``), drawn from those Parquet files only, into
    ``outputs/studies/NAME/figures/``.
 
 ``--figures-only`` repeats steps 2-3 from the existing Parquet files. Extra ``key=value``
@@ -31,21 +31,21 @@ from typing import Callable, Optional
 import pandas as pd
 from omegaconf import OmegaConf
 
-from pipeline.catalogue import load_catalogue
-from pipeline.choice import acceptance, choose, verdict
-from pipeline.cli import launch
+from pipeline.model.catalogue import load_catalogue
+from pipeline.analyses.choice import acceptance, choose, verdict
+from pipeline.app.cli import launch
 from pipeline.errors import ConfigError, one_line
-from pipeline.evidence import evidence, scores
-from pipeline.figures import SERIES_DIR, FigureSpec, StudyResults, render
-from pipeline.job import PREPARED, changed_files, execute
-from pipeline.optimise import (OptimiseSpec, best_drive, check_catalogue_objectives, corner_overrides, optimise,
+from pipeline.analyses.evidence import evidence, scores
+from pipeline.analyses.figures import SERIES_DIR, FigureSpec, StudyResults, render
+from pipeline.app.job import PREPARED, changed_files, execute
+from pipeline.analyses.optimise import (OptimiseSpec, best_drive, check_catalogue_objectives, corner_overrides, optimise,
                                trial_folder)
-from pipeline.preflight import check, parse, quoted
-from pipeline.resources import STUDIES_DIR
-from pipeline.results import code_version, write_csv, write_parquet, write_text
-from pipeline.search import SearchSpec, exact_drive, search
-from pipeline.workspace import analysis_name
-from pipeline.survival import survival
+from pipeline.app.preflight import check, parse, quoted
+from pipeline.app.resources import STUDIES_DIR
+from pipeline.app.results import code_version, write_csv, write_parquet, write_text
+from pipeline.analyses.search import SearchSpec, exact_drive, search
+from pipeline.workspace.compute import analysis_name
+from pipeline.analyses.survival import survival
 
 OUTPUT_DIR = Path("outputs") / "studies"
 ALWAYS_EXCLUDED = ["compute.n_jobs", "compute.backend", "compute.chunk_size", "compute.scheduler",
@@ -78,8 +78,8 @@ class StudySpec:
     ``case_label`` column for titles, captions, legends and report tables (default: the name,
     which stays the folder name). ``extra_overrides: false``: the study checks published facts
     on the papers' own settings, so a command may add ``compute.*`` overrides only.
-    ``optimise`` (:class:`pipeline.optimise.OptimiseSpec`) replaces the sweep by trials that an
-    optimiser proposes; ``search`` (:class:`pipeline.search.SearchSpec`), alone or with it, by
+    ``optimise`` (:class:`pipeline.analyses.optimise.OptimiseSpec`) replaces the sweep by trials that an
+    optimiser proposes; ``search`` (:class:`pipeline.analyses.search.SearchSpec`), alone or with it, by
     the exact search over the drive train (``search.parquet``): no ``sweep`` or ``cases`` then."""
 
     title: str
@@ -102,7 +102,7 @@ def available(directory: Path = STUDIES_DIR) -> list[str]:
 
 def load_study(name: str, directory: Path = STUDIES_DIR) -> StudySpec:
     """Read and check ``studies/NAME.yaml``; unknown keys, analyses or figure kinds fail here."""
-    from pipeline.figures import KINDS
+    from pipeline.analyses.figures import KINDS
 
     path = directory / f"{name}.yaml"
     if name not in available(directory):  # a declared name, never a path to another file
@@ -315,7 +315,7 @@ def checked_commands(name: str, extra: list[str], out_root: Path | None = None,
                      launcher: str = "pool") -> list[tuple[list[str], dict]]:
     """The sweep commands of a study (one per case), every job of them validated by the
     preflight: bad input fails here, before anything is written or removed. Each with the
-    typed configs of its jobs (``pipeline.job.PREPARED``)."""
+    typed configs of its jobs (``pipeline.app.job.PREPARED``)."""
     study = load_study(name)
     changed = [o for o in extra if _key(o) not in ALWAYS_EXCLUDED]
     if changed and not study.extra_overrides:
@@ -347,7 +347,7 @@ def checked_commands(name: str, extra: list[str], out_root: Path | None = None,
 
 
 def _check_searchable(cfg, name: str) -> None:
-    """The search is exact for CPR-WWA with minimum-norm tensions (``pipeline.search``) and
+    """The search is exact for CPR-WWA with minimum-norm tensions (``pipeline.analyses.search``) and
     reads every job's margins: ConfigError otherwise."""
     if analysis_name(cfg) != "cpr_wwa":
         raise ConfigError(f"analysis={analysis_name(cfg)}: study {name} searches the drive train; "
@@ -378,7 +378,7 @@ def _designs(study: StudySpec, extra: list[str], jobs_dir: Path, catalogue,
     """The optimiser's trials (``jobs/trial_NNNN``) and the search's jobs
     (``jobs/search_a<id>_r<R_i>_n<N_V>``), each an ordinary job (a finished one with the same
     config is reused). Returns the summary (one row per trial, else per search job) and the
-    search's table (:func:`pipeline.search.search`), or None without a search block."""
+    search's table (:func:`pipeline.analyses.search.search`), or None without a search block."""
     quiet, progress = logging.getLogger("pipeline"), logging.getLogger("pipeline.study")
     required = cfg.choice.required_pct
     searched_rows = []

@@ -5,9 +5,9 @@ from __future__ import annotations
 import pytest
 from hydra import compose, initialize_config_dir
 
-from pipeline.catalogue import load_catalogue
-from pipeline.config import register, typed_config
-from pipeline.resources import CONF_DIR
+from pipeline.model.catalogue import load_catalogue
+from pipeline.app.config import register, typed_config
+from pipeline.app.resources import CONF_DIR
 
 register()
 

@@ -2,8 +2,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from pipeline.actuators import actuator_model
-from pipeline.catalogue import load_catalogue
+from pipeline.model.actuators import actuator_model
+from pipeline.model.catalogue import load_catalogue
 from pipeline.errors import ConfigError
 
 

@@ -10,14 +10,14 @@ import pandas as pd
 import pytest
 
 from pipeline import api
-from pipeline.results import file_digest
+from pipeline.app.results import file_digest
 
 DOCS = pathlib.Path(__file__).resolve().parent.parent / "docs" / "api.md"
 
 
 def test_importing_the_api_keeps_the_notebook_backend_and_logging():
     """A notebook's pyplot backend and logging handlers are not touched by the import."""
-    code = ("import logging, matplotlib; matplotlib.use('svg'); import pipeline.api, pipeline.figures; "
+    code = ("import logging, matplotlib; matplotlib.use('svg'); import pipeline.api, pipeline.analyses.figures; "
             "assert matplotlib.get_backend() == 'svg', matplotlib.get_backend(); "
             "assert not logging.getLogger().handlers, logging.getLogger().handlers")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
@@ -43,7 +43,7 @@ def test_workspace_gives_table_2_and_the_command_line_points(tmp_path, monkeypat
 
 
 def test_a_folder_name_may_hold_the_override_grammars_characters(tmp_path, monkeypatch):
-    """The folder goes to Hydra quoted (pipeline.preflight.quoted): =, commas, quotes, spaces."""
+    """The folder goes to Hydra quoted (pipeline.app.preflight.quoted): =, commas, quotes, spaces."""
     monkeypatch.chdir(tmp_path)
     for name in ("grid=centred,n=6", "it's here", "trailing\\"):
         ws = api.workspace(["actuator=1"], folder=name)

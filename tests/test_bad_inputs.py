@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 from omegaconf import OmegaConf
 
-from pipeline.catalogue import load_catalogue
+from pipeline.model.catalogue import load_catalogue
 
 pytestmark = pytest.mark.slow
 
@@ -132,12 +132,12 @@ def test_the_catalogue_of_bad_inputs_has_at_least_25_cases():
 
 
 def test_every_declared_rule_is_applied(make_cfg):
-    """Each field's value rule sits next to its declaration (pipeline/config.py, ``rule``) and
+    """Each field's value rule sits next to its declaration (pipeline/app/config.py, ``rule``) and
     ``check_values`` applies all of them: a default that breaks none passes, and each rule-bearing
     field set to a value its rule refuses is named in the error."""
     from dataclasses import fields, is_dataclass
 
-    from pipeline.config import Config, check_values
+    from pipeline.app.config import Config, check_values
     from pipeline.errors import ConfigError
 
     def ruled(schema, prefix=""):

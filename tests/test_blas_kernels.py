@@ -2,7 +2,7 @@
 
 OpenBLAS picks a kernel per CPU (``OPENBLAS_CORETYPE`` forces one). Round-off then differs in the
 last bits, and a pose whose exact margin is 0 used to flip: the IRPM at r_base = 4 m gave 91.52 m^3
-on an AVX2 kernel and 91.584 m^3 on AVX-512. With the tolerance of ``pipeline.verdict`` the
+on an AVX2 kernel and 91.584 m^3 on AVX-512. With the tolerance of ``pipeline.workspace.verdict`` the
 verdicts are identical under the oldest and the newest kernel this CPU can run (all four agree
 on an AVX-512 machine, checked when this test was written), and the pinned counts of the paper
 tests hold under a kernel other than the default one.

@@ -1,4 +1,4 @@
-"""Hyperplane shifting (pipeline.capacity) against the LPs it replaces (issue 17): the same
+"""Hyperplane shifting (pipeline.model.capacity) against the LPs it replaces (issue 17): the same
 capacity margins, hence the same verdicts, on the paper's grid, on the IRPM and on a fuzz of
 random robots, poses and limits; the LP fallback where the structure is poorly conditioned.
 
@@ -11,12 +11,12 @@ import logging
 import numpy as np
 import pytest
 
-from pipeline.capacity import shifted_margins
-from pipeline.criteria.forces import tension_families
-from pipeline.geometry import structure_matrix
-from pipeline.linalg import batched_pinv
-from pipeline.tensions import Family, capacity_margins, reachability
-from pipeline.workspace import build_problem, compute_workspace
+from pipeline.model.capacity import shifted_margins
+from pipeline.workspace.criteria.forces import tension_families
+from pipeline.model.geometry import structure_matrix
+from pipeline.model.linalg import batched_pinv
+from pipeline.model.tensions import Family, capacity_margins, reachability
+from pipeline.workspace.compute import build_problem, compute_workspace
 
 MARGIN_ATOL = 1e-6
 
@@ -131,7 +131,7 @@ def test_a_pose_the_lp_cannot_solve_keeps_its_hyperplane_shifting_margins(monkey
     then solved one pose at a time; a pose whose own LP fails keeps its hyperplane-shifting
     margins, is not counted as solved by LP, and the job goes on. Here HiGHS is made to fail
     on one chosen pose, so that the path is taken on every machine."""
-    import pipeline.tensions as tensions
+    import pipeline.model.tensions as tensions
 
     rng = np.random.default_rng(3)
     structure, wrenches, families = random_problems(rng, 3, 5, 40)

@@ -10,7 +10,7 @@ import pytest
 import yaml
 from scipy.optimize import linprog
 
-from pipeline.geometry import structure_matrix
+from pipeline.model.geometry import structure_matrix
 
 pytestmark = pytest.mark.slow
 

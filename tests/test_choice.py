@@ -3,8 +3,8 @@
 import pandas as pd
 import pytest
 
-from pipeline.choice import acceptance, choose
-from pipeline.workspace import compute_workspace
+from pipeline.analyses.choice import acceptance, choose
+from pipeline.workspace.compute import compute_workspace
 
 
 @pytest.fixture(scope="module")

@@ -6,7 +6,7 @@ import sys
 import pandas as pd
 import pytest
 
-from pipeline.results import read_metadata
+from pipeline.app.results import read_metadata
 
 pytestmark = pytest.mark.slow
 

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from pipeline.criteria.actuator import acceleration, max_abs_sum, voltage
-from pipeline.workspace import build_problem
-from pipeline.dynamics import PoseDynamics
+from pipeline.workspace.criteria.actuator import acceleration, max_abs_sum, voltage
+from pipeline.workspace.compute import build_problem
+from pipeline.model.dynamics import PoseDynamics
 
 
 def test_max_abs_sum_identity_against_enumeration():

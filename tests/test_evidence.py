@@ -1,4 +1,4 @@
-"""The evidence tables (pipeline/evidence.py): every published fact against each reading, from
+"""The evidence tables (pipeline/analyses/evidence.py): every published fact against each reading, from
 the jobs the declared studies evidence_cpr8 and evidence_irpm run (computed here in-process,
 one job per case and swept value, as the study would)."""
 
@@ -11,10 +11,11 @@ import pytest
 from omegaconf import OmegaConf
 
 from pipeline.errors import ConfigError
-from pipeline.evidence import FACTS, MARGIN, POINTS, evidence, reading_name, scores
-from pipeline.lines import simulate_lines
+from pipeline.analyses.evidence import FACTS, MARGIN, POINTS, evidence, scores
+from pipeline.app.readings import reading_name
+from pipeline.workspace.lines import simulate_lines
 from pipeline.study import checked_commands, load_study, sweep_command
-from pipeline.workspace import analysis_name, compute_workspace
+from pipeline.workspace.compute import analysis_name, compute_workspace
 
 
 def study_summary(name, make_cfg, catalogue, readings=None) -> pd.DataFrame:

@@ -1,9 +1,9 @@
 import numpy as np
 import pytest
 
-from pipeline.dynamics import Load, MotionSpec, PoseDynamics
-from pipeline.geometry import cable_vectors, rotation_matrix, rotation_partials
-from pipeline.robots import cpr8
+from pipeline.model.dynamics import Load, MotionSpec, PoseDynamics
+from pipeline.model.geometry import cable_vectors, rotation_matrix, rotation_partials
+from pipeline.model.robots import cpr8
 
 ROBOT = cpr8(3.2, 2.2, 2.2, 0.224, 0.154, 0.140)
 RNG = np.random.default_rng(7)

@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 
 from pipeline.errors import ConfigError
-from pipeline.config import validate
-from pipeline.kernel import evaluate_chunk
-from pipeline.workspace import build_problem, compute_workspace
+from pipeline.app.config import validate
+from pipeline.workspace.kernel import evaluate_chunk
+from pipeline.workspace.compute import build_problem, compute_workspace
 
 
 @pytest.fixture(scope="module")
@@ -96,7 +96,7 @@ def test_volume_decreases_as_gamma_grows(irpm):
 
 def test_volume_grows_with_the_base_radius_conclusion_2(irpm):
     """At r_base = 4 and 8 m, 50 poses on y = 0 have one cable at exactly zero tension: inside
-    eq. (10)'s 0 <= s, so counted (``pipeline.verdict``) on every CPU."""
+    eq. (10)'s 0 <= s, so counted (``pipeline.workspace.verdict``) on every CPU."""
     volumes = [volume(irpm, "robot.r_end=1.2", f"robot.r_base={r}") for r in (2, 4, 6, 8)]
     assert volumes == pytest.approx([25.984, 93.248, 183.168, 283.008])
 

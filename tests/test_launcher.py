@@ -9,9 +9,9 @@ import yaml
 from hydra import compose, initialize_config_dir
 from omegaconf import OmegaConf
 
-from pipeline.config import validate
-from pipeline.preflight import check, job_overrides
-from pipeline.resources import CONF_DIR
+from pipeline.app.config import validate
+from pipeline.app.preflight import check, job_overrides
+from pipeline.app.resources import CONF_DIR
 
 # group choices (composed per set of files), plain values (derived), and a dict value (merged
 # into the key, so every such job is composed in full): psi must not leak into the theta job
@@ -80,7 +80,7 @@ def test_a_pool_worker_is_sent_the_typed_config_of_its_job():
     task function receives) and takes it out, so that it is sent to one worker only."""
     from hydra_plugins.cdpr.launcher import _prepared
 
-    from pipeline.job import PREPARED
+    from pipeline.app.job import PREPARED
 
     argv = ["-m", "robot=irpm6", "robot.gamma_deg=0,30"]
     PREPARED.update(check(argv))

@@ -4,8 +4,8 @@ profile, line O''-F'', the power balance, and the agreement with the CPR-WWA gri
 import numpy as np
 import pytest
 
-from pipeline.lines import simulate_lines
-from pipeline.trajectory import trapezoid
+from pipeline.workspace.lines import simulate_lines
+from pipeline.workspace.trajectory import trapezoid
 
 ROT = ["orientation.psi=0.5", "orientation.theta=0.5", "orientation.phi=0.5"]
 

@@ -4,8 +4,8 @@ load's weight and centre-of-mass moment in the statics (issue 15)."""
 import numpy as np
 import pytest
 
-from pipeline.geometry import euler_rate_axes, rotation_matrix, rotation_partials
-from pipeline.workspace import build_problem, compute_workspace
+from pipeline.model.geometry import euler_rate_axes, rotation_matrix, rotation_partials
+from pipeline.workspace.compute import build_problem, compute_workspace
 
 
 @pytest.mark.parametrize("angles", [(0.0, 0.0, 0.0), (0.5, 0.5, 0.5), (-0.3, 1.2, 2.0)])

@@ -1,4 +1,4 @@
-"""The optimise study kind (pipeline/optimise.py): declared design variables and objectives,
+"""The optimise study kind (pipeline/analyses/optimise.py): declared design variables and objectives,
 Optuna's seeded sampler, each trial an ordinary job; bad input refused before anything runs."""
 
 import re
@@ -11,9 +11,9 @@ import pandas as pd
 import pytest
 
 import pipeline.study
-from pipeline.catalogue import load_catalogue
+from pipeline.model.catalogue import load_catalogue
 from pipeline.errors import ConfigError
-from pipeline.optimise import OptimiseSpec, corner_overrides, pareto_front
+from pipeline.analyses.optimise import OptimiseSpec, corner_overrides, pareto_front
 from pipeline.study import load_study, run_study
 
 STUDY = "title: t\nsource: s\noptimise:\n{body}\n"
@@ -112,7 +112,7 @@ def test_a_seeded_rerun_proposes_the_same_trials_and_reuses_their_jobs(small_run
 def test_each_trial_is_the_job_its_variables_name(small_run, make_cfg, catalogue):
     """The objectives from the trial's own job: the peak motor torque is the largest share of
     eq. (32)'s limit over the feasible poses times the rated torque."""
-    from pipeline.workspace import compute_workspace
+    from pipeline.workspace.compute import compute_workspace
 
     out, trials, _ = small_run
     meeting = trials[trials["feasible_pct"] > 0].iloc[0]
@@ -131,7 +131,7 @@ def test_each_trial_is_the_job_its_variables_name(small_run, make_cfg, catalogue
 
 def priced_catalogue(tmp_path, prices) -> str:
     """Table 1 with the user's own price column."""
-    from pipeline.catalogue import TABLE1
+    from pipeline.model.catalogue import TABLE1
 
     table = pd.read_csv(TABLE1, dtype=str)
     table["price_EUR"] = prices
@@ -142,7 +142,7 @@ def priced_catalogue(tmp_path, prices) -> str:
 
 def priced_study(monkeypatch):
     """drive_pareto asked for the cheapest actuator and gear ratio (8 trials), its front drawn."""
-    from pipeline.figures import FigureSpec
+    from pipeline.analyses.figures import FigureSpec
 
     spec = load_study("drive_pareto")
     study = replace(spec, search=None, analyses=["best_drive"], optimise=OptimiseSpec(

@@ -2,8 +2,8 @@
 
 import pandas as pd
 
-from pipeline import workspace
-from pipeline.workspace import build_problem, compute_workspace, worth_workers
+from pipeline.workspace import compute as workspace
+from pipeline.workspace.compute import build_problem, compute_workspace, worth_workers
 
 
 def test_workers_only_when_the_kernel_outlasts_their_start(make_cfg, catalogue):

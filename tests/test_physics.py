@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from pipeline.dynamics import PoseDynamics
-from pipeline.workspace import build_problem, compute_workspace
+from pipeline.model.dynamics import PoseDynamics
+from pipeline.workspace.compute import build_problem, compute_workspace
 
 
 def _dyn(make_cfg, catalogue, *overrides):

@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 from scipy.optimize import linprog
 
-from pipeline.geometry import rotation_matrix, structure_matrix
+from pipeline.model.geometry import rotation_matrix, structure_matrix
 
 pytestmark = pytest.mark.slow
 

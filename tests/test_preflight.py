@@ -3,7 +3,7 @@
 import pytest
 
 from pipeline.errors import ConfigError
-from pipeline.preflight import check, job_overrides
+from pipeline.app.preflight import check, job_overrides
 
 
 def test_sweep_expands_like_hydra_basic_sweeper():
@@ -42,7 +42,7 @@ def test_expansion_matches_hydra_basic_sweeper_with_ranges_and_repeated_keys():
     used here only as the reference, never by the package)."""
     from hydra._internal.core_plugins.basic_sweeper import BasicSweeper
 
-    from pipeline.preflight import parse
+    from pipeline.app.preflight import parse
 
     argv = ["-m", "actuator=range(1,4)", "load.mass=1", "grid.n=2,3", "load.mass=4,5"]
     expected = BasicSweeper.split_arguments(parse(argv[1:]), max_batch_size=None)[0]

@@ -1,12 +1,12 @@
-"""Progress lines (pipeline.progress) and the warning before a long job (the cost model)."""
+"""Progress lines (pipeline.workspace.progress) and the warning before a long job (the cost model)."""
 
 import logging
 
 import pytest
 
-from pipeline.preflight import check
-from pipeline.progress import Progress, clock_text
-from pipeline.workspace import announce_cost, build_problem, estimated_seconds
+from pipeline.app.preflight import check
+from pipeline.workspace.progress import Progress, clock_text
+from pipeline.workspace.compute import announce_cost, build_problem, estimated_seconds
 
 
 class Clock:

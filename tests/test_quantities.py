@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from pipeline.geometry import structure_matrix
-from pipeline.workspace import build_problem, compute_workspace
+from pipeline.model.geometry import structure_matrix
+from pipeline.workspace.compute import build_problem, compute_workspace
 
 
 def test_irpm_at_the_centre_holds_the_weight_with_six_equal_tensions(make_cfg, catalogue):

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from pipeline.kernel import evaluate_chunk
-from pipeline.reference import literal_margins
-from pipeline.workspace import build_problem
+from pipeline.workspace.kernel import evaluate_chunk
+from pipeline.workspace.reference import literal_margins
+from pipeline.workspace.compute import build_problem
 
 pytestmark = pytest.mark.slow  # the literal loop takes about 2 s per case
 

@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 from omegaconf import OmegaConf
 
-from pipeline.criteria import DYNAMICS, GATES, REGISTRY, STATICS
-from pipeline.verdict import classify
-from pipeline.workspace import build_problem, compute_workspace
+from pipeline.workspace.criteria import DYNAMICS, GATES, REGISTRY, STATICS
+from pipeline.workspace.verdict import classify
+from pipeline.workspace.compute import build_problem, compute_workspace
 
 SMALL_POINTS = ["robot=points",  # six cables: the fewest a wrench with moments needs
                 "robot.anchors=[[-1,-1,2],[1,-1,2],[1,1,2],[-1,1,2],[0,-1.5,2],[0,1.5,2]]",
@@ -67,7 +67,7 @@ def test_fewer_cables_than_the_analysis_balances_are_refused(make_cfg, catalogue
     """Four cables to a point: the statics' six wrench rows would make every pose singular;
     CPR-WWA balances forces only there (its moment rows vanish at a point platform, whatever
     model.pinv_columns says). Four cables to a platform with moment arms cannot balance six."""
-    from pipeline.config import validate
+    from pipeline.app.config import validate
     from pipeline.errors import ConfigError
 
     four = ["robot=points", "robot.anchors=[[-1,-1,2],[1,-1,2],[1,1,2],[-1,1,2]]",
@@ -103,7 +103,7 @@ def test_tension_is_a_config_group_that_sets_its_own_keys_only(make_cfg):
 
 def test_an_unknown_tension_option_is_refused_before_anything_runs():
     from pipeline.errors import ConfigError
-    from pipeline.preflight import check
+    from pipeline.app.preflight import check
 
     with pytest.raises(ConfigError, match="tension=lp"):
         check(["-m", "tension=pinv,lp"])

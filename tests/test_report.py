@@ -10,13 +10,13 @@ import pytest
 import yaml
 
 import pipeline.report
-from pipeline.choice import choose
-from pipeline.figures import StudyResults
-from pipeline.survival import survival
-from pipeline.views import write_view
-from pipeline.lines import simulate_lines
+from pipeline.analyses.choice import choose
+from pipeline.analyses.figures import StudyResults
+from pipeline.analyses.survival import survival
+from pipeline.analyses.views import write_view
+from pipeline.workspace.lines import simulate_lines
 from pipeline.study import available
-from pipeline.workspace import compute_workspace
+from pipeline.workspace.compute import compute_workspace
 
 STUDIES = ["actuator_choice", "actuator_choice_pulling", "line_simulation", "irpm_fig13_end_ratio",
            "tension_comparison", "evidence_cpr8", "evidence_irpm"]
@@ -105,9 +105,9 @@ def _png(path, caption=None):
 
 def test_the_report_gives_each_studys_answer_and_the_figures_captions(studies, tmp_path, monkeypatch,
                                                                       make_cfg, catalogue):
-    """Captions come from the figures (their PNG Description, written by pipeline.figures),
+    """Captions come from the figures (their PNG Description, written by pipeline.analyses.figures),
     answers from the analysis tables: the choice's verdict, a design study's accepted values."""
-    from pipeline.choice import acceptance
+    from pipeline.analyses.choice import acceptance
 
     _png(studies / "actuator_choice" / "figures" / "fig9.png", "Feasible share | per actuator")
     design = studies / "design_mass"

@@ -1,4 +1,4 @@
-"""The exact search over the drive train (pipeline/search.py): its two premises checked on the
+"""The exact search over the drive train (pipeline/analyses/search.py): its two premises checked on the
 kernel (only N_V / R_i counts; each pose's least margin is quasiconcave in it), its branch and
 bound against evaluating every ratio (random interval data and the kernel), the paper robot's
 answers pinned, and the optimiser's agreement on the single-variable questions."""
@@ -11,10 +11,10 @@ import pandas as pd
 import pytest
 
 from pipeline.errors import ConfigError
-from pipeline.optimise import OBJECTIVES, optimise
-from pipeline.search import Evaluation, SearchSpec, branch_and_bound, candidates, exact_drive, search
+from pipeline.analyses.optimise import OBJECTIVES, optimise
+from pipeline.analyses.search import Evaluation, SearchSpec, branch_and_bound, candidates, exact_drive, search
 from pipeline.study import checked_commands, load_study
-from pipeline.workspace import compute_workspace
+from pipeline.workspace.compute import compute_workspace
 
 STUDY = "title: t\nsource: s\nsearch:\n{body}\n"
 
@@ -24,7 +24,7 @@ def margins(points: pd.DataFrame) -> np.ndarray:
 
 
 def kernel_runner(make_cfg, catalogue, *fixed):
-    """run_job for :func:`pipeline.search.search` on the kernel itself, no files."""
+    """run_job for :func:`pipeline.analyses.search.search` on the kernel itself, no files."""
     def run_job(actuator, overrides):
         points, summary = compute_workspace(make_cfg(f"actuator={actuator}", *fixed, *overrides), catalogue)
         return {"job": "-", **summary}, points

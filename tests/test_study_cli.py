@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from pipeline.catalogue import load_catalogue
+from pipeline.model.catalogue import load_catalogue
 from pipeline.errors import ConfigError
 from pipeline.study import StudySpec, available, load_study, run_study
 
@@ -36,8 +36,8 @@ def test_choice_command_accepts_actuators_1_and_2_and_draws_every_figure(choice_
     assert figures == sorted(
         ["fig9_feasible_share_by_actuator.png", "limiting_constraints_by_actuator.png"]
         + [f"fig8_workspace_actuator{a}.{kind}" for a in range(1, 6) for kind in ("png", "json")]
-    )  # each workspace picture with its interactive view (pipeline/views.py)
-    from pipeline.figures import caption
+    )  # each workspace picture with its interactive view (pipeline/analyses/views.py)
+    from pipeline.analyses.figures import caption
 
     assert caption(choice_run / "figures" / "fig8_workspace_actuator5.png").endswith(
         "0 of 216 points are feasible.")  # the study's caption, filled from the job
@@ -45,14 +45,14 @@ def test_choice_command_accepts_actuators_1_and_2_and_draws_every_figure(choice_
 
 def test_figures_are_drawn_from_the_parquet_results(choice_run, monkeypatch):
     """Block the kernel, redraw from Parquet: identical bytes; edit the Parquet: the figure follows."""
-    import pipeline.kernel
-    import pipeline.workspace
+    import pipeline.workspace.kernel
+    import pipeline.workspace.compute
 
     def blocked(*args, **kwargs):
         raise AssertionError("figures must not recompute the workspace")
 
-    monkeypatch.setattr(pipeline.kernel, "evaluate_chunk", blocked)
-    monkeypatch.setattr(pipeline.workspace, "compute_workspace", blocked)
+    monkeypatch.setattr(pipeline.workspace.kernel, "evaluate_chunk", blocked)
+    monkeypatch.setattr(pipeline.workspace.compute, "compute_workspace", blocked)
     figures = choice_run / "figures"
     before = {p.name: p.read_bytes() for p in figures.iterdir()}
     out_root = choice_run.parent

@@ -10,16 +10,16 @@ import pandas as pd
 import pytest
 from scipy.optimize import nnls
 
-from pipeline.actuators import ActuatorModel
-from pipeline.criteria import REGISTRY
-from pipeline.criteria.forces import tension_families
-from pipeline.dynamics import Load, MotionSpec, load_wrenches
-from pipeline.figures import caption
-from pipeline.geometry import CableRobot
-from pipeline.kernel import WorkspaceProblem, evaluate_chunk
-from pipeline.verdict import classify
-from pipeline.tensions import TensionSpec, feasible_tensions
-from pipeline.workspace import build_problem, compute_workspace
+from pipeline.model.actuators import ActuatorModel
+from pipeline.workspace.criteria import REGISTRY
+from pipeline.workspace.criteria.forces import tension_families
+from pipeline.model.dynamics import Load, MotionSpec, load_wrenches
+from pipeline.analyses.figures import caption
+from pipeline.model.geometry import CableRobot
+from pipeline.workspace.kernel import WorkspaceProblem, evaluate_chunk
+from pipeline.workspace.verdict import classify
+from pipeline.model.tensions import TensionSpec, feasible_tensions
+from pipeline.workspace.compute import build_problem, compute_workspace
 
 FORCES = "model.pinv_columns=translational"  # forces only: the paper's reading of eq. (20) for Table 2
 
@@ -169,7 +169,7 @@ def test_zero_orientation_with_moment_rows_is_unreachable_as_the_rank_5_jacobian
 
 
 def test_lines_use_the_lp_torques_and_agree_with_the_grid(make_cfg, catalogue):
-    from pipeline.lines import simulate_lines
+    from pipeline.workspace.lines import simulate_lines
 
     samples, points, summary = simulate_lines(make_cfg("analysis=lines", "tension.model=feasible", FORCES),
                                               catalogue)
@@ -242,10 +242,10 @@ def test_with_moment_balance_few_or_no_poses_can_even_hang_still(orientation, ha
 
 
 def test_verdicts_do_not_depend_on_how_poses_are_chunked_or_batched(make_cfg, catalogue, monkeypatch):
-    import pipeline.tensions
+    import pipeline.model.tensions
 
     whole, _ = compute_workspace(make_cfg("tension.model=feasible", "actuator=3", FORCES), catalogue)
-    monkeypatch.setattr(pipeline.tensions, "LP_BLOCKS", 40)
+    monkeypatch.setattr(pipeline.model.tensions, "LP_BLOCKS", 40)
     split, _ = compute_workspace(make_cfg("tension.model=feasible", "actuator=3", FORCES,
                                           "compute.chunk_size=37"), catalogue)
     assert (whole["feasible"] == split["feasible"]).all() and whole["feasible"].any()

@@ -8,7 +8,7 @@ import time
 import pandas as pd
 import pytest
 
-from pipeline.results import read_metadata
+from pipeline.app.results import read_metadata
 
 pytestmark = pytest.mark.slow
 SLOW_JOB = ["tension.model=feasible", "output.cables=true", "grid.n=12", "compute.n_jobs=1"]  # ~5 s of LPs (per-pose tensions)

@@ -80,7 +80,7 @@ class CdprLauncher(Launcher):
         workers = min(self.n_jobs, os.cpu_count() or 1)  # more would only thrash memory
         if workers < self.n_jobs:
             log.warning("hydra.launcher.n_jobs=%d: capped at the %d cores of this machine", self.n_jobs, workers)
-        from pipeline.progress import Progress
+        from pipeline.workspace.progress import Progress
 
         log.info("Launching %d jobs %s", len(job_overrides),
                  "locally" if workers == 1 else f"on {workers} worker processes")
@@ -109,7 +109,7 @@ class CdprLauncher(Launcher):
 
     def job_config(self, idx: int, overrides: Sequence[str]) -> DictConfig:
         """The config Hydra's loader composes for these overrides, with job id and number."""
-        from pipeline.preflight import override_dirname, parse, structural
+        from pipeline.app.preflight import override_dirname, parse, structural
 
         parsed = parse(overrides)
         plain = [o for o in parsed if not structural(o)]
@@ -147,9 +147,9 @@ def _outcome(ret: JobReturn) -> str:
 
 
 def _prepared(config: DictConfig) -> Optional[Tuple[str, Any]]:
-    """The preflight's typed config for this job (``pipeline.job.PREPARED``, by the YAML of the
+    """The preflight's typed config for this job (``pipeline.app.job.PREPARED``, by the YAML of the
     job's config without Hydra's node), taken from this process to send to a worker."""
-    from pipeline.job import PREPARED
+    from pipeline.app.job import PREPARED
 
     if not PREPARED:
         return None
@@ -167,7 +167,7 @@ def _run(config: DictConfig, hydra_context: HydraContext, task_function: TaskFun
         setup_globals()
         Singleton.set_state(singleton_state)
     if prepared is not None:
-        from pipeline.job import PREPARED
+        from pipeline.app.job import PREPARED
 
         PREPARED[prepared[0]] = prepared[1]
     return run_job(hydra_context=hydra_context, task_function=task_function, config=config,

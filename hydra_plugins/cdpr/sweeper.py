@@ -3,7 +3,7 @@ default of ``python -m pipeline``).
 
 Hydra's basic sweeper composes each job's config once to validate it and once more to run it,
 about 80 ms each, serially in the parent. ``python -m pipeline`` has already composed and
-validated every job before Hydra starts (``pipeline.preflight``), so this sweeper expands the
+validated every job before Hydra starts (``pipeline.app.preflight``), so this sweeper expands the
 sweep the same way (same jobs, same order: ``preflight.expand_sweep``) and hands the whole batch
 to the launcher. Built on Hydra's public plugin interface only; it lives in the
 ``hydra_plugins`` namespace because Hydra accepts plugins from there only.
@@ -41,7 +41,7 @@ class CdprSweeper(Sweeper):
             hydra_context=hydra_context, task_function=task_function, config=config)
 
     def sweep(self, arguments: List[str]) -> Any:
-        from pipeline.preflight import expand_sweep, parse
+        from pipeline.app.preflight import expand_sweep, parse
 
         jobs = expand_sweep(parse(arguments))
         sweep_dir = Path(self.config.hydra.sweep.dir)

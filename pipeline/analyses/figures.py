@@ -1,0 +1,442 @@
+"""Report figures, drawn only from a study's Parquet results (never from the kernels).
+
+Each figure kind is a function ``(spec, results, out_dir) -> [paths]`` registered in ``KINDS``;
+a study declares its figures as :class:`FigureSpec` entries (``studies/*.yaml``). Every figure
+uses the shipped style ``pipeline.styles.paper`` and is drawn on a bare matplotlib ``Figure``
+(Agg when saved), so reruns give identical PNG files and importing this module leaves a
+notebook's pyplot backend alone.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Optional
+
+import matplotlib
+import numpy as np
+import pandas as pd
+import seaborn as sns
+from matplotlib.figure import Figure
+
+from pipeline.workspace.criteria import COLOURS, FEASIBLE_COLOUR
+from pipeline.errors import ConfigError
+from pipeline.app.results import write_csv
+from pipeline.analyses.views import write_view
+
+STYLE = "pipeline.styles.paper"
+MANY_BARS = 10  # a choice bar chart with more actuators turns its labels upright
+SERIES_DIR = "series"  # beside figures/: the curves' numbers as CSV
+PANEL_TITLES = {"feasible_grid": "CPR-WWA grid", "feasible": "simulated lines"}
+
+
+@dataclass
+class FigureSpec:
+    """One declared figure. ``file`` and ``title`` may hold ``{column}`` fields (dots written as
+    ``_``); ``per`` draws one file per value of a summary column or list of columns (e.g.
+    ``case``), ``cloud`` one per job. ``x``, ``y``, ``value`` are summary columns or pandas
+    expressions over them (dotted names in backticks); ``select`` keeps the jobs whose columns
+    take the listed values; ``hline`` is a number or a summary column; ``invert_z`` draws z
+    downwards; ``panels`` the feasibility columns a cloud shows side by side, or, with
+    ``panels_from`` (e.g. ``tension.model``), that column's values, one job each per ``per``
+    group; ``line`` the simulated line of a time series; ``caption`` what the figure shows and
+    what to conclude (``{column}`` fields as in ``title``), printed under it in the report;
+    ``bars`` draws a curve's categories (actuator ids) as grouped bars; ``legend`` titles a
+    curve's legend (default: the ``hue`` key in words); ``table`` draws from an analysis table
+    of the study (e.g. ``exact_drive``: its rows name their jobs) instead of the summary."""
+
+    kind: str
+    file: str
+    title: Optional[str] = None
+    x: Optional[str] = None
+    y: Optional[str] = None
+    value: Optional[str] = None
+    hue: Optional[str] = None
+    facet: Optional[str] = None
+    hline: Optional[Any] = None
+    xlabel: Optional[str] = None
+    ylabel: Optional[str] = None
+    per: Optional[Any] = None
+    invert_z: bool = False
+    panels: list[str] = field(default_factory=lambda: ["feasible"])
+    panels_from: Optional[str] = None
+    line: int = 0
+    select: dict[str, Any] = field(default_factory=dict)
+    caption: Optional[str] = None
+    bars: bool = False
+    legend: Optional[str] = None
+    table: Optional[str] = None
+
+
+class StudyResults:
+    """Read access to one study's outputs: the summary, analysis tables, job points."""
+
+    def __init__(self, directory: Path):
+        self.directory = Path(directory)
+
+    @property
+    def summary(self) -> pd.DataFrame:
+        return pd.read_parquet(self.directory / "summary.parquet")
+
+    def table(self, name: str) -> pd.DataFrame:
+        return pd.read_parquet(self.directory / f"{name}.parquet")
+
+    def points(self, job: str) -> pd.DataFrame:
+        return pd.read_parquet(self.directory / "jobs" / job / "points.parquet")
+
+    def samples(self, job: str) -> pd.DataFrame:
+        return pd.read_parquet(self.directory / "jobs" / job / "samples.parquet")
+
+
+def render(spec: FigureSpec, results: StudyResults, out_dir: Path) -> list[Path]:
+    """Draw one declared figure (one file per ``per`` value) into ``out_dir``; returns the files."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    table = _select(results.summary if spec.table is None else results.table(spec.table), spec.select)
+    groups = table.groupby(spec.per, sort=True) if spec.per else [(None, table)]
+    written = []
+    with matplotlib.style.context(STYLE):
+        for _, part in groups:
+            written.extend(KINDS[spec.kind](spec, part, results, out_dir))
+    return written
+
+
+def choice_bar(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
+    """Fig. 9: feasible share per actuator, accepted ones shaded as in Table 2, x % as a line."""
+    choice = results.table("choice").sort_values("actuator")
+    many = len(choice) > MANY_BARS  # a user catalogue: upright labels would overlap
+    width, height = matplotlib.rcParams["figure.figsize"]
+    fig = Figure(figsize=(max(width, 0.42 * len(choice)), height + (0.8 if many else 0.0)))
+    ax = fig.subplots()
+    colours = ["0.45" if ok else "0.82" for ok in choice["accepted"]]
+    separator = " " if many else "\n"
+    labels = [f"{a}{separator}{p:g} W" for a, p in zip(choice["actuator"], choice["actuator_power_W"])]
+    at = np.arange(len(choice))
+    bars = ax.bar(at, choice["feasible_pct"], color=colours, edgecolor="black", linewidth=0.6)
+    ax.set_xticks(at, labels, rotation=90 if many else 0, fontsize=7 if many else None)
+    ax.bar_label(bars, fmt="%.1f" if many else "%.2f", padding=2, fontsize=6 if many else 8,
+                 rotation=90 if many else 0)
+    required = float(choice["required_pct"].iloc[0])
+    ax.axhline(required, color="#D55E00", linestyle="--", label=f"required x = {required:g} %")
+    ax.set_ylim(0, 125 if many else 110)  # many: room for upright value labels under the legend
+    _labels(ax, spec, "actuator (catalogue power)", "feasible workspace x(i_a) (%)")
+    ax.legend(loc="upper right")
+    return [_save(fig, spec, out_dir)]
+
+
+def limiting_bar(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
+    """Share of the grid that is feasible and lost to each constraint, stacked per actuator."""
+    choice = results.table("choice").sort_values("actuator")
+    lost = [c for c in choice.columns if c.startswith("lost_") and c.endswith("_pct")]
+    fig = Figure()
+    ax = fig.subplots()
+    labels = np.arange(len(choice))
+    ax.set_xticks(labels, choice["actuator"].astype(str))
+    bottom = choice["feasible_pct"].to_numpy()
+    ax.bar(labels, bottom, color=FEASIBLE_COLOUR, label="feasible", edgecolor="black", lw=0.4)
+    for column in lost:
+        name = column[len("lost_"):-len("_pct")]
+        share = choice[column].to_numpy()
+        if share.any():
+            ax.bar(labels, share, bottom=bottom, color=COLOURS.get(name),
+                   label=f"lost to {name}", edgecolor="black", lw=0.4)
+        bottom = bottom + share
+    ax.set_ylim(0, 100)
+    _labels(ax, spec, "actuator", "share of the geometric workspace grid (%)")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.0, 1.0))
+    return [_save(fig, spec, out_dir)]
+
+
+def cloud(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
+    """Figs. 4, 5, 8 (CPR-8) and 5-12 (IRPM): one 3D picture per selected job, one panel per
+    column of ``panels`` (e.g. the grid and the simulated verdicts side by side), or one picture
+    per ``per`` group with one panel per value of ``panels_from`` listed in ``panels``; feasible
+    points as dots, infeasible ones as crosses coloured by their limiting constraint when the
+    job has one, the searched box outlined."""
+    if spec.panels_from:
+        values = table[spec.panels_from].astype(str)
+        jobs = [table[values == value].iloc[0] for value in spec.panels]
+        panels = [(results.points(job["job"]), "feasible",
+                   f"{spec.panels_from} = {job[spec.panels_from]}: {job['n_feasible']}/{job['n_points']}")
+                  for job in jobs]
+        return [_cloud_figure(spec, panels, jobs[0], out_dir)]
+    written = []
+    for _, job in table.iterrows():
+        points = results.points(job["job"])
+        titles = [PANEL_TITLES.get(c, c) if len(spec.panels) > 1 else None for c in spec.panels]
+        panels = [(points, column, title) for column, title in zip(spec.panels, titles)]
+        written.append(_cloud_figure(spec, panels, job, out_dir))
+    return written
+
+
+def _cloud_figure(spec: FigureSpec, panels: list, job: pd.Series, out_dir: Path) -> Path:
+    fig = Figure(figsize=(5.6 * len(panels), 4.6))
+    for i, (points, column, title) in enumerate(panels, start=1):
+        ax = fig.add_subplot(1, len(panels), i, projection="3d")
+        _cloud_panel(ax, points, column, spec.invert_z)
+        _box(ax, job)
+        if title:
+            ax.set_title(title, fontsize=9)
+    fig.suptitle(_fill(spec.title or "", job), fontsize=10)
+    png = _save(fig, spec, out_dir, job)
+    write_view(panels, _fill(spec.title or "", job), spec.invert_z, png.with_suffix(".json"))
+    return png
+
+
+def _cloud_panel(ax, points: pd.DataFrame, column: str, invert_z: bool) -> None:
+    feasible = points[column].to_numpy()
+    ax.scatter(*(points.loc[feasible, c] for c in "xyz"), s=6, c=FEASIBLE_COLOUR,
+               depthshade=False, label=f"feasible ({feasible.sum()})")
+    infeasible = points.loc[~feasible]
+    limiting = "limiting" + column[len("feasible"):]
+    if len(infeasible) <= 5000:  # dense grids: draw the feasible set only
+        groups = (infeasible.groupby(limiting, observed=True) if limiting in points
+                  else [("infeasible", infeasible)])
+        for name, group in groups:
+            ax.scatter(*(group[c] for c in "xyz"), s=10, marker="x", linewidths=0.7,
+                       c=COLOURS.get(name, "0.5"), depthshade=False,
+                       label=f"{name} ({len(group)})")
+    if invert_z:
+        ax.invert_zaxis()
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.set_zlabel("z (m)")
+    ax.legend(loc="upper left", fontsize=7, bbox_to_anchor=(0.0, 1.0))
+
+
+def timeseries(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
+    """Fig. 6: shaft speed, load torque and control voltage of every cable along simulated line
+    ``line`` (line 0 is O''-F''), with the actuator limits of eqs. (30), (32), (34) dashed."""
+    written = []
+    rows = [("theta_dot", "limit_speed", "shaft speed (rad/s)"),
+            ("torque", "limit_torque", "load torque (N m)"),
+            ("voltage", "limit_voltage", "control voltage (V)")]
+    for _, job in table.iterrows():
+        samples = results.samples(job["job"])
+        line = samples[samples["line"] == spec.line]
+        if line.empty:
+            raise ConfigError(f"{job['job']}: no samples of line {spec.line} (only line 0 is "
+                             "written unless lines.samples=all)")
+        cables = sum(c.startswith("theta_dot_") for c in samples.columns)
+        fig = Figure(figsize=(6.4, 7.0))
+        axes = fig.subplots(3, 1, sharex=True)
+        for ax, (quantity, limit, label) in zip(axes, rows):
+            for cable in range(1, cables + 1):
+                ax.plot(line["t"], line[f"{quantity}_{cable}"], lw=1, label=str(cable),
+                        color=matplotlib.colormaps["tab10"](cable - 1))
+            for sign in (1, -1):
+                ax.axhline(sign * job[limit], color="0.2", linestyle="--", lw=0.9)
+            ax.set_ylabel(label)
+        axes[0].legend(title="cable", ncol=cables, fontsize=7, loc="lower center",
+                       bbox_to_anchor=(0.5, 1.0))
+        axes[-1].set_xlabel("t (s)")
+        fig.suptitle(_fill(spec.title or "", job), fontsize=10, y=1.02)
+        written.append(_save(fig, spec, out_dir, job))
+    return written
+
+
+def survival_bar(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
+    """Issue 8: per actuator, the minimum-norm (paper) and the physically valid feasible share,
+    labelled with the share of the former that survives; one panel per case and wrench rows."""
+    data = results.table("survival")
+    cases, rows = data["case_label"].unique(), sorted(data["wrench_rows"].unique(), reverse=True)
+    fig = Figure(figsize=(4.2 * len(cases), 3.3 * len(rows)), layout="constrained")
+    axes = fig.subplots(len(rows), len(cases), squeeze=False, sharey=True)
+    for (row, col), ax in np.ndenumerate(axes):
+        part = data[(data["wrench_rows"] == rows[row]) & (data["case_label"] == cases[col])]
+        part = part.sort_values("actuator")
+        at = np.arange(len(part))
+        ax.bar(at - 0.2, part["paper_pct"], 0.4, color="0.7", edgecolor="black", lw=0.4,
+               label="pinv (paper, eq. 20)")
+        bars = ax.bar(at + 0.2, part["physical_pct"], 0.4, color=FEASIBLE_COLOUR,
+                      edgecolor="black", lw=0.4, label="cables only pull")
+        ax.bar_label(bars, labels=[f"{v:.0f}%" if np.isfinite(v) else "–" for v in part["survive_pct"]],
+                     padding=2, fontsize=7)
+        ax.set_xticks(at, part["actuator"].astype(str))
+        ax.set_ylim(0, 115)
+        ax.set_title(f"{cases[col]}, wrench rows: {rows[row]}", fontsize=9)
+        ax.set_xlabel("actuator")
+    for ax in axes[:, 0]:
+        ax.set_ylabel(spec.ylabel or "feasible share of the grid (%)")
+    axes[0, -1].legend(loc="upper right", fontsize=7)
+    if spec.title:
+        fig.suptitle(spec.title, fontsize=10)
+    return [_save(fig, spec, out_dir)]
+
+
+def curve(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
+    """Volume (or share) versus a swept parameter, one line per ``hue`` value (Figs. 13-15)."""
+    data = pd.DataFrame({"x": _column(table, spec.x), "y": _column(table, spec.y)})
+    fig = Figure()
+    ax = fig.subplots()
+    if spec.bars:  # categories on x (actuator ids): grouped bars, no line between them
+        if spec.hue:
+            data[spec.hue] = table[spec.hue].astype(str).to_numpy()
+        sns.barplot(data=data, x="x", y="y", hue=spec.hue, ax=ax, errorbar=None,
+                    edgecolor="black", linewidth=0.4)
+        ax.set_ylim(0, 1.2 * float(data["y"].max()))  # room for the legend above the bars
+    elif spec.hue:  # colour and marker both vary, so coinciding lines stay distinguishable
+        data[spec.hue] = table[spec.hue].astype(str).to_numpy()
+        sns.lineplot(data=data, x="x", y="y", hue=spec.hue, style=spec.hue, markers=True,
+                     dashes=False, ax=ax, errorbar=None)
+    else:
+        sns.lineplot(data=data, x="x", y="y", marker="o", ax=ax, errorbar=None)
+    if spec.hline is not None:
+        level = float(table[spec.hline].iloc[0]) if isinstance(spec.hline, str) else spec.hline
+        ax.axhline(level, color="0.3", linestyle="--", lw=1, label=f"required {level:g}")
+    if spec.hue or spec.hline is not None:
+        ax.legend(title=spec.legend or (label(spec.hue) if spec.hue else None),
+                  **({"loc": "upper center", "ncol": data[spec.hue].nunique()} if spec.bars and spec.hue else {}))
+    _labels(ax, spec, spec.x, spec.y, table.iloc[0])
+    png = _save(fig, spec, out_dir, table.iloc[0])
+    return [png, _series(data, spec, out_dir.parent / SERIES_DIR / png.with_suffix(".csv").name)]
+
+
+def _series(data: pd.DataFrame, spec: FigureSpec, path: Path) -> Path:
+    """A curve's numbers as CSV (``series/`` beside ``figures/``), one x column and one y
+    column per ``hue`` value (``actuator_1``, ``robot_gamma_deg_30``): what DVC's plots
+    (dvc.yaml) and a spreadsheet read. Column names are plain words, as Vega-Lite reads a dot
+    in a field name as nesting."""
+    if spec.hue:
+        wide = data.pivot_table(index="x", columns=spec.hue, values="y", aggfunc="mean")
+        wide.columns = [f"{_field(spec.hue)}_{_field(value)}" for value in wide.columns]
+    else:
+        wide = data.groupby("x")["y"].mean().to_frame(_field(spec.y))
+    path.parent.mkdir(parents=True, exist_ok=True)
+    write_csv(wide.rename_axis(_field(spec.x)).reset_index(), path)
+    return path
+
+
+def _field(text) -> str:
+    if isinstance(text, str):
+        try:
+            text = float(text)
+        except ValueError:
+            return re.sub(r"\W+", "_", text).strip("_")
+    return format(text, "g").replace(".", "p").replace("-", "m")
+
+
+def heatmap(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
+    """``value`` over two swept keys ``x`` and ``y``, one panel per ``facet`` value (Figs. 16-29)."""
+    facets = sorted(table[spec.facet].unique()) if spec.facet else [None]
+    fig = Figure(figsize=(2.6 * len(facets) + 0.8, 3.1), layout="constrained")  # no title overlap
+    axes = fig.subplots(1, len(facets), squeeze=False, sharey=True)
+    values = _column(table, spec.value)
+    vmin, vmax = float(values.min()), float(values.max())
+    if vmax == vmin:  # one value everywhere (e.g. no pose holds any of these wrenches): one colour
+        vmin, vmax = vmin - 0.5, vmax + 0.5
+    for ax, facet in zip(axes[0], facets):
+        part = table if facet is None else table[table[spec.facet] == facet]
+        grid = pd.DataFrame({"x": _column(part, spec.x), "y": _column(part, spec.y),
+                             "v": _column(part, spec.value)}).pivot_table(
+            index="y", columns="x", values="v", aggfunc="first").sort_index(ascending=False)
+        grid = grid.rename(index="{:g}".format, columns="{:g}".format)
+        sns.heatmap(grid, ax=ax, vmin=vmin, vmax=vmax, cmap="viridis", annot=True, fmt=".0f",
+                    annot_kws={"fontsize": 6}, cbar=ax is axes[0][-1], square=False)
+        ax.set_title("" if facet is None else f"{label(spec.facet)} = {facet:g}", fontsize=8)
+        ax.set_xlabel(spec.xlabel or spec.x)
+        ax.set_ylabel(spec.ylabel or spec.y if ax is axes[0][0] else "")
+    if spec.title:
+        fig.suptitle(_fill(spec.title, table.iloc[0])
+                     + (f" (every value {float(values.iloc[0]):g})" if values.nunique() == 1 else ""),
+                     fontsize=10)
+    return [_save(fig, spec, out_dir, table.iloc[0])]
+
+
+def pareto(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
+    """An optimise study's trials (``x``, ``y`` objectives): those that meet the requirement
+    coloured by ``hue`` (the actuator), the others as grey crosses, the Pareto front joined."""
+    fig = Figure()
+    ax = fig.subplots()
+    missed = table[~table["meets"]]
+    ax.scatter(missed[spec.x], missed[spec.y], marker="x", s=14, color="0.75", lw=0.8,
+               label=f"below the requirement ({len(missed)})")
+    met = table[table["meets"]]
+    for value, part in met.groupby(spec.hue, sort=True):
+        ax.scatter(part[spec.x], part[spec.y], s=18, label=f"{label(spec.hue)} {value} ({len(part)})")
+    front = met[met["pareto"]].sort_values(spec.x)
+    ax.plot(front[spec.x], front[spec.y], color="black", lw=1, drawstyle="steps-post",
+            label=f"Pareto front ({len(front)})")
+    ax.legend(fontsize=7)
+    _labels(ax, spec, spec.x, spec.y)
+    return [_save(fig, spec, out_dir)]
+
+
+KINDS: dict[str, Callable[[FigureSpec, pd.DataFrame, StudyResults, Path], list[Path]]] = {
+    "pareto": pareto,
+    "choice_bar": choice_bar,
+    "limiting_bar": limiting_bar,
+    "cloud": cloud,
+    "survival_bar": survival_bar,
+    "timeseries": timeseries,
+    "curve": curve,
+    "heatmap": heatmap,
+}
+
+
+# Config keys as a reader names them (legend titles, panel titles).
+LABELS = {"robot.gamma_deg": "γ (deg)", "robot.r_end": "r_end (m)", "robot.r_base": "r_base (m)",
+          "load.mass": "load mass (kg)", "motion.v_max": "V_cmax (m/s)",
+          "drive.winch_radius": "winch radius R_i (m)", "drive.gear_ratio": "gear ratio N_V",
+          "tension.model": "tension model"}
+
+
+def label(key: str) -> str:
+    return LABELS.get(key, key)
+
+
+def _column(table: pd.DataFrame, expression: str) -> pd.Series:
+    return table[expression] if expression in table.columns else table.eval(expression)
+
+
+def _select(table: pd.DataFrame, select: dict[str, Any]) -> pd.DataFrame:
+    keep = np.ones(len(table), dtype=bool)
+    for key, wanted in select.items():
+        wanted = wanted if isinstance(wanted, (list, tuple)) else [wanted]
+        keep &= np.isin(table[key].to_numpy(), wanted)
+    return table[keep]
+
+
+def _fill(pattern: str, row: pd.Series) -> str:
+    return pattern.format(**{str(k).replace(".", "_"): v for k, v in row.items()})
+
+
+def _labels(ax, spec: FigureSpec, xlabel: str | None, ylabel: str | None, row=None) -> None:
+    ax.set_xlabel(spec.xlabel or xlabel or "")
+    ax.set_ylabel(spec.ylabel or ylabel or "")
+    if spec.title:
+        ax.set_title(spec.title if row is None else _fill(spec.title, row))
+
+
+def _box(ax, row: pd.Series) -> None:
+    """Outline the searched box (the geometric workspace) from the summary's box.* columns."""
+    lo = np.array([row[f"box.{a}_min"] for a in "xyz"])
+    hi = np.array([row[f"box.{a}_max"] for a in "xyz"])
+    corners = np.array([[lo[0] if i & 1 == 0 else hi[0], lo[1] if i & 2 == 0 else hi[1],
+                         lo[2] if i & 4 == 0 else hi[2]] for i in range(8)])
+    for i in range(8):
+        for bit in (1, 2, 4):
+            if not i & bit:
+                edge = corners[[i, i | bit]]
+                ax.plot(*edge.T, color="0.4", lw=0.6)
+
+
+def _save(fig, spec: FigureSpec, out_dir: Path, row: pd.Series | None = None) -> Path:
+    """Save as ``spec.file`` (its fields filled from ``row``), with the filled caption as the
+    PNG's Description (the report prints it under the figure: :func:`caption`)."""
+    fill = (lambda text: text) if row is None else (lambda text: _fill(text, row))
+    path = out_dir / fill(spec.file)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    meta = {"Software": None}
+    if spec.caption:
+        meta["Description"] = " ".join(fill(spec.caption).split())
+    fig.savefig(path, metadata=meta)
+    return path
+
+
+def caption(png: Path) -> str | None:
+    """The caption a figure was saved with (None for a figure without one)."""
+    from PIL import Image
+
+    with Image.open(png) as image:
+        return image.text.get("Description")

@@ -1,0 +1,630 @@
+"""Structured configuration (Hydra + OmegaConf dataclasses) and its semantic validation.
+
+The dataclasses give every key a type, so a wrong key or a non-numeric value fails while the
+config is composed. :func:`validate` then checks values against the physics (positive masses,
+a carrier that fits in its frame, a catalogue id that exists) and raises :class:`ConfigError`
+naming the offending key and value.
+"""
+
+from __future__ import annotations
+
+import functools
+import importlib.util
+from dataclasses import dataclass, field, fields, is_dataclass
+from enum import Enum
+from typing import Any, Optional
+
+from omegaconf import MISSING, DictConfig, ListConfig, OmegaConf
+from omegaconf.errors import OmegaConfBaseException
+
+from pipeline.errors import ConfigError, one_line
+
+INF = float("inf")
+JOBLIB_BACKENDS = ("loky", "threading", "multiprocessing", "sequential", "dask")
+
+
+# Value rules sit next to the fields they constrain (scikit-learn's declared parameter
+# constraints): ``rule(check, default)`` declares a field, :func:`check_values` applies every
+# declared rule of a typed config once, and a schema's ``check_fields`` holds its rules between
+# fields. A check returns None when the value is fine, else what it must be.
+def rule(check, default=MISSING, factory=None):
+    """A dataclass field whose (non-null) value must pass ``check``."""
+    if factory is not None:
+        return field(default_factory=factory, metadata={"check": check})
+    return field(default=default, metadata={"check": check})
+
+
+def positive(value):
+    return None if 0 < value < INF else "must be > 0 and finite"
+
+
+def non_negative(value):
+    return None if 0 <= value < INF else "must be >= 0 and finite"
+
+
+def finite(value):
+    return None if abs(value) < INF else "must be finite"
+
+
+def at_least(bound: int):
+    return lambda value: None if value >= bound else f"must be >= {bound}"
+
+
+def vector(size: int, meaning: str):
+    """``size`` finite numbers."""
+    def check(values):
+        values = list(values)
+        if not all(isinstance(v, (int, float)) and abs(v) < INF for v in values):
+            return "every value must be a finite number"
+        return None if len(values) == size else f"needs {size} values ({meaning})"
+    return check
+
+
+class PinvColumns(Enum):
+    """Which columns of J enter the pseudo-inverse of eq. (20): all six (full, the default) or
+    the three position columns (translational); docs/model.md section 4."""
+
+    translational = "translational"
+    full = "full"
+
+
+class VelocityBoundary(Enum):
+    """Whether grid velocities with |v| = V_cmax exactly belong to the set of eq. (26)."""
+
+    exclude = "exclude"
+    include = "include"
+
+
+class AccelerationSet(Enum):
+    """Reading of eqs. (27)-(29): box corners, or MATLAB's literal colon with step 1."""
+
+    corners = "corners"
+    colon = "colon"
+
+
+class Inertia(Enum):
+    """Sign of the inertial term of eq. (31): as printed, m (a - g e_z), or Newton's m (-a - g e_z)
+    for the force the cables must exert with z up (docs/model.md section 4)."""
+
+    paper = "paper"
+    newton = "newton"
+
+
+class MomentArm(Enum):
+    """Moment arm of eq. (8) of the IRPM paper: R d_i (about O_M) or r + R d_i (eq. 9 literal)."""
+
+    platform = "platform"
+    base = "base"
+
+
+class CableDirection(Enum):
+    """Where a cable of the IRPM statics pulls: from its anchor towards its attachment point
+    (physical) or towards the platform's reference point (the platform a point for the cables'
+    directions and lengths, moment arms R d_i kept; docs/model.md section 5)."""
+
+    attachment = "attachment"
+    centre = "centre"
+
+
+class TensionModel(Enum):
+    """Cable forces the criteria check: minimum-norm (the papers' eq. 20 / eq. 10, any sign) or
+    pulling cables only, chosen by linear programming (``pipeline.model.tensions``)."""
+
+    pinv = "pinv"
+    feasible = "feasible"
+
+
+class Analysis(Enum):
+    """Which workspace: CPR-WWA (dynamics, actuator limits), statics (wrench, tensions), or the
+    straight-line simulation experiments compared with CPR-WWA (``pipeline.workspace.lines``)."""
+
+    cpr_wwa = "cpr_wwa"
+    statics = "statics"
+    lines = "lines"
+
+
+class Spacing(Enum):
+    """Where the N grid points of an axis sit in the geometric workspace."""
+
+    linspace = "linspace"
+    centred = "centred"
+
+
+class LineSamples(Enum):
+    """Which straight lines' samples ``analysis=lines`` writes to samples.parquet: the first
+    (line O''-F'', the one Fig. 6 draws; 0.1 MB a job) or all 72 (7 MB a job)."""
+
+    first = "first"
+    all = "all"
+
+
+@dataclass
+class FrameConfig:
+    """Frame d * s * v (m): the theoretical workspace of Fig. 2."""
+
+    d: float = rule(positive)
+    s: float = rule(positive)
+    v: float = rule(positive)
+
+
+@dataclass
+class CarrierConfig:
+    """Load carrier l * w * h_o (m), eqs. (1)-(8)."""
+
+    l: float = rule(positive)
+    w: float = rule(positive)
+    h: float = rule(positive)
+
+
+@dataclass
+class Cpr8Config:
+    """CPR-8 robot (Fig. 1). ``lower_anchor_drop``: depth of O', F', G', H' below O, F, G, H
+    (null = h_o as eqs. 14-17)."""
+
+    name: str = "cpr8"
+    frame: FrameConfig = field(default_factory=FrameConfig)
+    carrier: CarrierConfig = field(default_factory=CarrierConfig)
+    lower_anchor_drop: Optional[float] = rule(non_negative, None)
+
+    @staticmethod
+    def check_fields(robot: DictConfig) -> None:
+        from pipeline.model.robots import carrier_half_diagonal
+
+        de = carrier_half_diagonal(robot.carrier.l, robot.carrier.w, robot.carrier.h)
+        for axis in ("d", "s", "v"):
+            size = robot.frame[axis]
+            if size <= 2 * de:
+                raise ConfigError(
+                    f"robot.frame.{axis}={size}: carrier does not fit "
+                    f"(needs > 2 d_e = {2 * de:.4g} m for carrier {robot.carrier.l} x "
+                    f"{robot.carrier.w} x {robot.carrier.h} m)"
+                )
+
+
+@dataclass
+class SearchConfig:
+    """Searched box (m) and grid step (m): points lo + k step up to hi on every axis."""
+
+    lo: list[float] = rule(vector(3, "x, y, z"))
+    hi: list[float] = rule(vector(3, "x, y, z"))
+    step: float = rule(positive)
+
+    @staticmethod
+    def check_fields(search: DictConfig) -> None:
+        for axis, lo, hi in zip("xyz", search.lo, search.hi):
+            if not lo <= hi:
+                raise ConfigError(f"robot.search: {axis} from {lo} to {hi}: must be finite with lo <= hi")
+
+
+@dataclass
+class Irpm6Config:
+    """6-cable IRPM (Hamed & Zohoor, Figs. 1-4): base and platform radii (m), pair angle gamma
+    (deg), longest cable l_max (m), the search box of section III."""
+
+    name: str = "irpm6"
+    r_base: float = rule(positive, 6.0)
+    r_end: float = rule(positive, 1.2)
+    gamma_deg: float = rule(lambda v: None if 0 <= v < 120 else "must be in [0, 120) (pairs would overlap)", 0.0)
+    l_max: float = rule(positive, 15.0)
+    search: SearchConfig = field(default_factory=SearchConfig)
+
+
+@dataclass
+class PointsSearchConfig(SearchConfig):
+    """Searched box and step (m); ``spacing``: ``faces`` (lo + k step up to hi, as the IRPM) or
+    ``centres`` (lo + (k + 1/2) step, the centres of the cells of side step inside the box)."""
+
+    spacing: str = "faces"
+
+
+@dataclass
+class PointsConfig:
+    """A robot given by its points (``pipeline.model.robots.PointsRobot.from_config`` checks them
+    where it builds the robot): anchors
+    (fixed frame) and attachments (platform frame), lists of [x, y, z] in m; optional cable
+    names; the up direction; the longest cable l_max (m, null = none); the search box."""
+
+    name: str = "points"
+    anchors: Any = MISSING
+    attachments: Any = MISSING
+    cable_names: Optional[list[str]] = None
+    up: list[float] = field(default_factory=lambda: [0.0, 0.0, 1.0])
+    l_max: Optional[float] = rule(positive, None)
+    search: PointsSearchConfig = field(default_factory=PointsSearchConfig)
+
+
+@dataclass
+class TotalOrientationConfig:
+    """Total-orientation workspace: every orientation (psi, theta, phi) + offsets, with the
+    offsets on a grid of ``n`` values per angle in [-bound, bound] rad (n = 1: constant
+    orientation)."""
+
+    bound: float = rule(non_negative, 0.0)
+    n: int = rule(at_least(1), 1)
+
+
+@dataclass
+class OrientationConfig:
+    """Carrier orientation, Euler angles of eq. (9) in rad; ``total`` widens it to the
+    total-orientation workspace around it."""
+
+    psi: float = rule(finite, 0.0)
+    theta: float = rule(finite, 0.0)
+    phi: float = rule(finite, 0.0)
+    total: TotalOrientationConfig = field(default_factory=TotalOrientationConfig)
+
+
+@dataclass
+class WrenchConfig:
+    """Applied wrench f_ext of eq. (11) of the IRPM paper, N and N m (the paper gives kN)."""
+
+    fx: float = rule(finite, 0.0)
+    fy: float = rule(finite, 0.0)
+    fz: float = rule(finite, 100_000.0)
+    mx: float = rule(finite, 0.0)
+    my: float = rule(finite, 0.0)
+    mz: float = rule(finite, 0.0)
+
+
+@dataclass
+class LimitsConfig:
+    """``s_max``: the IRPM paper's name (eq. 10) for ``tension.t_max``, kept as an alias: when
+    given it replaces ``tension.t_max``."""
+
+    s_max: Any = None
+
+
+@dataclass
+class TensionConfig:
+    """``model``: pinv (papers) or feasible (cables only pull). ``t_min``: smallest tension (N).
+    ``t_max``: cable rating (N) in every analysis; each a number or one per cable, null = none (CPR-WWA: the motor torque limit
+    / R_i only); ``limits.s_max`` is an alias. ``residual_rtol``: a required wrench is unreachable when the equilibrium
+    residual exceeds this fraction of it."""
+
+    model: TensionModel = TensionModel.pinv
+    t_min: Any = 0.0
+    t_max: Any = None
+    residual_rtol: float = rule(positive, 1e-6)
+
+
+@dataclass
+class GridConfig:
+    """N points per axis of the geometric workspace (section 3; the paper uses N = 6).
+    ``n_vel``: N of the velocity grid of eqs. (23)-(25); null ties it to ``n`` as in the paper.
+    Set it for dense position grids: n_vel = n = 40 would test 33 371 velocities per pose."""
+
+    n: int = rule(at_least(2), 6)
+    n_vel: Optional[int] = rule(at_least(1), None)
+    spacing: Spacing = Spacing.linspace
+
+
+@dataclass
+class MotionConfig:
+    """Trapezoidal reference motion: V_cmax (m/s), t_acc and t_dec (s)."""
+
+    v_max: float = rule(positive, 1.3)
+    t_acc: float = rule(positive, 1.82)
+    t_dec: float = rule(positive, 1.82)
+
+
+@dataclass
+class LoadConfig:
+    """Load mass m (kg) of eq. (31), gravitational acceleration g (m/s^2, along -up of the robot),
+    centre of mass (m, platform frame) and a constant external wrench [f_x f_y f_z M_x M_y M_z]
+    (N, N m) the cables must also balance, in every analysis."""
+
+    mass: float = rule(non_negative, 2.0)
+    gravity: float = rule(non_negative, 9.81)
+    com: list[float] = rule(vector(3, "x y z, m, platform frame"), factory=lambda: [0.0] * 3)
+    external: list[float] = rule(vector(6, "fx fy fz mx my mz"), factory=lambda: [0.0] * 6)
+
+
+@dataclass
+class DriveConfig:
+    """Design overrides of the catalogue's drive train, for every cable: winch radius R_i (m) and
+    gear ratio N_V. null keeps each actuator's catalogue value."""
+
+    winch_radius: Optional[float] = rule(positive, None)
+    gear_ratio: Optional[float] = rule(positive, None)
+
+
+@dataclass
+class ChoiceConfig:
+    """CPR-ACM (section 4): an actuator is accepted when its feasible share x(i_a) >= required_pct."""
+
+    required_pct: float = rule(lambda v: None if 0 < v <= 100 else "must be in (0, 100]", 90.0)
+
+
+@dataclass
+class ModelConfig:
+    """Readings of the ambiguous equations; each default is the best fit to all the published
+    evidence (studies evidence_cpr8 and evidence_irpm), except ``cable_direction``, whose better
+    fit describes another robot (docs/model.md sections 4-5 give every reading's numbers). ``pinv_columns``: eq. (20) with all six columns of J (full) or forces
+    only (translational); ``velocity_boundary``: |v| = V_cmax in the set of eq. (26) or not;
+    ``acceleration_set``: the box's corners or MATLAB's colon (eqs. 27-29); ``inertia``: eq.
+    (31)'s sign as printed (paper) or Newton's; ``jdot``: the centripetal term of the shaft
+    acceleration; ``xi_in_torque_limit``: xi in eq. (32); ``moment_arm`` and ``cable_direction``:
+    the IRPM's eqs. (8)-(9) (moments about the platform or the base; cables towards their
+    attachment points or the platform's centre). ``rank_rtol``: singular values below it (times
+    the largest) count as zero. ``margin_atol``: margins within it of zero are exactly 0 and
+    satisfied (``pipeline.workspace.verdict``), so a pose on a limit gets the same verdict on every CPU."""
+
+    pinv_columns: PinvColumns = PinvColumns.full
+    velocity_boundary: VelocityBoundary = VelocityBoundary.exclude
+    acceleration_set: AccelerationSet = AccelerationSet.corners
+    inertia: Inertia = Inertia.paper
+    moment_arm: MomentArm = MomentArm.platform
+    cable_direction: CableDirection = CableDirection.attachment
+    jdot: bool = False
+    xi_in_torque_limit: bool = True
+    rank_rtol: float = rule(positive, 1e-9)
+    margin_atol: float = rule(lambda v: None if 0 <= v <= 1e-3 else "must be in [0, 1e-3]", 1e-9)
+
+
+@dataclass
+class ComputeConfig:
+    """Parallel execution: joblib backend, workers (capped at the machine's cores except on
+    Dask), poses per chunk. ``backend=dask`` runs the chunks on the Dask scheduler at
+    ``scheduler`` (null: a local cluster of n_jobs workers). ``max_poses``: the most pose x
+    orientation evaluations a job may take (checked before any work; raise it knowingly)."""
+
+    n_jobs: int = rule(lambda v: None if v != 0 else "must be a positive count or negative (joblib style)", 2)
+    backend: str = rule(lambda v: None if v in JOBLIB_BACKENDS else f"must be one of {', '.join(JOBLIB_BACKENDS)}", "loky")
+    chunk_size: int = rule(positive, 20_000)
+    scheduler: Optional[str] = None
+    max_poses: int = 50_000_000
+
+
+@dataclass
+class LinesConfig:
+    """Straight-line simulations (analysis=lines, section 3.1.3 of the CPR-8 paper): samples =
+    first writes the samples of line O''-F'' only (what Fig. 6 draws), all those of every line.
+    The verdicts of every line are in points.parquet either way."""
+
+    samples: LineSamples = LineSamples.first
+
+
+@dataclass
+class OutputConfig:
+    """``cables``: add per-pose cable lengths and tensions to points.parquet
+    (``pipeline.workspace.quantities``). ``points``: write the per-pose table points.parquet (false: the
+    summary only, for sweeps whose figures read summaries; a study that draws clouds or
+    compares poses refuses it)."""
+
+    cables: bool = False
+    points: bool = True
+
+
+@dataclass
+class Config:
+    """The job: ``analysis`` (cpr_wwa, statics or lines), ``actuator`` (the id of a catalogue
+    row), ``catalogue`` (a CSV or Parquet path; null = Table 1 of the CPR-8 paper, shipped),
+    ``poses`` (a list of [x, y, z] positions in m checked instead of the robot's grid; null =
+    the grid). A job has the keys of conf/config.yaml plus those of its tension, analysis and
+    robot files, and only those (:func:`typed_config` checks them against this schema)."""
+
+    robot: Any = MISSING
+    analysis: Analysis = Analysis.cpr_wwa
+    actuator: int = 1
+    catalogue: Optional[str] = None
+    orientation: OrientationConfig = field(default_factory=OrientationConfig)
+    grid: GridConfig = field(default_factory=GridConfig)
+    motion: MotionConfig = field(default_factory=MotionConfig)
+    load: LoadConfig = field(default_factory=LoadConfig)
+    wrench: WrenchConfig = field(default_factory=WrenchConfig)
+    limits: LimitsConfig = field(default_factory=LimitsConfig)
+    tension: TensionConfig = field(default_factory=TensionConfig)
+    drive: DriveConfig = field(default_factory=DriveConfig)
+    choice: ChoiceConfig = field(default_factory=ChoiceConfig)
+    model: ModelConfig = field(default_factory=ModelConfig)
+    compute: ComputeConfig = field(default_factory=ComputeConfig)
+    output: OutputConfig = field(default_factory=OutputConfig)
+    lines: LinesConfig = field(default_factory=LinesConfig)
+    poses: Any = None
+
+
+def register() -> None:
+    """The resolver of sweep job folder names. The YAML files in conf/ are composed untyped; the
+    schemas here type and check the result (:func:`typed_config`)."""
+    OmegaConf.register_new_resolver("cdpr.jobdir", job_dir_name, replace=True)
+
+
+def job_dir_name(override_dirname: str, job_num: int) -> str:
+    """A sweep job's folder: its overrides (``actuator=3``), or ``job<N>`` when it has none."""
+    return override_dirname.replace("/", "_") or f"job{job_num}"
+
+
+
+
+def unknown_keys(node: DictConfig, schema, prefix: str = "") -> None:
+    """ConfigError for the first key of ``node`` that ``schema`` (a dataclass) does not declare:
+    a ``+key`` override adds keys past Hydra's struct check, and would otherwise be ignored."""
+    declared = {f.name: f for f in fields(schema)}
+    for key in node:
+        if key not in declared:
+            raise ConfigError(f"{prefix}{key}: not a key of {schema.__name__} "
+                              f"(keys: {', '.join(declared)})")
+        default = declared[key].default_factory() if callable(declared[key].default_factory) else None
+        if is_dataclass(default) and isinstance(node[key], DictConfig):
+            unknown_keys(node[key], type(default), f"{prefix}{key}.")
+
+
+def typed_config(cfg: DictConfig) -> DictConfig:
+    """The composed config with every value of its declared type (numbers, enums, lists), keeping
+    only the keys it has: a statics job has no ``actuator``, so its summary has none either.
+    An undeclared key (also one added with ``+``) or a value of the wrong type: ConfigError."""
+    return masked(typed_schema(cfg), cfg)
+
+
+def typed_schema(cfg: DictConfig) -> DictConfig:
+    """``cfg`` merged into the typed schema (every declared key, typed nodes that check any
+    later assignment); :func:`masked` keeps the keys ``cfg`` has."""
+    unknown_keys(cfg, Config)
+    name = cfg.robot.get("name") if isinstance(cfg.get("robot"), DictConfig) else None
+    if name not in ROBOT_SCHEMAS:
+        raise ConfigError(f"robot.name={name}: unknown robot ({', '.join(ROBOT_SCHEMAS)})")
+    unknown_keys(cfg.robot, ROBOT_SCHEMAS[name], "robot.")
+    full = _merged(Config, cfg, "")
+    full.robot = _merged(ROBOT_SCHEMAS[name], cfg.robot, "robot.")
+    return full
+
+
+def _merged(schema, node: DictConfig, prefix: str) -> DictConfig:
+    """``node`` merged into ``schema``'s typed defaults; a value of the wrong type is a
+    ConfigError naming the key and the value."""
+    try:
+        return OmegaConf.merge(_structured(schema), node)  # merge copies, never changes, its inputs
+    except OmegaConfBaseException as exc:
+        message = one_line(exc).split(": full_key")[0]
+        raise ConfigError(f"{prefix}{exc.full_key}={exc.value}: {message}") from None
+
+
+@functools.cache
+def _structured(schema) -> DictConfig:
+    """The typed defaults of a schema, built once per process (about 8 ms each)."""
+    return OmegaConf.structured(schema)
+
+
+def masked(full: DictConfig, present: DictConfig) -> DictConfig:
+    """``full``'s typed values at the keys of ``present`` only (struct: no key can be added)."""
+    typed = _masked(full, present)
+    OmegaConf.set_struct(typed, True)
+    return typed
+
+
+def _masked(full: DictConfig, present: DictConfig) -> dict:
+    kept = {}
+    for key in present:
+        value = full[key]
+        if isinstance(present[key], DictConfig) and isinstance(value, DictConfig):
+            value = _masked(value, present[key])
+        kept[key] = value
+    return OmegaConf.create(kept)
+
+
+def validate(cfg: DictConfig, catalogue_ids=None, typed: bool = False) -> DictConfig:
+    """The typed config (:func:`typed_config`; ``typed``: ``cfg`` already is), or ConfigError on
+    the first value the model cannot use: '<key>=<value>: <rule>'. First every field's declared
+    rule (:func:`check_values`), then the rules that join several groups. ``catalogue_ids``:
+    the ids an ``actuator`` may take."""
+    from pipeline.workspace.compute import build_robot
+
+    cfg = cfg if typed else typed_config(cfg)
+    check_values(cfg, Config)
+    check_values(cfg.robot, ROBOT_SCHEMAS[cfg.robot.name], "robot.")
+    robot = build_robot(cfg)  # a points robot checks its points as it is built
+    if "moment_arm" in cfg.model and cfg.model.moment_arm.name == "base" and cfg.load.mass > 0:
+        raise ConfigError(f"model.moment_arm=base: moments about the base are only read for a "
+                          f"massless platform (load.mass={cfg.load.mass}); set load.mass=0 and put "
+                          "the weight in wrench.*")
+    if cfg.output.cables and not cfg.output.points:
+        raise ConfigError("output.cables=true: the cables go into points.parquet, which "
+                          "output.points=false does not write")
+    if cfg.compute.backend == "dask" and importlib.util.find_spec("distributed") is None:
+        raise ConfigError("compute.backend=dask: needs Dask, pip install 'cdpr-studies[dask]'")
+    if "actuator" in cfg and cfg.actuator not in set(catalogue_ids):
+        ids = ", ".join(str(i) for i in sorted(catalogue_ids))
+        raise ConfigError(f"actuator={cfg.actuator}: no such id in the catalogue (ids: {ids})")
+    _validate_tension(cfg, robot)
+    if cfg.poses is not None:
+        from pipeline.model.robots import point_list
+
+        point_list("poses", cfg.poses)
+    _validate_size(cfg)
+    return cfg
+
+
+def check_values(node: DictConfig, schema, prefix: str = "") -> None:
+    """Apply the rules ``schema`` declares (``rule`` fields, ``check_fields``) to the keys
+    ``node`` has, nested schemas first: ConfigError '<key>=<value>: <rule>' on the first
+    failure."""
+    for declared in fields(schema):
+        if declared.name not in node:
+            continue
+        value = node[declared.name]
+        default = declared.default_factory() if callable(declared.default_factory) else None
+        if is_dataclass(default) and isinstance(value, DictConfig):
+            check_values(value, type(default), f"{prefix}{declared.name}.")
+        elif value is not None and "check" in declared.metadata:
+            broken = declared.metadata["check"](value)
+            if broken:
+                raise ConfigError(f"{prefix}{declared.name}={_shown(value)}: {broken}")
+    if hasattr(schema, "check_fields"):
+        schema.check_fields(node)
+
+
+MAX_VELOCITY_CANDIDATES = 10_000_000  # (n_vel + 1)^3 grid velocities of eq. (23), built in memory
+
+
+def _validate_size(cfg: DictConfig) -> None:
+    """Refuse, before any work, a job larger than ``compute.max_poses`` pose x orientation
+    evaluations or a velocity grid that would not fit in memory, naming the key to change."""
+    from pipeline.workspace.compute import grid_size
+
+    n_vel = cfg.get("grid", {}).get("n_vel")
+    if n_vel is not None and (n_vel + 1) ** 3 > MAX_VELOCITY_CANDIDATES:
+        limit = round(MAX_VELOCITY_CANDIDATES ** (1 / 3)) - 1
+        raise ConfigError(f"grid.n_vel={n_vel}: the velocity grid would have {(n_vel + 1) ** 3:.3g} "
+                          f"candidates; at most grid.n_vel={limit}")
+    poses = grid_size(cfg)
+    orientations = cfg.orientation.total.n ** 3 if cfg.orientation.total.bound > 0 else 1
+    if poses * orientations > cfg.compute.max_poses:
+        raise ConfigError(
+            f"compute.max_poses={cfg.compute.max_poses}: this job has {poses:.3g} poses x "
+            f"{orientations:.3g} orientations = {poses * orientations:.3g} evaluations; use a "
+            "coarser grid (grid.n, robot.search.step), fewer orientation.total.n, or raise "
+            "compute.max_poses knowingly")
+
+
+def _validate_tension(cfg: DictConfig, robot) -> None:
+    """Enough cables for the wrench rows the analysis balances: CPR-WWA's moment rows
+    (``pinv_columns=full``) vanish for a point platform (every attachment at its reference
+    point), the statics' do not (its gram ratio would make every pose singular)."""
+    from pipeline.workspace.compute import analysis_name, cable_rating
+
+    tension, n_cables = cfg.tension, robot.n_cables
+    forces_only = "pinv_columns" in cfg.model and (
+        cfg.model.pinv_columns.name == "translational" or not robot.attachments.any())
+    rows = 3 if forces_only else 6
+    if n_cables < rows:
+        what = "forces" if rows == 3 else "forces and moments"
+        hint = "; model.pinv_columns=translational balances forces only" if "pinv_columns" in cfg.model else ""
+        raise ConfigError(f"robot: {n_cables} cables; analysis={analysis_name(cfg)} balances {what} "
+                          f"({rows} rows of the structure matrix) and needs >= {rows} cables{hint}")
+    t_min = _limit_values("tension.t_min", tension.t_min, n_cables)
+    if not (t_min >= 0).all():
+        raise ConfigError(f"tension.t_min={_shown(tension.t_min)}: must be >= 0 (a cable cannot push)")
+    rating = cable_rating(cfg)
+    key = "limits.s_max" if cfg.limits.s_max is not None else "tension.t_max"
+    if rating is not None and not (t_min < _limit_values(key, rating, n_cables)).all():
+        raise ConfigError(f"{key}={_shown(rating)}: must be > tension.t_min={_shown(tension.t_min)}")
+    if tension.model.name == "pinv" and (t_min != 0).any() and analysis_name(cfg) != "statics":
+        raise ConfigError(f"tension.t_min={_shown(tension.t_min)}: the pinv model checks the papers' "
+                          "minimum-norm torques, which may push; set tension.model=feasible")
+
+
+def _limit_values(key: str, value, n_cables: int):
+    """A tension limit as an (m,) array: one finite number for every cable, or one per cable."""
+    import numpy as np
+
+    items = [value] if isinstance(value, (int, float)) and not isinstance(value, bool) else value
+    try:
+        items = list(items)
+    except TypeError:
+        items = None
+    if items is None or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in items):
+        raise ConfigError(f"{key}={_shown(value)}: must be a number (N) or a list of one per cable")
+    if len(items) not in (1, n_cables):
+        raise ConfigError(f"{key}={_shown(value)}: {len(items)} values for {n_cables} cables")
+    values = np.broadcast_to(np.asarray(items, dtype=float), (n_cables,))
+    if not np.isfinite(values).all():
+        raise ConfigError(f"{key}={_shown(value)}: must be finite (null: no limit)")
+    return values
+
+
+def _shown(value):
+    return OmegaConf.to_container(value) if isinstance(value, ListConfig) else value
+
+
+# The robots a config can name: keys, types and value rules (pipeline.workspace.compute.ROBOTS builds them).
+ROBOT_SCHEMAS = {"cpr8": Cpr8Config, "irpm6": Irpm6Config, "points": PointsConfig}

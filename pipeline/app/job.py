@@ -1,0 +1,167 @@
+"""The Hydra task: one job writes points.parquet (samples.parquet for lines) and, last,
+summary.parquet in its folder.
+
+A job whose folder already holds a summary.parquet written with the same resolved config and
+the same code version is not recomputed: every file is written to a temporary name and renamed
+(``pipeline.app.results.write_parquet``), and the summary is written last, so its presence proves
+the job finished. A sweep killed mid-way therefore resumes with only the missing jobs. Before a
+finished job is reused its data files are checked against the sha256 digests its summary
+recorded; an unreadable summary or a changed data file is recomputed, with a log line.
+
+One writer per folder: a job holds an exclusive lock on ``<folder>/.lock`` while it works, and
+a second job started into the same folder stops at once with one line and exit status 2.
+"""
+
+from __future__ import annotations
+
+import fcntl
+import json
+import logging
+import sys
+from contextlib import contextmanager
+from pathlib import Path
+
+import pandas as pd
+from hydra.core.hydra_config import HydraConfig
+from hydra.types import RunMode
+from omegaconf import DictConfig, OmegaConf
+
+from pipeline.model.catalogue import load_catalogue
+from pipeline.app.config import validate
+from pipeline.errors import ConfigError
+from pipeline.app.readings import describe_reading
+from pipeline.app.results import (
+    CONFIG_KEY, DIGESTS_KEY, VERSION_KEY, ParquetSink, code_version, digests_json, file_digest,
+    read_metadata, write_parquet,
+)
+from pipeline.workspace.lines import simulate_lines
+from pipeline.workspace.compute import analysis_name, compute_workspace
+
+log = logging.getLogger("pipeline")
+# The typed, validated config and catalogue of every job the preflight of this process checked,
+# by the YAML of the config Hydra composes for it (``pipeline.app.preflight.check``): a job run in
+# this process takes them from here instead of typing, validating and reading them again.
+PREPARED: dict[str, tuple[DictConfig, object]] = {}
+
+
+def run_job(cfg: DictConfig) -> dict:
+    """Validate, compute the feasible workspace, write the Parquet files; returns the summary."""
+    prepared = PREPARED.pop(OmegaConf.to_yaml(cfg), None)
+    if prepared is not None:
+        cfg, catalogue = prepared
+    else:
+        catalogue = load_catalogue(cfg.catalogue) if "catalogue" in cfg else None
+        cfg = validate(cfg, None if catalogue is None else catalogue.index)
+    hydra = HydraConfig.get()
+    out = Path(hydra.runtime.output_dir)
+    try:
+        summary = execute(cfg, catalogue, out)
+    except ConfigError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        raise SystemExit(2) from None
+    if hydra.mode == RunMode.RUN:  # a sweep says where its folder is when it ends (callbacks)
+        log.info("results in %s", out)
+    return summary
+
+
+def execute(cfg: DictConfig, catalogue, out: Path) -> dict:
+    """Run one validated job into the existing folder ``out`` under its lock (or reuse it when
+    finished); returns the summary. Output errors (a full disk, a folder gone read-only while
+    writing) are raised as ConfigError naming the path."""
+    try:
+        with folder_lock(out):
+            return _run_locked(cfg, catalogue, out)
+    except OSError as exc:
+        raise ConfigError(f"cannot write {exc.filename or out}: {exc.strerror or exc}") from None
+
+
+@contextmanager
+def folder_lock(out: Path):
+    """An exclusive lock on ``out/.lock`` for the duration of the block, or ConfigError at once
+    when another process holds it."""
+    with open(out / ".lock", "a") as handle:
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise ConfigError(f"{out}: another run is writing this folder; wait for it or "
+                              "choose another (hydra.run.dir=...)") from None
+        try:
+            yield
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)
+
+
+def _run_locked(cfg: DictConfig, catalogue, out: Path) -> dict:
+    config_yaml = OmegaConf.to_yaml(cfg, resolve=True)
+    done = finished_summary(out, config_yaml)
+    if done is not None:
+        log.info("reused the finished job in %s (same config and code version)", out)
+        return done
+    log.info("reading: %s (docs/model.md, sections 4-5)", describe_reading(cfg.model))
+    if analysis_name(cfg) == "lines":
+        samples, points, summary = simulate_lines(cfg, catalogue)
+        if cfg.lines.samples.name == "first":  # the verdicts of every line are in points.parquet
+            samples = samples[samples["line"] == 0].reset_index(drop=True)
+        write_parquet(samples, out / "samples.parquet", config_yaml)
+        log.info("%d lines, %d samples; simulated %d vs grid %d feasible points, agreement %.1f%%",
+                 summary["n_lines"], summary["n_samples"], summary["n_feasible"],
+                 summary["n_feasible_grid"], summary["agreement_pct"])
+        written = [out / "samples.parquet"]
+        if cfg.output.points:
+            write_parquet(points, out / "points.parquet", config_yaml)
+            written.append(out / "points.parquet")
+    elif cfg.output.points:  # streamed chunk by chunk: memory bounded by a chunk, not by the grid
+        with ParquetSink(out / "points.parquet", config_yaml) as sink:
+            _, summary = compute_workspace(cfg, catalogue, sink.write)
+        written = [out / "points.parquet"]
+    else:  # the summary only: each chunk's rows are counted, then dropped
+        _, summary = compute_workspace(cfg, catalogue, lambda chunk: None)
+        written = []
+    write_parquet(pd.DataFrame([summary]), out / "summary.parquet", config_yaml,
+                  {DIGESTS_KEY: digests_json(written)})
+    lost = ", ".join(
+        f"{key[len('lost_'):]} {value}" for key, value in summary.items() if key.startswith("lost_")
+    )
+    subject = (f"actuator {cfg.actuator} ({summary['actuator_name']})"
+               if "actuator_name" in summary else f"{cfg.robot.name} {summary['analysis']}")
+    headroom = ", ".join(f"{key[len('least_margin_'):]} {100 * value:.1f}%" for key, value in summary.items()
+                         if key.startswith("least_margin_") and value == value)  # NaN: none feasible
+    log.info(
+        "%s: %d/%d feasible = %.2f%% (%.4f m^3); lost to %s%s", subject,
+        summary["n_feasible"], summary["n_points"], summary["feasible_pct"], summary["volume_m3"],
+        lost, f"; headroom of the feasible poses: {headroom}" if headroom else "",
+    )
+    return summary
+
+
+def changed_files(out: Path, meta: dict | None = None) -> list[str]:
+    """The data files of the finished job in ``out`` that are missing or no longer have the
+    digest its summary recorded (``meta``: the summary's metadata, read if not given); a job
+    whose summary has no record of them reports so."""
+    meta = read_metadata(out / "summary.parquet") if meta is None else meta
+    if DIGESTS_KEY not in meta:  # "{}" is recorded by a job that writes its summary only
+        return ["its data files are not recorded"]
+    recorded = json.loads(meta[DIGESTS_KEY])
+    return [name for name, digest in recorded.items()
+            if not (out / name).exists() or file_digest(out / name) != digest]
+
+
+def finished_summary(out: Path, config_yaml: str) -> dict | None:
+    """The summary of a job already finished in ``out`` with this config and code, whose data
+    files still have the digests it recorded; else None (and a log line when something in the
+    folder is unreadable or changed)."""
+    path = out / "summary.parquet"
+    if not path.exists():
+        return None
+    try:
+        meta = read_metadata(path)
+        if meta.get(CONFIG_KEY) != config_yaml or meta.get(VERSION_KEY) != code_version():
+            return None
+        changed = changed_files(out, meta)
+        if changed:
+            log.warning("recomputing %s: %s changed since the job finished", out, ", ".join(changed))
+            return None
+        return pd.read_parquet(path).iloc[0].to_dict()
+    except (OSError, ValueError) as exc:  # pyarrow's errors derive from these
+        log.warning("recomputing %s: unreadable summary.parquet (%s)", out, exc)
+        return None

@@ -1,0 +1,310 @@
+"""Validate every job of a command line before Hydra creates any output folder.
+
+Hydra makes the run (or sweep) folder before the task function starts, so a bad value found
+inside a job would leave folders behind. The preflight expands the command's sweep exactly as
+Hydra's basic sweeper does (with Hydra's public override parser), builds each job's config, validates it, and stops at the first
+problem with a one-line message naming the key and value.
+
+Composing a config costs about 80 ms, so a sweep of a thousand jobs is not composed a thousand
+times: jobs that share their structural overrides (config groups, ``+``/``~``, ``hydra.*``) share
+one composition, and each job's plain ``key=value`` overrides are applied to a copy of it with
+the same typed merge Hydra uses (the dataclass schema still rejects a bad key or type).
+"""
+
+from __future__ import annotations
+
+import copy
+import functools
+import itertools
+import os
+import re
+import shutil
+from pathlib import Path
+from typing import Any
+
+from hydra import compose, initialize_config_dir
+from hydra.errors import MissingConfigException
+from hydra.core.override_parser.overrides_parser import OverridesParser
+from hydra.core.override_parser.types import Override
+from omegaconf import DictConfig, OmegaConf, open_dict
+from omegaconf.errors import ConfigAttributeError, ConfigKeyError
+
+from pipeline.model.catalogue import load_catalogue
+from pipeline.app.config import job_dir_name, masked, register, typed_schema, validate
+from pipeline.errors import ConfigError, one_line
+from pipeline.app.resources import CONF_DIR
+NO_JOB_FLAGS = {"--help", "-h", "--hydra-help", "--info", "-i", "--cfg", "-c", "--version",
+                "--shell-completion", "-sc", "--resolve", "-p", "--package"}
+FLAGS_WITH_VALUE = {"--config-path", "-cp", "--config-name", "-cn", "--config-dir", "-cd",
+                    "--experimental-rerun"}
+
+
+def job_overrides(argv: list[str]) -> list[list[str]] | None:
+    """The override list of every job the command would launch; None when it launches none.
+
+    The expansion is the basic sweeper's: the cartesian product of every override's values, in
+    command order. A sweep it cannot enumerate (``interval(...)``, or another sweeper such as
+    Optuna choosing the values) is checked with its other overrides only: one job, the sweep's
+    fixed part, so such sweepers are not refused."""
+    overrides = _overrides(argv)
+    if overrides is None or not _is_multirun(argv):
+        return None if overrides is None else [overrides]
+    parsed = parse(overrides)
+    if any(o.is_interval_sweep() for o in parsed) or _other_sweeper(parsed):
+        return [[o.input_line for o in parsed if not o.is_sweep_override()]]
+    return expand_sweep(parsed)
+
+
+def expand_sweep(parsed: list[Override]) -> list[list[str]]:
+    """The basic sweeper's jobs: the cartesian product of every override's values, in command
+    order (``pipeline.sweeper`` launches exactly these)."""
+    values: dict[str, list[str]] = {}  # a repeated key keeps its place and takes its last values
+    for override in parsed:
+        key = override.get_key_element()
+        if override.is_interval_sweep():
+            raise ConfigError(f"{override.input_line}: interval sweeps need a sweeper that samples "
+                              "them (e.g. hydra/sweeper=optuna)")
+        if override.is_sweep_override():
+            values[key] = [f"{key}={value}" for value in override.sweep_string_iterator()]
+        else:
+            values[key] = [f"{key}={override.get_value_element_as_str()}"]
+    return [list(job) for job in itertools.product(*values.values())]
+
+
+def _other_sweeper(parsed: list[Override]) -> bool:
+    """The command picks a sweeper other than Hydra's basic one."""
+    return any(o.key_or_group == "hydra/sweeper" and o.value() not in ("basic", "cdpr") for o in parsed)
+
+
+def _overrides(argv: list[str]) -> list[str] | None:
+    overrides, skip = [], False
+    for arg in argv:
+        if skip:
+            skip = False
+        elif arg in NO_JOB_FLAGS:
+            return None
+        elif arg in FLAGS_WITH_VALUE:
+            skip = True
+        elif not arg.startswith("-"):
+            overrides.append(arg)
+    return overrides
+
+
+def _is_multirun(argv: list[str]) -> bool:
+    return "-m" in argv or "--multirun" in argv
+
+
+def _multirun_base(argv: list[str]) -> list[str] | None:
+    """A multirun's non-sweep overrides, in order: Hydra applies them all (a repeated key
+    included) when it composes the sweep config, before the jobs."""
+    if not _is_multirun(argv):
+        return None
+    return [o.input_line for o in parse(_overrides(argv)) if not o.is_sweep_override()]
+
+
+def quoted(value) -> str:
+    """``value`` as a quoted value of Hydra's override grammar, so a folder name may hold
+    ``=``, ``,``, spaces and quotes (``hydra.run.dir=`` + ``quoted(folder)``)."""
+    text = re.sub(r"(\\+)(?='|$)", r"\1\1", str(value))  # backslashes escape only before a quote
+    return "'" + text.replace("'", "\\'") + "'"
+
+
+def parse(overrides: list[str]) -> list[Override]:
+    """Hydra's parse of each override; a grammar error names the override it is in."""
+    return [override for text in overrides for override in _parse_one(text)]
+
+
+@functools.lru_cache(maxsize=4096)
+def _parse_one(text: str) -> tuple[Override, ...]:
+    """One override parsed (about 0.3 ms with Hydra's grammar; the jobs of a sweep repeat the
+    same ``key=value`` texts, read only, so each is parsed once)."""
+    try:
+        return tuple(OverridesParser.create().parse_overrides([text]))
+    except Exception as exc:  # Hydra's override grammar errors have several types
+        raise ConfigError(f"{text}: {one_line(exc)}") from exc
+
+
+def check(argv: list[str]) -> dict[str, tuple[DictConfig, Any]]:
+    """Raise ConfigError for the first job whose config cannot be composed or is invalid. Returns
+    every job's typed, validated config and catalogue (None without an actuator), by the YAML of
+    its composed config (``pipeline.app.job.PREPARED``: a job run in this process is not typed twice)."""
+    try:
+        jobs = job_overrides(argv)
+        multirun_base = _multirun_base(argv) if jobs is not None else None
+    except Exception as exc:  # Hydra's override grammar errors have several types
+        raise ConfigError(one_line(exc)) from exc
+    if jobs is None:
+        return {}
+    register()
+    search_path = _search_path(argv)
+    composed: dict[tuple[str, ...], tuple[DictConfig, DictConfig, DictConfig]] = {}
+    catalogues = {}
+    prepared = {}
+
+    def composed_for(overrides: list[str]) -> tuple[list[Override], tuple[DictConfig, ...]]:
+        """The job's parsed overrides, and (with Hydra's node, without, typed) for its files."""
+        parsed = parse(overrides)
+        files = (*search_path, *(o.input_line for o in parsed if structural(o)))
+        if files not in composed:
+            try:
+                hydra = compose(config_name="config", overrides=list(files), return_hydra_config=True)
+            except MissingConfigException as exc:  # a group option with no file
+                raise ConfigError(_missing_option(exc, parsed)) from exc
+            except Exception as exc:  # composition errors come as Hydra and OmegaConf types
+                raise ConfigError(one_line(exc)) from exc
+            plain = copy.deepcopy(hydra)
+            with open_dict(plain):
+                del plain["hydra"]
+            composed[files] = hydra, plain, typed_schema(plain)  # typed once per composition
+        return parsed, composed[files]
+
+    def build(overrides: list[str]) -> tuple[DictConfig, DictConfig]:
+        """(the job's typed config, its config as Hydra composes it)"""
+        parsed, (_, plain, full) = composed_for(overrides)
+        plain, full = copy.deepcopy(plain), copy.deepcopy(full)
+        for override in parsed:
+            if not structural(override):
+                _apply(plain, override)  # a key this robot and analysis have
+                _apply(full, override)  # of the declared type
+        return masked(full, plain), plain
+
+    def hydra_node(overrides: list[str]) -> DictConfig:
+        parsed, (hydra, _, _) = composed_for(overrides)
+        hydra = copy.deepcopy(hydra)
+        for override in parsed:
+            if not structural(override):
+                _apply(hydra, override)
+        return hydra.hydra
+
+    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3", job_name="preflight"):
+        if multirun_base is not None:
+            build(multirun_base)  # Hydra composes the sweep's own config from these first
+        for overrides in jobs:
+            cfg, plain = build(overrides)
+            catalogue = None
+            if "catalogue" in cfg:  # analyses with an actuator
+                if cfg.catalogue not in catalogues:
+                    catalogues[cfg.catalogue] = load_catalogue(cfg.catalogue)
+                catalogue = catalogues[cfg.catalogue]
+            validate(cfg, None if catalogue is None else catalogue.index, typed=True)
+            prepared[OmegaConf.to_yaml(plain)] = cfg, catalogue
+        hydra = hydra_node(jobs[0] if multirun_base is None else multirun_base)
+    first = next(iter(prepared.values()))[0]
+    _check_launcher(hydra.launcher)
+    _check_output_folders(jobs, first, hydra, multirun_base is not None)
+    return prepared
+
+
+def _check_launcher(launcher: DictConfig) -> None:
+    """The ``cdpr`` launcher's setting (its own rule), before Hydra instantiates it."""
+    if str(launcher.get("_target_", "")).startswith("hydra_plugins.cdpr."):
+        from hydra_plugins.cdpr.launcher import n_jobs_rule
+
+        broken = n_jobs_rule(launcher.get("n_jobs"))
+        if broken:
+            raise ConfigError(f"hydra.launcher.n_jobs={launcher.get('n_jobs')}: {broken}")
+
+
+NAME_MAX = 255  # bytes in one folder name (Linux, macOS)
+BYTES_PER_POSE = 200  # a points.parquet row with its margins, generously
+BYTES_PER_JOB = 512 * 1024  # Hydra's files, the log and the summary of one job
+
+
+def _check_output_folders(jobs: list[list[str]], first: DictConfig, hydra: DictConfig,
+                          multirun: bool) -> None:
+    """The folders Hydra will make (run dir, or one per job of a sweep) can be made and written
+    and their disk has room: a path through a file, a folder name over 255 bytes, a read-only
+    place or a full disk is one line naming the path, before anything is written. ``first``:
+    the first job's valid config; ``hydra``: Hydra's node of the run or sweep config."""
+    from pipeline.workspace.compute import grid_size
+
+    folders = [Path(hydra.run.dir)]
+    if multirun:
+        naming = hydra.job.config.override_dirname
+        folders = [Path(hydra.sweep.dir) / job_dir_name(override_dirname(parse(job), naming), number)
+                   for number, job in enumerate(jobs)]
+    for folder in folders:
+        _writable(folder)
+    needed = len(jobs) * (BYTES_PER_JOB + BYTES_PER_POSE * grid_size(first))  # a sweep varies values, not grids
+    probe = _existing_ancestor(folders[0])
+    free = shutil.disk_usage(probe).free
+    if free < needed:
+        raise ConfigError(f"{folders[0]}: needs about {needed / 2**20:.1f} MiB, {free / 2**20:.1f} MiB "
+                          f"free on its disk ({probe})")
+
+
+def override_dirname(parsed: list[Override], naming) -> str:
+    """Hydra's ``hydra.job.override_dirname`` of a job (its config loader's rule): the task
+    overrides but the excluded keys, sorted, joined with the item separator, every ``=``
+    replaced by the key-value separator. ``naming``: ``hydra.job.config.override_dirname``."""
+    lines = sorted(o.input_line for o in parsed
+                   if not o.is_hydra_override() and o.key_or_group not in naming.exclude_keys)
+    return naming.item_sep.join(lines).replace("=", naming.kv_sep)
+
+
+def _writable(folder: Path) -> None:
+    for part in folder.parts:
+        if len(os.fsencode(part)) > NAME_MAX:
+            raise ConfigError(f"{folder}: a folder name of {len(os.fsencode(part))} bytes (at most "
+                              f"{NAME_MAX}): choose a shorter hydra.run.dir, or sweep fewer or shorter values")
+    probe = _existing_ancestor(folder)
+    if not probe.is_dir():
+        raise ConfigError(f"{folder}: {probe} is a file, not a folder")
+    if not os.access(probe, os.W_OK | os.X_OK):
+        raise ConfigError(f"{folder}: {probe} is not writable")
+
+
+def _existing_ancestor(folder: Path) -> Path:
+    probe = folder.absolute()
+    while not probe.exists() and probe != probe.parent:
+        probe = probe.parent
+    return probe
+
+
+def _search_path(argv: list[str]) -> tuple[str, ...]:
+    """``--config-dir DIR`` (``-cd DIR``, ``--config-dir=DIR``) as the override Hydra applies for
+    it, so that the preflight composes from the user's folder as the job will."""
+    for i, arg in enumerate(argv):
+        folder = None
+        if arg in ("--config-dir", "-cd") and i + 1 < len(argv):
+            folder = argv[i + 1]
+        elif arg.startswith("--config-dir="):
+            folder = arg.split("=", 1)[1]
+        if folder is not None:
+            path = Path(folder).expanduser().resolve()
+            if not path.is_dir():
+                raise ConfigError(f"--config-dir={folder}: no such folder")
+            return (f"hydra.searchpath=[file://{path}]",)
+    return ()
+
+
+def _missing_option(exc: MissingConfigException, parsed: list[Override]) -> str:
+    """'group=option: no such option (options: ...)' for the override that named it."""
+    for override in parsed:
+        group = override.key_or_group
+        if (CONF_DIR / group).is_dir() and f"{group}/{override.value()}" in str(exc):
+            options = sorted(f.stem for f in (CONF_DIR / group).glob("*.yaml"))
+            return (f"{override.input_line}: no such option of the {group} group "
+                    f"(options: {', '.join(options)}; your own: --config-dir DIR with DIR/{group}/NAME.yaml)")
+    return one_line(exc)
+
+
+def structural(override: Override) -> bool:
+    """Overrides that change which config files are composed, or that Hydra must interpret."""
+    key = override.key_or_group
+    return (
+        override.is_add() or override.is_delete() or override.is_force_add()
+        or override.is_sweep_override() or override.package is not None
+        or re.split(r"[./]", key)[0] == "hydra" or (CONF_DIR / key).is_dir()
+    )
+
+
+def _apply(cfg: DictConfig, override: Override) -> None:
+    """``key=value`` merged into the typed config, as Hydra's own override does."""
+    try:
+        OmegaConf.update(cfg, override.key_or_group, override.value(), merge=True)
+    except (ConfigAttributeError, ConfigKeyError):  # not a key of this job's robot and analysis
+        raise ConfigError(f"{override.input_line}: no such key for robot={cfg.robot.name} with "
+                          f"analysis={cfg.analysis} (a key of another analysis or robot, or a typo)") from None
+    except Exception as exc:  # OmegaConf raises key, type and validation errors
+        raise ConfigError(f"{override.input_line}: {one_line(exc)}") from exc

@@ -1,0 +1,29 @@
+"""The readings of a job: the ``model.*`` switches (docs/model.md, sections 4-5) by name and in
+words, for its log line, the report and the evidence studies."""
+
+from __future__ import annotations
+
+from dataclasses import fields
+
+from pipeline.app.config import ModelConfig
+
+SETTINGS = ("rank_rtol", "margin_atol")  # model.* keys that are tolerances, not readings
+
+
+def reading_name(switches: dict) -> str:
+    """``default``, or the switches that differ from the defaults (``pinv_columns=full``)."""
+    defaults = {f"model.{f.name}": f.default for f in fields(ModelConfig)}
+    differ = [f"{key[6:]}={_text(value)}" for key, value in switches.items()
+              if _text(value) != _text(defaults[key])]
+    return ", ".join(differ) or "default"
+
+
+def describe_reading(model) -> str:
+    """A job's readings in one line: ``default`` or the switches that differ, then every switch
+    it has (``default: pinv_columns=full, ..., xi_in_torque_limit=true``)."""
+    switches = {f"model.{key}": value for key, value in model.items() if key not in SETTINGS}
+    return f"{reading_name(switches)}: " + ", ".join(f"{key[6:]}={_text(v)}" for key, v in switches.items())
+
+
+def _text(value) -> str:
+    return str(getattr(value, "value", value)).lower()

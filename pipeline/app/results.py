@@ -1,0 +1,152 @@
+"""Parquet output: atomic writes, with the resolved config and the code version in the schema."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import secrets
+import subprocess
+from contextlib import contextmanager
+from functools import lru_cache
+from importlib import metadata
+from pathlib import Path
+
+import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+CONFIG_KEY = "cdpr.config"
+VERSION_KEY = "cdpr.version"
+DIGESTS_KEY = "cdpr.digests"  # in a job's summary: sha256 of every data file the job wrote
+
+
+@lru_cache(maxsize=1)
+def code_version() -> str:
+    """Package version, plus the git commit (and '.dirty') when run from a checkout of this
+    repository (not when installed in a virtual environment inside another one)."""
+    try:
+        version = metadata.version("cdpr-studies")
+    except metadata.PackageNotFoundError:
+        version = "0+unknown"
+    here = Path(__file__).resolve().parents[1]  # pipeline/, above app/
+    try:
+        top, sha = subprocess.run(
+            ["git", "rev-parse", "--show-toplevel", "--short=12", "HEAD"], cwd=here,
+            capture_output=True, text=True, check=True,
+        ).stdout.split()
+        if Path(top).resolve() != here.parent:  # installed inside another repository's tree
+            return version
+        dirty = subprocess.run(
+            ["git", "status", "--porcelain", "--untracked-files=no", "--", "pipeline", "conf"],
+            cwd=here.parent, capture_output=True, text=True, check=True,
+        ).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return version
+    return f"{version}+g{sha}{'.dirty' if dirty else ''}"
+
+
+def write_parquet(frame: pd.DataFrame, path: Path, config_yaml: str, extra: dict | None = None) -> None:
+    """Write ``frame`` to ``path`` via a temporary file and a rename: no half-written file ever
+    carries the final name. ``extra``: more ``cdpr.*`` schema metadata (str values)."""
+    with ParquetSink(path, config_yaml, extra) as sink:
+        sink.write(frame)
+
+
+class ParquetSink:
+    """Write a table chunk by chunk (one row group per :meth:`write`) to a temporary file,
+    renamed to ``path`` only when the ``with`` block ends without an error. The temporary name
+    is unique to this writer (process id and a random part), so two writers never share one."""
+
+    def __init__(self, path: Path, config_yaml: str, extra: dict | None = None):
+        self.path = Path(path)
+        self.tmp = _temporary(self.path)
+        self.config_yaml = config_yaml
+        self.extra = extra or {}
+        self.writer: pq.ParquetWriter | None = None
+
+    def write(self, frame: pd.DataFrame) -> None:
+        table = pa.Table.from_pandas(frame, preserve_index=False)
+        if self.writer is None:
+            meta = dict(table.schema.metadata or {})
+            meta[CONFIG_KEY.encode()] = self.config_yaml.encode()
+            meta[VERSION_KEY.encode()] = code_version().encode()
+            meta.update({key.encode(): value.encode() for key, value in self.extra.items()})
+            self.writer = pq.ParquetWriter(self.tmp, table.schema.with_metadata(meta))
+        self.writer.write_table(table.replace_schema_metadata(self.writer.schema.metadata))
+
+    def __enter__(self) -> "ParquetSink":
+        return self
+
+    def __exit__(self, kind, value, traceback) -> None:
+        try:
+            if self.writer is not None:
+                self.writer.close()
+            if kind is None and self.writer is not None:
+                os.replace(self.tmp, self.path)
+        finally:
+            self.tmp.unlink(missing_ok=True)
+
+
+def _temporary(path: Path) -> Path:
+    """A temporary name beside ``path`` unique to this writer (process id and a random part)."""
+    return path.with_name(f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp")
+
+
+@contextmanager
+def replacing(path: Path):
+    """Yield a temporary path to write; it becomes ``path`` when the block ends without an error
+    and is removed otherwise, so no half-written file ever carries the final name."""
+    tmp = _temporary(Path(path))
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
+def write_text(path: Path, text: str) -> None:
+    """A small text file (YAML records), written via :func:`replacing`."""
+    with replacing(path) as tmp:
+        tmp.write_text(text)
+
+
+def write_csv(frame: pd.DataFrame, path: Path) -> None:
+    """A table as CSV for a spreadsheet (beside its Parquet file), written via :func:`replacing`."""
+    with replacing(path) as tmp:
+        frame.to_csv(tmp, index=False)
+
+
+def read_metadata(path: Path) -> dict[str, str]:
+    """The cdpr.* schema metadata of a Parquet file written by :func:`write_parquet`."""
+    meta = pq.read_schema(path).metadata or {}
+    return {k.decode(): v.decode() for k, v in meta.items() if k.startswith(b"cdpr.")}
+
+
+def file_digest(path: Path) -> str:
+    """sha256 of a file's bytes (hex)."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as handle:
+        for block in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def digests_json(paths: list[Path]) -> str:
+    """The ``cdpr.digests`` metadata of a job's summary: file name -> sha256."""
+    return json.dumps({p.name: file_digest(p) for p in paths}, sort_keys=True)
+
+
+# A job summary's result columns (summarize, and simulate_lines' additions); the rest is config
+RESULT_COLUMNS = {"analysis", "actuator_name", "actuator_power_W", "n_orientations", "n_points",
+                  "n_feasible", "feasible_pct", "volume_m3", "n_lines", "n_samples",
+                  "n_feasible_grid", "agreement_pct"}
+RESULT_PREFIXES = ("box.", "lost_", "least_margin_", "limit_", "line0_margin_")
+
+
+def varying_settings(table: pd.DataFrame, ignore=()) -> list[str]:
+    """The config columns of a table of job summaries whose value differs between the jobs
+    (what their sweep varied), in column order, except ``ignore``."""
+    return [c for c in table.columns
+            if c not in RESULT_COLUMNS and c not in ignore and not c.startswith(RESULT_PREFIXES)
+            and table[c].astype(str).nunique() > 1]

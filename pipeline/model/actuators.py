@@ -1,0 +1,78 @@
+"""The actuator model of eqs. (21)-(22), (30)-(34): one catalogue row (motor + gearbox + winch,
+``pipeline.model.catalogue``) in SI units, behind the gearbox.
+
+:func:`actuator_model` is the only place where catalogue units become SI and where the model
+constants and limits are derived. numpy only: the kernel's worker processes import it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+G_CM2_TO_KG_M2 = 1e-7
+RPM_TO_RAD_S = np.pi / 30.0  # the paper's 1/9.5493 in eq. (30)
+
+
+@dataclass(frozen=True)
+class ActuatorModel:
+    """One catalogue actuator in SI units, seen behind the gearbox (output shaft).
+
+    Model constants of eq. (22): ``G_v`` (V s^2/rad), ``L_v`` (V s/rad), ``S_v`` (V/(N m)), with
+    u = G_v * theta_ddot + L_v * theta_dot + S_v * M (eq. 21). Limits: ``speed_limit`` (rad/s,
+    eq. 30), ``torque_limit`` (N m, eq. 32), ``accel_limit`` (rad/s^2, eq. 33), ``voltage_limit``
+    (V, eq. 34). ``winch_radius`` R_i (m) of eq. (18).
+    """
+
+    id: int
+    name: str
+    power: float
+    G_v: float
+    L_v: float
+    S_v: float
+    speed_limit: float
+    torque_limit: float
+    accel_limit: float
+    voltage_limit: float
+    winch_radius: float
+
+
+def actuator_model(
+    row: pd.Series,
+    winch_radius: float | None = None,
+    gear_ratio: float | None = None,
+    xi_in_torque_limit: bool = True,
+) -> ActuatorModel:
+    """Turn one catalogue row (a row of :func:`pipeline.model.catalogue.load_catalogue`, named by its
+    id) into SI model constants and limits (section 3, eqs. 22, 30-34).
+
+    N_M = N_V xi; C_E = C_e N_V; C_M = C_m N_M; B_C = B_c N_V N_M; J_r = J_M N_V N_M.
+    ``winch_radius`` and ``gear_ratio`` replace the catalogue's R_i and N_V when given.
+    ``xi_in_torque_limit=False`` reads eq. (32) with the gear ratio N_V instead of N_M.
+    """
+    n_v = row["gear_ratio"] if gear_ratio is None else gear_ratio
+    n_m = n_v * row["efficiency"]
+    c_e = row["back_emf_V_per_rad_s"] * n_v
+    c_m = row["torque_constant_Nm_per_A"] * n_m
+    b_c = row["viscous_friction_Nm_per_rad_s"] * n_v * n_m
+    j_r = row["inertia_g_cm2"] * G_CM2_TO_KG_M2 * n_v * n_m
+    r_r = row["resistance_ohm"]
+    torque_limit = row["torque_Nm"] * (n_m if xi_in_torque_limit else n_v)
+    return ActuatorModel(
+        id=int(row.name),
+        name=str(row["name"]),
+        power=float(row["power_W"]),
+        G_v=j_r * r_r / c_m,
+        L_v=b_c * r_r / c_m + c_e,
+        S_v=r_r / c_m,
+        speed_limit=row["speed_rpm"] * RPM_TO_RAD_S / n_v,
+        torque_limit=torque_limit,
+        accel_limit=row["torque_Nm"] * n_m / j_r,
+        voltage_limit=float(row["voltage_V"]),
+        winch_radius=float(row["winch_radius_m"] if winch_radius is None else winch_radius),
+    )

@@ -1,0 +1,279 @@
+"""Per-chunk kinematic and dynamic quantities of CPR-WWA, computed once and only when asked for.
+
+A :class:`PoseDynamics` holds one chunk of n positions at one constant orientation. Each property
+is an array over (pose, cable[, velocity | acceleration]) built with numpy batched operations: no
+Python loop over poses. Criteria (``pipeline.workspace.criteria``) read the properties they need. The
+geometric part (:class:`PoseGeometry`) is shared with the statics of ``pipeline.model.statics``.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+
+from pipeline.model.linalg import batched_pinv
+from pipeline.model.tensions import TensionSpec
+from pipeline.model.geometry import (
+    CableRobot,
+    cable_vectors,
+    euler_rate_axes,
+    length_jacobian,
+    rotation_matrix,
+    structure_matrix,
+)
+
+
+@dataclass(frozen=True)
+class Load:
+    """What the cables carry besides inertia: a load of ``mass`` (kg) under gravity of magnitude
+    ``gravity`` (m/s^2, along -up of the robot) with its centre of mass at ``com`` (m, platform
+    frame), and a constant ``external`` wrench [f; M] (N, N m; fixed axes, moments about the
+    platform's reference point)."""
+
+    mass: float = 0.0
+    gravity: float = 9.81
+    com: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    external: np.ndarray = field(default_factory=lambda: np.zeros(6))
+
+
+@dataclass(frozen=True)
+class MotionSpec:
+    """What the carrier must do at every pose: velocity set, acceleration set, load, model options.
+
+    ``pinv_columns``: ``"full"`` uses all six columns of eq. (19), so the moments balance too
+    (the default: the best fit to all the published evidence, docs/model.md section 4);
+    ``"translational"`` solves eq. (20) with the three position columns of J (orientation held
+    constant, no moment balance; the best fit to Table 2 alone).
+    ``rank_rtol``: singular values below ``rank_rtol * sigma_max`` are treated as zero in the
+    pseudo-inverse (the CPR-8 Jacobian has rank 5 at zero orientation).
+    ``jdot``: add the centripetal term (J-dot p-dot) of the shaft acceleration.
+    ``velocity_extremes``: the velocities among which every linear function of the velocity
+    takes its extremes (``motion.extreme_points``); null = the whole set.
+    ``tension``: which torques the torque and voltage criteria check (``pipeline.model.tensions``);
+    the wrench rows follow ``pinv_columns`` (forces only, or forces and moments).
+    ``inertia``: ``"paper"`` takes F of eq. (31) as printed, m (a - g e_z); ``"newton"`` the
+    force the pulling cables must exert with z up, m (-a - g e_z) (docs/model.md section 4).
+    ``load``: mass, gravity, centre of mass and external wrench of F in eq. (31) (:class:`Load`;
+    the paper: 2 kg at the reference point, no external wrench).
+    """
+
+    velocities: np.ndarray
+    accelerations: np.ndarray
+    load: Load
+    winch_radius: np.ndarray
+    pinv_columns: str = "full"
+    rank_rtol: float = 1e-9
+    jdot: bool = False
+    velocity_extremes: np.ndarray | None = None
+    tension: TensionSpec = field(default_factory=TensionSpec)
+    inertia: str = "paper"
+
+    def state(self, robot: CableRobot, positions: np.ndarray, orientation) -> "PoseDynamics":
+        return PoseDynamics(robot, positions, orientation, self)
+
+    def set_size(self) -> int:
+        """Largest per-pose, per-cable set a criterion holds in memory."""
+        return max(len(self.velocities), len(self.accelerations))
+
+
+class PoseGeometry:
+    """Cable vectors, lengths and directions for positions (n, 3) at one orientation."""
+
+    def __init__(self, robot: CableRobot, positions: np.ndarray, orientation):
+        self.robot = robot
+        self.positions = np.asarray(positions, dtype=float)
+        self.orientation = tuple(float(a) for a in orientation)
+
+    @cached_property
+    def rotation(self) -> np.ndarray:
+        return rotation_matrix(*self.orientation)
+
+    @cached_property
+    def vectors(self) -> np.ndarray:
+        """(n, m, 3) cable vectors anchor -> attachment point (eqs. 1-17)."""
+        return cable_vectors(self.robot, self.positions, self.rotation)
+
+    @cached_property
+    def lengths(self) -> np.ndarray:
+        """(n, m) cable lengths k, h, m, n, k', h', m', n' (eqs. 10-17)."""
+        return np.linalg.norm(self.vectors, axis=2)
+
+    @cached_property
+    def unit(self) -> np.ndarray:
+        """(n, m, 3) unit cable directions; zero where a cable has zero length."""
+        lengths = self.lengths[..., None]
+        return np.divide(self.vectors, lengths, out=np.zeros_like(self.vectors), where=lengths > 0)
+
+    @cached_property
+    def arms(self) -> np.ndarray:
+        """(n, m, 3) R b_i: attachment points from the platform's reference point, fixed axes."""
+        return np.broadcast_to(self.robot.attachments @ self.rotation.T, self.vectors.shape)
+
+    @cached_property
+    def structure_matrix(self) -> np.ndarray:
+        """(n, 6, m) A = [u_i; (R b_i) x u_i] (``geometry.structure_matrix``): A t balances the
+        wrench on the platform, moments about its reference point."""
+        return structure_matrix(self.unit, self.arms)
+
+
+class PoseDynamics(PoseGeometry):
+    """Lazily evaluated CPR-WWA quantities (eqs. 18-22) for a chunk of poses."""
+
+    def __init__(self, robot: CableRobot, positions: np.ndarray, orientation, motion: MotionSpec):
+        super().__init__(robot, positions, orientation)
+        self.motion = motion
+
+    @cached_property
+    def jacobian(self) -> np.ndarray:
+        """(n, m, 6) shaft Jacobian J of eq. (19): theta_dot = J p_dot, rows divided by R_i (18);
+        J^T = blockdiag(I, E^T) A diag(1 / R_i) with A the structure matrix."""
+        dl_dp = length_jacobian(self.structure_matrix, euler_rate_axes(*self.orientation))
+        return dl_dp / self.motion.winch_radius[None, :, None]
+
+    @cached_property
+    def shaft_speed(self) -> np.ndarray:
+        """(n, m, k_v) theta_dot for every velocity of the set, Euler rates zero (eq. 19); one
+        BLAS product over the whole chunk."""
+        n, m, _ = self.jacobian.shape
+        flat = np.ascontiguousarray(self.jacobian[:, :, :3]).reshape(n * m, 3)
+        return (flat @ self.motion.velocities.T).reshape(n, m, -1)
+
+    @cached_property
+    def shaft_speed_range(self) -> tuple[np.ndarray, np.ndarray]:
+        """(n, m) largest and smallest theta_dot over the velocity set. theta_dot is linear in
+        the velocity, so only ``motion.velocity_extremes`` need to be evaluated."""
+        extremes = self.motion.velocity_extremes
+        if extremes is None:
+            return self.shaft_speed.max(axis=2), self.shaft_speed.min(axis=2)
+        speed = np.einsum("nmj,vj->nmv", self.jacobian[:, :, :3], extremes)
+        return speed.max(axis=2), speed.min(axis=2)
+
+    @cached_property
+    def _acceleration_box(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """Centre and half-width per axis when the acceleration set is the full product of its
+        per-axis values (both readings of eqs. 27-29 are); None otherwise."""
+        acc = self.motion.accelerations
+        axes = [np.unique(acc[:, j]) for j in range(3)]
+        if len(np.unique(acc, axis=0)) != np.prod([len(a) for a in axes]):
+            return None
+        lo, hi = np.array([a[0] for a in axes]), np.array([a[-1] for a in axes])
+        return (lo + hi) / 2, (hi - lo) / 2
+
+    def acceleration_range(self, coefficients: np.ndarray, offset) -> tuple[np.ndarray, np.ndarray]:
+        """(n, m) largest and smallest value of ``coefficients . a + offset`` over the
+        acceleration set. On a product set (a box's grid) a linear function ranges over
+        c . centre +- |c| . half-width, with no enumeration; otherwise every a is evaluated."""
+        box = self._acceleration_box
+        if box is None:
+            values = np.einsum("nmj,aj->nma", coefficients, self.motion.accelerations)
+            values = values + np.asarray(offset)[..., None]
+            return values.max(axis=2), values.min(axis=2)
+        centre, half = box
+        middle = coefficients @ centre + offset
+        spread = np.abs(coefficients) @ half
+        return middle + spread, middle - spread
+
+    @cached_property
+    def torque_affine(self) -> tuple[np.ndarray, np.ndarray]:
+        """M = (J^T)^+ F is affine in the acceleration (eqs. 20, 31: F = L a + F_0, the inertia
+        +-m a acting at the centre of mass, the weight and the external wrench in F_0):
+        M = C a + d with C (n, m, 3) and d (n, m) = M at rest."""
+        pinv = self.wrench_pinv[0]
+        rows = pinv.shape[2]
+        slope, at_rest = load_wrench_terms(self.motion.load, inertia_sign(self.motion),
+                                           self.robot.up, self.rotation)
+        return pinv @ slope[:rows], pinv @ at_rest[:rows]
+
+    @cached_property
+    def shaft_accel_from_acceleration(self) -> np.ndarray:
+        """(n, m, k_a) J p_ddot: the part of theta_ddot linear in the carrier acceleration."""
+        return np.einsum("nmj,aj->nma", self.jacobian[:, :, :3], self.motion.accelerations)
+
+    @cached_property
+    def shaft_accel_from_velocity(self) -> np.ndarray:
+        """(n, m, k_v) J-dot p_dot = (|v|^2 - (u.v)^2) / (l R) at constant orientation; zeros
+        unless ``motion.jdot``."""
+        v = self.motion.velocities
+        if not self.motion.jdot:
+            return np.zeros(self.shaft_speed.shape)
+        along = np.einsum("nmj,vj->nmv", self.unit, v)
+        speed2 = np.einsum("vj,vj->v", v, v)[None, None, :]
+        return centripetal(speed2, along, self.lengths[..., None], self.motion.winch_radius[None, :, None])
+
+    @cached_property
+    def wrenches(self) -> np.ndarray:
+        """(k_a, 6) F of eq. (31) for every acceleration of the set."""
+        return load_wrenches(self.motion, self.motion.accelerations, self.robot.up, self.rotation)
+
+    @cached_property
+    def structure(self) -> np.ndarray:
+        """(n, c, m) J^T of eq. (20), c = 3 (``translational``) or 6 (``full``) rows."""
+        columns = 3 if self.motion.pinv_columns == "translational" else 6
+        return np.transpose(self.jacobian[:, :, :columns], (0, 2, 1))
+
+    @cached_property
+    def wrench_pinv(self) -> tuple[np.ndarray, np.ndarray]:
+        """(J^T)^+ (n, m, c) and the rank of J^T (n,)."""
+        return batched_pinv(self.structure, self.motion.rank_rtol)
+
+    @cached_property
+    def wrench_accelerations(self) -> np.ndarray:
+        """(K, 3) accelerations whose wrenches decide the ``feasible`` model: the 8 vertices of
+        the box on a product set (the wrench-feasible set is convex), else the whole set."""
+        box = self._acceleration_box
+        if box is None:
+            return self.motion.accelerations
+        centre, half = box
+        return centre + half * np.array(list(itertools.product((-1.0, 1.0), repeat=3)))
+
+    @cached_property
+    def required_wrenches(self) -> np.ndarray:
+        """(K, c) F of eq. (31) at ``wrench_accelerations``, the rows of ``structure``."""
+        wrenches = load_wrenches(self.motion, self.wrench_accelerations, self.robot.up, self.rotation)
+        return wrenches[:, : self.structure.shape[1]]
+
+    @cached_property
+    def jacobian_rank(self) -> np.ndarray:
+        """(n,) numerical rank of the J^T used in eq. (20)."""
+        return self.wrench_pinv[1]
+
+    @cached_property
+    def shaft_torque(self) -> np.ndarray:
+        """(n, m, k_a) load torques M = (J^T)^+ F behind the gearbox (eq. 20)."""
+        pinv = self.wrench_pinv[0]
+        columns = pinv.shape[2]
+        return np.einsum("nmc,ac->nma", pinv, self.wrenches[:, :columns])
+
+
+def load_wrench_terms(load: Load, sign: float, up: np.ndarray, rotation: np.ndarray):
+    """F of eq. (31) as L a + F_0: L (6, 3) and F_0 (6,). The load (mass m, centre of mass
+    R com from the platform's reference point) carries its weight m g (-up) and the inertial
+    force ``sign`` m a (``inertia``: ``paper`` +1, ``newton`` -1), both acting at the centre of
+    mass, plus ``load.external``. With z up, com = 0 and sign +1 this is the paper's
+    F = [m xdd, m ydd, m (zdd - g), 0, 0, 0]; with a = 0 it is the wrench of eq. (7) of the
+    IRPM paper that the weight adds to f_ext."""
+    arm = rotation @ np.asarray(load.com, dtype=float)
+    cross = np.array([[0.0, -arm[2], arm[1]], [arm[2], 0.0, -arm[0]], [-arm[1], arm[0], 0.0]])
+    slope = sign * load.mass * np.vstack([np.eye(3), cross])
+    weight = -load.mass * load.gravity * np.asarray(up, dtype=float)
+    return slope, np.concatenate([weight, cross @ weight]) + load.external
+
+
+def load_wrenches(motion: MotionSpec, accelerations: np.ndarray, up: np.ndarray,
+                  rotation: np.ndarray) -> np.ndarray:
+    """(k, 6) F of eq. (31) for accelerations (k, 3): :func:`load_wrench_terms` evaluated."""
+    slope, at_rest = load_wrench_terms(motion.load, inertia_sign(motion), up, rotation)
+    return accelerations @ slope.T + at_rest
+
+
+def inertia_sign(motion: MotionSpec) -> float:
+    return 1.0 if motion.inertia == "paper" else -1.0
+
+
+def centripetal(speed2, along, length, radius):
+    """J-dot p-dot of one cable at constant orientation: (|v|^2 - (u.v)^2) / (l R) (rad/s^2),
+    the rate of change of the cable direction times the velocity, behind the winch."""
+    return (speed2 - along**2) / (length * radius)

@@ -1,0 +1,139 @@
+"""Static equilibrium under an applied wrench: eqs. (7)-(10) of Hamed & Zohoor (IRPM paper).
+
+The structure matrix A (6, m) has one column per cable, [u_i; a_i x u_i], where u_i is the unit
+vector of l_i = r + R d_i - c_i (eq. 1, from the base point to the platform point) and a_i the
+moment arm (eq. 8). Tensions s solve A s = f_ext (eq. 7); for the square 6-cable case this is
+s = A^-1 f_ext (eq. 10), for other cable counts the minimum-norm least-squares solution.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+
+from pipeline.model.dynamics import Load, PoseGeometry, load_wrench_terms
+from pipeline.model.linalg import batched_pinv, gram, gram_ratio
+from pipeline.model.geometry import CableRobot, structure_matrix
+from pipeline.model.tensions import TensionSpec
+
+
+@dataclass(frozen=True)
+class StaticsSpec:
+    """The load whose weight (and centre-of-mass moment) and external wrench the cables balance
+    (``load.external`` plus the applied wrench f_ext of eq. (11), ``wrench.*``), and model options.
+
+    ``moment_arm``: ``"platform"`` takes a_i = R d_i, moments about the platform's reference
+    point O_M, where section IV applies the wrench; ``"base"`` takes eq. (9) literally,
+    a_i = r + R d_i, moments about the base centre O_F (docs/model.md compares them).
+    ``cable_direction``: ``"attachment"`` takes each cable from its anchor to its attachment
+    point (eq. 1); ``"centre"`` from its anchor to the platform's reference point (directions and
+    lengths of a point platform, moment arms kept): with no applied moment the moment rows of
+    A s = f_ext are then r_end times rows that do not depend on r_end, so the tensions and the
+    volume do not either (the IRPM paper's conclusions 1, 4 and 5; docs/model.md section 5).
+    ``rank_rtol``: a pose is singular when the gram ratio of A (``PoseStatics.gram_ratio``)
+    falls below it. ``tension``: minimum-norm tensions (``pinv``, eq. 10) or pulling cables
+    only (``feasible``, ``pipeline.model.tensions``; for six cables the same verdict).
+    """
+
+    moment_arm: str = "platform"
+    cable_direction: str = "attachment"
+    rank_rtol: float = 1e-9
+    tension: TensionSpec = field(default_factory=TensionSpec)
+    load: Load = field(default_factory=Load)
+
+    def state(self, robot: CableRobot, positions: np.ndarray, orientation) -> "PoseStatics":
+        return PoseStatics(robot, positions, orientation, self)
+
+    def set_size(self) -> int:
+        return 1
+
+
+@dataclass(frozen=True)
+class StaticLimits:
+    """Eq. (10) of the IRPM paper: tensions in [t_min, s_max] (N; s_max = ``tension.t_max``,
+    inf = no rating, a scalar or one per cable); a pose is singular when the gram ratio of the
+    structure matrix is below ``rank_rtol``. ``scale`` (N) is the unit of the slack margin:
+    the largest rating, or without one the magnitude of the force the cables balance (at least
+    1 N). Cable lengths are limited by the robot's own ``l_max``."""
+
+    s_max: float | np.ndarray
+    rank_rtol: float
+    scale: float
+
+
+class PoseStatics(PoseGeometry):
+    """Lazily evaluated structure matrix, conditioning and cable tensions of a chunk of poses."""
+
+    def __init__(self, robot: CableRobot, positions: np.ndarray, orientation, spec: StaticsSpec):
+        super().__init__(robot, positions, orientation)
+        self.spec = spec
+
+    @cached_property
+    def vectors(self) -> np.ndarray:
+        """(n, m, 3) cable vectors from each anchor to its attachment point (eq. 1) or, with
+        ``cable_direction="centre"``, to the platform's reference point."""
+        if self.spec.cable_direction == "centre":
+            return self.positions[:, None, :] - self.robot.anchors[None, :, :]
+        return super().vectors
+
+    @cached_property
+    def structure_matrix(self) -> np.ndarray:
+        """(n, 6, m) A of eq. (8): columns [u_i; a_i x u_i], a_i = R d_i (``platform``) or
+        r + R d_i (``base``)."""
+        arms = self.arms if self.spec.moment_arm == "platform" else self.arms + self.positions[:, None, :]
+        return structure_matrix(self.unit, arms)
+
+    @cached_property
+    def wrench(self) -> np.ndarray:
+        """(6,) the wrench the cables balance: the load's weight, its moment about the reference
+        point and the load's external wrench (which holds f_ext of eq. 11)."""
+        return load_wrench_terms(self.spec.load, 0.0, self.robot.up, self.rotation)[1]
+
+    @property
+    def structure(self) -> np.ndarray:
+        """A of eq. (8), the S of ``pipeline.model.tensions``: A s = f_ext."""
+        return self.structure_matrix
+
+    @cached_property
+    def wrench_pinv(self) -> tuple[np.ndarray, np.ndarray]:
+        """A^+ (n, m, 6) and the rank of A (n,)."""
+        return batched_pinv(self.structure_matrix, self.spec.rank_rtol)
+
+    @property
+    def required_wrenches(self) -> np.ndarray:
+        """(1, 6) the wrench of :attr:`wrench`."""
+        return self.wrench[None, :]
+
+    @cached_property
+    def gram_ratio(self) -> np.ndarray:
+        """(n,) det(A A^T) / prod(diag(A A^T)) in [0, 1] (Hadamard's inequality): 1 when the six
+        rows of A are orthogonal, 0 when A loses rank. Cheaper than an SVD per pose."""
+        return gram_ratio(self._gram)
+
+    @cached_property
+    def singular(self) -> np.ndarray:
+        """(n,) poses whose structure matrix is numerically rank-deficient (gram ratio < rtol)."""
+        return self.gram_ratio < self.spec.rank_rtol
+
+    @cached_property
+    def tensions(self) -> np.ndarray:
+        """(n, m) minimum-norm tensions with A s = f_ext (eq. 7), N: s = A^T (A A^T)^-1 f, which
+        is A^-1 f for six cables (eq. 10). Singular poses get the least-squares s = A^+ f from an
+        SVD, so every value is finite."""
+        a, wrench = self.structure_matrix, self.wrench
+        out = np.empty((a.shape[0], a.shape[2]))
+        ok = ~self.singular
+        if ok.any():
+            rhs = np.broadcast_to(wrench, (int(ok.sum()), 6))[..., None]
+            y = np.linalg.solve(self._gram[ok], rhs)[..., 0]
+            out[ok] = np.einsum("nkm,nk->nm", a[ok], y)
+        if (~ok).any():
+            pinv, _ = batched_pinv(a[~ok], self.spec.rank_rtol)
+            out[~ok] = pinv @ wrench
+        return out
+
+    @cached_property
+    def _gram(self) -> np.ndarray:
+        return gram(self.structure_matrix)

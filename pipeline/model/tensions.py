@@ -1,0 +1,243 @@
+"""Cables that can only pull: the ``feasible`` tension model, shared by every robot (issue 8).
+
+Per pose p and required wrench w (one of K), the cable forces x (m,) must satisfy the
+equilibrium ``S_p x = w`` and one interval per cable and criterion. x and S are what the
+robot's model multiplies: shaft torques M with S = J^T for CPR-8 (eq. 20, M_i = R_i t_i),
+tensions s with S = A for the IRPM (eqs. 7-10). A criterion is a :class:`Family` of intervals
+``lower <= x_i <= upper`` with a margin unit ``scale``: its margin is the capacity margin
+
+    max_x  s   subject to   S x = w,   lower + s scale <= x <= upper - s scale,   s <= 1,
+
+the largest uniform shrink of its intervals that still admits a valid x. Families are nested in
+the order given (slack, then the tension rating, torque, voltage): each one's LP keeps the
+earlier families' intervals, relaxed by their own margin where that is negative. So a pose is
+feasible at w (every margin >= 0) exactly when one x satisfies all intervals at once, and the
+margin of a later criterion is the best it can do while the earlier ones do their best.
+
+Exactness: for a fixed pose the set of wrenches w admitting a valid x is convex (the image of a
+polytope under a linear map), so checking the vertices of a convex required-wrench set (the
+acceleration box of eqs. 27-29 through the load mass) decides the whole set.
+
+Cost: where S has full column rank (square IRPM, rank 6 = m) x is unique, x = S^+ w, and the
+margins are closed forms (this is the paper's own criterion). Otherwise the margins come from
+hyperplane shifting (``pipeline.model.capacity``), exact and batched over poses, and the LPs are
+the reference and the fallback: for poses whose structure matrix is poorly conditioned (gram
+ratio of S in its range below ``HSM_MIN_GRAM``), for robots with more candidate normals than
+``capacity.MAX_NORMALS``, for a search that did not settle, and whenever the cable forces
+themselves are wanted (``distribution``: per-pose tensions, the straight-line simulations).
+The LPs of all (pose, wrench) pairs of a chunk go into one block-diagonal LP per family, solved
+by HiGHS (scipy.optimize.linprog); maximising the sum of the independent s's maximises each.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from math import comb
+
+import numpy as np
+
+from pipeline.model.capacity import MAX_NORMALS, RELAX, range_coordinates, shifted_margins
+from pipeline.model.linalg import gram, gram_ratio
+
+LP_BLOCKS = 256  # (pose, wrench) pairs per HiGHS call; HiGHS time grows faster than linearly
+HSM_MIN_GRAM = 1e-6  # gram ratio of S (in its range) below which a pose goes to the LP
+
+
+@dataclass(frozen=True)
+class TensionSpec:
+    """Which cable forces the criteria check. ``model``: ``"pinv"`` (minimum-norm, eq. 20 of the
+    CPR-8 paper / eq. 10 of the IRPM paper, any sign) or ``"feasible"`` (pulling cables only,
+    solved as above). ``t_min``: smallest cable tension (N). ``t_max``: cable rating (N), None =
+    the motor's torque limit / R_i only. Both a float or one value per cable (m,). ``residual_rtol``: a wrench is unreachable when
+    |S S^+ w - w| > residual_rtol |w|."""
+
+    model: str = "pinv"
+    t_min: float | np.ndarray = 0.0
+    t_max: float | np.ndarray | None = None
+    residual_rtol: float = 1e-6
+
+
+@dataclass(frozen=True)
+class Family:
+    """One criterion's intervals on x, each array broadcastable to (n, K, m); +-inf: no side."""
+
+    name: str
+    lower: np.ndarray
+    upper: np.ndarray
+    scale: np.ndarray
+
+
+def feasible_tensions(
+    structure: np.ndarray, pinv: np.ndarray, rank: np.ndarray, wrenches: np.ndarray,
+    families: list[Family], residual_rtol: float, distribution: bool = False,
+) -> tuple[dict[str, np.ndarray], np.ndarray | None, np.ndarray]:
+    """Margins (n, K): ``unreachable`` (1 - residual / residual_rtol) and the nested capacity
+    margins of ``families``; with ``distribution`` the chosen x (n, K, m), else None; and (n,)
+    which poses the LPs solved. ``wrenches`` (K, r) or (n, K, r)."""
+    residual, projected = reachability(structure, pinv, wrenches)
+    margins, chosen, by_lp = capacity_margins(structure, pinv, rank, projected, families, distribution)
+    margins["unreachable"] = 1.0 - residual / residual_rtol
+    return margins, chosen, by_lp
+
+
+def reachability(structure: np.ndarray, pinv: np.ndarray, wrenches: np.ndarray):
+    """Relative residual (n, K) of the least-squares equilibrium S x = w and the wrenches
+    projected onto the range of S (n, K, r). ``pinv`` (n, m, r) = S^+, ``wrenches`` (K, r) or
+    (n, K, r)."""
+    w = np.broadcast_to(wrenches, (structure.shape[0], *np.shape(wrenches)[-2:]))
+    projected = np.einsum("nrm,nmq,nkq->nkr", structure, pinv, w)
+    size = np.linalg.norm(w, axis=2)
+    residual = np.linalg.norm(projected - w, axis=2) / np.where(size > 0, size, 1.0)
+    return residual, projected
+
+
+def capacity_margins(
+    structure: np.ndarray, pinv: np.ndarray, rank: np.ndarray, wrenches: np.ndarray,
+    families: list[Family], distribution: bool = False,
+) -> tuple[dict[str, np.ndarray], np.ndarray | None, np.ndarray]:
+    """Nested capacity margins (n, K) per family; with ``distribution`` the chosen x
+    (n, K, m), the solution of the last family's LP, else None; and (n,) the poses solved by
+    LP. ``wrenches`` (n, K, r) must lie in the range of S (see :func:`reachability`); ``pinv``
+    and ``rank`` (n,) are S^+ and the rank of S."""
+    n, _, m = structure.shape
+    k = wrenches.shape[1]
+    margins = {f.name: np.empty((n, k)) for f in families}
+    chosen = np.empty((n, k, m)) if distribution else None
+    unique = rank == m
+    if unique.any():  # x = S^+ w is the only candidate: the margins are closed forms
+        x = np.einsum("nmr,nkr->nkm", pinv[unique], wrenches[unique])
+        if distribution:
+            chosen[unique] = x
+        for f in families:
+            lower, upper, scale = (a[unique] for a in _broadcast(f, (n, k, m))[1:])
+            room = np.minimum(x - lower, upper - x) / scale
+            margins[f.name][unique] = np.minimum(room.min(axis=2), 1.0)
+    by_lp, shifted = ~unique, np.zeros(n, dtype=bool)
+    if not distribution:
+        for q in np.unique(rank[by_lp]):
+            if 2 * comb(m, int(q) - 1) > MAX_NORMALS:
+                continue
+            poses = np.flatnonzero(by_lp & (rank == q))
+            structure_q, wrenches_q = range_coordinates(structure[poses], wrenches[poses], int(q))
+            found, unsettled = shifted_margins(structure_q, wrenches_q,
+                                               [_select(f, poses, n) for f in families])
+            for name, value in found.items():
+                margins[name][poses] = value
+            shifted[poses[~unsettled]] = True
+            conditioned = gram_ratio(gram(structure_q)) >= HSM_MIN_GRAM
+            by_lp[poses[~unsettled & conditioned]] = False
+    full = [_broadcast(f, (n, k, m)) for f in families]
+    rest = np.flatnonzero(by_lp)
+    by_lp[:] = False  # set again for the poses the LPs solve
+    step = max(1, LP_BLOCKS // k)
+    for start in range(0, len(rest), step):
+        for poses, found, x in _solved(structure, wrenches, full, rest[start:start + step], shifted):
+            if distribution:
+                chosen[poses] = x
+            for name, value in found.items():
+                margins[name][poses] = value
+            by_lp[poses] = True
+    return margins, chosen, by_lp
+
+
+def _solved(structure, wrenches, full, poses, shifted):
+    """The nested LPs of ``poses`` as (poses, margins, x) parts: all at once, else one pose at a
+    time when HiGHS declares the joint LP infeasible. A pose whose own LP still fails keeps
+    its hyperplane-shifting margins when it has them (counted as not solved by LP, ``shifted``);
+    otherwise the failure is raised."""
+    try:
+        found, x = _nested_lps(structure[poses], wrenches[poses],
+                               [(f[0], *(a[poses] for a in f[1:])) for f in full])
+        return [(poses, found, x)]
+    except RuntimeError:
+        if len(poses) == 1:
+            if shifted[poses[0]]:
+                return []
+            raise
+    return [part for pose in poses for part in _solved(structure, wrenches, full, [pose], shifted)]
+
+
+def _select(family: Family, poses: np.ndarray, n: int) -> Family:
+    """``family`` at ``poses`` of the n: arrays with a pose axis are indexed, others kept."""
+    def pick(values):
+        values = np.asarray(values, dtype=float)
+        return values[poses] if values.ndim == 3 and values.shape[0] == n else values
+
+    return Family(family.name, pick(family.lower), pick(family.upper), pick(family.scale))
+
+
+def _broadcast(family: Family, shape) -> tuple:
+    return (family.name, *(np.broadcast_to(np.asarray(a, dtype=float), shape)
+                           for a in (family.lower, family.upper, family.scale)))
+
+
+def _nested_lps(structure, wrenches, families) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """The families' LPs in order, each one block-diagonal LP over all (pose, wrench) pairs."""
+    from scipy.optimize import linprog
+
+    n, r, m = structure.shape
+    k = wrenches.shape[1]
+    blocks, width = n * k, m + 1  # variables per block: x (scaled by ``unit``) and s
+    unit = float(np.median(families[0][3]))
+    equality = _block_matrix(np.repeat(structure, k, axis=0) * unit, width)
+    b_eq = wrenches.reshape(blocks * r)
+    lower, upper = np.full((blocks, m), -np.inf), np.full((blocks, m), np.inf)
+    margins, x = {}, None
+    for name, f_lower, f_upper, f_scale in families:
+        f_lower, f_upper, f_scale = (a.reshape(blocks, m) / unit for a in (f_lower, f_upper, f_scale))
+        a_ub, b_ub = _shrink_rows(f_lower, f_upper, f_scale, width)
+        bounds = np.empty((blocks, width, 2))
+        bounds[:, :m, 0], bounds[:, :m, 1] = lower, upper
+        bounds[:, m] = (-np.inf, 1.0)
+        cost = np.zeros(blocks * width)
+        cost[m::width] = -1.0
+        for options in ({}, {"presolve": False}):  # HiGHS's presolve has declared feasible
+            result = linprog(cost, A_ub=a_ub, b_ub=b_ub, A_eq=equality, b_eq=b_eq,  # LPs infeasible
+                             bounds=bounds.reshape(-1, 2), method="highs", options=options)
+            if result.status == 0:
+                break
+        if result.status != 0:
+            raise RuntimeError(f"tension LP for {name!r} failed: {result.message}")
+        solution = result.x.reshape(blocks, width)
+        s = solution[:, m]
+        margins[name] = s.reshape(n, k)
+        x = solution[:, :m] * unit
+        relax = (np.minimum(s, 0.0)[:, None] - RELAX) * f_scale
+        # the next LP keeps these bounds, widened to hold this LP's own x: feasible by
+        # construction, where HiGHS's tolerance could otherwise make it declare it infeasible
+        lower = np.minimum(np.maximum(lower, f_lower + relax), solution[:, :m])  # -inf stays
+        upper = np.maximum(np.minimum(upper, f_upper - relax), solution[:, :m])
+    return margins, x.reshape(n, k, m)
+
+
+def _block_matrix(blocks: np.ndarray, width: int):
+    """Block-diagonal (B r, B width) sparse matrix with blocks (B, r, m) in the first m columns."""
+    import scipy.sparse as sparse
+
+    count, r, m = blocks.shape
+    rows = np.arange(count * r).reshape(count, r, 1).repeat(m, axis=2)
+    cols = (np.arange(count)[:, None, None] * width + np.arange(m)[None, None, :]).repeat(r, axis=1)
+    return sparse.csr_matrix((blocks.ravel(), (rows.ravel(), cols.ravel())),
+                             shape=(count * r, count * width))
+
+
+def _shrink_rows(lower, upper, scale, width):
+    """Rows ``x_i + c_i s <= upper_i`` and ``-x_i + c_i s <= -lower_i`` for the finite sides."""
+    import scipy.sparse as sparse
+
+    m = lower.shape[1]
+    rows, cols, values, rhs = [], [], [], []
+    start = 0
+    for sign, bound in ((1.0, upper), (-1.0, lower)):
+        block, cable = np.nonzero(np.isfinite(bound))
+        index = start + np.arange(len(block))
+        rows += [index, index]
+        cols += [block * width + cable, block * width + m]
+        values += [np.full(len(block), sign), scale[block, cable]]
+        rhs.append(sign * bound[block, cable])
+        start += len(block)
+    matrix = sparse.csr_matrix(
+        (np.concatenate(values), (np.concatenate(rows), np.concatenate(cols))),
+        shape=(start, lower.shape[0] * width),
+    )
+    return matrix, np.concatenate(rhs)

@@ -1,0 +1,23 @@
+"""Geometric criteria: a structure matrix of full rank (the singular gate) and cables no longer
+than the robot's ``l_max`` (eq. 10 of the IRPM paper), for every analysis."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pipeline.model.statics import PoseStatics, StaticLimits
+
+
+def singular(st: PoseStatics, lim: StaticLimits) -> np.ndarray:
+    """The structure matrix must have full rank. With g its gram ratio in [0, 1] the margin is
+    (g - rtol) / (1 - rtol) in [0, 1] for a regular pose and g / rtol - 1 in [-1, 0) for a
+    singular one (continuous and increasing in g, -1 for an exactly singular pose, so the
+    verdict tolerance of ``pipeline.workspace.verdict`` never reaches it). A singular pose has no tensions
+    to check (``verdict.GATES``)."""
+    g, rtol = st.gram_ratio, lim.rank_rtol
+    return np.where(g >= rtol, (g - rtol) / (1.0 - rtol), g / rtol - 1.0)
+
+
+def length(state, limits) -> np.ndarray:
+    """Eq. (10): l_i <= l_max of the robot (``CableRobot.l_max``), in any analysis."""
+    return 1.0 - (state.lengths / state.robot.l_max).max(axis=1)

@@ -1,0 +1,35 @@
+"""Criteria on the cable tensions, in every analysis: a wrench the cables can reach at all
+(``feasible`` model), cables that only pull (tensions >= t_min; eq. 10 of the IRPM paper) and
+the cable rating t_max (eq. 10: s <= s_max)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pipeline.workspace.criteria.forces import feasible_margins, feasible_model
+from pipeline.model.statics import PoseStatics
+
+
+def unreachable(state, limits) -> np.ndarray:
+    """``feasible`` model: every required wrench must be in the range of S (J^T or A), within
+    |S S^+ w - w| <= residual_rtol |w|. Margin 1 - residual / (residual_rtol |w|)."""
+    return feasible_margins(state, limits)["unreachable"]
+
+
+def slack(state, limits) -> np.ndarray:
+    """A cable can only pull: tensions >= t_min (eq. 10 of the IRPM paper: s_i >= 0). Margin
+    (min_i s_i - t_min) / scale (``StaticLimits.scale``); under ``feasible`` the best such margin
+    over all valid tension distributions (CPR-8: in units of the torque limit)."""
+    if feasible_model(state):
+        return feasible_margins(state, limits)["slack"]
+    return (state.tensions - state.spec.tension.t_min).min(axis=1) / limits.scale
+
+
+def tension_max(state, limits) -> np.ndarray:
+    """Eq. (10): s_i <= s_max (IRPM), or the cable rating ``tension.t_max`` (CPR-8)."""
+    if feasible_model(state):
+        return feasible_margins(state, limits)["tension_max"]
+    if isinstance(state, PoseStatics):
+        return 1.0 - (state.tensions / limits.s_max).max(axis=1)  # s_max: scalar or per cable
+    high, _ = state.acceleration_range(*state.torque_affine)  # largest M_i = R_i t_i over the set
+    return 1.0 - (high / state.motion.winch_radius / state.motion.tension.t_max).max(axis=1)

@@ -1,0 +1,114 @@
+"""The paper's experiment set of straight lines (section 3.1.3) and its comparison with CPR-WWA.
+
+Lines run along x and along y through every row of the CPR-WWA position grid, at every z level
+(N = 6: 36 x-lines and 36 y-lines), each from one face of the geometric workspace to the
+opposite one with the trapezoidal profile of ``motion.*``. Line 0 is O''-F'': the x-line at the
+smallest y on the top layer (the corners below the hanging points O and F, Fig. 3).
+
+Rule for a grid point (docs/model.md): it belongs to the simulated feasible workspace when every
+sample of its x-line and of its y-line within half a grid step of it satisfies eqs. (30),
+(32)-(34). A line can therefore belong to the workspace only partly, as O''-F'' at 0.5 rad does.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+from omegaconf import DictConfig
+
+from pipeline.workspace.trajectory import inverse_dynamics, sample_margins, trapezoid
+from pipeline.workspace.verdict import classify
+from pipeline.workspace.compute import build_problem, grid_workspace
+
+QUANTITIES = ("theta_dot", "torque", "voltage")
+DT = 0.01  # s, time step of the simulated lines
+
+
+def simulate_lines(cfg: DictConfig, catalogue: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame, dict]:
+    """(samples, points, summary): every line sample, the grid points with both verdicts, and
+    the CPR-WWA summary extended with the simulated count, the agreement and, per criterion,
+    the smallest margin along line O''-F'' (``line0_margin_*``: Fig. 6's verdict per limit)."""
+    problem, grid = build_problem(cfg, catalogue)
+    points, summary = grid_workspace(cfg, problem, grid)
+    lines = _lines(grid.positions)
+    parts = []
+    for number, (axis, start, end) in enumerate(lines):
+        profile = trapezoid(float(np.linalg.norm(end - start)), cfg.motion.v_max,
+                            cfg.motion.t_acc, cfg.motion.t_dec, DT)
+        direction = (end - start) / np.linalg.norm(end - start)
+        parts.append(pd.DataFrame({
+            "line": number, "axis": axis, "t": profile.t, "s": profile.s, "v": profile.v,
+            "a": profile.a, **{c: start[i] + profile.s * direction[i] for i, c in enumerate("xyz")},
+            **{f"{c}_dot": profile.v * direction[i] for i, c in enumerate("xyz")},
+            **{f"{c}_ddot": profile.a * direction[i] for i, c in enumerate("xyz")},
+        }))
+    samples = pd.concat(parts, ignore_index=True)
+    act = problem.limits
+    quantities = inverse_dynamics(
+        problem.robot, samples[["x", "y", "z"]].to_numpy(),
+        samples[["x_dot", "y_dot", "z_dot"]].to_numpy(),
+        samples[["x_ddot", "y_ddot", "z_ddot"]].to_numpy(),
+        problem.orientation, problem.spec, act,
+    )
+    for name in QUANTITIES:
+        for cable in range(problem.robot.n_cables):
+            samples[f"{name}_{cable + 1}"] = quantities[name][:, cable]
+    for key in ("wrench_residual", "power_cables", "power_load"):
+        samples[key] = quantities[key]
+    raw = sample_margins(quantities, act)
+    margins, samples["ok"], _ = classify({name: raw[name] for name in problem.criteria},
+                                         problem.margin_atol)
+    for name in problem.criteria:
+        samples[f"margin_{name}"] = margins[name]
+
+    points = points.rename(columns={"feasible": "feasible_grid", "limiting": "limiting_grid"})
+    worst = _point_margins(samples, points, problem.criteria)
+    _, points["feasible"], limiting = classify(worst, 0.0)  # samples' margins are snapped already
+    points["limiting"] = pd.Categorical(limiting, categories=list(problem.criteria))
+    agree = points["feasible"] == points["feasible_grid"]
+    for name in problem.criteria:  # counts of the lines' verdict; the grid's under lost_grid_*
+        summary[f"lost_grid_{name}"] = summary.pop(f"lost_{name}")
+        summary[f"lost_{name}"] = int(((limiting == name) & ~points["feasible"]).sum())
+    summary.update(
+        n_lines=len(lines), n_samples=len(samples),
+        n_feasible_grid=summary["n_feasible"], n_feasible=int(points["feasible"].sum()),
+        feasible_pct=100.0 * points["feasible"].mean(), agreement_pct=100.0 * agree.mean(),
+        limit_speed=act.speed_limit, limit_torque=act.torque_limit,
+        limit_acceleration=act.accel_limit, limit_voltage=act.voltage_limit,
+        **{f"line0_margin_{name}": float(samples.loc[samples["line"] == 0, f"margin_{name}"].min())
+           for name in problem.criteria},
+    )
+    summary["volume_m3"] = summary["n_feasible"] * grid.cell_volume
+    return samples, points, summary
+
+
+def _lines(positions: np.ndarray) -> list[tuple[str, np.ndarray, np.ndarray]]:
+    """x-lines (line 0 = O''-F'': smallest y, top layer) then y-lines, through the grid rows."""
+    xs, ys, zs = (np.unique(positions[:, i]) for i in range(3))
+    lines = []
+    for z in zs[::-1]:
+        for y in ys:
+            lines.append(("x", np.array([xs[0], y, z]), np.array([xs[-1], y, z])))
+    for z in zs[::-1]:
+        for x in xs:
+            lines.append(("y", np.array([x, ys[0], z]), np.array([x, ys[-1], z])))
+    return lines
+
+
+def _point_margins(samples: pd.DataFrame, points: pd.DataFrame, criteria) -> dict[str, np.ndarray]:
+    """Per grid point and criterion, the smallest margin over the samples of both its lines
+    within half a grid step: the point is feasible when all those samples are, and its limiting
+    criterion is the worst one among them."""
+    columns = [f"margin_{name}" for name in criteria]
+    key = pd.MultiIndex.from_frame(points[["x", "y", "z"]].round(9))
+    worst = None
+    for axis in ("x", "y"):
+        on = samples[samples["axis"] == axis]
+        nodes = np.unique(points[axis].to_numpy())
+        nearest = nodes[np.abs(on[axis].to_numpy()[:, None] - nodes[None, :]).argmin(axis=1)]
+        per_point = (on.assign(**{axis: nearest})[["x", "y", "z", *columns]].round({c: 9 for c in "xyz"})
+                     .groupby(["x", "y", "z"])[columns].min().reindex(key).to_numpy())
+        worst = per_point if worst is None else np.minimum(worst, per_point)
+    if np.isnan(worst).any():
+        raise ValueError("a grid point lies on no simulated line (a flat search box?)")
+    return {name: worst[:, i] for i, name in enumerate(criteria)}

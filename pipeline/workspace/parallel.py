@@ -1,0 +1,99 @@
+"""Chunked parallel map over poses: one level of parallelism, one task per chunk of poses.
+
+Follows scikit-learn's ``_parallel_pairwise``: the poses are split into contiguous slices, each
+worker evaluates the vectorised kernel on its slice, and the results come back in order. A
+problem that fits in a single chunk runs in-process (no pool start-up). The joblib backend is a
+parameter: ``dask`` sends the same chunks to a Dask distributed cluster (the scheduler at
+``scheduler``, or a local cluster of ``n_jobs`` single-threaded worker processes) through
+joblib's dask backend, with no other change.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import math
+import os
+from typing import Callable, Iterator
+
+import numpy as np
+
+from pipeline.workspace.progress import Progress
+
+log = logging.getLogger(__name__)
+CHUNK_REPORT_S = 10.0  # a line about the chunks at most this often (and at the end)
+
+
+def chunk_slices(n_items: int, n_jobs: int, chunk_size: int) -> list[slice]:
+    """Contiguous slices: at least one per worker when there is enough work, none over chunk_size."""
+    n_chunks = max(math.ceil(n_items / chunk_size), 1)
+    if n_items > chunk_size:
+        n_chunks = max(n_chunks, n_jobs)
+    bounds = np.linspace(0, n_items, n_chunks + 1).round().astype(int)
+    return [slice(a, b) for a, b in zip(bounds[:-1], bounds[1:]) if b > a]
+
+
+def iter_chunks(
+    function: Callable[..., dict[str, np.ndarray]],
+    problem,
+    positions: np.ndarray,
+    n_jobs: int = 2,
+    backend: str = "loky",
+    chunk_size: int = 20_000,
+    scheduler: str | None = None,
+) -> Iterator[tuple[slice, dict[str, np.ndarray]]]:
+    """(slice, ``function(problem, positions[slice])``) for every chunk, in order, as each
+    finishes: a caller can write results out chunk by chunk (bounded memory)."""
+    workers = n_jobs if n_jobs > 0 else max((os.cpu_count() or 1) + 1 + n_jobs, 1)  # joblib's rule
+    if backend != "dask" and workers > (os.cpu_count() or 1):  # more would only thrash memory
+        log.warning("compute.n_jobs=%d: capped at the %d cores of this machine", n_jobs, os.cpu_count())
+        workers = os.cpu_count() or 1
+    slices = chunk_slices(len(positions), workers, chunk_size)
+    progress = Progress("chunks", len(slices), log, every=CHUNK_REPORT_S)
+    if len(slices) <= 1 or workers == 1:
+        for s in slices:
+            yield s, function(problem, positions[s])
+            progress.step()
+        return
+    from joblib import Parallel, delayed  # only here: 50 ms of imports a one-chunk job skips
+
+    with _engine(backend, workers, scheduler) as joblib_backend:
+        runner = Parallel(n_jobs=workers, backend=joblib_backend, return_as="generator")
+        tasks = (delayed(function)(problem, positions[s]) for s in slices)
+        for s, part in zip(slices, runner(tasks)):
+            yield s, part
+            progress.step()
+
+
+def _verbose(name: str) -> bool:
+    """Whether the run asked for ``name``'s log lines (``hydra.verbose=true`` or ``=[name]``)."""
+    from hydra.core.hydra_config import HydraConfig
+
+    verbose = HydraConfig.get().verbose if HydraConfig.initialized() else False
+    return verbose is True or (not isinstance(verbose, (bool, str)) and name in verbose) or verbose == name
+
+
+@contextlib.contextmanager
+def _engine(backend: str, workers: int, scheduler: str | None):
+    """The joblib backend to pass to Parallel; for Dask, None (the backend set by
+    ``parallel_config``) with a client connected while it is in use."""
+    if backend != "dask":
+        yield backend
+        return
+    from dask.distributed import Client, LocalCluster
+    from joblib import parallel_config
+
+    if not _verbose("distributed"):  # dozens of INFO lines per cluster otherwise
+        logging.getLogger("distributed").setLevel(logging.WARNING)
+
+    if scheduler:
+        client = Client(scheduler)
+    else:
+        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                               dashboard_address=None)
+        client = Client(cluster)
+    with client, parallel_config(backend="dask"):
+        log.info("chunks on the Dask cluster %s", client.scheduler.address)
+        yield None
+    if not scheduler:
+        cluster.close()

@@ -1,0 +1,37 @@
+"""Per-pose physical quantities behind a verdict (``output.cables=true``): the cable lengths and
+the cable tensions the checked model uses, so that a user can see why a pose fails.
+
+Columns, per cable name c: ``length_<c>`` (m). Statics: ``tension_<c>`` (N), the minimum-norm
+tensions of eq. (10) (``pinv``) or the distribution the LPs chose (``feasible``, the solution of
+the last family's LP). CPR-WWA and lines: ``tension_min_<c>`` and ``tension_max_<c>`` (N), the
+range over the acceleration set of t = M / R_i with M of eq. (20) (``pinv``) or of the chosen
+forces at the vertices of the acceleration box (``feasible``). All at the nominal orientation.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pipeline.workspace.criteria.forces import feasible_distribution
+from pipeline.model.statics import PoseStatics
+
+
+def cable_quantities(state, limits) -> dict[str, np.ndarray]:
+    """(n,) arrays keyed by column name for one chunk's state (``PoseStatics``/``PoseDynamics``)."""
+    names = state.robot.cable_names
+    columns = {f"length_{name}": state.lengths[:, i] for i, name in enumerate(names)}
+    if isinstance(state, PoseStatics):
+        tensions = (state.tensions if state.spec.tension.model == "pinv"
+                    else feasible_distribution(state, limits)[:, 0, :])
+        columns.update({f"tension_{name}": tensions[:, i] for i, name in enumerate(names)})
+        return columns
+    radius = state.motion.winch_radius
+    if state.motion.tension.model == "pinv":
+        high, low = state.acceleration_range(*state.torque_affine)
+    else:
+        chosen = feasible_distribution(state, limits)
+        high, low = chosen.max(axis=1), chosen.min(axis=1)
+    for i, name in enumerate(names):
+        columns[f"tension_min_{name}"] = low[:, i] / radius[i]
+        columns[f"tension_max_{name}"] = high[:, i] / radius[i]
+    return columns

@@ -1,0 +1,47 @@
+"""The verdict rule: margins to a feasible flag and a limiting criterion, with a stated tolerance.
+
+Every criterion reports a relative margin (>= 0 satisfied). A margin computed in floating point
+carries round-off of a few ulps of the quantities behind it, and which way that round-off falls
+depends on the BLAS kernel the CPU selects (``OPENBLAS_CORETYPE``): a pose whose exact margin is
+0 (a cable with exactly zero tension, a velocity exactly at its limit) would otherwise be
+feasible on one machine and not on another. So margins within ``atol`` of zero are set to
+exactly 0 and count as satisfied: the boundary belongs to the workspace (closed sets, as the
+papers' ``<=`` limits), and the verdict no longer depends on the CPU. ``model.margin_atol``
+(default 1e-9, dimensionless like the margins) is that tolerance; 0 restores the raw rule.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pipeline.workspace.criteria import GATES  # violated, they decide the verdict (first listed wins)
+
+
+def snap(margin: np.ndarray, atol: float) -> np.ndarray:
+    """``margin`` with every value in [-atol, atol] replaced by exactly 0."""
+    margin = np.asarray(margin, dtype=float)
+    return np.where(np.abs(margin) <= atol, 0.0, margin)
+
+
+def classify(
+    margins: dict[str, np.ndarray], atol: float
+) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray]:
+    """Snapped margins, feasibility and the limiting criterion of every pose.
+
+    A pose is feasible when every snapped margin is >= 0. ``limiting`` names the criterion with
+    the smallest margin: the most violated one for an infeasible pose, the tightest for a
+    feasible one (ties: the first criterion listed); a violated gate (``GATES``) takes
+    precedence. Each infeasible pose is therefore attributed to exactly one criterion.
+    """
+    names = list(margins)
+    snapped = {name: snap(margins[name], atol) for name in names}
+    stacked = np.column_stack([snapped[name] for name in names])
+    if not np.isfinite(stacked).all():
+        row = int(np.flatnonzero(~np.isfinite(stacked).all(axis=1))[0])
+        raise FloatingPointError(f"non-finite margin at pose index {row}: {stacked[row]}")
+    feasible = (stacked >= 0).all(axis=1)
+    limiting = np.asarray(names, dtype=object)[stacked.argmin(axis=1)]
+    for gate in reversed(GATES):  # the first gate listed wins
+        if gate in snapped:
+            limiting[snapped[gate] < 0] = gate
+    return snapped, feasible, limiting

@@ -1,0 +1,43 @@
+"""The package's layers (pipeline/__init__.py): a module imports only from its own layer and the
+layers before it, at the top of the file or inside a function."""
+
+import ast
+from pathlib import Path
+
+import pipeline
+
+ROOT = Path(pipeline.__file__).parent
+LAYERS = ["errors", "model", "workspace", "app", "analyses"]  # then the entry points on top
+
+
+def layer(module: str) -> int:
+    """Rank of a dotted ``pipeline.*`` module name (an entry point ranks above every layer)."""
+    parts = module.split(".")
+    return LAYERS.index(parts[1]) if len(parts) > 1 and parts[1] in LAYERS else len(LAYERS)
+
+
+def imported(path: Path) -> set[str]:
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            found.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            found.add(node.module)
+    return {name for name in found if name.startswith("pipeline.")}
+
+
+def test_no_layer_imports_a_later_one():
+    modules = sorted(ROOT.rglob("*.py"))
+    assert len(modules) > 40
+    wrong = []
+    for path in modules:
+        name = ".".join(("pipeline", *path.relative_to(ROOT).with_suffix("").parts))
+        wrong += [f"{name} imports {other}" for other in imported(path) if layer(other) > layer(name)]
+    assert not wrong, wrong
+
+
+def test_every_layer_is_a_package_with_its_modules():
+    for name in LAYERS[1:]:
+        assert (ROOT / name / "__init__.py").exists()
+        assert len(list((ROOT / name).glob("*.py"))) >= 5
+    assert sorted(p.stem for p in ROOT.glob("*.py")) == ["__init__", "__main__", "api", "caspr", "errors", "report", "study"]
