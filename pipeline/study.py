@@ -323,17 +323,27 @@ def checked_commands(name: str, extra: list[str], out_root: Path | None = None,
                           "their own settings; it takes compute.* overrides only")
     out = study_dir(name, extra, out_root)
     if study.optimise is not None or study.search is not None:  # the lowest and highest designs
-        ((cfg, catalogue),) = check([*study.overrides, *extra, f"hydra.run.dir={quoted(out)}"]).values()
-        ids = [] if catalogue is None else [int(i) for i in catalogue.index]
-        if study.optimise is not None and catalogue is not None:
+        folder = f"hydra.run.dir={quoted(out)}"
+        first = f"actuator={_catalogue([*study.overrides, *extra]).index[0]}"  # an id of the user's catalogue
+        try:
+            ((cfg, catalogue),) = check([*study.overrides, first, *extra, folder]).values()
+        except ConfigError:  # an analysis without actuators has no key actuator: say that instead
+            ((cfg, catalogue),) = check([*study.overrides, *extra, folder]).values()
+            if catalogue is not None:
+                raise
+        if catalogue is None:  # the objectives and the search read the job's catalogue actuator
+            raise ConfigError(f"analysis={analysis_name(cfg)}: study {name} designs a catalogue "
+                              "actuator's drive train; this analysis has no actuator (use analysis=cpr_wwa)")
+        if study.search is not None:
+            _check_searchable(cfg, name)
+        if study.optimise is not None:
             check_catalogue_objectives(study.optimise, catalogue)
+        ids = [int(i) for i in catalogue.index]
         variables = study.optimise.variables if study.optimise is not None else {
             "actuator": study.search.actuators, **study.search.variables}
         corners = [(["design"], check([*study.overrides, *extra, *corner,
                                        f"hydra.run.dir={quoted(trial_folder(out / 'jobs', 0))}"]))
                    for corner in corner_overrides(variables, ids)]
-        if study.search is not None:
-            _check_searchable(cfg, name)
         return corners
     commands = [sweep_command(study, [*overrides, *extra], out / "jobs" / case, launcher)
                 for case, overrides in (study.cases or {"": []}).items()]
@@ -430,9 +440,13 @@ def _sweep_values(key: str, values: str, fixed: list[str]) -> str:
         return values
     if key != "actuator":
         raise ConfigError(f"sweep {key}=catalogue: only 'actuator' can sweep the catalogue")
-    paths = [o.split("=", 1)[1] for o in fixed if _key(o) == "catalogue"]
-    path = paths[-1] if paths and paths[-1] not in ("null", "") else None
-    return ",".join(str(i) for i in load_catalogue(path).index)
+    return ",".join(str(i) for i in _catalogue(fixed).index)
+
+
+def _catalogue(overrides: list[str]):
+    """The catalogue the jobs of ``overrides`` read (the last ``catalogue=``, else Table 1)."""
+    paths = [o.split("=", 1)[1] for o in overrides if _key(o) == "catalogue"]
+    return load_catalogue(paths[-1] if paths and paths[-1] not in ("null", "") else None)
 
 
 def _log_to_console() -> None:

@@ -217,6 +217,9 @@ def test_a_search_and_an_optimiser_must_ask_the_same_question(tmp_path):
     (["tension=feasible"], "tension.model=feasible: study smallest_gear_ratio's search is exact for minimum-norm"),
     (["output.points=false"], "output.points=false: study smallest_gear_ratio's search reads every job's margins"),
     (["catalogue=missing.csv"], "missing.csv"),
+    (["analysis=statics"], "analysis=statics: study smallest_gear_ratio designs a catalogue actuator's drive train"),
+    (["robot=irpm6"], "analysis=statics: study smallest_gear_ratio designs a catalogue actuator's drive train"),
+    (["analysis=lines"], "analysis=lines: study smallest_gear_ratio searches the drive train; only analysis=cpr_wwa"),
 ])
 def test_a_search_the_model_cannot_make_exact_is_refused_before_anything_runs(tmp_path, extra, message):
     with pytest.raises(ConfigError, match=message):
@@ -229,3 +232,14 @@ def test_search_actuators_must_be_catalogue_ids(catalogue):
         SearchSpec(variables={"drive.gear_ratio": [10]}, actuators=[2, 9]).ids(catalogue)
     with pytest.raises(ConfigError, match="search.actuators='all': catalogue or a list of ids"):
         SearchSpec(variables={"drive.gear_ratio": [10]}, actuators="all").ids(catalogue)
+
+
+def test_a_users_catalogue_without_actuator_1_is_searched(tmp_path):
+    """The design studies' preflight takes an id of the user's catalogue, not the default 1."""
+    from pipeline.model.catalogue import TABLE1
+
+    table = pd.read_csv(TABLE1, dtype=str).iloc[[0, 2]].assign(id=["7", "9"])
+    table.to_csv(tmp_path / "mine.csv", index=False)
+    corners = checked_commands("smallest_gear_ratio", [f"catalogue={tmp_path / 'mine.csv'}"], tmp_path / "out")
+    actuators = [cfg.actuator for _, jobs in corners for cfg, _ in jobs.values()]
+    assert actuators == [7, 9]
