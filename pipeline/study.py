@@ -37,7 +37,7 @@ from pipeline.app.cli import launch
 from pipeline.errors import ConfigError, one_line
 from pipeline.analyses.evidence import evidence, scores
 from pipeline.analyses.figures import SERIES_DIR, FigureSpec, StudyResults, render
-from pipeline.app.job import PREPARED, changed_files, execute
+from pipeline.app.job import PREPARED, changed_files, execute, folder_lock
 from pipeline.analyses.optimise import (OptimiseSpec, best_drive, check_catalogue_objectives, corner_overrides, optimise,
                                trial_folder)
 from pipeline.app.preflight import check, parse, quoted
@@ -193,15 +193,27 @@ def run_study(name: str, extra: list[str], out_root: Path | None = None,
     """Sweep (unless ``figures_only``), analyses and figures of one study; returns the files.
     The jobs of an interrupted run of the same study are reused (``_start_or_resume``).
     ``checked``: the study's sweep commands if already checked (:func:`checked_commands`)."""
-    study = load_study(name)
     out = study_dir(name, extra, out_root)
+    if not figures_only:
+        claim_study_dir(out, name, extra, force)  # refused here: nothing written
+        checked = checked or checked_commands(name, extra, out_root, launcher)
+        out.mkdir(parents=True, exist_ok=True)
+    if not out.is_dir():
+        raise ConfigError(f"study {name}: no results in {out}; run it without --figures-only")
+    with folder_lock(out, f"another run of study {name} is writing this folder; wait for it or "
+                          "write elsewhere (--out DIR)"):  # two runs would share the jobs
+        return _run_study(name, extra, out, figures_only, checked, force)
+
+
+def _run_study(name: str, extra: list[str], out: Path, figures_only: bool,
+               checked: list[tuple[list[str], dict]] | None, force: bool) -> list[Path]:
+    """:func:`run_study` once the study's folder is held."""
+    study = load_study(name)
     cases = study.cases or {"": []}
     provenance = OmegaConf.to_yaml({"study": name, "extra_overrides": extra})
     if not figures_only:
         provenance = claim_study_dir(out, name, extra, force)
-        checked = checked or checked_commands(name, extra, out_root, launcher)
         commands = [command for command, _ in checked]
-        out.mkdir(parents=True, exist_ok=True)
         write_text(out / "study.yaml", provenance)
         log.info("study %s: %s", name, study.title)
         if study.optimise is not None or study.search is not None:

@@ -190,3 +190,22 @@ def test_a_study_that_reads_points_refuses_a_summary_only_run():
     with pytest.raises(ConfigError, match=r"study actuator_choice reads every job's points.parquet \(cloud\)"):
         checked_commands("actuator_choice", ["output.points=false"])
     assert len(checked_commands("design_mass", ["output.points=false"])) == 1
+
+
+def test_a_second_run_of_a_study_at_once_stops_in_one_line(tmp_path):
+    """Two runs into one study folder would share its jobs: the second stops (exit 2) while
+    the first holds the folder, and writes nothing; --figures-only too."""
+    from pipeline.app.job import folder_lock
+    from pipeline.study import study_dir
+
+    folder = study_dir("actuator_choice", [], tmp_path)
+    folder.mkdir(parents=True)
+    with folder_lock(folder):
+        for flags in ([], ["--figures-only"]):
+            done = subprocess.run([sys.executable, "-m", "pipeline.study", "actuator_choice", "--out", str(tmp_path), *flags],
+                                  capture_output=True, text=True, cwd=tmp_path)
+            assert done.returncode == 2
+            assert done.stderr.strip().splitlines()[-1] == (
+                f"error: {folder}: another run of study actuator_choice is writing this folder; wait for "
+                "it or write elsewhere (--out DIR)")
+    assert [p.name for p in folder.iterdir()] == [".lock"]

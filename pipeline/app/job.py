@@ -76,15 +76,15 @@ def execute(cfg: DictConfig, catalogue, out: Path) -> dict:
 
 
 @contextmanager
-def folder_lock(out: Path):
-    """An exclusive lock on ``out/.lock`` for the duration of the block, or ConfigError at once
-    when another process holds it."""
+def folder_lock(out: Path, busy: str = "another run is writing this folder; wait for it or "
+                                        "choose another (hydra.run.dir=...)"):
+    """An exclusive lock on ``out/.lock`` for the duration of the block, or ConfigError
+    ``{out}: {busy}`` at once when another process holds it."""
     with open(out / ".lock", "a") as handle:
         try:
             fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
-            raise ConfigError(f"{out}: another run is writing this folder; wait for it or "
-                              "choose another (hydra.run.dir=...)") from None
+            raise ConfigError(f"{out}: {busy}") from None
         try:
             yield
         finally:
