@@ -237,17 +237,18 @@ def _run_study(name: str, extra: list[str], out: Path, figures_only: bool,
             summary = _gather(out / "jobs", cases, study.case_labels)
         write_parquet(summary, out / "summary.parquet", provenance)
     results = StudyResults(out)
-    try:
-        results.summary  # noqa: B018  (read once: a missing or corrupt file fails here, clearly)
-    except FileNotFoundError:
-        raise ConfigError(f"study {name}: no results in {out}; run it without --figures-only")
-    except (OSError, ValueError) as exc:  # pyarrow's ArrowInvalid is a ValueError
-        raise ConfigError(f"{out / 'summary.parquet'}: not a readable Parquet file ({exc}); "
-                          "rerun the study") from exc
-    if figures_only:  # redraw from intact results only, before any old figure is removed
-        searched = out / "search.parquet"
-        _check_jobs(out / "jobs", dict.fromkeys([*results.summary["job"], *(
-            pd.read_parquet(searched, columns=["job"])["job"].dropna() if searched.exists() else [])]))
+    inputs = ["summary", *(["search"] if study.search is not None else [])]  # what the analyses read
+    for table in inputs:  # read once each: a missing or corrupt file fails here, clearly
+        try:
+            jobs = results.table(table)["job"].dropna()
+        except FileNotFoundError:
+            raise ConfigError(f"study {name}: no results in {out} ({table}.parquet); run it without "
+                              "--figures-only") from None
+        except (OSError, ValueError, KeyError) as exc:  # pyarrow's ArrowInvalid is a ValueError
+            raise ConfigError(f"{out / f'{table}.parquet'}: not a readable Parquet file of this "
+                              f"study ({one_line(exc)}); rerun the study") from exc
+        if figures_only:  # redraw from intact results only, before any old figure is removed
+            _check_jobs(out / "jobs", jobs)
     written = [out / "summary.parquet"]
     tables = {}
     for analysis in study.analyses:

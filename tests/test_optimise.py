@@ -178,3 +178,24 @@ def test_a_catalogue_objective_needs_a_number_for_every_actuator(tmp_path, monke
         pipeline.study.checked_commands("drive_pareto", [f"catalogue={priced_catalogue(tmp_path, prices)}"],
                                         tmp_path / "out")
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("damage", ["truncated", "missing"])
+def test_figures_only_refuses_a_damaged_search_table_before_touching_the_figures(small_run, tmp_path, monkeypatch, damage):
+    import shutil
+
+    out, _, _ = small_run
+    copy = tmp_path / "drive_pareto"
+    shutil.copytree(out, copy)
+    searched = copy / "search.parquet"
+    if damage == "truncated":
+        searched.write_bytes(searched.read_bytes()[:100])
+    else:
+        searched.unlink()
+    figures = sorted(p.name for p in (copy / "figures").iterdir())
+    small = pipeline.study.load_study("drive_pareto")
+    monkeypatch.setattr(pipeline.study, "load_study", lambda name, directory=None: small)
+    message = "not a readable Parquet file" if damage == "truncated" else r"no results in .*\(search.parquet\)"
+    with pytest.raises(ConfigError, match=message):
+        run_study("drive_pareto", ["grid.n=4", "grid.n_vel=4"], tmp_path, figures_only=True)
+    assert sorted(p.name for p in (copy / "figures").iterdir()) == figures

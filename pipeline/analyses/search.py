@@ -9,7 +9,7 @@ Two facts of the CPR-WWA model (eqs. 18-22, 30-34, minimum-norm tensions) make i
    M = R_i t (eq. 20) and its limit M_mot N_V xi (eq. 32); G_v and L_v grow with N_V and S_v
    falls with it (eq. 22), so u = rho (G l'' + L l') + S t / rho. Every margin of a pose, and
    the motor torque demand, is a function of rho alone (tested: (R, N) and (c R, c N) give the
-   same margins to 1e-14). A (R_i, N_V) grid is therefore a sorted list of ratios.
+   same margins to 1e-12). A (R_i, N_V) grid is therefore a sorted list of ratios.
 2. **Each pose is feasible on one interval of rho.** Each limit reads |alpha rho + beta / rho|
    <= c for every velocity and acceleration of the set, a quasiconvex function of rho > 0
    (convex when alpha and beta share a sign, monotone otherwise); the largest of them is
