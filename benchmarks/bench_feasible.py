@@ -7,10 +7,11 @@ Cases: the CPR-8 on the paper's box (actuator 1, a 20^3 grid, 8 acceleration ver
 slack, torque and voltage margins nested) at zero orientation with both readings of eq. (20)'s
 columns and at 0.5 rad about every axis with moments; and a random 8-cable robot (anchors in a
 4 m cube, attachments on a 0.3 m platform, statics on a 10^3 grid, t in [1, 500] N, a 30 kg
-platform). For each: poses/s of the margins by hyperplane shifting (with its LP fallback; second call, so
-neither numba's cached search nor scipy's import is counted), of the LPs alone (on every 10th
-pose: they are slow), their ratio, and the share of poses the fast path sent to the LP; then
-poses/s of the whole kernel (every criterion, chunks of 4 096 poses) under that model.
+platform). For each: poses/s of the tension margins (each criterion's least over the
+acceleration vertices) by hyperplane shifting with its LP fallback (second call, so neither
+numba's cached search nor scipy's import is counted), of the LPs alone (on every 10th pose:
+they are slow), their ratio, and the share of poses the fast path sent to the LP; then poses/s
+of the whole kernel (every criterion, chunks of 4 096 poses) under that model.
 """
 
 from __future__ import annotations

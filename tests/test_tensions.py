@@ -53,7 +53,7 @@ def test_symmetric_four_cable_point_mass_gets_the_analytic_tensions():
                                            tension_families(state, ACTUATOR), 1e-6, distribution=True)
     assert chosen[0, 0] / RADIUS == pytest.approx(np.full(4, tension), rel=1e-7)
     torque = RADIUS * tension
-    assert margins["slack"][0, 0] == pytest.approx(torque / ACTUATOR.torque_limit, rel=1e-7)
+    assert margins["slack"][0] == pytest.approx(torque / ACTUATOR.torque_limit, rel=1e-7)
     assert REGISTRY["torque"].function(state, ACTUATOR)[0] == pytest.approx(1 - torque / ACTUATOR.torque_limit)
     assert REGISTRY["voltage"].function(state, ACTUATOR)[0] == pytest.approx(
         1 - ACTUATOR.S_v * torque / ACTUATOR.voltage_limit)
@@ -135,7 +135,7 @@ def test_slack_agrees_with_an_independent_nonnegative_least_squares(columns, ori
     margins, *_ = feasible_tensions(state.structure, *state.wrench_pinv, state.required_wrenches,
                                    tension_families(state, problem.limits), 1e-6)
     wrenches = state.required_wrenches
-    residual = np.array([[nnls(s, w)[1] / np.linalg.norm(w) for w in wrenches] for s in state.structure])
+    residual = np.array([max(nnls(s, w)[1] / np.linalg.norm(w) for w in wrenches) for s in state.structure])
     clear = np.abs(margins["slack"]) > 1e-6
     assert clear.mean() > 0.95
     assert ((margins["slack"] < 0) == (residual > 1e-9))[clear].all()
@@ -155,7 +155,7 @@ def test_the_box_vertices_decide_every_acceleration_inside_it(make_cfg, catalogu
     inside = box.min(axis=0) + rng.random((12, 3)) * (box.max(axis=0) - box.min(axis=0))
     wrenches = load_wrenches(problem.spec, inside, problem.robot.up, state.rotation)[:, :3]
     interior, *_ = feasible_tensions(state.structure, *state.wrench_pinv, wrenches, families[:1], 1e-6)
-    assert (interior["slack"].min(axis=1) >= vertices["slack"].min(axis=1) - 1e-9).all()
+    assert (interior["slack"] >= vertices["slack"] - 1e-9).all()
 
 
 def test_zero_orientation_with_moment_rows_is_unreachable_as_the_rank_5_jacobian_says(make_cfg, catalogue):

@@ -12,7 +12,9 @@ the largest uniform shrink of its intervals that still admits a valid x. Familie
 the order given (slack, then the tension rating, torque, voltage): each one's LP keeps the
 earlier families' intervals, relaxed by their own margin where that is negative. So a pose is
 feasible at w (every margin >= 0) exactly when one x satisfies all intervals at once, and the
-margin of a later criterion is the best it can do while the earlier ones do their best.
+margin of a later criterion is the best it can do while the earlier ones do their best. A
+pose's margin of a criterion is the least over its K required wrenches (each wrench nested on
+its own): what the criterion reads.
 
 Exactness: for a fixed pose the set of wrenches w admitting a valid x is convex (the image of a
 polytope under a linear map), so checking the vertices of a convex required-wrench set (the
@@ -71,12 +73,13 @@ def feasible_tensions(
     structure: np.ndarray, pinv: np.ndarray, rank: np.ndarray, wrenches: np.ndarray,
     families: list[Family], residual_rtol: float, distribution: bool = False,
 ) -> tuple[dict[str, np.ndarray], np.ndarray | None, np.ndarray]:
-    """Margins (n, K): ``unreachable`` (1 - residual / residual_rtol) and the nested capacity
-    margins of ``families``; with ``distribution`` the chosen x (n, K, m), else None; and (n,)
-    which poses the LPs solved. ``wrenches`` (K, r) or (n, K, r)."""
+    """Margins (n,), each the least over the K required wrenches: ``unreachable``
+    (1 - residual / residual_rtol) and the nested capacity margins of ``families``; with
+    ``distribution`` the chosen x (n, K, m), else None; and (n,) which poses the LPs solved.
+    ``wrenches`` (K, r) or (n, K, r)."""
     residual, projected = reachability(structure, pinv, wrenches)
     margins, chosen, by_lp = capacity_margins(structure, pinv, rank, projected, families, distribution)
-    margins["unreachable"] = 1.0 - residual / residual_rtol
+    margins["unreachable"] = 1.0 - residual.max(axis=1) / residual_rtol
     return margins, chosen, by_lp
 
 
@@ -85,7 +88,7 @@ def reachability(structure: np.ndarray, pinv: np.ndarray, wrenches: np.ndarray):
     projected onto the range of S (n, K, r). ``pinv`` (n, m, r) = S^+, ``wrenches`` (K, r) or
     (n, K, r)."""
     w = np.broadcast_to(wrenches, (structure.shape[0], *np.shape(wrenches)[-2:]))
-    projected = np.einsum("nrm,nmq,nkq->nkr", structure, pinv, w)
+    projected = w @ np.swapaxes(structure @ pinv, 1, 2)  # S S^+ w: matmul, not a 3-operand einsum
     size = np.linalg.norm(w, axis=2)
     residual = np.linalg.norm(projected - w, axis=2) / np.where(size > 0, size, 1.0)
     return residual, projected
@@ -95,13 +98,13 @@ def capacity_margins(
     structure: np.ndarray, pinv: np.ndarray, rank: np.ndarray, wrenches: np.ndarray,
     families: list[Family], distribution: bool = False,
 ) -> tuple[dict[str, np.ndarray], np.ndarray | None, np.ndarray]:
-    """Nested capacity margins (n, K) per family; with ``distribution`` the chosen x
-    (n, K, m), the solution of the last family's LP, else None; and (n,) the poses solved by
-    LP. ``wrenches`` (n, K, r) must lie in the range of S (see :func:`reachability`); ``pinv``
-    and ``rank`` (n,) are S^+ and the rank of S."""
+    """Nested capacity margins (n,) per family, each the least over the K wrenches; with
+    ``distribution`` the chosen x (n, K, m), the solution of the last family's LP, else None;
+    and (n,) the poses solved by LP. ``wrenches`` (n, K, r) must lie in the range of S (see
+    :func:`reachability`); ``pinv`` and ``rank`` (n,) are S^+ and the rank of S."""
     n, _, m = structure.shape
     k = wrenches.shape[1]
-    margins = {f.name: np.empty((n, k)) for f in families}
+    margins = {f.name: np.empty(n) for f in families}
     chosen = np.empty((n, k, m)) if distribution else None
     unique = rank == m
     if unique.any():  # x = S^+ w is the only candidate: the margins are closed forms
@@ -111,7 +114,7 @@ def capacity_margins(
         for f in families:
             lower, upper, scale = (a[unique] for a in _broadcast(f, (n, k, m))[1:])
             room = np.minimum(x - lower, upper - x) / scale
-            margins[f.name][unique] = np.minimum(room.min(axis=2), 1.0)
+            margins[f.name][unique] = np.minimum(room.min(axis=(1, 2)), 1.0)
     by_lp, shifted = ~unique, np.zeros(n, dtype=bool)
     if not distribution:
         for q in np.unique(rank[by_lp]):
@@ -135,7 +138,7 @@ def capacity_margins(
             if distribution:
                 chosen[poses] = x
             for name, value in found.items():
-                margins[name][poses] = value
+                margins[name][poses] = value.min(axis=1)
             by_lp[poses] = True
     return margins, chosen, by_lp
 

@@ -82,7 +82,6 @@ def inverse_dynamics(
         families = actuator_families(motion.tension, motion.winch_radius, actuator, other, other)
         margins, chosen, _ = feasible_tensions(state.structure, *state.wrench_pinv, wrench[:, None, :],
                                                families, motion.tension.residual_rtol, distribution=True)
-        margins = {name: value[:, 0] for name, value in margins.items()}
         torque = chosen[:, 0, :]
     else:
         torque = np.einsum("nmc,nc->nm", state.wrench_pinv[0], wrench)

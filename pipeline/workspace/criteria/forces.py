@@ -25,7 +25,7 @@ def feasible_margins(state, limits) -> dict[str, np.ndarray]:
             state.structure, *state.wrench_pinv, state.required_wrenches,
             tension_families(state, limits), tension_spec(state).residual_rtol,
         )
-        cache[key] = {name: value.min(axis=1) for name, value in margins.items()}
+        cache[key] = margins
         state.tension_lp = by_lp
     return cache[key]
 
