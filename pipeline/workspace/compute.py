@@ -275,7 +275,7 @@ def tabulate(problem: WorkspaceProblem, positions: np.ndarray, raw: dict) -> pd.
 # The speeds hold for the paper's set of REFERENCE_SET velocities per pose (grid.n_vel = 6);
 # a pose's cost grows with its set. A job estimated above LONG_JOB_S is announced with a warning.
 WORKER_START_S = 0.4
-POSES_PER_SECOND = {"pinv": 200_000, "feasible": 3_000}
+POSES_PER_SECOND = {"pinv": 200_000, "feasible": 20_000}
 REFERENCE_SET = 93
 LONG_JOB_S = 30.0
 
