@@ -21,9 +21,12 @@ import argparse
 import hashlib
 import json
 import logging
+import multiprocessing
+import os
 import re
 import shutil
 import sys
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Callable, Optional
@@ -52,11 +55,17 @@ ALWAYS_EXCLUDED = ["compute.n_jobs", "compute.backend", "compute.chunk_size", "c
                    "compute.max_poses"]
 # Studies are many small jobs: by default two at a time on two worker processes kept for every
 # sweep of the command, each job on one core (one level of parallelism); "serial": one after
-# another in this process, each with its own compute.n_jobs (large grids, Dask)
+# another in this process, each with its own compute.n_jobs (large grids, Dask); "one_core": one
+# after another, each job on one core (what each of the concurrent studies of --all uses)
 LAUNCHERS = {
     "pool": ["hydra.launcher.n_jobs=2", "compute.n_jobs=1"],
     "serial": ["hydra.launcher.n_jobs=1"],
+    "one_core": ["hydra.launcher.n_jobs=1", "compute.n_jobs=1"],
 }
+# Several studies with the default launcher: this many at a time, each in its own process with
+# its jobs on one core (one level of parallelism); the optimiser and search studies, which run
+# their jobs one after another anyway, start first (measured: docs/performance.md)
+STUDY_WORKERS = 2
 ANALYSES: dict[str, Callable[[StudyResults], pd.DataFrame]] = {
     "choice": lambda results: choose(results.summary),
     "acceptance": lambda results: acceptance(results.summary),
@@ -369,6 +378,23 @@ def checked_commands(name: str, extra: list[str], out_root: Path | None = None,
     return checked
 
 
+def _concurrently(runs: list[tuple], workers: int) -> list[Path]:
+    """:func:`run_study` of every run, ``workers`` at a time in forked processes (the code is
+    imported once, in this one), the designing studies first; the files of all, in the given
+    order. The first failure is raised once the running studies end; none not yet started
+    starts."""
+    designing = [run for run in runs
+                 if load_study(run[0]).optimise is not None or load_study(run[0]).search is not None]
+    ordered = designing + [run for run in runs if run not in designing]
+    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork")) as pool:
+        futures = {run[0]: pool.submit(run_study, *run) for run in ordered}
+        try:
+            return [path for run in runs for path in futures[run[0]].result()]
+        except BaseException:
+            pool.shutdown(cancel_futures=True)
+            raise
+
+
 def _check_searchable(cfg, name: str) -> None:
     """The search is exact for CPR-WWA with minimum-norm tensions (``pipeline.analyses.search``) and
     reads every job's margins: ConfigError otherwise."""
@@ -483,8 +509,10 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--force", action="store_true",
                         help="replace a study folder that holds another configuration's results")
     parser.add_argument("--launcher", choices=sorted(LAUNCHERS), default="pool",
-                        help="pool: 2 jobs at a time on worker processes (default); serial: one "
-                             "after another in this process, each with its compute.n_jobs")
+                        help="pool (default): one study's jobs 2 at a time on worker processes, "
+                             "several studies 2 at a time, each with its jobs on one core; "
+                             "serial: one after another in this process, each job with its "
+                             "compute.n_jobs; one_core: one after another, each job on one core")
     args = parser.parse_intermixed_args(argv)
     _log_to_console()
     if args.list:
@@ -497,16 +525,20 @@ def main(argv: list[str] | None = None) -> None:
     try:
         if not names:
             raise ConfigError("no study given (use --all or --list)")
+        workers = min(STUDY_WORKERS, os.cpu_count() or 1, len(names))
+        concurrent = workers > 1 and args.launcher == "pool" and not args.figures_only
+        launcher = "one_core" if concurrent else args.launcher
         checked = {}  # every study of the command checked before the first one runs
         for name in names:
             load_study(name)
             if not args.figures_only:
                 claim_study_dir(study_dir(name, extra, args.out), name, extra, args.force)
-                checked[name] = checked_commands(name, extra, args.out, args.launcher)
-        for name in names:
-            for path in run_study(name, extra, args.out, args.figures_only, args.launcher,
-                                  checked.get(name), args.force):
-                log.info("wrote %s", path)
+                checked[name] = checked_commands(name, extra, args.out, launcher)
+        runs = [(name, extra, args.out, args.figures_only, launcher, checked.get(name), args.force)
+                for name in names]
+        for path in (_concurrently(runs, workers) if concurrent else
+                     (path for run in runs for path in run_study(*run))):
+            log.info("wrote %s", path)
     except ConfigError as exc:
         print(f"error: {exc}", file=sys.stderr)
         raise SystemExit(2) from None

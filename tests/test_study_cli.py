@@ -209,3 +209,21 @@ def test_a_second_run_of_a_study_at_once_stops_in_one_line(tmp_path):
                 f"error: {folder}: another run of study actuator_choice is writing this folder; wait for "
                 "it or write elsewhere (--out DIR)")
     assert [p.name for p in folder.iterdir()] == [".lock"]
+
+
+def test_several_studies_run_two_at_a_time_with_the_results_of_one_run_each(tmp_path):
+    """Two studies in one command run concurrently (each its jobs on one core): the same tables
+    as the study run alone with the default two-worker pool."""
+    (tmp_path / "alone").mkdir()
+    assert study(tmp_path / "alone", "actuator_choice").returncode == 0
+    proc = study(tmp_path, "actuator_choice", "actuator_choice_pulling")
+    assert proc.returncode == 0, proc.stderr
+    both, alone = tmp_path / "outputs" / "studies", tmp_path / "alone" / "outputs" / "studies"
+    for table in ("summary", "choice"):
+        pd.testing.assert_frame_equal(pd.read_parquet(both / "actuator_choice" / f"{table}.parquet"),
+                                      pd.read_parquet(alone / "actuator_choice" / f"{table}.parquet"))
+    pulling = pd.read_parquet(both / "actuator_choice_pulling" / "choice.parquet")
+    assert pulling["feasible_pct"].round(2).tolist() == [66.67, 62.96, 51.85, 51.85, 14.81]
+    sweep = (both / "actuator_choice" / "jobs" / "multirun.yaml").read_text()
+    assert "CdprLauncher\n    n_jobs: 1\n" in sweep  # one level of parallelism: the studies
+    assert "CdprLauncher\n    n_jobs: 2\n" in (alone / "actuator_choice" / "jobs" / "multirun.yaml").read_text()
