@@ -43,7 +43,7 @@ from pipeline.analyses.figures import SERIES_DIR, FigureSpec, StudyResults, rend
 from pipeline.app.job import PREPARED, changed_files, execute, folder_lock
 from pipeline.analyses.optimise import (OptimiseSpec, best_drive, check_catalogue_objectives, corner_overrides, optimise,
                                trial_folder)
-from pipeline.app.preflight import check, parse, quoted
+from pipeline.app.preflight import Reuse, check, parse, quoted
 from pipeline.app.resources import STUDIES_DIR
 from pipeline.app.results import code_version, write_csv, write_parquet, write_text
 from pipeline.analyses.search import SearchSpec, exact_drive, search
@@ -431,10 +431,11 @@ def _designs(study: StudySpec, extra: list[str], jobs_dir: Path, catalogue,
     quiet, progress = logging.getLogger("pipeline"), logging.getLogger("pipeline.study")
     required = cfg.choice.required_pct
     searched_rows = []
+    reuse = Reuse()  # every trial has the same config files and catalogue: read once
 
     def run(folder: Path, overrides: list[str]) -> dict:
         ((job_cfg, job_catalogue),) = check([*study.overrides, *extra, *overrides,
-                                             f"hydra.run.dir={quoted(folder)}"]).values()
+                                             f"hydra.run.dir={quoted(folder)}"], reuse).values()
         folder.mkdir(parents=True, exist_ok=True)
         return {"job": folder.name, **execute(job_cfg, job_catalogue, folder)}
 

@@ -19,6 +19,7 @@ import itertools
 import os
 import re
 import shutil
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -124,10 +125,25 @@ def _parse_one(text: str) -> tuple[Override, ...]:
         raise ConfigError(f"{text}: {one_line(exc)}") from exc
 
 
-def check(argv: list[str]) -> dict[str, tuple[DictConfig, Any]]:
+RUN_FOLDERS = ("hydra.run.dir", "hydra.sweep.dir")
+
+
+@dataclass
+class Reuse:
+    """What :func:`check` may keep across calls over the same config files and catalogues (a
+    study's trials, checked one by one): each set of files composed and typed once, each
+    catalogue read once, the run folder (``RUN_FOLDERS``, the caller's own) set afterwards. The
+    configs are copied before any override is applied."""
+
+    compositions: dict = field(default_factory=dict)
+    catalogues: dict = field(default_factory=dict)
+
+
+def check(argv: list[str], reuse: Reuse | None = None) -> dict[str, tuple[DictConfig, Any]]:
     """Raise ConfigError for the first job whose config cannot be composed or is invalid. Returns
     every job's typed, validated config and catalogue (None without an actuator), by the YAML of
-    its composed config (``pipeline.app.job.PREPARED``: a job run in this process is not typed twice)."""
+    its composed config (``pipeline.app.job.PREPARED``: a job run in this process is not typed twice).
+    ``reuse``: kept by a caller that checks many commands over the same files (:class:`Reuse`)."""
     try:
         jobs = job_overrides(argv)
         multirun_base = _multirun_base(argv) if jobs is not None else None
@@ -137,14 +153,18 @@ def check(argv: list[str]) -> dict[str, tuple[DictConfig, Any]]:
         return {}
     register()
     search_path = _search_path(argv)
-    composed: dict[tuple[str, ...], tuple[DictConfig, DictConfig, DictConfig]] = {}
-    catalogues = {}
+    # a caller's trials differ in their folder too: that value is set on Hydra's node afterwards
+    after = RUN_FOLDERS if reuse is not None else ()
+    reuse = Reuse() if reuse is None else reuse
+    composed: dict[tuple[str, ...], tuple[DictConfig, DictConfig, DictConfig]] = reuse.compositions
+    catalogues = reuse.catalogues
     prepared = {}
 
     def composed_for(overrides: list[str]) -> tuple[list[Override], tuple[DictConfig, ...]]:
         """The job's parsed overrides, and (with Hydra's node, without, typed) for its files."""
         parsed = parse(overrides)
-        files = (*search_path, *(o.input_line for o in parsed if structural(o)))
+        files = (*search_path, *(o.input_line for o in parsed
+                                 if structural(o) and o.key_or_group not in after))
         if files not in composed:
             try:
                 hydra = compose(config_name="config", overrides=list(files), return_hydra_config=True)
@@ -172,7 +192,7 @@ def check(argv: list[str]) -> dict[str, tuple[DictConfig, Any]]:
         parsed, (hydra, _, _) = composed_for(overrides)
         hydra = copy.deepcopy(hydra)
         for override in parsed:
-            if not structural(override):
+            if not structural(override) or override.key_or_group in after:
                 _apply(hydra, override)
         return hydra.hydra
 
