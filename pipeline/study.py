@@ -378,18 +378,23 @@ def checked_commands(name: str, extra: list[str], out_root: Path | None = None,
     return checked
 
 
-def _concurrently(runs: list[tuple], workers: int) -> list[Path]:
-    """:func:`run_study` of every run, ``workers`` at a time in forked processes (the code is
-    imported once, in this one), the designing studies first; the files of all, in the given
-    order. The first failure is raised once the running studies end; none not yet started
-    starts."""
-    designing = [run for run in runs
-                 if load_study(run[0]).optimise is not None or load_study(run[0]).search is not None]
-    ordered = designing + [run for run in runs if run not in designing]
+def _concurrently(names: list[str], extra: list[str], out_root: Path | None, launcher: str,
+                  force: bool, workers: int) -> list[Path]:
+    """Every study checked (:func:`checked_commands`), then run (:func:`run_study`), ``workers``
+    at a time in forked processes (the code is imported once, in this one): no study starts
+    before all are checked, the first failing check is raised as in a serial run, and the
+    designing studies start first. The files of all, in the given order; the first failure is
+    raised once the running studies end, and none not yet started starts."""
     with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork")) as pool:
-        futures = {run[0]: pool.submit(run_study, *run) for run in ordered}
         try:
-            return [path for run in runs for path in futures[run[0]].result()]
+            checks = [pool.submit(checked_commands, name, extra, out_root, launcher) for name in names]
+            checked = {name: check.result() for name, check in zip(names, checks)}
+            designing = [name for name in names
+                         if load_study(name).optimise is not None or load_study(name).search is not None]
+            futures = {name: pool.submit(run_study, name, extra, out_root, False, launcher,
+                                         checked[name], force)
+                       for name in designing + [name for name in names if name not in designing]}
+            return [path for name in names for path in futures[name].result()]
         except BaseException:
             pool.shutdown(cancel_futures=True)
             raise
@@ -534,11 +539,11 @@ def main(argv: list[str] | None = None) -> None:
             load_study(name)
             if not args.figures_only:
                 claim_study_dir(study_dir(name, extra, args.out), name, extra, args.force)
-                checked[name] = checked_commands(name, extra, args.out, launcher)
-        runs = [(name, extra, args.out, args.figures_only, launcher, checked.get(name), args.force)
-                for name in names]
-        for path in (_concurrently(runs, workers) if concurrent else
-                     (path for run in runs for path in run_study(*run))):
+                if not concurrent:
+                    checked[name] = checked_commands(name, extra, args.out, launcher)
+        for path in (_concurrently(names, extra, args.out, launcher, args.force, workers) if concurrent
+                     else (path for name in names for path in run_study(
+                         name, extra, args.out, args.figures_only, launcher, checked.get(name), args.force))):
             log.info("wrote %s", path)
     except ConfigError as exc:
         print(f"error: {exc}", file=sys.stderr)

@@ -227,3 +227,14 @@ def test_several_studies_run_two_at_a_time_with_the_results_of_one_run_each(tmp_
     sweep = (both / "actuator_choice" / "jobs" / "multirun.yaml").read_text()
     assert "CdprLauncher\n    n_jobs: 1\n" in sweep  # one level of parallelism: the studies
     assert "CdprLauncher\n    n_jobs: 2\n" in (alone / "actuator_choice" / "jobs" / "multirun.yaml").read_text()
+
+
+def test_a_bad_study_among_several_stops_them_all_before_any_runs(tmp_path):
+    """The studies of one command are checked in the concurrent workers too, all before the
+    first runs: the failing check is the one line, exit 2, and no study folder is written."""
+    proc = study(tmp_path, "actuator_choice", "evidence_cpr8", "load.mass=3")
+    assert proc.returncode == 2
+    assert proc.stderr.strip().splitlines() == [
+        "error: load.mass=3: study evidence_cpr8 checks the papers' published facts on their own "
+        "settings; it takes compute.* overrides only"]
+    assert not (tmp_path / "outputs").exists()
