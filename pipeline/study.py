@@ -104,6 +104,11 @@ class StudySpec:
     figures: list[FigureSpec] = field(default_factory=list)
     name: Optional[str] = None
 
+    @property
+    def designs(self) -> bool:
+        """Whether trials or a search replace the sweep (jobs run one after another here)."""
+        return self.optimise is not None or self.search is not None
+
 
 def available(directory: Path = STUDIES_DIR) -> list[str]:
     return sorted(path.stem for path in directory.glob("*.yaml"))
@@ -225,7 +230,7 @@ def _run_study(name: str, extra: list[str], out: Path, figures_only: bool,
         commands = [command for command, _ in checked]
         write_text(out / "study.yaml", provenance)
         log.info("study %s: %s", name, study.title)
-        if study.optimise is not None or study.search is not None:
+        if study.designs:
             _start_or_resume(out / "jobs", [[OmegaConf.to_yaml({
                 "optimise": study.optimise and asdict(study.optimise),
                 "search": study.search and asdict(study.search), "extra_overrides": extra})]])
@@ -344,7 +349,7 @@ def checked_commands(name: str, extra: list[str], out_root: Path | None = None,
         raise ConfigError(f"{changed[0]}: study {name} checks the papers' published facts on "
                           "their own settings; it takes compute.* overrides only")
     out = study_dir(name, extra, out_root)
-    if study.optimise is not None or study.search is not None:  # the lowest and highest designs
+    if study.designs:  # the lowest and highest designs
         folder = f"hydra.run.dir={quoted(out)}"
         first = f"actuator={_catalogue([*study.overrides, *extra]).index[0]}"  # an id of the user's catalogue
         try:
@@ -389,8 +394,7 @@ def _concurrently(names: list[str], extra: list[str], out_root: Path | None, lau
         try:
             checks = [pool.submit(checked_commands, name, extra, out_root, launcher) for name in names]
             checked = {name: check.result() for name, check in zip(names, checks)}
-            designing = [name for name in names
-                         if load_study(name).optimise is not None or load_study(name).search is not None]
+            designing = [name for name in names if load_study(name).designs]
             futures = {name: pool.submit(run_study, name, extra, out_root, False, launcher,
                                          checked[name], force)
                        for name in designing + [name for name in names if name not in designing]}
