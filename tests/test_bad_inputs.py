@@ -94,6 +94,11 @@ CASES = [
     ("pipeline", ["robot=irpm6", "wrench.fx=nan"], "wrench.fx=nan"),
     ("pipeline", ["robot=irpm6", "robot.search.hi=[6,6,inf]"], "robot.search.hi=[6.0, 6.0, inf]: every value must be a finite number"),
     ("pipeline", ["tension.model=feasible", "tension.t_max=inf"], "tension.t_max=inf"),
+    # magnitudes past any cable robot (a mistyped exponent) once reached HiGHS: "Model error"
+    ("pipeline", ["tension.model=feasible", "tension.t_min=1e308"], "tension.t_min=1e+308: must be at most 1e+09 N"),
+    ("pipeline", ["tension.model=feasible", "load.mass=1e200"], "load.mass=1e+200: must be >= 0 and at most 1e+08 kg"),
+    ("pipeline", ["tension.model=feasible", "load.external=[0,0,1e200,0,0,0]"], "every value must be at most 1e+09"),
+    ("pipeline", ["robot=irpm6", "tension=feasible", "wrench.fz=1e250"], "wrench.fz=1e+250: must be finite and at most 1e+09"),
     ("pipeline", ["grid.n=1000000"], "compute.max_poses=50000000"),
     ("pipeline", ["grid.n_vel=100000"], "grid.n_vel=100000"),
     ("pipeline", ["orientation.total.n=1000", "orientation.total.bound=0.1"], "compute.max_poses"),

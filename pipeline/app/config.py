@@ -46,16 +46,33 @@ def finite(value):
     return None if abs(value) < INF else "must be finite"
 
 
+# Largest force or moment (N, N m) and mass (kg) a config may give: far beyond any cable robot,
+# and well inside the range where the LP solver's coefficients stay finite (HiGHS reads 1e20 as
+# infinite), so a mistyped exponent is one line rather than a solver failure.
+MAX_FORCE = 1e9
+MAX_MASS = 1e8
+
+
+def force(value):
+    return None if abs(value) <= MAX_FORCE else f"must be finite and at most {MAX_FORCE:g} in magnitude (N, N m)"
+
+
+def mass_kg(value):
+    return None if 0 <= value <= MAX_MASS else f"must be >= 0 and at most {MAX_MASS:g} kg"
+
+
 def at_least(bound: int):
     return lambda value: None if value >= bound else f"must be >= {bound}"
 
 
-def vector(size: int, meaning: str):
-    """``size`` finite numbers."""
+def vector(size: int, meaning: str, bound: float = INF):
+    """``size`` finite numbers, each at most ``bound`` in magnitude."""
     def check(values):
         values = list(values)
         if not all(isinstance(v, (int, float)) and abs(v) < INF for v in values):
             return "every value must be a finite number"
+        if not all(abs(v) <= bound for v in values):
+            return f"every value must be at most {bound:g} in magnitude"
         return None if len(values) == size else f"needs {size} values ({meaning})"
     return check
 
@@ -258,12 +275,12 @@ class OrientationConfig:
 class WrenchConfig:
     """Applied wrench f_ext of eq. (11) of the IRPM paper, N and N m (the paper gives kN)."""
 
-    fx: float = rule(finite, 0.0)
-    fy: float = rule(finite, 0.0)
-    fz: float = rule(finite, 100_000.0)
-    mx: float = rule(finite, 0.0)
-    my: float = rule(finite, 0.0)
-    mz: float = rule(finite, 0.0)
+    fx: float = rule(force, 0.0)
+    fy: float = rule(force, 0.0)
+    fz: float = rule(force, 100_000.0)
+    mx: float = rule(force, 0.0)
+    my: float = rule(force, 0.0)
+    mz: float = rule(force, 0.0)
 
 
 @dataclass
@@ -313,10 +330,10 @@ class LoadConfig:
     centre of mass (m, platform frame) and a constant external wrench [f_x f_y f_z M_x M_y M_z]
     (N, N m) the cables must also balance, in every analysis."""
 
-    mass: float = rule(non_negative, 2.0)
+    mass: float = rule(mass_kg, 2.0)
     gravity: float = rule(non_negative, 9.81)
     com: list[float] = rule(vector(3, "x y z, m, platform frame"), factory=lambda: [0.0] * 3)
-    external: list[float] = rule(vector(6, "fx fy fz mx my mz"), factory=lambda: [0.0] * 6)
+    external: list[float] = rule(vector(6, "fx fy fz mx my mz", MAX_FORCE), factory=lambda: [0.0] * 6)
 
 
 @dataclass
@@ -619,6 +636,8 @@ def _limit_values(key: str, value, n_cables: int):
     values = np.broadcast_to(np.asarray(items, dtype=float), (n_cables,))
     if not np.isfinite(values).all():
         raise ConfigError(f"{key}={_shown(value)}: must be finite (null: no limit)")
+    if (np.abs(values) > MAX_FORCE).any():
+        raise ConfigError(f"{key}={_shown(value)}: must be at most {MAX_FORCE:g} N")
     return values
 
 
