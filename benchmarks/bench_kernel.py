@@ -5,7 +5,10 @@
     python benchmarks/bench_kernel.py --full   # also CPR-WWA 100^3 on 2 workers
 
 CPR-WWA: the paper's sets, 93 velocities (7 per axis, |v| < V) and 8 acceleration corners,
-actuator 2, psi = theta = phi = 0.5 rad (rank-6 Jacobian). IRPM: statics on the paper's box
+actuator 2, psi = theta = phi = 0.5 rad (rank-6 Jacobian); "zero orientation": the default
+orientation, where every J^T is one rank short (numpy: an SVD per pose; the fused kernel: its
+deflated route). "fused": the compiled kernel of ``pipeline.workspace.fused``, compiled
+before timing. IRPM: statics on the paper's box
 (31 x 31 x 26 points), gamma = 15 deg. "1 core" rows run with one BLAS thread. Ratios are against
 the reference's poses/s measured here, in the same process. Peak memory is this process's
 maximum resident set size (workers not included).
@@ -19,6 +22,7 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")  # honest per-core figures: set before numpy is imported
 
 import argparse  # noqa: E402
+import dataclasses  # noqa: E402
 import resource  # noqa: E402
 import time  # noqa: E402
 
@@ -33,9 +37,9 @@ from pipeline.workspace.reference import literal_margins  # noqa: E402
 from pipeline.workspace.compute import bounded_chunk_size, build_problem  # noqa: E402
 
 
-def problem_for(n: int, *extra: str):
+def problem_for(n: int, *extra: str, angle: float = 0.5):
     return composed(f"grid.n={n}", "grid.n_vel=6", "actuator=2",
-                    "orientation.psi=0.5", "orientation.theta=0.5", "orientation.phi=0.5", *extra)
+                    *(f"orientation.{a}={angle}" for a in ("psi", "theta", "phi")), *extra)
 
 
 def composed(*overrides: str):
@@ -78,6 +82,12 @@ def main() -> None:
     for n in (6, 40):
         problem, grid = problem_for(n)
         rows.append((f"CPR-WWA kernel {n}^3, 1 core", grid.n_points, serial_rate(problem, grid)))
+    for angle, label in ((0.5, ""), (0.0, " zero orientation")):
+        problem, grid = problem_for(40, angle=angle)
+        if angle == 0.0:
+            rows.append((f"CPR-WWA kernel 40^3{label}, 1 core", grid.n_points, serial_rate(problem, grid)))
+        fused = dataclasses.replace(problem, fused=True)
+        rows.append((f"CPR-WWA fused 40^3{label}, 1 core", grid.n_points, serial_rate(fused, grid)))
     for n in (6, 20):  # cables only pull: 8 acceleration vertices x 3 nested LPs per pose
         problem, grid = problem_for(n, "tension.model=feasible")
         rows.append((f"CPR-WWA feasible tensions {n}^3, 1 core", grid.n_points, serial_rate(problem, grid)))
@@ -97,10 +107,10 @@ def main() -> None:
             parallel()  # start the loky worker pool once, outside the timing
         rows.append((f"CPR-WWA kernel {n}^3, 2 workers", grid.n_points, timed(parallel)))
 
-    print(f"{'case':40s} {'poses':>9s} {'seconds':>9s} {'poses/s':>11s} {'x reference':>12s}")
+    print(f"{'case':46s} {'poses':>9s} {'seconds':>9s} {'poses/s':>11s} {'x reference':>12s}")
     for name, poses, secs in rows:
         rate = poses / secs
-        print(f"{name:40s} {poses:9d} {secs:9.3f} {rate:11,.0f} {rate / reference:12,.0f}")
+        print(f"{name:46s} {poses:9d} {secs:9.3f} {rate:11,.0f} {rate / reference:12,.0f}")
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(f"peak resident memory of this process: {peak:.0f} MiB")
 

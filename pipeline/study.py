@@ -52,7 +52,7 @@ from pipeline.analyses.survival import survival
 
 OUTPUT_DIR = Path("outputs") / "studies"
 ALWAYS_EXCLUDED = ["compute.n_jobs", "compute.backend", "compute.chunk_size", "compute.scheduler",
-                   "compute.max_poses"]
+                   "compute.max_poses", "compute.kernel"]
 # Studies are many small jobs: by default two at a time on two worker processes kept for every
 # sweep of the command, each job on one core (one level of parallelism); "serial": one after
 # another in this process, each with its own compute.n_jobs (large grids, Dask); "one_core": one

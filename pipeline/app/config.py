@@ -85,6 +85,16 @@ class PinvColumns(Enum):
     full = "full"
 
 
+class Kernel(Enum):
+    """Which code evaluates the criteria: ``auto`` (the compiled kernel where it applies and
+    the cost model says it pays), ``numpy`` (always the numpy criteria) or ``fused`` (the
+    compiled kernel of ``pipeline.workspace.fused``, refused where it does not apply)."""
+
+    auto = "auto"
+    numpy = "numpy"
+    fused = "fused"
+
+
 class VelocityBoundary(Enum):
     """Whether grid velocities with |v| = V_cmax exactly belong to the set of eq. (26)."""
 
@@ -383,13 +393,15 @@ class ComputeConfig:
     """Parallel execution: joblib backend, workers (capped at the machine's cores except on
     Dask), poses per chunk. ``backend=dask`` runs the chunks on the Dask scheduler at
     ``scheduler`` (null: a local cluster of n_jobs workers). ``max_poses``: the most pose x
-    orientation evaluations a job may take (checked before any work; raise it knowingly)."""
+    orientation evaluations a job may take (checked before any work; raise it knowingly).
+    ``kernel``: :class:`Kernel` (docs/performance.md: when the compiled kernel pays)."""
 
     n_jobs: int = rule(lambda v: None if v != 0 else "must be a positive count or negative (joblib style)", 2)
     backend: str = rule(lambda v: None if v in JOBLIB_BACKENDS else f"must be one of {', '.join(JOBLIB_BACKENDS)}", "loky")
     chunk_size: int = rule(positive, 20_000)
     scheduler: Optional[str] = None
     max_poses: int = 50_000_000
+    kernel: Kernel = Kernel.auto
 
 
 @dataclass
@@ -537,6 +549,12 @@ def validate(cfg: DictConfig, catalogue_ids=None, typed: bool = False) -> DictCo
     if cfg.output.cables and not cfg.output.points:
         raise ConfigError("output.cables=true: the cables go into points.parquet, which "
                           "output.points=false does not write")
+    if cfg.compute.kernel is Kernel.fused:
+        from pipeline.workspace.compute import fused_unfit
+
+        unfit = fused_unfit(cfg)
+        if unfit:
+            raise ConfigError(f"compute.kernel=fused: {unfit}; use compute.kernel=auto or numpy")
     if cfg.compute.backend == "dask" and importlib.util.find_spec("distributed") is None:
         raise ConfigError("compute.backend=dask: needs Dask, pip install 'cdpr-studies[dask]'")
     if "actuator" in cfg and cfg.actuator not in set(catalogue_ids):

@@ -153,14 +153,7 @@ class PoseDynamics(PoseGeometry):
 
     @cached_property
     def _acceleration_box(self) -> tuple[np.ndarray, np.ndarray] | None:
-        """Centre and half-width per axis when the acceleration set is the full product of its
-        per-axis values (both readings of eqs. 27-29 are); None otherwise."""
-        acc = self.motion.accelerations
-        axes = [np.unique(acc[:, j]) for j in range(3)]
-        if len(np.unique(acc, axis=0)) != np.prod([len(a) for a in axes]):
-            return None
-        lo, hi = np.array([a[0] for a in axes]), np.array([a[-1] for a in axes])
-        return (lo + hi) / 2, (hi - lo) / 2
+        return acceleration_box(self.motion.accelerations)
 
     def acceleration_range(self, coefficients: np.ndarray, offset) -> tuple[np.ndarray, np.ndarray]:
         """(n, m) largest and smallest value of ``coefficients . a + offset`` over the
@@ -267,6 +260,16 @@ def load_wrenches(motion: MotionSpec, accelerations: np.ndarray, up: np.ndarray,
     """(k, 6) F of eq. (31) for accelerations (k, 3): :func:`load_wrench_terms` evaluated."""
     slope, at_rest = load_wrench_terms(motion.load, inertia_sign(motion), up, rotation)
     return accelerations @ slope.T + at_rest
+
+
+def acceleration_box(accelerations: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """Centre and half-width per axis when the acceleration set (k, 3) is the full product of
+    its per-axis values (both readings of eqs. 27-29 are); None otherwise."""
+    axes = [np.unique(accelerations[:, j]) for j in range(3)]
+    if len(np.unique(accelerations, axis=0)) != np.prod([len(a) for a in axes]):
+        return None
+    lo, hi = np.array([a[0] for a in axes]), np.array([a[-1] for a in axes])
+    return (lo + hi) / 2, (hi - lo) / 2
 
 
 def inertia_sign(motion: MotionSpec) -> float:

@@ -18,6 +18,7 @@ from __future__ import annotations
 import logging
 import os
 from collections import Counter
+from dataclasses import replace
 from typing import Callable
 
 import numpy as np
@@ -215,6 +216,7 @@ def grid_workspace(
     sink: Callable[[pd.DataFrame], None] | None = None,
 ) -> tuple[pd.DataFrame | None, dict]:
     """:func:`compute_workspace` for an already built problem and grid."""
+    problem = replace(problem, fused=use_fused(cfg, problem, grid.n_points))
     workers = worth_workers(problem, grid.n_points, cfg.compute.n_jobs, cfg.compute.backend)
     announce_cost(cfg, problem, grid.n_points, workers)
     chunks = iter_chunks(
@@ -275,7 +277,8 @@ def tabulate(problem: WorkspaceProblem, positions: np.ndarray, raw: dict) -> pd.
 # The speeds hold for the paper's set of REFERENCE_SET velocities per pose (grid.n_vel = 6);
 # a pose's cost grows with its set. A job estimated above LONG_JOB_S is announced with a warning.
 WORKER_START_S = 0.4
-POSES_PER_SECOND = {"pinv": 200_000, "feasible": 20_000}
+FUSED_START_S = 0.3  # numba's import and the compiled kernel loaded from its cache
+POSES_PER_SECOND = {"pinv": 200_000, "feasible": 20_000, "fused": 500_000}
 REFERENCE_SET = 93
 LONG_JOB_S = 30.0
 
@@ -284,17 +287,44 @@ def estimated_seconds(problem: WorkspaceProblem, n_points: int) -> float:
     """The kernel's time for ``n_points`` positions on one core here, by the cost model."""
     evaluations = n_points * len(problem.orientations)
     per_pose = max(1.0, problem.spec.set_size() / REFERENCE_SET)
-    return evaluations * per_pose / POSES_PER_SECOND[problem.spec.tension.model]
+    speed = POSES_PER_SECOND["fused" if problem.fused else problem.spec.tension.model]
+    return evaluations * per_pose / speed
+
+
+def fused_unfit(cfg: DictConfig) -> str | None:
+    """Why the compiled kernel (``pipeline.workspace.fused``) cannot evaluate this config's
+    problem; None when it can: the CPR-WWA criteria of the ``pinv`` model without J-dot (the
+    extreme velocities, a product acceleration set: both readings of eqs. 27-29) and no
+    per-pose cable quantities."""
+    if analysis_name(cfg) not in ("cpr_wwa", "lines"):
+        return "it evaluates the CPR-WWA criteria (analysis=cpr_wwa or lines) only"
+    if _name(cfg.tension.model) != "pinv":
+        return "it evaluates tension.model=pinv only"
+    if cfg.model.jdot:
+        return "it evaluates model.jdot=false only"
+    if cfg.output.cables:
+        return "it does not write the per-pose cable quantities of output.cables=true"
+    return None
+
+
+def use_fused(cfg: DictConfig, problem: WorkspaceProblem, n_points: int) -> bool:
+    """``compute.kernel``: fused (checked by the config), numpy, or auto: the compiled kernel
+    where it applies and the numpy kernel would take longer than its start (FUSED_START_S)."""
+    kernel = _name(cfg.compute.kernel)
+    if kernel != "auto":
+        return kernel == "fused"
+    return estimated_seconds(problem, n_points) > FUSED_START_S and fused_unfit(cfg) is None
 
 
 def worth_workers(problem: WorkspaceProblem, n_points: int, n_jobs: int, backend: str) -> int:
     """``n_jobs``, or 1 when the cost model says local workers would not pay for their start
     (measured on 2 cores: 125 000 CPR-WWA poses took 1.13x the wall time and 1.44x the CPU on
-    two workers; 10^6 poses 0.7x the wall time). A Dask cluster is the user's explicit choice."""
+    two workers; 10^6 poses 0.7x the wall time). A worker of the fused kernel also loads numba
+    (FUSED_START_S). A Dask cluster is the user's explicit choice."""
     if backend == "dask" or n_jobs == 1:
         return n_jobs
     serial_s = estimated_seconds(problem, n_points)
-    if serial_s > 2 * WORKER_START_S:
+    if serial_s > 2 * (WORKER_START_S + (FUSED_START_S if problem.fused else 0.0)):
         return n_jobs
     log.debug("compute.n_jobs=%d: about %.2f s of kernel, too little for worker processes to pay "
               "for their start; running here", n_jobs, serial_s)
@@ -318,9 +348,10 @@ def announce_cost(cfg: DictConfig, problem: WorkspaceProblem, n_points: int, wor
 
 def bounded_chunk_size(problem: WorkspaceProblem, requested: int) -> int:
     """Poses per chunk: the requested size, lowered so that a chunk's largest intermediate
-    array (poses x cables x velocity or acceleration set) stays within CHUNK_BUDGET_FLOATS,
-    and to FEASIBLE_CHUNK_POSES under the feasible tension model."""
-    per_pose = problem.robot.n_cables * problem.spec.set_size()
+    array (poses x cables x velocity or acceleration set) stays within CHUNK_BUDGET_FLOATS
+    (the fused kernel holds no such array), and to FEASIBLE_CHUNK_POSES under the feasible
+    tension model."""
+    per_pose = problem.robot.n_cables * (1 if problem.fused else problem.spec.set_size())
     if problem.spec.tension.model == "feasible":
         requested = min(requested, FEASIBLE_CHUNK_POSES)
     return max(1, min(requested, CHUNK_BUDGET_FLOATS // per_pose))

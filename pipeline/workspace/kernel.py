@@ -21,6 +21,8 @@ class WorkspaceProblem:
     one of them (k = 1: constant-orientation workspace; k > 1: total-orientation workspace).
     ``margin_atol``: margins within it of zero count as exactly 0 (``pipeline.workspace.verdict``).
     ``cables``: also return the per-pose cable lengths and tensions (``pipeline.workspace.quantities``).
+    ``fused``: evaluate with the compiled kernel of ``pipeline.workspace.fused`` (numpy for the
+    poses it leaves unsettled); the job decides (``pipeline.workspace.compute.use_fused``).
     """
 
     robot: CableRobot
@@ -30,6 +32,7 @@ class WorkspaceProblem:
     criteria: tuple[str, ...]
     margin_atol: float = 1e-9
     cables: bool = False
+    fused: bool = False
 
     @property
     def orientation(self) -> tuple[float, float, float]:
@@ -43,16 +46,39 @@ def evaluate_chunk(problem: WorkspaceProblem, positions: np.ndarray) -> dict[str
     the feasible tension model ``lp_poses`` (n,): poses whose margins came from the LPs."""
     result = {}
     for number, orientation in enumerate(problem.orientations):
-        state = problem.spec.state(problem.robot, positions, orientation)
-        if problem.cables and number == 0:
-            result.update(cable_quantities(state, problem.limits))
-        for name in problem.criteria:
-            margin = REGISTRY[name].function(state, problem.limits)
-            key = f"margin_{name}"
-            result[key] = margin if key not in result else np.minimum(result[key], margin)
-        if hasattr(state, "jacobian_rank"):
-            rank = state.jacobian_rank.astype(np.int8)
-            result["jacobian_rank"] = np.minimum(result.get("jacobian_rank", rank), rank)
-        if hasattr(state, "tension_lp"):  # the feasible model's LP fallback (pipeline.model.tensions)
-            result["lp_poses"] = result.get("lp_poses", False) | state.tension_lp
+        if problem.fused:
+            part = _fused(problem, positions, orientation)
+        else:
+            part = _criteria(problem, positions, orientation, problem.cables and number == 0)
+        for key, value in part.items():
+            if key not in result:
+                result[key] = value
+            elif key.startswith("margin_") or key == "jacobian_rank":
+                result[key] = np.minimum(result[key], value)
+            elif key == "lp_poses":
+                result[key] = result[key] | value
+    return result
+
+
+def _criteria(problem: WorkspaceProblem, positions: np.ndarray, orientation, cables: bool) -> dict:
+    """Every criterion's margins at one orientation, from the chunk state (numpy)."""
+    state = problem.spec.state(problem.robot, positions, orientation)
+    result = cable_quantities(state, problem.limits) if cables else {}
+    for name in problem.criteria:
+        result[f"margin_{name}"] = REGISTRY[name].function(state, problem.limits)
+    if hasattr(state, "jacobian_rank"):
+        result["jacobian_rank"] = state.jacobian_rank.astype(np.int8)
+    if hasattr(state, "tension_lp"):  # the feasible model's LP fallback (pipeline.model.tensions)
+        result["lp_poses"] = state.tension_lp
+    return result
+
+
+def _fused(problem: WorkspaceProblem, positions: np.ndarray, orientation) -> dict:
+    """:func:`_criteria` by the compiled kernel, numpy for the poses it leaves unsettled."""
+    from pipeline.workspace import fused
+
+    result, unsettled = fused.margins(problem, positions, orientation)
+    if unsettled.any():
+        for key, value in _criteria(problem, positions[unsettled], orientation, False).items():
+            result[key][unsettled] = value
     return result

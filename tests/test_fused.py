@@ -1,0 +1,131 @@
+"""The compiled kernel (pipeline.workspace.fused) against the numpy criteria it replaces on large
+grids: the same margins, the same Jacobian ranks and the same verdicts, on the paper's robot at
+every actuator, both readings of eq. (20), zero and non-zero orientations, and on random robots
+whose poses include rank-deficient ones that the compiled kernel must leave to numpy.
+
+Tolerance: both kernels solve the normal equations (J^T J) x = F (a Cholesky factor here, numpy's
+LU there), whose rounding grows with cond(J)^2: margins agree within 1e-13 on well conditioned
+poses and within about 1e-8 relative close to the CPR-8's singular zero orientation (0.2 rad
+away). Margins are compared within MARGIN_RTOL relative plus MARGIN_ATOL, verdicts outside
+that band around zero."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from pipeline.workspace import fused
+from pipeline.workspace.compute import build_problem, compute_workspace, fused_unfit, use_fused
+from pipeline.workspace.kernel import evaluate_chunk
+from pipeline.workspace.verdict import classify
+
+MARGIN_ATOL, MARGIN_RTOL = 1e-9, 1e-6
+
+
+def both_kernels(problem, positions):
+    numpy_result = evaluate_chunk(problem, positions)
+    fused_result = evaluate_chunk(dataclasses.replace(problem, fused=True), positions)
+    return numpy_result, fused_result
+
+
+def assert_same(problem, numpy_result, fused_result):
+    assert numpy_result.keys() == fused_result.keys()
+    for key in numpy_result:
+        np.testing.assert_allclose(fused_result[key], numpy_result[key], rtol=MARGIN_RTOL, atol=MARGIN_ATOL,
+                                   err_msg=key)
+    np.testing.assert_array_equal(fused_result["jacobian_rank"], numpy_result["jacobian_rank"])
+    margins = {n: numpy_result[f"margin_{n}"] for n in problem.criteria}
+    clear = np.all([np.abs(v) > MARGIN_ATOL + MARGIN_RTOL * np.abs(v) for v in margins.values()], axis=0)
+    verdicts = [classify({n: r[f"margin_{n}"] for n in problem.criteria}, problem.margin_atol)
+                for r in (numpy_result, fused_result)]
+    np.testing.assert_array_equal(verdicts[0][1][clear], verdicts[1][1][clear])
+    np.testing.assert_array_equal(verdicts[0][2][clear], verdicts[1][2][clear])
+    assert clear.mean() > 0.9
+
+
+@pytest.mark.parametrize("columns", ["full", "translational"])
+@pytest.mark.parametrize("angle", [0.0, 0.3])
+def test_paper_grid_every_actuator_gives_the_numpy_margins(columns, angle, make_cfg, catalogue):
+    """Section 3.1's robot on a 12^3 grid, Table 1's five actuators; at the zero orientation
+    with all six columns every J^T is one rank short (the compiled kernel's deflated route)."""
+    verdicts = []
+    for actuator in range(1, 6):
+        cfg = make_cfg(f"actuator={actuator}", f"model.pinv_columns={columns}", "grid.n=12",
+                       *(f"orientation.{a}={angle}" for a in ("psi", "theta", "phi")))
+        problem, grid = build_problem(cfg, catalogue)
+        numpy_result, fused_result = both_kernels(problem, grid.positions)
+        assert_same(problem, numpy_result, fused_result)
+        verdicts.append(classify({n: numpy_result[f"margin_{n}"] for n in problem.criteria}, 1e-9)[1])
+        if columns == "full" and angle == 0.0:
+            assert (numpy_result["jacobian_rank"] == 5).all()
+    assert np.concatenate(verdicts).any() and not np.concatenate(verdicts).all()  # both verdicts compared
+
+
+def test_loads_ratings_lengths_and_total_orientation_give_the_numpy_margins(make_cfg, catalogue):
+    """Every term of F in eq. (31) (centre of mass, external wrench, Newton's sign), a rating per
+    cable, a cable length limit and a total-orientation set (the worst over 27 orientations)."""
+    cfg = make_cfg("actuator=4", "grid.n=10", "load.com=[0.01,-0.02,0.03]",
+                   "load.external=[3,-2,5,0.2,-0.1,0.3]", "model.inertia=newton",
+                   "tension.t_max=[3000,2500,3000,2800,3000,3000,2600,3000]", "orientation.total.n=3",
+                   "orientation.total.bound=0.2")
+    problem, grid = build_problem(cfg, catalogue)
+    assert {"tension_max", "speed", "torque", "acceleration", "voltage"} <= set(problem.criteria)
+    problem = dataclasses.replace(problem, robot=dataclasses.replace(problem.robot, l_max=2.3),
+                                  criteria=(*problem.criteria, "length"))
+    numpy_result, fused_result = both_kernels(problem, grid.positions)
+    assert_same(problem, numpy_result, fused_result)
+    for name in ("tension_max", "length"):  # both limits bind somewhere, so both are compared
+        assert (numpy_result[f"margin_{name}"] < 0).any() and (numpy_result[f"margin_{name}"] > 0).any()
+
+
+def test_random_robots_with_singular_poses_are_left_to_numpy(make_cfg, catalogue):
+    """Random 8-cable robots, a third of them with cables doubled so that only 5 distinct
+    cables remain (J^T one rank short everywhere: the deflated route on a geometry unlike the
+    CPR-8's), a third with 4 (two short: left to numpy), and zero-length cables; every pose
+    equals the numpy kernel."""
+    rng = np.random.default_rng(7)
+    cfg = make_cfg("actuator=3", "grid.n=4")
+    problem, _ = build_problem(cfg, catalogue)
+    unsettled_total = short_total = 0
+    for number in range(42):
+        anchors = rng.uniform(-1.5, 1.5, (8, 3))
+        attachments = rng.uniform(-0.1, 0.1, (8, 3))
+        distinct = (8, 5, 4)[number % 3]
+        anchors[distinct:], attachments[distinct:] = anchors[: 8 - distinct], attachments[: 8 - distinct]
+        robot = dataclasses.replace(problem.robot, anchors=anchors, attachments=attachments)
+        positions = rng.uniform(-0.5, 0.5, (200, 3))
+        positions[:5] = anchors[2] - attachments[2]  # a zero-length cable: no direction
+        orientation = rng.uniform(-0.5, 0.5, 3) * (rng.random() < 0.5)
+        candidate = dataclasses.replace(problem, robot=robot, orientations=orientation[None, :])
+        numpy_result, fused_result = both_kernels(candidate, positions)
+        assert_same(candidate, numpy_result, fused_result)
+        direct, unsettled = fused.margins(candidate, positions, orientation)
+        unsettled_total += unsettled.sum()
+        short_total += ((direct["jacobian_rank"] == 5) & ~unsettled).sum()
+    assert unsettled_total > 1000 and short_total > 1000  # both the fallback and the deflation ran
+
+
+def test_a_whole_job_writes_the_same_points_with_either_kernel(make_cfg, catalogue):
+    """compute.kernel=numpy and =fused: the same verdicts, limiting criteria and counts."""
+    tables = {}
+    for kernel in ("numpy", "fused"):
+        cfg = make_cfg(f"compute.kernel={kernel}", "grid.n=20", "actuator=3")
+        tables[kernel] = compute_workspace(cfg, catalogue)
+    (points_numpy, summary_numpy), (points_fused, summary_fused) = tables["numpy"], tables["fused"]
+    assert (points_numpy["feasible"] == points_fused["feasible"]).all()
+    assert (points_numpy["limiting"] == points_fused["limiting"]).all()
+    for key in ("n_feasible", "feasible_pct", *(k for k in summary_numpy if k.startswith("lost_"))):
+        assert summary_numpy[key] == summary_fused[key], key
+    assert 0 < summary_numpy["n_feasible"] < summary_numpy["n_points"]
+
+
+def test_auto_uses_the_compiled_kernel_only_where_it_applies_and_pays(make_cfg, catalogue):
+    small = make_cfg()
+    assert not use_fused(small, build_problem(small, catalogue)[0], 216)  # the main job's grid
+    large = make_cfg("grid.n=60")
+    assert use_fused(large, build_problem(large, catalogue)[0], 60 ** 3)
+    jdot = make_cfg("grid.n=60", "model.jdot=true")
+    assert fused_unfit(jdot) and not use_fused(jdot, build_problem(jdot, catalogue)[0], 60 ** 3)
+    for overrides in (["tension=feasible"], ["robot=irpm6"], ["output.cables=true"]):
+        assert fused_unfit(make_cfg(*overrides)), overrides
+    assert fused_unfit(make_cfg("analysis=lines")) is None
