@@ -61,10 +61,10 @@ def test_a_full_disk_is_refused_before_the_job(tiny_disk, tmp_path):
 
 
 def test_a_disk_that_fills_while_writing_stops_the_job_and_leaves_no_temporary_file(tiny_disk, tmp_path):
-    disk = tiny_disk("6m")  # passes the estimate; the per-cable columns then fill it
-    proc = run(tmp_path, f"hydra.run.dir={disk}/run", "grid.n=30", "grid.n_vel=6", "output.cables=true",
+    disk = tiny_disk("2m")  # passes the estimate (a 216-pose grid); every line's samples (5 MB) fill it
+    proc = run(tmp_path, f"hydra.run.dir={disk}/run", "analysis=lines", "lines.samples=all",
                "compute.n_jobs=1")
     one_line_exit_2(proc, "No space left on device")
     left = {p.name for p in (disk / "run").iterdir()}
-    assert "points.parquet" not in left and "summary.parquet" not in left
+    assert not {"samples.parquet", "points.parquet", "summary.parquet"} & left
     assert not [name for name in left if name.endswith(".tmp")]

@@ -159,7 +159,7 @@ class Spacing(Enum):
 
 class LineSamples(Enum):
     """Which straight lines' samples ``analysis=lines`` writes to samples.parquet: the first
-    (line O''-F'', the one Fig. 6 draws; 0.1 MB a job) or all 72 (7 MB a job)."""
+    (line O''-F'', the one Fig. 6 draws; 0.13 MB a job) or all 72 (5.4 MB a job)."""
 
     first = "first"
     all = "all"

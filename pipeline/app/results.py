@@ -72,7 +72,10 @@ class ParquetSink:
             meta[CONFIG_KEY.encode()] = self.config_yaml.encode()
             meta[VERSION_KEY.encode()] = code_version().encode()
             meta.update({key.encode(): value.encode() for key, value in self.extra.items()})
-            self.writer = pq.ParquetWriter(self.tmp, table.schema.with_metadata(meta))
+            floats = {f.name for f in table.schema if pa.types.is_floating(f.type)}
+            self.writer = pq.ParquetWriter(  # dictionaries only where values repeat: half the
+                self.tmp, table.schema.with_metadata(meta), compression="zstd",  # time and size
+                use_dictionary=[name for name in table.column_names if name not in floats])
         self.writer.write_table(table.replace_schema_metadata(self.writer.schema.metadata))
 
     def __enter__(self) -> "ParquetSink":

@@ -252,21 +252,21 @@ def tabulate(problem: WorkspaceProblem, positions: np.ndarray, raw: dict) -> pd.
     """One chunk's points: position, orientation, verdict, limiting criterion, margins."""
     margins, feasible, limiting = classify(
         {name: raw[f"margin_{name}"] for name in problem.criteria}, problem.margin_atol)
-    points = pd.DataFrame(positions, columns=["x", "y", "z"])
+    columns = {"x": positions[:, 0], "y": positions[:, 1], "z": positions[:, 2]}
     for name, value in zip(("psi", "theta", "phi"), problem.orientation):
-        points[name] = value
-    points["feasible"] = feasible
-    points["limiting"] = pd.Categorical(limiting, categories=list(problem.criteria))
+        columns[name] = np.full(len(positions), value)
+    columns["feasible"] = feasible
+    columns["limiting"] = pd.Categorical.from_codes(limiting, categories=list(problem.criteria))
     for name, margin in margins.items():
-        points[f"margin_{name}"] = margin
+        columns[f"margin_{name}"] = margin
     if "jacobian_rank" in raw:
-        points["jacobian_rank"] = raw["jacobian_rank"]
+        columns["jacobian_rank"] = raw["jacobian_rank"]
     for key, values in raw.items():  # output.cables: lengths and tensions (pipeline.workspace.quantities)
         if key.startswith(("length_", "tension_")):
-            points[key] = values
+            columns[key] = values
     if "unreachable" in margins:  # |S S^+ w - w| / |w|, worst over the required wrenches
-        points["wrench_residual"] = (1.0 - margins["unreachable"]) * problem.spec.tension.residual_rtol
-    return points
+        columns["wrench_residual"] = (1.0 - margins["unreachable"]) * problem.spec.tension.residual_rtol
+    return pd.DataFrame(columns)
 
 
 # Cost model of the choice between worker processes and this one (docs/performance.md): a

@@ -64,11 +64,11 @@ def simulate_lines(cfg: DictConfig, catalogue: pd.DataFrame) -> tuple[pd.DataFra
     points = points.rename(columns={"feasible": "feasible_grid", "limiting": "limiting_grid"})
     worst = _point_margins(samples, points, problem.criteria)
     _, points["feasible"], limiting = classify(worst, 0.0)  # samples' margins are snapped already
-    points["limiting"] = pd.Categorical(limiting, categories=list(problem.criteria))
+    points["limiting"] = pd.Categorical.from_codes(limiting, categories=list(problem.criteria))
     agree = points["feasible"] == points["feasible_grid"]
     for name in problem.criteria:  # counts of the lines' verdict; the grid's under lost_grid_*
         summary[f"lost_grid_{name}"] = summary.pop(f"lost_{name}")
-        summary[f"lost_{name}"] = int(((limiting == name) & ~points["feasible"]).sum())
+        summary[f"lost_{name}"] = int(((points["limiting"] == name) & ~points["feasible"]).sum())
     summary.update(
         n_lines=len(lines), n_samples=len(samples),
         n_feasible_grid=summary["n_feasible"], n_feasible=int(points["feasible"].sum()),

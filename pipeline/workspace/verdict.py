@@ -28,10 +28,12 @@ def classify(
 ) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray]:
     """Snapped margins, feasibility and the limiting criterion of every pose.
 
-    A pose is feasible when every snapped margin is >= 0. ``limiting`` names the criterion with
-    the smallest margin: the most violated one for an infeasible pose, the tightest for a
-    feasible one (ties: the first criterion listed); a violated gate (``GATES``) takes
-    precedence. Each infeasible pose is therefore attributed to exactly one criterion.
+    A pose is feasible when every snapped margin is >= 0. ``limiting`` (int8 codes: positions in
+    ``list(margins)``, as ``pandas.Categorical.from_codes`` takes them, no string per pose)
+    points at the criterion with the smallest margin: the most violated one for an infeasible
+    pose, the tightest for a feasible one (ties: the first criterion listed); a violated gate
+    (``GATES``) takes precedence. Each infeasible pose is therefore attributed to exactly one
+    criterion.
     """
     names = list(margins)
     snapped = {name: snap(margins[name], atol) for name in names}
@@ -40,8 +42,8 @@ def classify(
         row = int(np.flatnonzero(~np.isfinite(stacked).all(axis=1))[0])
         raise FloatingPointError(f"non-finite margin at pose index {row}: {stacked[row]}")
     feasible = (stacked >= 0).all(axis=1)
-    limiting = np.asarray(names, dtype=object)[stacked.argmin(axis=1)]
+    limiting = stacked.argmin(axis=1).astype(np.int8)
     for gate in reversed(GATES):  # the first gate listed wins
         if gate in snapped:
-            limiting[snapped[gate] < 0] = gate
+            limiting[snapped[gate] < 0] = names.index(gate)
     return snapped, feasible, limiting
