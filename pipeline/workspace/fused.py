@@ -87,7 +87,7 @@ def _kernel(positions, anchors, arms, rate_axes, radius, rows, extremes, centre,
     w = np.empty(rows)
     along = np.empty(m)
     scratch = np.empty((rows, rows))  # G + mu I, then the completed matrix
-    vectors = np.empty((rows, 2))  # the inverse iteration's iterate and its next step
+    iterate, step = np.empty((rows, 1)), np.empty((rows, 1))  # the inverse iteration
     projected = np.empty(rows)  # G w
     warm = False  # w holds the previous pose's direction (a good start for the next)
     inverse_radius = 1.0 / radius
@@ -117,7 +117,7 @@ def _kernel(positions, anchors, arms, rate_axes, radius, rows, extremes, centre,
             _scaled_solve(factor, scale, loads, rows, solved)
             rank[p] = rows
         elif ratio < rtol / BAND and _drop_one(jac, gram, rows, m, rtol, factor, scale, w, warm, along,
-                                              deflated, solved, loads, scratch, vectors, projected):
+                                              deflated, solved, loads, scratch, iterate, step, projected):
             source = deflated
             rank[p] = rows - 1
             warm = True
@@ -220,7 +220,7 @@ def _scaled_solve(factor, scale, loads, rows, solved):
 
 @njit(cache=True)
 def _drop_one(jac, gram, rows, m, rtol, factor, scale, w, warm, along, deflated, solved, loads, scratch,
-              vectors, projected):
+              iterate, step, projected):
     """The one-short route of the module docstring: ``deflated`` J', ``w`` and ``solved`` =
     (J'^T J' + s^2 w w^T)^-1 ``loads``; False when the SVD's choice is in doubt. ``warm``: ``w``
     holds the previous pose's direction, one step from it is tried first."""
@@ -241,15 +241,15 @@ def _drop_one(jac, gram, rows, m, rtol, factor, scale, w, warm, along, deflated,
         if attempt == 0 and not warm:
             continue
         for r in range(rows):
-            vectors[r, 0] = w[r] if attempt == 0 else 1.0 + r / max(rows - 1, 1)  # any start not orthogonal to w
+            iterate[r, 0] = w[r] if attempt == 0 else 1.0 + r / max(rows - 1, 1)  # any start not orthogonal to w
         for _ in range(1 if attempt == 0 else 2):
-            _scaled_solve(factor, scale, vectors[:, :1], rows, vectors[:, 1:])
+            _scaled_solve(factor, scale, iterate, rows, step)
             norm = 0.0
             for r in range(rows):
-                norm += vectors[r, 1] * vectors[r, 1]
+                norm += step[r, 0] * step[r, 0]
             norm = 1.0 / np.sqrt(norm)
             for r in range(rows):
-                w[r] = vectors[r, 0] = vectors[r, 1] * norm
+                w[r] = iterate[r, 0] = step[r, 0] * norm
         size = 0.0
         for i in range(m):
             total = 0.0
