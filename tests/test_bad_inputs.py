@@ -87,6 +87,8 @@ CASES = [
     ("pipeline", ["orientation.total.bound=inf"], "orientation.total.bound=inf: must be >= 0 and finite"),
     ("pipeline", ["drive.winch_radius=inf"], "drive.winch_radius=inf"),
     ("pipeline", ["model.rank_rtol=inf"], "model.rank_rtol=inf"),
+    ("pipeline", ["model.rank_rtol=1e-300"], "model.rank_rtol=1e-300: must be in [1e-12, 0.1]"),
+    ("pipeline", ["model.rank_rtol=5"], "model.rank_rtol=5"),
     ("pipeline", ["robot.lower_anchor_drop=inf"], "robot.lower_anchor_drop=inf"),
     ("pipeline", ["motion.v_max=inf"], "motion.v_max=inf"),
     ("pipeline", ["load.mass=inf"], "load.mass=inf"),

@@ -373,7 +373,7 @@ class ModelConfig:
     acceleration; ``xi_in_torque_limit``: xi in eq. (32); ``moment_arm`` and ``cable_direction``:
     the IRPM's eqs. (8)-(9) (moments about the platform or the base; cables towards their
     attachment points or the platform's centre). ``rank_rtol``: singular values below it (times
-    the largest) count as zero. ``margin_atol``: margins within it of zero are exactly 0 and
+    the largest) count as zero (1e-12 to 0.1). ``margin_atol``: margins within it of zero are exactly 0 and
     satisfied (``pipeline.workspace.verdict``), so a pose on a limit gets the same verdict on every CPU."""
 
     pinv_columns: PinvColumns = PinvColumns.full
@@ -384,7 +384,9 @@ class ModelConfig:
     cable_direction: CableDirection = CableDirection.attachment
     jdot: bool = False
     xi_in_torque_limit: bool = True
-    rank_rtol: float = rule(positive, 1e-9)
+    rank_rtol: float = rule(lambda v: None if 1e-12 <= v <= 0.1 else (
+        "must be in [1e-12, 0.1]: below, rounding (about 1e-16) hides a singular matrix from the "
+        "rank test; above, well-conditioned poses count as singular"), 1e-9)
     margin_atol: float = rule(lambda v: None if 0 <= v <= 1e-3 else "must be in [0, 1e-3]", 1e-9)
 
 
