@@ -93,6 +93,8 @@ def main() -> None:
         rows.append((f"CPR-WWA feasible tensions {n}^3, 1 core", grid.n_points, serial_rate(problem, grid)))
     problem, grid = composed("robot=irpm6", "robot.gamma_deg=15")
     rows.append(("IRPM statics 31x31x26, 1 core", grid.n_points, serial_rate(problem, grid)))
+    fused = dataclasses.replace(problem, fused=True)
+    rows.append(("IRPM statics fused 31x31x26, 1 core", grid.n_points, serial_rate(fused, grid)))
     problem, grid = composed("robot=irpm6", "robot.gamma_deg=15", "tension.model=feasible")
     rows.append(("IRPM feasible tensions, 1 core", grid.n_points, serial_rate(problem, grid)))
     for i, n in enumerate((40, 100) if args.full else (40,)):

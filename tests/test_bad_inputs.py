@@ -105,7 +105,7 @@ CASES = [
     ("pipeline", ["grid.n_vel=100000"], "grid.n_vel=100000"),
     ("pipeline", ["compute.kernel=gpu"], "compute.kernel=gpu"),
     ("pipeline", ["compute.kernel=fused", "model.jdot=true"], "compute.kernel=fused: it evaluates model.jdot=false only"),
-    ("pipeline", ["robot=irpm6", "compute.kernel=fused"], "compute.kernel=fused: it evaluates the CPR-WWA criteria"),
+    ("pipeline", ["robot=irpm6", "tension=feasible", "compute.kernel=fused"], "compute.kernel=fused: it evaluates tension.model=pinv only"),
     ("pipeline", ["orientation.total.n=1000", "orientation.total.bound=0.1"], "compute.max_poses"),
     ("pipeline", ["-m", "load.mass=1,2,inf"], "load.mass=inf"),
     ("pipeline", ["robot=irpm6", "actuator=3"], "no such key for robot=irpm6 with analysis=statics"),

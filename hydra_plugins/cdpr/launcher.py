@@ -19,6 +19,7 @@ Jobs composed here are sent to the workers whole, with the preflight's typed con
 """
 
 import copy
+import importlib
 import logging
 import os
 from dataclasses import dataclass
@@ -91,9 +92,10 @@ class CdprLauncher(Launcher):
         configs = (self.job_config(idx, list(overrides))
                    for idx, overrides in enumerate(job_overrides, start=initial_job_idx))
         runs = []
+        fused = _fused_pays()
         if workers == 1 or len(job_overrides) == 1:
             for config in configs:
-                runs.append(_run(config, self.hydra_context, self.task_function))
+                runs.append(_run(config, self.hydra_context, self.task_function, fused=fused))
                 configure_log(self.config.hydra.hydra_logging, self.config.hydra.verbose)
                 progress.step(_outcome(runs[-1]))
             return runs
@@ -101,7 +103,7 @@ class CdprLauncher(Launcher):
 
         state = Singleton.get_state()
         for ret in Parallel(n_jobs=workers, backend="loky", return_as="generator")(
-                delayed(_run)(config, self.hydra_context, self.task_function, state, _prepared(config))
+                delayed(_run)(config, self.hydra_context, self.task_function, state, _prepared(config), fused)
                 for config in configs):
             runs.append(ret)
             progress.step(_outcome(ret))
@@ -146,6 +148,15 @@ def _outcome(ret: JobReturn) -> str:
     return name
 
 
+def _fused_pays() -> bool:
+    """Whether the jobs the preflight prepared in this process would, together, pay for loading
+    the compiled kernels (``pipeline.workspace.compute.fused_pays``)."""
+    from pipeline.app.job import PREPARED
+    from pipeline.workspace.compute import fused_pays
+
+    return fused_pays(cfg for cfg, _ in PREPARED.values())
+
+
 def _prepared(config: DictConfig) -> Optional[Tuple[str, Any]]:
     """The preflight's typed config for this job (``pipeline.app.job.PREPARED``, by the YAML of the
     job's config without Hydra's node), taken from this process to send to a worker."""
@@ -160,9 +171,12 @@ def _prepared(config: DictConfig) -> Optional[Tuple[str, Any]]:
 
 def _run(config: DictConfig, hydra_context: HydraContext, task_function: TaskFunction,
          singleton_state: Optional[Dict[Any, Any]] = None,
-         prepared: Optional[Tuple[str, Any]] = None) -> JobReturn:
+         prepared: Optional[Tuple[str, Any]] = None, fused: bool = False) -> JobReturn:
     """One job, as Hydra's launchers run it; in a worker process, with the parent's Hydra state
-    and the job's typed config when the parent has it."""
+    and the job's typed config when the parent has it. ``fused``: load the compiled kernels
+    first (the sweep pays for them, :func:`_fused_pays`)."""
+    if fused:  # jobs with compute.kernel=auto use what this process has loaded
+        importlib.import_module("pipeline.workspace.fused")
     if singleton_state is not None:
         setup_globals()
         Singleton.set_state(singleton_state)

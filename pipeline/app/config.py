@@ -86,9 +86,10 @@ class PinvColumns(Enum):
 
 
 class Kernel(Enum):
-    """Which code evaluates the criteria: ``auto`` (the compiled kernel where it applies and
-    the cost model says it pays), ``numpy`` (always the numpy criteria) or ``fused`` (the
-    compiled kernel of ``pipeline.workspace.fused``, refused where it does not apply)."""
+    """Which code evaluates the criteria: ``auto`` (the compiled kernels where they apply and
+    the cost model says they pay, for the job or its sweep), ``numpy`` (always the numpy
+    criteria) or ``fused`` (the compiled kernels of ``pipeline.workspace.fused``, refused where
+    they do not apply)."""
 
     auto = "auto"
     numpy = "numpy"

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import logging
 import os
+import sys
 from collections import Counter
 from dataclasses import replace
 from typing import Callable
@@ -292,15 +293,13 @@ def estimated_seconds(problem: WorkspaceProblem, n_points: int) -> float:
 
 
 def fused_unfit(cfg: DictConfig) -> str | None:
-    """Why the compiled kernel (``pipeline.workspace.fused``) cannot evaluate this config's
-    problem; None when it can: the CPR-WWA criteria of the ``pinv`` model without J-dot (the
-    extreme velocities, a product acceleration set: both readings of eqs. 27-29) and no
-    per-pose cable quantities."""
-    if analysis_name(cfg) not in ("cpr_wwa", "lines"):
-        return "it evaluates the CPR-WWA criteria (analysis=cpr_wwa or lines) only"
+    """Why the compiled kernels (``pipeline.workspace.fused``) cannot evaluate this config's
+    problem; None when they can: the CPR-WWA and statics criteria of the ``pinv`` model
+    (CPR-WWA without J-dot: the extreme velocities, a product acceleration set, both readings of
+    eqs. 27-29) and no per-pose cable quantities."""
     if _name(cfg.tension.model) != "pinv":
         return "it evaluates tension.model=pinv only"
-    if cfg.model.jdot:
+    if "jdot" in cfg.model and cfg.model.jdot:
         return "it evaluates model.jdot=false only"
     if cfg.output.cables:
         return "it does not write the per-pose cable quantities of output.cables=true"
@@ -308,12 +307,28 @@ def fused_unfit(cfg: DictConfig) -> str | None:
 
 
 def use_fused(cfg: DictConfig, problem: WorkspaceProblem, n_points: int) -> bool:
-    """``compute.kernel``: fused (checked by the config), numpy, or auto: the compiled kernel
-    where it applies and the numpy kernel would take longer than its start (FUSED_START_S)."""
+    """``compute.kernel``: fused (checked by the config), numpy, or auto: the compiled kernels
+    where they apply and either this process has loaded them already (:func:`fused_pays` for a
+    sweep) or the numpy kernel would take longer than their start (FUSED_START_S)."""
     kernel = _name(cfg.compute.kernel)
     if kernel != "auto":
         return kernel == "fused"
-    return estimated_seconds(problem, n_points) > FUSED_START_S and fused_unfit(cfg) is None
+    loaded = "pipeline.workspace.fused" in sys.modules
+    return fused_unfit(cfg) is None and (loaded or estimated_seconds(problem, n_points) > FUSED_START_S)
+
+
+def fused_pays(configs) -> bool:
+    """Whether the compiled kernels pay for their start over these jobs together (typed configs
+    of a sweep that one process runs: the IRPM wrench studies are 180 jobs of 25 000 poses, each
+    too small alone). The launcher then loads them before the first job, and every job that can
+    use them does (:func:`use_fused`)."""
+    seconds = 0.0
+    for cfg in configs:
+        if _name(cfg.compute.kernel) == "auto" and fused_unfit(cfg) is None:
+            total = cfg.orientation.total
+            orientations = total.n ** 3 if total.n > 1 and total.bound > 0 else 1
+            seconds += grid_size(cfg) * orientations / POSES_PER_SECOND["pinv"]
+    return seconds > FUSED_START_S
 
 
 def worth_workers(problem: WorkspaceProblem, n_points: int, n_jobs: int, backend: str) -> int:
@@ -369,6 +384,7 @@ def summarize(cfg: DictConfig, counts: dict, cell_volume: float, problem) -> dic
         row["actuator_name"] = problem.limits.name
         row["actuator_power_W"] = problem.limits.power
     row["n_orientations"] = len(problem.orientations)
+    row["kernel"] = "fused" if problem.fused else "numpy"  # which code computed the margins
     for axis, lo, hi in zip("xyz", problem.robot.box_lo, problem.robot.box_hi):
         row[f"box.{axis}_min"], row[f"box.{axis}_max"] = float(lo), float(hi)
     row.update(

@@ -1,32 +1,39 @@
-"""The CPR-WWA criteria of the ``pinv`` tension model fused into one loop over poses, compiled
-by numba (issue 18's fused kernel): per pose, the cable vectors and lengths (eqs. 1-17), the
-shaft Jacobian J (eqs. 18-19), M = (J^T)^+ F affine in the acceleration (eqs. 20, 31) and the
-margins of eqs. (30), (32)-(34), the cable rating and the longest cable, in registers: no
-(poses x cables x set) arrays, no LAPACK call per pose. It computes what the criteria of
-``pipeline.workspace.criteria`` compute from ``PoseDynamics``, in the same order of operations
-where it matters, and is tested against them (margins within 1e-9, identical verdicts).
+"""The criteria of the ``pinv`` tension model fused into one loop over poses, compiled by numba
+(issue 18's fused kernels), one per analysis:
 
-The pseudo-inverse of J^T (c x m, c = 3 or 6 rows) takes one of two routes, each used only where
-numpy's route (``pipeline.model.linalg.batched_pinv``) is beyond doubt the same:
+- CPR-WWA (Filipovic & Kevac 2018): per pose, the cable vectors and lengths (eqs. 1-17), the
+  shaft Jacobian J (eqs. 18-19), M = (J^T)^+ F affine in the acceleration (eqs. 20, 31) and the
+  margins of eqs. (30), (32)-(34), the cable rating and the longest cable;
+- statics (Hamed & Zohoor): the structure matrix A of eq. (8) (either moment arm, either cable
+  direction), its gram ratio (the singular gate), the tensions s = A^T (A A^T)^-1 f of eqs.
+  (7), (10) and the slack, rating and length margins;
+
+in registers: no (poses x cables x set) arrays, no LAPACK call per pose. They compute what the
+criteria of ``pipeline.workspace.criteria`` compute from ``PoseDynamics`` and ``PoseStatics``, in
+the same order of operations where it matters, and are tested against them (tests/test_fused.py).
+
+The pseudo-inverse of J^T (c x m, c = 3 or 6 rows; A for the statics) takes one of two routes,
+each used only where numpy's route (``pipeline.model.linalg.batched_pinv``) is beyond doubt the
+same:
 
 - full row rank, gram ratio >= ``BAND`` x rtol: (J^T)^+ F = J G^-1 F with G = J^T J, from the
   Cholesky factor of G scaled to unit diagonal (whose squared diagonal product is the gram
   ratio);
-- one short, gram ratio < rtol / ``BAND``: the CPR-8 with all six columns at the zero
-  orientation (a turn about a vertical axis, a different one per pose, changes no cable
+- one short, gram ratio < rtol / ``BAND`` (CPR-WWA only): the CPR-8 with all six columns at the
+  zero orientation (a turn about a vertical axis, a different one per pose, changes no cable
   length). Two steps of inverse iteration on G + mu I give the unit w with w^T J^T ~ 0; with
   J'^T = (I - w w^T) J^T, the matrix whose pseudo-inverse the SVD returns when it drops that
   direction, (J'^T)^+ = J' (J'^T J' + s^2 w w^T)^-1. Taken only when |w^T J^T| is at most
   ``DROPPED`` x rtol x sigma_max / ``BAND`` (the SVD surely drops it) and the completed matrix
   passes the full-rank test (the SVD surely keeps the rest).
 
-Every other pose (rank two short, or a ratio within a factor ``BAND`` of rtol) is returned as
-unsettled, and ``pipeline.workspace.kernel`` evaluates it with numpy.
+Every other pose (rank two short, a singular statics pose, or a ratio within a factor ``BAND``
+of rtol) is returned as unsettled, and ``pipeline.workspace.kernel`` evaluates it with numpy.
 
-It applies to the ``pinv`` tension model without J-dot (extreme velocities, a product
-acceleration set: both readings of eqs. 27-29), without per-pose cable quantities
-(``pipeline.workspace.compute.fused_unfit``); a job uses it when the cost model says it pays for
-numba's import (``compute.kernel=auto``, ``pipeline.workspace.compute.use_fused``).
+They apply to the ``pinv`` tension model (CPR-WWA: without J-dot, on the extreme velocities and
+a product acceleration set, both readings of eqs. 27-29), without per-pose cable quantities
+(``pipeline.workspace.compute.fused_unfit``); a job uses them when the cost model says they pay
+for numba's import (``compute.kernel=auto``, ``pipeline.workspace.compute.use_fused``).
 """
 
 from __future__ import annotations
@@ -34,18 +41,42 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from pipeline.model.dynamics import acceleration_box, inertia_sign, load_wrench_terms
+from pipeline.model.dynamics import MotionSpec, acceleration_box, inertia_sign, load_wrench_terms
 from pipeline.model.geometry import euler_rate_axes, rotation_matrix
 
-CRITERIA = ("speed", "torque", "acceleration", "voltage", "tension_max", "length")  # columns of the kernel
+CRITERIA = ("speed", "torque", "acceleration", "voltage", "tension_max", "length")  # columns of _kernel
+STATICS_CRITERIA = ("singular", "slack", "tension_max", "length")  # columns of _statics
 BAND = 2.0  # a gram ratio within this factor of rtol is left to numpy, as is a doubtful drop
 DROPPED = 0.1  # |w^T J^T| / (rtol sigma_max) below which the SVD surely drops the direction w
 SHIFT = 1e-14  # mu / trace(G) of the inverse iteration
 
 
 def margins(problem, positions: np.ndarray, orientation) -> tuple[dict[str, np.ndarray], np.ndarray]:
-    """``margin_<criterion>`` (n,) and ``jacobian_rank`` (n,) at one orientation, and (n,) the
-    poses left unsettled (their entries are NaN and 0: evaluate them with numpy)."""
+    """``margin_<criterion>`` (n,) (and CPR-WWA's ``jacobian_rank``) at one orientation, and
+    (n,) the poses left unsettled (their entries are NaN: evaluate them with numpy)."""
+    if isinstance(problem.spec, MotionSpec):
+        return _cpr_wwa_margins(problem, positions, orientation)
+    return _statics_margins(problem, positions, orientation)
+
+
+def _statics_margins(problem, positions: np.ndarray, orientation):
+    spec, lim, robot = problem.spec, problem.limits, problem.robot
+    rotation = rotation_matrix(*orientation)
+    wrench = load_wrench_terms(spec.load, 0.0, robot.up, rotation)[1]
+    m = robot.n_cables
+    n = len(positions)
+    out = np.empty((n, len(STATICS_CRITERIA)))
+    unsettled = np.zeros(n, dtype=np.bool_)
+    _statics(np.ascontiguousarray(positions, dtype=float), np.ascontiguousarray(robot.anchors, dtype=float),
+             np.ascontiguousarray(robot.attachments @ rotation.T), spec.cable_direction == "centre",
+             spec.moment_arm == "base", np.ascontiguousarray(wrench[:, None]), float(spec.rank_rtol),
+             float(lim.rank_rtol), np.ascontiguousarray(np.broadcast_to(spec.tension.t_min, (m,)), dtype=float),
+             np.ascontiguousarray(np.broadcast_to(lim.s_max, (m,)), dtype=float), float(lim.scale),
+             np.inf if robot.l_max is None else float(robot.l_max), out, unsettled)
+    return {f"margin_{name}": out[:, STATICS_CRITERIA.index(name)] for name in problem.criteria}, unsettled
+
+
+def _cpr_wwa_margins(problem, positions: np.ndarray, orientation):
     spec, act, robot = problem.spec, problem.limits, problem.robot
     rotation = rotation_matrix(*orientation)
     rows = 3 if spec.pinv_columns == "translational" else 6
@@ -164,6 +195,60 @@ def _kernel(positions, anchors, arms, rate_axes, radius, rows, extremes, centre,
         out[p, 3] = 1.0 - worst_voltage / voltage_limit
         out[p, 4] = 1.0 - worst_rating
         out[p, 5] = 1.0 - worst_length
+
+
+@njit(cache=True)
+def _statics(positions, anchors, arms, centre, base, wrench, rtol, singular_rtol, t_min, s_max, scale,
+             l_max, out, unsettled):
+    """Fill ``out`` (n, 4) with the margins of ``STATICS_CRITERIA`` and ``unsettled``."""
+    n, m = positions.shape[0], anchors.shape[0]
+    columns = np.empty((m, 6))  # A^T: row i = [u_i; a_i x u_i] (eq. 8)
+    lengths = np.empty(m)
+    gram = np.empty((6, 6))
+    factor = np.empty((6, 6))
+    scale_rows = np.empty(6)
+    solved = np.empty((6, 1))
+    for p in range(n):
+        for i in range(m):
+            vx = positions[p, 0] - anchors[i, 0]
+            vy = positions[p, 1] - anchors[i, 1]
+            vz = positions[p, 2] - anchors[i, 2]
+            if not centre:  # to the attachment point (eq. 1), not the platform's reference point
+                vx, vy, vz = vx + arms[i, 0], vy + arms[i, 1], vz + arms[i, 2]
+            length = np.sqrt(vx * vx + vy * vy + vz * vz)
+            lengths[i] = length
+            inverse = 1.0 / length if length > 0 else 0.0
+            ux, uy, uz = vx * inverse, vy * inverse, vz * inverse
+            ax, ay, az = arms[i, 0], arms[i, 1], arms[i, 2]
+            if base:  # moments about the base centre (eq. 9): a_i = r + R d_i
+                ax, ay, az = ax + positions[p, 0], ay + positions[p, 1], az + positions[p, 2]
+            columns[i, 0], columns[i, 1], columns[i, 2] = ux, uy, uz
+            columns[i, 3] = ay * uz - az * uy
+            columns[i, 4] = az * ux - ax * uz
+            columns[i, 5] = ax * uy - ay * ux
+        _gram(columns, 6, m, gram)
+        ratio = _scaled_cholesky(gram, 6, factor, scale_rows)
+        if ratio < BAND * rtol:  # singular or in doubt: numpy's SVD
+            unsettled[p] = True
+            for k in range(out.shape[1]):
+                out[p, k] = np.nan
+            continue
+        _scaled_solve(factor, scale_rows, wrench, 6, solved)
+        lowest, worst_rating, worst_length = np.inf, -np.inf, -np.inf
+        for i in range(m):
+            tension = 0.0  # s = A^T (A A^T)^-1 f (eqs. 7, 10)
+            for r in range(6):
+                tension += columns[i, r] * solved[r, 0]
+            lowest = min(lowest, tension - t_min[i])
+            worst_rating = max(worst_rating, tension / s_max[i])
+            worst_length = max(worst_length, lengths[i] / l_max)
+        if ratio >= singular_rtol:
+            out[p, 0] = (ratio - singular_rtol) / (1.0 - singular_rtol)
+        else:
+            out[p, 0] = ratio / singular_rtol - 1.0
+        out[p, 1] = lowest / scale
+        out[p, 2] = 1.0 - worst_rating
+        out[p, 3] = 1.0 - worst_length
 
 
 @njit(cache=True, inline="always")
