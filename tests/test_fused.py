@@ -19,7 +19,9 @@ import pandas as pd
 import pytest
 
 from pipeline.workspace import fused
-from pipeline.workspace.compute import build_problem, compute_workspace, fused_pays, fused_unfit, use_fused
+from pipeline.workspace.compute import (
+    SWEEP_FUSED, build_problem, compute_workspace, fused_pays, fused_unfit, use_fused,
+)
 from pipeline.workspace.kernel import evaluate_chunk
 from pipeline.workspace.verdict import classify
 
@@ -124,13 +126,18 @@ def test_a_whole_job_writes_the_same_points_with_either_kernel(make_cfg, catalog
     assert 0 < summary_numpy["n_feasible"] < summary_numpy["n_points"]
 
 
-def test_auto_uses_the_compiled_kernel_only_where_it_applies_and_pays(make_cfg, catalogue, monkeypatch):
+def test_auto_uses_the_compiled_kernel_only_where_it_applies_and_pays(make_cfg, catalogue):
     small = make_cfg()
-    monkeypatch.delitem(sys.modules, "pipeline.workspace.fused")  # a process that has not loaded it
     assert not use_fused(small, build_problem(small, catalogue)[0], 216)  # the main job's grid
-    monkeypatch.setitem(sys.modules, "pipeline.workspace.fused", fused)  # loaded: it pays already
-    assert use_fused(small, build_problem(small, catalogue)[0], 216)
-    assert not use_fused(make_cfg("compute.kernel=numpy"), build_problem(small, catalogue)[0], 216)
+    token = SWEEP_FUSED.set(True)  # a sweep that pays as a whole
+    try:
+        assert use_fused(small, build_problem(small, catalogue)[0], 216)
+        assert not use_fused(make_cfg("compute.kernel=numpy"), build_problem(small, catalogue)[0], 216)
+        feasible = make_cfg("tension=feasible")
+        assert not use_fused(feasible, build_problem(feasible, catalogue)[0], 216)
+    finally:
+        SWEEP_FUSED.reset(token)
+    assert not use_fused(small, build_problem(small, catalogue)[0], 216)  # not a process's history
     large = make_cfg("grid.n=60")
     assert use_fused(large, build_problem(large, catalogue)[0], 60 ** 3)
     jdot = make_cfg("grid.n=60", "model.jdot=true")

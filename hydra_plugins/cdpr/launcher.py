@@ -19,7 +19,6 @@ Jobs composed here are sent to the workers whole, with the preflight's typed con
 """
 
 import copy
-import importlib
 import logging
 import os
 from dataclasses import dataclass
@@ -173,10 +172,10 @@ def _run(config: DictConfig, hydra_context: HydraContext, task_function: TaskFun
          singleton_state: Optional[Dict[Any, Any]] = None,
          prepared: Optional[Tuple[str, Any]] = None, fused: bool = False) -> JobReturn:
     """One job, as Hydra's launchers run it; in a worker process, with the parent's Hydra state
-    and the job's typed config when the parent has it. ``fused``: load the compiled kernels
-    first (the sweep pays for them, :func:`_fused_pays`)."""
-    if fused:  # jobs with compute.kernel=auto use what this process has loaded
-        importlib.import_module("pipeline.workspace.fused")
+    and the job's typed config when the parent has it. ``fused``: the sweep pays for the
+    compiled kernels (:func:`_fused_pays`), so the job uses them where they apply."""
+    from pipeline.workspace.compute import SWEEP_FUSED
+
     if singleton_state is not None:
         setup_globals()
         Singleton.set_state(singleton_state)
@@ -184,5 +183,9 @@ def _run(config: DictConfig, hydra_context: HydraContext, task_function: TaskFun
         from pipeline.app.job import PREPARED
 
         PREPARED[prepared[0]] = prepared[1]
-    return run_job(hydra_context=hydra_context, task_function=task_function, config=config,
-                   job_dir_key="hydra.sweep.dir", job_subdir_key="hydra.sweep.subdir")
+    token = SWEEP_FUSED.set(fused)
+    try:
+        return run_job(hydra_context=hydra_context, task_function=task_function, config=config,
+                       job_dir_key="hydra.sweep.dir", job_subdir_key="hydra.sweep.subdir")
+    finally:
+        SWEEP_FUSED.reset(token)

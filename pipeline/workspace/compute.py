@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import logging
 import os
-import sys
+from contextvars import ContextVar
 from collections import Counter
 from dataclasses import replace
 from typing import Callable
@@ -306,22 +306,27 @@ def fused_unfit(cfg: DictConfig) -> str | None:
     return None
 
 
+# Whether the sweep a job belongs to pays, as a whole, for the compiled kernels (fused_pays):
+# set by the launcher around each job it runs (hydra_plugins/cdpr), False for a job run alone.
+# A job's kernel follows from its sweep, never from what its process ran before.
+SWEEP_FUSED: ContextVar[bool] = ContextVar("SWEEP_FUSED", default=False)
+
+
 def use_fused(cfg: DictConfig, problem: WorkspaceProblem, n_points: int) -> bool:
     """``compute.kernel``: fused (checked by the config), numpy, or auto: the compiled kernels
-    where they apply and either this process has loaded them already (:func:`fused_pays` for a
-    sweep) or the numpy kernel would take longer than their start (FUSED_START_S)."""
+    where they apply and either the job's sweep pays for them (``SWEEP_FUSED``) or the numpy
+    kernel would take longer than their start (FUSED_START_S)."""
     kernel = _name(cfg.compute.kernel)
     if kernel != "auto":
         return kernel == "fused"
-    loaded = "pipeline.workspace.fused" in sys.modules
-    return fused_unfit(cfg) is None and (loaded or estimated_seconds(problem, n_points) > FUSED_START_S)
+    pays = SWEEP_FUSED.get() or estimated_seconds(problem, n_points) > FUSED_START_S
+    return pays and fused_unfit(cfg) is None
 
 
 def fused_pays(configs) -> bool:
     """Whether the compiled kernels pay for their start over these jobs together (typed configs
-    of a sweep that one process runs: the IRPM wrench studies are 180 jobs of 25 000 poses, each
-    too small alone). The launcher then loads them before the first job, and every job that can
-    use them does (:func:`use_fused`)."""
+    of a sweep: the IRPM wrench studies are 180 jobs of 25 000 poses, each too small alone;
+    each process that runs its jobs loads them once)."""
     seconds = 0.0
     for cfg in configs:
         if _name(cfg.compute.kernel) == "auto" and fused_unfit(cfg) is None:
