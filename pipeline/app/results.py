@@ -53,6 +53,10 @@ def write_parquet(frame: pd.DataFrame, path: Path, config_yaml: str, extra: dict
         sink.write(frame)
 
 
+ZSTD_ROWS = 1000  # zstd for tables that stream chunks of at least this many rows (points), snappy
+# for the small ones (a summary's one row: 1.8 ms instead of 4.4 ms, where zstd gains nothing)
+
+
 class ParquetSink:
     """Write a table chunk by chunk (one row group per :meth:`write`) to a temporary file,
     renamed to ``path`` only when the ``with`` block ends without an error. The temporary name
@@ -74,7 +78,8 @@ class ParquetSink:
             meta.update({key.encode(): value.encode() for key, value in self.extra.items()})
             floats = {f.name for f in table.schema if pa.types.is_floating(f.type)}
             self.writer = pq.ParquetWriter(  # dictionaries only where values repeat: half the
-                self.tmp, table.schema.with_metadata(meta), compression="zstd",  # time and size
+                self.tmp, table.schema.with_metadata(meta),  # time and size of a points table
+                compression="zstd" if table.num_rows >= ZSTD_ROWS else "snappy",
                 use_dictionary=[name for name in table.column_names if name not in floats])
         self.writer.write_table(table.replace_schema_metadata(self.writer.schema.metadata))
 
