@@ -397,7 +397,8 @@ class ComputeConfig:
     Dask), poses per chunk. ``backend=dask`` runs the chunks on the Dask scheduler at
     ``scheduler`` (null: a local cluster of n_jobs workers). ``max_poses``: the most pose x
     orientation evaluations a job may take (checked before any work; raise it knowingly).
-    ``kernel``: :class:`Kernel` (docs/performance.md: when the compiled kernel pays)."""
+    ``kernel``: auto (the compiled kernels where they apply and pay, for the job or its sweep),
+    numpy or fused (docs/performance.md)."""
 
     n_jobs: int = rule(lambda v: None if v != 0 else "must be a positive count or negative (joblib style)", 2)
     backend: str = rule(lambda v: None if v in JOBLIB_BACKENDS else f"must be one of {', '.join(JOBLIB_BACKENDS)}", "loky")
