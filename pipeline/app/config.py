@@ -598,7 +598,7 @@ MAX_VELOCITY_CANDIDATES = 10_000_000  # (n_vel + 1)^3 grid velocities of eq. (23
 def _validate_size(cfg: DictConfig) -> None:
     """Refuse, before any work, a job larger than ``compute.max_poses`` pose x orientation
     evaluations or a velocity grid that would not fit in memory, naming the key to change."""
-    from pipeline.workspace.compute import grid_size
+    from pipeline.workspace.compute import grid_size, orientation_count
 
     n_vel = cfg.get("grid", {}).get("n_vel")
     if n_vel is not None and (n_vel + 1) ** 3 > MAX_VELOCITY_CANDIDATES:
@@ -606,7 +606,7 @@ def _validate_size(cfg: DictConfig) -> None:
         raise ConfigError(f"grid.n_vel={n_vel}: the velocity grid would have {(n_vel + 1) ** 3:.3g} "
                           f"candidates; at most grid.n_vel={limit}")
     poses = grid_size(cfg)
-    orientations = cfg.orientation.total.n ** 3 if cfg.orientation.total.bound > 0 else 1
+    orientations = orientation_count(cfg.orientation)
     if poses * orientations > cfg.compute.max_poses:
         raise ConfigError(
             f"compute.max_poses={cfg.compute.max_poses}: this job has {poses:.3g} poses x "

@@ -66,11 +66,17 @@ def analysis_name(cfg: DictConfig) -> str:
     return _name(cfg.analysis)
 
 
+def orientation_count(orientation: DictConfig) -> int:
+    """k of :func:`orientation_set`, counted without building it."""
+    total = orientation.total
+    return 1 if total.n == 1 or total.bound == 0 else int(total.n) ** 3
+
+
 def orientation_set(orientation: DictConfig) -> np.ndarray:
     """(k, 3) Euler angles: the constant orientation, or the total-orientation grid around it."""
     nominal = np.array([orientation.psi, orientation.theta, orientation.phi], dtype=float)
     total = orientation.total
-    if total.n == 1 or total.bound == 0:
+    if orientation_count(orientation) == 1:
         return nominal[None, :]
     offsets = np.linspace(-total.bound, total.bound, total.n)
     grid = cartesian_cube(offsets)
@@ -330,9 +336,7 @@ def fused_pays(configs) -> bool:
     seconds = 0.0
     for cfg in configs:
         if _name(cfg.compute.kernel) == "auto" and fused_unfit(cfg) is None:
-            total = cfg.orientation.total
-            orientations = total.n ** 3 if total.n > 1 and total.bound > 0 else 1
-            seconds += grid_size(cfg) * orientations / POSES_PER_SECOND["pinv"]
+            seconds += grid_size(cfg) * orientation_count(cfg.orientation) / POSES_PER_SECOND["pinv"]
     return seconds > FUSED_START_S
 
 

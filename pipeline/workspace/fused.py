@@ -127,13 +127,7 @@ def _kernel(positions, anchors, arms, rate_axes, radius, rows, extremes, centre,
     g_v, l_v, s_v = gains[0], gains[1], gains[2]
     for p in range(n):
         for i in range(m):  # eqs. (1)-(19): J row i = [u_i, ((R b_i) x u_i) . E] / R_i
-            vx = positions[p, 0] + arms[i, 0] - anchors[i, 0]
-            vy = positions[p, 1] + arms[i, 1] - anchors[i, 1]
-            vz = positions[p, 2] + arms[i, 2] - anchors[i, 2]
-            length = np.sqrt(vx * vx + vy * vy + vz * vz)
-            lengths[i] = length
-            inverse = 1.0 / length if length > 0 else 0.0
-            ux, uy, uz = vx * inverse, vy * inverse, vz * inverse
+            lengths[i], ux, uy, uz = _cable(positions, p, anchors, arms, i, True)
             mx = arms[i, 1] * uz - arms[i, 2] * uy
             my = arms[i, 2] * ux - arms[i, 0] * uz
             mz = arms[i, 0] * uy - arms[i, 1] * ux
@@ -210,15 +204,7 @@ def _statics(positions, anchors, arms, centre, base, wrench, rtol, singular_rtol
     solved = np.empty((6, 1))
     for p in range(n):
         for i in range(m):
-            vx = positions[p, 0] - anchors[i, 0]
-            vy = positions[p, 1] - anchors[i, 1]
-            vz = positions[p, 2] - anchors[i, 2]
-            if not centre:  # to the attachment point (eq. 1), not the platform's reference point
-                vx, vy, vz = vx + arms[i, 0], vy + arms[i, 1], vz + arms[i, 2]
-            length = np.sqrt(vx * vx + vy * vy + vz * vz)
-            lengths[i] = length
-            inverse = 1.0 / length if length > 0 else 0.0
-            ux, uy, uz = vx * inverse, vy * inverse, vz * inverse
+            lengths[i], ux, uy, uz = _cable(positions, p, anchors, arms, i, not centre)
             ax, ay, az = arms[i, 0], arms[i, 1], arms[i, 2]
             if base:  # moments about the base centre (eq. 9): a_i = r + R d_i
                 ax, ay, az = ax + positions[p, 0], ay + positions[p, 1], az + positions[p, 2]
@@ -249,6 +235,20 @@ def _statics(positions, anchors, arms, centre, base, wrench, rtol, singular_rtol
         out[p, 1] = lowest / scale
         out[p, 2] = 1.0 - worst_rating
         out[p, 3] = 1.0 - worst_length
+
+
+@njit(cache=True, inline="always")
+def _cable(positions, p, anchors, arms, i, to_attachment):
+    """Length and unit vector (0 for a zero length) of cable i at pose p, from its anchor to its
+    attachment point (eq. 1; ``arms``: R b_i) or, without ``to_attachment``, to the platform's
+    reference point; the operations in ``geometry.cable_vectors``' order."""
+    vx, vy, vz = positions[p, 0], positions[p, 1], positions[p, 2]
+    if to_attachment:
+        vx, vy, vz = vx + arms[i, 0], vy + arms[i, 1], vz + arms[i, 2]
+    vx, vy, vz = vx - anchors[i, 0], vy - anchors[i, 1], vz - anchors[i, 2]
+    length = np.sqrt(vx * vx + vy * vy + vz * vz)
+    inverse = 1.0 / length if length > 0 else 0.0
+    return length, vx * inverse, vy * inverse, vz * inverse
 
 
 @njit(cache=True, inline="always")
