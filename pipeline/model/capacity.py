@@ -63,6 +63,7 @@ def shifted_margins(structure: np.ndarray, wrenches: np.ndarray, families) -> tu
     whether a pose needs the LP after all (a crossing search that did not settle). The work per
     pose is compiled (``pipeline.model.crossings``); here the bounds are laid out for it."""
     from pipeline.model.crossings import least_margins
+    from pipeline.model.jit import call_compiled
 
     n, k, q = wrenches.shape
     m = structure.shape[2]
@@ -90,7 +91,7 @@ def shifted_margins(structure: np.ndarray, wrenches: np.ndarray, families) -> tu
             else:
                 fixed[which, where[f]] = values[0] if values.ndim == 3 else values
     found = np.empty((len(families), n))
-    unsettled = least_margins(np.ascontiguousarray(structure), spread, null,
+    unsettled = call_compiled(least_margins, np.ascontiguousarray(structure), spread, null,
                               np.ascontiguousarray(wrenches), subsets, others, fixed, posed, where,
                               varies, RELAX, found)
     return {family.name: found[f] for f, family in enumerate(families)}, unsettled

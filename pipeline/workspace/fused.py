@@ -43,6 +43,7 @@ from numba import njit
 
 from pipeline.model.dynamics import MotionSpec, acceleration_box, inertia_sign, load_wrench_terms
 from pipeline.model.geometry import euler_rate_axes, rotation_matrix
+from pipeline.model.jit import call_compiled
 
 CRITERIA = ("speed", "torque", "acceleration", "voltage", "tension_max", "length")  # columns of _kernel
 STATICS_CRITERIA = ("singular", "slack", "tension_max", "length")  # columns of _statics
@@ -67,12 +68,13 @@ def _statics_margins(problem, positions: np.ndarray, orientation):
     n = len(positions)
     out = np.empty((n, len(STATICS_CRITERIA)))
     unsettled = np.zeros(n, dtype=np.bool_)
-    _statics(np.ascontiguousarray(positions, dtype=float), np.ascontiguousarray(robot.anchors, dtype=float),
-             np.ascontiguousarray(robot.attachments @ rotation.T), spec.cable_direction == "centre",
-             spec.moment_arm == "base", np.ascontiguousarray(wrench[:, None]), float(spec.rank_rtol),
-             float(lim.rank_rtol), np.ascontiguousarray(np.broadcast_to(spec.tension.t_min, (m,)), dtype=float),
-             np.ascontiguousarray(np.broadcast_to(lim.s_max, (m,)), dtype=float), float(lim.scale),
-             np.inf if robot.l_max is None else float(robot.l_max), out, unsettled)
+    call_compiled(_statics, np.ascontiguousarray(positions, dtype=float),
+                  np.ascontiguousarray(robot.anchors, dtype=float), np.ascontiguousarray(robot.attachments @ rotation.T),
+                  spec.cable_direction == "centre", spec.moment_arm == "base",
+                  np.ascontiguousarray(wrench[:, None]), float(spec.rank_rtol), float(lim.rank_rtol),
+                  np.ascontiguousarray(np.broadcast_to(spec.tension.t_min, (m,)), dtype=float),
+                  np.ascontiguousarray(np.broadcast_to(lim.s_max, (m,)), dtype=float), float(lim.scale),
+                  np.inf if robot.l_max is None else float(robot.l_max), out, unsettled)
     return {f"margin_{name}": out[:, STATICS_CRITERIA.index(name)] for name in problem.criteria}, unsettled
 
 
@@ -90,14 +92,14 @@ def _cpr_wwa_margins(problem, positions: np.ndarray, orientation):
     out = np.empty((n, len(CRITERIA)))
     rank = np.zeros(n, dtype=np.int8)
     unsettled = np.zeros(n, dtype=np.bool_)
-    _kernel(np.ascontiguousarray(positions, dtype=float), np.ascontiguousarray(robot.anchors, dtype=float),
-            np.ascontiguousarray(robot.attachments @ rotation.T), np.ascontiguousarray(euler_rate_axes(*orientation)),
-            np.ascontiguousarray(spec.winch_radius, dtype=float), rows,
-            np.ascontiguousarray(spec.velocity_extremes, dtype=float), centre, half, loads,
-            float(spec.rank_rtol), np.array([act.speed_limit, act.torque_limit, act.accel_limit,
-                                             act.voltage_limit], dtype=float),
-            np.array([act.G_v, act.L_v, act.S_v], dtype=float), np.ascontiguousarray(t_max, dtype=float),
-            l_max, out, rank, unsettled)
+    call_compiled(_kernel, np.ascontiguousarray(positions, dtype=float),
+                  np.ascontiguousarray(robot.anchors, dtype=float), np.ascontiguousarray(robot.attachments @ rotation.T),
+                  np.ascontiguousarray(euler_rate_axes(*orientation)), np.ascontiguousarray(spec.winch_radius, dtype=float),
+                  rows, np.ascontiguousarray(spec.velocity_extremes, dtype=float), centre, half, loads,
+                  float(spec.rank_rtol), np.array([act.speed_limit, act.torque_limit, act.accel_limit,
+                                                   act.voltage_limit], dtype=float),
+                  np.array([act.G_v, act.L_v, act.S_v], dtype=float), np.ascontiguousarray(t_max, dtype=float),
+                  l_max, out, rank, unsettled)
     result = {f"margin_{name}": out[:, CRITERIA.index(name)] for name in problem.criteria}
     result["jacobian_rank"] = rank
     return result, unsettled
