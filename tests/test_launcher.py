@@ -28,7 +28,7 @@ def sweep(folder: Path, *launcher: str) -> Path:
 
 def job_files(folder: Path) -> dict[str, bytes]:
     """Every file of the sweep but logs, by relative path; Hydra's own config without the keys
-    that name the launcher or the sweep folder."""
+    that name the launcher or the sweep folder (the job's folder relative to the sweep's)."""
     files = {}
     for path in sorted(folder.rglob("*")):
         name = str(path.relative_to(folder))
@@ -39,7 +39,9 @@ def job_files(folder: Path) -> dict[str, bytes]:
             for key in ("launcher", "sweep"):
                 hydra.pop(key)
             hydra["runtime"]["choices"].pop("hydra/launcher")
-            hydra["runtime"].pop("output_dir", None)
+            if hydra["runtime"].get("output_dir", "???") != "???":  # the job's folder, in the sweep's
+                hydra["runtime"]["output_dir"] = str(Path(hydra["runtime"]["output_dir"]).relative_to(
+                    folder.resolve()))
             hydra["overrides"]["hydra"] = [o for o in hydra["overrides"]["hydra"]
                                            if not o.startswith(("hydra/launcher", "hydra.sweep.dir", "hydra.launcher"))]
             files[name] = yaml.safe_dump(hydra).encode()
@@ -87,8 +89,8 @@ def test_a_pool_worker_is_sent_the_typed_config_of_its_job():
     try:
         with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3", job_name="test"):
             for overrides in job_overrides(argv):
-                config = compose(config_name="config", overrides=overrides, return_hydra_config=True)
-                _, (typed, _) = _prepared(config)
+                task = compose(config_name="config", overrides=overrides)
+                _, (typed, _) = _prepared(task)
                 assert typed.robot.gamma_deg == float(overrides[-1].split("=")[1])
         assert PREPARED == {}
     finally:

@@ -56,3 +56,69 @@ def test_sweeps_the_preflight_cannot_enumerate_are_checked_by_their_fixed_part()
     assert job_overrides(["-m", "hydra/sweeper=optuna", "load.mass=1,2"]) == [["hydra/sweeper=optuna"]]
     with pytest.raises(ConfigError, match="actuator=9"):
         check(["-m", "load.mass=interval(1,3)", "actuator=9"])
+
+
+def _leaves(cfg, prefix=""):
+    """Every leaf of a config as (key, value, Python type), resolved."""
+    from omegaconf import DictConfig, ListConfig, OmegaConf
+
+    found = []
+    items = cfg.items() if isinstance(cfg, DictConfig) else enumerate(cfg)
+    for key, value in items:
+        if isinstance(value, (DictConfig, ListConfig)):
+            found += _leaves(value, f"{prefix}{key}.")
+        else:
+            found.append((f"{prefix}{key}", value, type(value)))
+    return found + [(prefix, OmegaConf.is_struct(cfg), "struct")] if isinstance(cfg, DictConfig) else found
+
+
+POINTS = ["robot=points", "robot.anchors=[[2,0,3],[1,2,3],[-1,2,3],[-2,0,3],[-1,-2,3],[1,-2,3]]",
+          "robot.attachments=[[0,0,0],[0,0,0],[0,0,0],[0,0,0],[0,0,0],[0,0,0]]",
+          "robot.search.lo=[0,0,0]", "robot.search.hi=[0.5,0.5,1]", "robot.search.step=0.25"]
+
+
+@pytest.mark.parametrize("argv", [
+    ["-m", "actuator=1,3", "load.mass=2,7.5", "compute.kernel=numpy,fused", "model.rank_rtol=1e-6"],
+    ["-m", "tension=feasible", "orientation.psi=0,0.1", "load.com=[0,0,0.1],[0.01,0,0]", "poses=[[0.1,0.2,0.3]]"],
+    ["-m", "robot=irpm6", "robot.gamma_deg=0,15", "wrench.fx=0,50000", "robot.r_end=4.8", "limits.s_max=null,1e5"],
+    ["-m", *POINTS, "robot.l_max=null,3", "load.mass=1,2"],
+    ["-m", "--config-dir", "{user}", "robot=hexa", "robot.l_max=null,3", "robot.search.step=0.25,0.5",
+     "robot.up=[0,0,1],[0,0.1,1]"],
+])
+def test_jobs_derived_from_one_composition_equal_each_job_typed_on_its_own(argv, tmp_path):
+    """Each job's typed config, derived from its composition by the overrides' typed values
+    (``Composition.job``), equals the job's own composition typed from scratch
+    (``typed_config``, the reference): same keys, values, Python types and struct flag."""
+    from hydra import compose, initialize_config_dir
+    from omegaconf import OmegaConf
+
+    from pipeline.app.config import typed_config
+    from pipeline.app.resources import CONF_DIR
+
+    folder = tmp_path / "robot"  # the user's own robot, every value in its file
+    folder.mkdir()
+    (folder / "hexa.yaml").write_text(
+        "# @package _global_\ndefaults: [points, _self_]\nrobot:\n"
+        "  anchors: [[2,0,3],[1,2,3],[-1,2,3],[-2,0,3],[-1,-2,3],[1,-2,3]]\n"
+        "  attachments: [[0.2,0,0],[0.1,0.2,0],[-0.1,0.2,0],[-0.2,0,0],[-0.1,-0.2,0],[0.1,-0.2,0]]\n"
+        "  search: {lo: [-0.5,-0.5,0], hi: [0.5,0.5,1], step: 0.25}\n")
+    argv = [a.replace("{user}", str(tmp_path)) for a in argv]
+    user = [f"hydra.searchpath=[file://{tmp_path}]"] if "--config-dir" in argv else []
+    prepared = check(argv)
+    jobs = job_overrides(argv)
+    assert len(prepared) == len(jobs) > 1
+    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3", job_name="reference"):
+        for overrides in jobs:
+            plain = compose(config_name="config", overrides=[*user, *overrides])
+            typed, _ = prepared[OmegaConf.to_yaml(plain)]
+            assert _leaves(typed) == _leaves(typed_config(plain))
+
+
+def test_a_bad_value_is_refused_in_any_job_of_a_derived_sweep():
+    """Typed values are remembered per override text: a good value first does not let a bad one
+    of the same key through, in the sweep's last job too."""
+    for argv, needle in [(["-m", "load.mass=1,2,abc"], "load.mass=abc"),
+                         (["-m", "actuator=1,2", "compute.kernel=auto,gpu"], "compute.kernel=gpu"),
+                         (["-m", "load.com=[0,0,0],[0,0,x]"], "load.com=[0,0,x]")]:
+        with pytest.raises(ConfigError, match=needle.replace("[", r"\[").replace("]", r"\]")):
+            check(argv)

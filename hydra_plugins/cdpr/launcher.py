@@ -5,9 +5,9 @@ Hydra's basic launcher composes every job of a sweep from the config files (abou
 Jobs that choose the same files (the same config-group choices and ``hydra.*`` overrides)
 differ only in plain ``key=value`` overrides, so this launcher composes those files once, with
 Hydra's own config loader and the job's group and ``hydra.*`` overrides, and makes each job
-from a copy: its plain overrides applied in command order with ``OmegaConf.update(...,
-merge=True)`` (what the loader does after composing), ``hydra.overrides.task`` and
-``hydra.job.override_dirname`` set by the loader's rules. A job with ``+``, ``++`` or ``~``
+from a copy (unpickled: ``preflight.Copies``): its plain overrides applied in command order
+with ``OmegaConf.update(..., merge=True)`` (what the loader does after composing),
+``hydra.overrides.task`` and ``hydra.job.override_dirname`` set by the loader's rules. A job with ``+``, ``++`` or ``~``
 overrides, or a plain override whose value is a dict (merged into the key, so not replaced by
 the next job's value), is composed in full. The ``.hydra`` files and results equal the basic
 launcher's (tests/test_launcher.py).
@@ -15,7 +15,9 @@ launcher's (tests/test_launcher.py).
 ``n_jobs`` > 1 runs the jobs on a pool of worker processes (at most one per core; loky's
 reusable executor, the one joblib uses): a process that runs many sweeps
 (``python -m pipeline.study``) starts its workers once, and each worker imports the code once.
-Jobs composed here are sent to the workers whole, with the preflight's typed config. Built on Hydra's public plugin interface (Launcher, ``hydra.core.utils.run_job``).
+Jobs composed here are sent to the workers whole, with the preflight's typed config. Each job
+runs as Hydra's ``run_job`` runs it, with fewer copies of its config (``runner.run_job``).
+Built on Hydra's public plugin interface (Launcher, ``hydra.core.utils``).
 """
 
 import copy
@@ -27,10 +29,12 @@ from typing import Any, Dict, Optional, Sequence, Tuple
 
 from hydra.core.config_store import ConfigStore
 from hydra.core.singleton import Singleton
-from hydra.core.utils import JobReturn, JobStatus, configure_log, filter_overrides, run_job, setup_globals
+from hydra.core.utils import JobReturn, JobStatus, configure_log, filter_overrides, setup_globals
 from hydra.plugins.launcher import Launcher
 from hydra.types import HydraContext, TaskFunction
-from omegaconf import DictConfig, OmegaConf, open_dict
+from omegaconf import DictConfig, OmegaConf, open_dict, read_write
+
+from hydra_plugins.cdpr.runner import run_job
 
 log = logging.getLogger(__name__)
 LISTED_JOBS = 10  # jobs named before a sweep starts; every job is named as it ends
@@ -65,7 +69,7 @@ class CdprLauncher(Launcher):
         self.config: Optional[DictConfig] = None
         self.hydra_context: Optional[HydraContext] = None
         self.task_function: Optional[TaskFunction] = None
-        self._composed: Dict[Tuple[str, ...], DictConfig] = {}
+        self._composed: Dict[Tuple[str, ...], Any] = {}  # preflight.Copies: composition, task
 
     def setup(self, *, hydra_context: HydraContext, task_function: TaskFunction,
               config: DictConfig) -> None:
@@ -93,8 +97,8 @@ class CdprLauncher(Launcher):
         runs = []
         fused = _fused_pays()
         if workers == 1 or len(job_overrides) == 1:
-            for config in configs:
-                runs.append(_run(config, self.hydra_context, self.task_function, fused=fused))
+            for config, task in configs:
+                runs.append(_run(config, task, self.hydra_context, self.task_function, fused=fused))
                 configure_log(self.config.hydra.hydra_logging, self.config.hydra.verbose)
                 progress.step(_outcome(runs[-1]))
             return runs
@@ -102,15 +106,16 @@ class CdprLauncher(Launcher):
 
         state = Singleton.get_state()
         for ret in Parallel(n_jobs=workers, backend="loky", return_as="generator")(
-                delayed(_run)(config, self.hydra_context, self.task_function, state, _prepared(config), fused)
-                for config in configs):
+                delayed(_run)(config, task, self.hydra_context, self.task_function, state, _prepared(task), fused)
+                for config, task in configs):
             runs.append(ret)
             progress.step(_outcome(ret))
         return runs
 
-    def job_config(self, idx: int, overrides: Sequence[str]) -> DictConfig:
-        """The config Hydra's loader composes for these overrides, with job id and number."""
-        from pipeline.app.preflight import override_dirname, parse, structural
+    def job_config(self, idx: int, overrides: Sequence[str]) -> Tuple[DictConfig, DictConfig]:
+        """The config Hydra's loader composes for these overrides, with job id and number, and
+        the task's config: the same without Hydra's node."""
+        from pipeline.app.preflight import Copies, override_dirname, parse, structural
 
         parsed = parse(overrides)
         plain = [o for o in parsed if not structural(o)]
@@ -120,19 +125,31 @@ class CdprLauncher(Launcher):
         if derivable:
             files = tuple(o.input_line for o in parsed if structural(o))
             if files not in self._composed:
-                self._composed[files] = loader.load_sweep_config(self.config, list(files))
-            config = copy.deepcopy(self._composed[files])
-            task = [o for o in parsed if not o.is_hydra_override()]
+                composed = loader.load_sweep_config(self.config, list(files))
+                self._composed[files] = Copies(composed), Copies(_task(composed))
+            config, task = (copies() for copies in self._composed[files])
             for override in plain:
-                OmegaConf.update(config, override.key_or_group, override.value(), merge=True)
-            config.hydra.overrides.task = [o.input_line for o in task]
-            config.hydra.job.override_dirname = override_dirname(task, config.hydra.job.config.override_dirname)
+                for node in (config, task):
+                    OmegaConf.update(node, override.key_or_group, override.value(), merge=True)
+            task_overrides = [o for o in parsed if not o.is_hydra_override()]
+            config.hydra.overrides.task = [o.input_line for o in task_overrides]
+            config.hydra.job.override_dirname = override_dirname(
+                task_overrides, config.hydra.job.config.override_dirname)
         else:
             config = loader.load_sweep_config(self.config, overrides)
+            task = _task(config)
         with open_dict(config):
             config.hydra.job.id = idx
             config.hydra.job.num = idx
-        return config
+        return config, task
+
+
+def _task(config: DictConfig) -> DictConfig:
+    """``config`` without Hydra's node, as Hydra's ``run_job`` makes it (a deep copy)."""
+    task = copy.deepcopy(config)
+    with read_write(task), open_dict(task):
+        del task["hydra"]
+    return task
 
 
 def _outcome(ret: JobReturn) -> str:
@@ -156,22 +173,23 @@ def _fused_pays() -> bool:
     return fused_pays(cfg for cfg, _ in PREPARED.values())
 
 
-def _prepared(config: DictConfig) -> Optional[Tuple[str, Any]]:
+def _prepared(task: DictConfig) -> Optional[Tuple[str, Any]]:
     """The preflight's typed config for this job (``pipeline.app.job.PREPARED``, by the YAML of the
-    job's config without Hydra's node), taken from this process to send to a worker."""
+    job's config without Hydra's node, ``task``), taken from this process to send to a worker."""
     from pipeline.app.job import PREPARED
 
     if not PREPARED:
         return None
-    key = OmegaConf.to_yaml(OmegaConf.masked_copy(config, [k for k in config if k != "hydra"]))
+    key = OmegaConf.to_yaml(task)
     entry = PREPARED.pop(key, None)
     return None if entry is None else (key, entry)
 
 
-def _run(config: DictConfig, hydra_context: HydraContext, task_function: TaskFunction,
+def _run(config: DictConfig, task: DictConfig, hydra_context: HydraContext, task_function: TaskFunction,
          singleton_state: Optional[Dict[Any, Any]] = None,
          prepared: Optional[Tuple[str, Any]] = None, fused: bool = False) -> JobReturn:
-    """One job, as Hydra's launchers run it; in a worker process, with the parent's Hydra state
+    """One job (``config``, and ``task``: the same without Hydra's node), as Hydra's launchers run
+    it (:func:`hydra_plugins.cdpr.runner.run_job`); in a worker process, with the parent's Hydra state
     and the job's typed config when the parent has it. ``fused``: the sweep pays for the
     compiled kernels (:func:`_fused_pays`), so the job uses them where they apply."""
     from pipeline.workspace.compute import SWEEP_FUSED
@@ -185,7 +203,6 @@ def _run(config: DictConfig, hydra_context: HydraContext, task_function: TaskFun
         PREPARED[prepared[0]] = prepared[1]
     token = SWEEP_FUSED.set(fused)
     try:
-        return run_job(hydra_context=hydra_context, task_function=task_function, config=config,
-                       job_dir_key="hydra.sweep.dir", job_subdir_key="hydra.sweep.subdir")
+        return run_job(config, task, task_function, hydra_context)
     finally:
         SWEEP_FUSED.reset(token)

@@ -577,8 +577,9 @@ def check_values(node: DictConfig, schema, prefix: str = "") -> None:
     """Apply the rules ``schema`` declares (``rule`` fields, ``check_fields``) to the keys
     ``node`` has, nested schemas first: ConfigError '<key>=<value>: <rule>' on the first
     failure."""
+    present = set(node.keys())  # `in node` raises and catches inside OmegaConf for an absent key
     for declared in fields(schema):
-        if declared.name not in node:
+        if declared.name not in present:
             continue
         value = node[declared.name]
         default = declared.default_factory() if callable(declared.default_factory) else None
