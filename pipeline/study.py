@@ -374,7 +374,8 @@ def checked_commands(name: str, extra: list[str], out_root: Path | None = None,
         return corners
     commands = [sweep_command(study, [*overrides, *extra], out / "jobs" / case, launcher)
                 for case, overrides in (study.cases or {"": []}).items()]
-    checked = [(command, check(command)) for command in commands]
+    reuse = Reuse()  # the cases share their config files: composed once, each folder set after
+    checked = [(command, check(command, reuse)) for command in commands]
     needs = [f.kind for f in study.figures if f.kind in NEEDS_POINTS] + [
         a for a in study.analyses if a in NEEDS_POINTS]
     if needs and any(not cfg.output.points for _, jobs in checked for cfg, _ in jobs.values()):

@@ -173,36 +173,35 @@ def _fused_pays() -> bool:
     return fused_pays(cfg for cfg, _ in PREPARED.values())
 
 
-def _prepared(task: DictConfig) -> Optional[Tuple[str, Any]]:
-    """The preflight's typed config for this job (``pipeline.app.job.PREPARED``, by the YAML of the
-    job's config without Hydra's node, ``task``), taken from this process to send to a worker."""
+def _prepared(task: DictConfig) -> Tuple[str, Any]:
+    """The YAML of the job's config without Hydra's node (``task``: its ``.hydra/config.yaml``),
+    and the preflight's typed config and catalogue for it, taken out of
+    ``pipeline.app.job.PREPARED`` (None when the preflight of this process has none: the job
+    types its config itself)."""
     from pipeline.app.job import PREPARED
 
-    if not PREPARED:
-        return None
-    key = OmegaConf.to_yaml(task)
-    entry = PREPARED.pop(key, None)
-    return None if entry is None else (key, entry)
+    text = OmegaConf.to_yaml(task)
+    return text, PREPARED.pop(text, None)
 
 
 def _run(config: DictConfig, task: DictConfig, hydra_context: HydraContext, task_function: TaskFunction,
          singleton_state: Optional[Dict[Any, Any]] = None,
          prepared: Optional[Tuple[str, Any]] = None, fused: bool = False) -> JobReturn:
     """One job (``config``, and ``task``: the same without Hydra's node), as Hydra's launchers run
-    it (:func:`hydra_plugins.cdpr.runner.run_job`); in a worker process, with the parent's Hydra state
-    and the job's typed config when the parent has it. ``fused``: the sweep pays for the
+    it (:func:`hydra_plugins.cdpr.runner.run_job`); in a worker process, with the parent's Hydra
+    state. ``prepared``: :func:`_prepared` of ``task`` if the parent made it; the job takes its
+    typed config from it (``pipeline.app.job.CURRENT``). ``fused``: the sweep pays for the
     compiled kernels (:func:`_fused_pays`), so the job uses them where they apply."""
+    from pipeline.app.job import CURRENT
     from pipeline.workspace.compute import SWEEP_FUSED
 
     if singleton_state is not None:
         setup_globals()
         Singleton.set_state(singleton_state)
-    if prepared is not None:
-        from pipeline.app.job import PREPARED
-
-        PREPARED[prepared[0]] = prepared[1]
-    token = SWEEP_FUSED.set(fused)
+    text, entry = _prepared(task) if prepared is None else prepared
+    tokens = SWEEP_FUSED.set(fused), CURRENT.set(entry)
     try:
-        return run_job(config, task, task_function, hydra_context)
+        return run_job(config, task, task_function, hydra_context, task_yaml=text)
     finally:
-        SWEEP_FUSED.reset(token)
+        SWEEP_FUSED.reset(tokens[0])
+        CURRENT.reset(tokens[1])

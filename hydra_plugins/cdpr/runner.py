@@ -14,6 +14,7 @@ compares the files with Hydra's basic launcher's).
 import logging
 import os
 from pathlib import Path
+from typing import Optional
 
 from hydra.core.hydra_config import HydraConfig
 from hydra.core.utils import JobReturn, JobRuntime, JobStatus, configure_log, env_override
@@ -22,10 +23,11 @@ from omegaconf import DictConfig, OmegaConf, open_dict, read_write
 
 
 def run_job(config: DictConfig, task_cfg: DictConfig, task_function: TaskFunction,
-            hydra_context: HydraContext) -> JobReturn:
+            hydra_context: HydraContext, task_yaml: Optional[str] = None) -> JobReturn:
     """Run ``task_function`` on a sweep job's ``task_cfg`` (``config`` without Hydra's node,
     the launcher's copy) in ``hydra.sweep.dir``/``hydra.sweep.subdir``. ``config`` is the job's
-    own object: its output folder is set in it. The task's exception, if any, is the return
+    own object: its output folder is set in it. ``task_yaml``: ``OmegaConf.to_yaml(task_cfg)``
+    if the caller has it (``.hydra/config.yaml``). The task's exception, if any, is the return
     value of a FAILED ``JobReturn``, as with Hydra."""
     old_cwd = os.getcwd()
     hydra_config = HydraConfig.instance()
@@ -51,9 +53,10 @@ def run_job(config: DictConfig, task_cfg: DictConfig, task_function: TaskFunctio
         if config.hydra.output_subdir is not None:
             saved = Path(config.hydra.runtime.output_dir) / str(config.hydra.output_subdir)
             saved.mkdir(parents=True, exist_ok=True)
-            for name, node in (("config.yaml", task_cfg), ("hydra.yaml", record),
-                               ("overrides.yaml", config.hydra.overrides.task)):
-                (saved / name).write_text(OmegaConf.to_yaml(node), encoding="utf-8")
+            for name, text in (("config.yaml", task_yaml or OmegaConf.to_yaml(task_cfg)),
+                               ("hydra.yaml", OmegaConf.to_yaml(record)),
+                               ("overrides.yaml", OmegaConf.to_yaml(config.hydra.overrides.task))):
+                (saved / name).write_text(text, encoding="utf-8")
         with env_override(record.hydra.job.env_set):
             hydra_context.callbacks.on_job_start(config=config, task_function=task_function)
             try:

@@ -19,6 +19,7 @@ import json
 import logging
 import sys
 from contextlib import contextmanager
+from contextvars import ContextVar
 from pathlib import Path
 
 import pandas as pd
@@ -42,11 +43,14 @@ log = logging.getLogger("pipeline")
 # by the YAML of the config Hydra composes for it (``pipeline.app.preflight.check``): a job run in
 # this process takes them from here instead of typing, validating and reading them again.
 PREPARED: dict[str, tuple[DictConfig, object]] = {}
+# The entry of PREPARED for the job the ``cdpr`` launcher is running, which it found by the YAML
+# it writes as the job's .hydra/config.yaml (hydra_plugins/cdpr/launcher.py): not dumped twice.
+CURRENT: ContextVar[tuple[DictConfig, object] | None] = ContextVar("CURRENT", default=None)
 
 
 def run_job(cfg: DictConfig) -> dict:
     """Validate, compute the feasible workspace, write the Parquet files; returns the summary."""
-    prepared = PREPARED.pop(OmegaConf.to_yaml(cfg), None)
+    prepared = CURRENT.get() or PREPARED.pop(OmegaConf.to_yaml(cfg), None)
     if prepared is not None:
         cfg, catalogue = prepared
     else:
