@@ -95,3 +95,22 @@ def test_a_pool_worker_is_sent_the_typed_config_of_its_job():
         assert PREPARED == {}
     finally:
         PREPARED.clear()
+
+
+def test_job_folder_settings_are_honoured_as_by_the_basic_launcher(tmp_path):
+    """``hydra.job.chdir=true`` and ``hydra.job.env_set``: the cdpr launcher's own job runner
+    (``hydra_plugins.cdpr.runner``) writes the files the basic launcher writes, and nothing in
+    the folder the command was started from."""
+    settings = ["actuator=1,2", "grid.n=3", "hydra.job.chdir=true", "+hydra.job.env_set.CDPR_NOTE=x"]
+
+    def files(name: str, *launcher: str) -> dict[str, bytes]:
+        done = subprocess.run([sys.executable, "-m", "pipeline", "-m", *settings,
+                               f"hydra.sweep.dir={tmp_path / name}", *launcher],
+                              capture_output=True, text=True, cwd=tmp_path)
+        assert done.returncode == 0, done.stderr
+        return job_files(tmp_path / name)
+
+    basic = files("basic", "hydra/launcher=basic")
+    assert len([n for n in basic if n.endswith("hydra.yaml")]) == 2
+    assert files("cdpr") == basic
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["basic", "cdpr"]  # nothing written beside
