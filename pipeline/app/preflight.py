@@ -7,8 +7,10 @@ problem with a one-line message naming the key and value.
 
 Composing a config costs about 80 ms, so a sweep of a thousand jobs is not composed a thousand
 times: jobs that share their structural overrides (config groups, ``+``/``~``, ``hydra.*``) share
-one composition, and each job's plain ``key=value`` overrides are applied to a copy of it with
-the same typed merge Hydra uses (the dataclass schema still rejects a bad key or type).
+one composition (:class:`Composition`), and each job's plain ``key=value`` overrides are applied
+to a copy of it with the same typed merge Hydra uses (the dataclass schema still rejects a bad
+key or type). The typed config of a job is derived from the composition's, typed once, and the
+typed value of each override text, typed once: about 10 ms a job instead of 21.
 """
 
 from __future__ import annotations
