@@ -5,10 +5,11 @@ Hydra's function sets ``HydraConfig`` twice (a masked copy of the config each ti
 the whole config for the task and Hydra's node again for the job's record: about 15 ms a job,
 where a study's job computes in 10 to 70 ms. Here ``HydraConfig`` is set once and its copy is
 the record, and the task's config is the launcher's (one unpickled copy, with the job's
-overrides, of the composition without Hydra's node). The rest is Hydra's: the job's folder, ``hydra.job.chdir``, its
-logging, ``.hydra/config.yaml``, ``hydra.yaml`` and ``overrides.yaml`` (the same text: OmegaConf's
-YAML, UTF-8), ``hydra.job.env_set``, the callbacks, the ``JobReturn`` (tests/test_launcher.py
-compares the files with Hydra's basic launcher's).
+overrides, of the composition without Hydra's node). The rest is Hydra's: the job's folder,
+``hydra.job.chdir`` (unset is false, Hydra's rule from version_base 1.2, which the app uses),
+its logging, ``.hydra/config.yaml``, ``hydra.yaml`` and ``overrides.yaml`` (the same text:
+OmegaConf's YAML, UTF-8), ``hydra.job.env_set``, the callbacks, the ``JobReturn``
+(tests/test_launcher.py compares the files with Hydra's basic launcher's).
 """
 
 import logging
@@ -39,7 +40,7 @@ def run_job(config: DictConfig, task_cfg: DictConfig, task_function: TaskFunctio
     for node in (config, record):
         with read_write(node.hydra.runtime), open_dict(node.hydra.runtime):
             node.hydra.runtime.output_dir = os.path.abspath(output_dir)
-    chdir = bool(record.hydra.job.chdir)  # None is False from version_base 1.2 on
+    chdir = bool(record.hydra.job.chdir)
     try:
         ret = JobReturn()
         ret.cfg = task_cfg

@@ -154,21 +154,12 @@ class Composition:
             del plain["hydra"]
         self.hydra = Copies(hydra)
         self.plain = Copies(plain)
-        self.full = typed_schema(plain)  # typed once per composition
-        self._full = Copies(self.full)
-        self._typed = self._derivable_from(plain)
+        full = typed_schema(plain)  # typed once per composition
+        self._full = Copies(full)
+        self._typed = _derivable(full, plain)
+        self._scratch = full  # where each override text is typed, once (:meth:`_typed_value`)
         self._converted: dict[str, Any] = {}
 
-    def _derivable_from(self, plain: DictConfig) -> Copies | None:
-        """The typed job config of no override, from which each job's is derived, when every
-        value of the files is set and none is an interpolation (a typed config holds resolved
-        values, which an override of another key could change); else None."""
-        if "${" in OmegaConf.to_yaml(plain):
-            return None
-        try:
-            return Copies(masked(self.full, plain))
-        except MissingMandatoryValue:  # ??? in the files: the overrides give it
-            return None
 
     def job(self, parsed: list[Override]) -> tuple[DictConfig, DictConfig]:
         """(the job's typed config, its config as Hydra composes it) for its parsed overrides,
@@ -193,11 +184,24 @@ class Composition:
         from the typed config), typed once per override text: a value's type depends on its
         key only, in one composition."""
         if override.input_line not in self._converted:
-            _apply(self.full, override)  # ConfigError for a value of the wrong type
-            value = OmegaConf.select(self.full, override.key_or_group)
+            _apply(self._scratch, override)  # ConfigError for a value of the wrong type
+            value = OmegaConf.select(self._scratch, override.key_or_group)
             self._converted[override.input_line] = (OmegaConf.to_container(value) if isinstance(
                 value, (DictConfig, ListConfig)) else value)
         return self._converted[override.input_line]
+
+
+def _derivable(full: DictConfig, plain: DictConfig) -> Copies | None:
+    """The typed job config of no override (``full`` masked to ``plain``'s keys), from which each
+    job's is derived, when every value of the files is set and none is an interpolation (a
+    typed config holds resolved values, which an override of another key could change); else
+    None."""
+    if "${" in OmegaConf.to_yaml(plain):
+        return None
+    try:
+        return Copies(masked(full, plain))
+    except MissingMandatoryValue:  # ??? in the files: the overrides give it
+        return None
 
 
 def _not_derivable(override: Override) -> bool:
