@@ -84,6 +84,7 @@ POINTS = ["robot=points", "robot.anchors=[[2,0,3],[1,2,3],[-1,2,3],[-2,0,3],[-1,
     ["-m", *POINTS, "robot.l_max=null,3", "load.mass=1,2"],
     ["-m", "--config-dir", "{user}", "robot=hexa", "robot.l_max=null,3", "robot.search.step=0.25,0.5",
      "robot.up=[0,0,1],[0,0.1,1]"],
+    ["-m", "--config-dir", "{user}", "robot=tied", "load.mass=3,5"],
 ])
 def test_jobs_derived_from_one_composition_equal_each_job_typed_on_its_own(argv, tmp_path):
     """Each job's typed config, derived from its composition by the overrides' typed values
@@ -102,6 +103,8 @@ def test_jobs_derived_from_one_composition_equal_each_job_typed_on_its_own(argv,
         "  anchors: [[2,0,3],[1,2,3],[-1,2,3],[-2,0,3],[-1,-2,3],[1,-2,3]]\n"
         "  attachments: [[0.2,0,0],[0.1,0.2,0],[-0.1,0.2,0],[-0.2,0,0],[-0.1,-0.2,0],[0.1,-0.2,0]]\n"
         "  search: {lo: [-0.5,-0.5,0], hi: [0.5,0.5,1], step: 0.25}\n")
+    (folder / "tied.yaml").write_text(  # a value that follows another key: resolved per job
+        "# @package _global_\ndefaults: [hexa, _self_]\nrobot:\n  l_max: ${load.mass}\n")
     argv = [a.replace("{user}", str(tmp_path)) for a in argv]
     user = [f"hydra.searchpath=[file://{tmp_path}]"] if "--config-dir" in argv else []
     prepared = check(argv)
