@@ -100,8 +100,10 @@ def test_a_pool_worker_is_sent_the_typed_config_of_its_job():
 def test_job_folder_settings_are_honoured_as_by_the_basic_launcher(tmp_path):
     """``hydra.job.chdir=true`` and ``hydra.job.env_set``: the cdpr launcher's own job runner
     (``hydra_plugins.cdpr.runner``) writes the files the basic launcher writes, and nothing in
-    the folder the command was started from."""
-    settings = ["actuator=1,2", "grid.n=3", "hydra.job.chdir=true", "+hydra.job.env_set.CDPR_NOTE=x"]
+    the folder the command was started from. A sweep over values only: its jobs are derived
+    from Hydra's sweep config, fixed values and group choice included, without a composition."""
+    settings = ["robot=cpr8", "actuator=1,2", "load.mass=3", "grid.n=3", "hydra.job.chdir=true",
+                "+hydra.job.env_set.CDPR_NOTE=x"]
 
     def files(name: str, *launcher: str) -> dict[str, bytes]:
         done = subprocess.run([sys.executable, "-m", "pipeline", "-m", *settings,

@@ -125,7 +125,8 @@ class CdprLauncher(Launcher):
         if derivable:
             files = tuple(o.input_line for o in parsed if structural(o))
             if files not in self._composed:
-                composed = loader.load_sweep_config(self.config, list(files))
+                composed = (self._sweep_as_composed() if files == self._sweep_files()
+                            else loader.load_sweep_config(self.config, list(files)))
                 self._composed[files] = Copies(composed), Copies(_task(composed))
             config, task = (copies() for copies in self._composed[files])
             for override in plain:
@@ -142,6 +143,21 @@ class CdprLauncher(Launcher):
             config.hydra.job.id = idx
             config.hydra.job.num = idx
         return config, task
+
+
+    def _sweep_files(self) -> Tuple[str, ...]:
+        """The structural overrides of the sweep's command that are not swept (its config files)."""
+        from pipeline.app.preflight import parse, structural
+
+        return tuple(o.input_line for o in parse(list(self.config.hydra.overrides.task))
+                     if structural(o) and not o.is_sweep_override())
+
+    def _sweep_as_composed(self) -> DictConfig:
+        """What the loader composes for the sweep command's own files: Hydra's sweep config (same
+        files, same ``hydra.*`` overrides, the fixed values applied, which each job applies again
+        with its swept ones; the task overrides and folder name are each job's own); saves a
+        composition of about 80 ms for a sweep over values only (the main job's)."""
+        return copy.deepcopy(self.config)
 
 
 def _task(config: DictConfig) -> DictConfig:
