@@ -125,3 +125,34 @@ def test_a_bad_value_is_refused_in_any_job_of_a_derived_sweep():
                          (["-m", "load.com=[0,0,0],[0,0,x]"], "load.com=[0,0,x]")]:
         with pytest.raises(ConfigError, match=needle.replace("[", r"\[").replace("]", r"\]")):
             check(argv)
+
+
+def test_copies_equal_deep_copies_also_of_a_config_pickle_cannot_write():
+    """``Copies`` unpickles; a structured config whose class pickle cannot find by name (defined
+    in a function) is deep-copied instead: equal, independent, still typed copies either way."""
+    import copy
+    import pickle
+    from dataclasses import dataclass, field
+
+    from omegaconf import OmegaConf
+    from omegaconf.errors import ValidationError
+
+    from pipeline.app.preflight import Copies
+
+    @dataclass
+    class Local:
+        mass: float = 2.0
+        com: list = field(default_factory=lambda: [0.0, 0.0, 0.1])
+
+    plain = OmegaConf.create({"load": {"mass": 2.0, "com": [0, 0, 0.1]}})
+    typed = OmegaConf.create({"load": OmegaConf.structured(Local)})
+    with pytest.raises((pickle.PicklingError, AttributeError)):
+        pickle.dumps(typed)
+    for cfg in (plain, typed):
+        copies = Copies(cfg)
+        first, second = copies(), copies()
+        first.load.mass = 5.0
+        assert second.load.mass == 2.0 and cfg.load.mass == 2.0
+        assert OmegaConf.to_yaml(second) == OmegaConf.to_yaml(copy.deepcopy(cfg))
+    with pytest.raises(ValidationError):
+        second.load.mass = "heavy"

@@ -134,13 +134,18 @@ RUN_FOLDERS = ("hydra.run.dir", "hydra.sweep.dir")
 class Copies:
     """Fresh copies of one config, each equal to what ``copy.deepcopy`` makes, at a fraction of
     its cost: the config is pickled once and each copy unpickled (about 1.0 ms against 4.8 ms
-    for a composed config with Hydra's node, which a sweep copies once per job)."""
+    for a composed config with Hydra's node, which a sweep copies once per job). A config that
+    pickle cannot write (a structured config whose class it cannot find by name, e.g. one
+    defined in a function) is deep-copied instead."""
 
     def __init__(self, cfg: DictConfig) -> None:
-        self._pickled = pickle.dumps(cfg, protocol=pickle.HIGHEST_PROTOCOL)
+        try:
+            self._pickled, self._cfg = pickle.dumps(cfg, protocol=pickle.HIGHEST_PROTOCOL), None
+        except (pickle.PicklingError, AttributeError, TypeError):  # pickle's refusals
+            self._pickled, self._cfg = None, cfg
 
     def __call__(self) -> DictConfig:
-        return pickle.loads(self._pickled)
+        return pickle.loads(self._pickled) if self._cfg is None else copy.deepcopy(self._cfg)
 
 
 class Composition:
