@@ -7,9 +7,10 @@ differ only in plain ``key=value`` overrides, so this launcher composes those fi
 Hydra's own config loader and the job's group and ``hydra.*`` overrides, and makes each job
 from a copy (unpickled: ``preflight.Copies``): its plain overrides applied in command order
 with ``OmegaConf.update(..., merge=True)`` (what the loader does after composing),
-``hydra.overrides.task`` and ``hydra.job.override_dirname`` set by the loader's rules. A job with ``+``, ``++`` or ``~``
-overrides, or a plain override whose value is a dict (merged into the key, so not replaced by
-the next job's value), is composed in full. The ``.hydra`` files and results equal the basic
+``hydra.overrides.task`` and ``hydra.job.override_dirname`` set by the loader's rules. The
+files of the command itself need no composition: Hydra's sweep config is theirs. A job with
+``+``, ``++`` or ``~`` overrides, or a plain override whose value is a dict (merged into the
+key, so not replaced by the next job's value), is composed in full. The ``.hydra`` files and results equal the basic
 launcher's (tests/test_launcher.py).
 
 ``n_jobs`` > 1 runs the jobs on a pool of worker processes (at most one per core; loky's
@@ -143,7 +144,6 @@ class CdprLauncher(Launcher):
             config.hydra.job.id = idx
             config.hydra.job.num = idx
         return config, task
-
 
     def _sweep_files(self) -> Tuple[str, ...]:
         """The structural overrides of the sweep's command that are not swept (its config files)."""
