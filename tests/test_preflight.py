@@ -154,5 +154,8 @@ def test_copies_equal_deep_copies_also_of_a_config_pickle_cannot_write():
         first.load.mass = 5.0
         assert second.load.mass == 2.0 and cfg.load.mass == 2.0
         assert OmegaConf.to_yaml(second) == OmegaConf.to_yaml(copy.deepcopy(cfg))
+        cfg.load.mass = 3.0  # copies are of the config as it was when Copies took it
+        assert copies().load.mass == 2.0
+        cfg.load.mass = 2.0
     with pytest.raises(ValidationError):
         second.load.mass = "heavy"

@@ -30,7 +30,7 @@ from hydra import compose, initialize_config_dir
 from hydra.errors import MissingConfigException
 from hydra.core.override_parser.overrides_parser import OverridesParser
 from hydra.core.override_parser.types import Override
-from omegaconf import DictConfig, ListConfig, OmegaConf, open_dict
+from omegaconf import DictConfig, ListConfig, OmegaConf, open_dict, read_write
 from omegaconf.errors import ConfigAttributeError, ConfigKeyError, MissingMandatoryValue
 
 from pipeline.model.catalogue import load_catalogue
@@ -134,15 +134,16 @@ RUN_FOLDERS = ("hydra.run.dir", "hydra.sweep.dir")
 class Copies:
     """Fresh copies of one config, each equal to what ``copy.deepcopy`` makes, at a fraction of
     its cost: the config is pickled once and each copy unpickled (about 1.0 ms against 4.8 ms
-    for a composed config with Hydra's node, which a sweep copies once per job). A config that
-    pickle cannot write (a structured config whose class it cannot find by name, e.g. one
-    defined in a function) is deep-copied instead."""
+    for a composed config with Hydra's node, which a sweep copies once per job). The copies are
+    of ``cfg`` as it is now: a later change to it is not in them. A config that pickle cannot
+    write (a structured config whose class it cannot find by name, e.g. one defined in a
+    function) is deep-copied instead."""
 
     def __init__(self, cfg: DictConfig) -> None:
         try:
             self._pickled, self._cfg = pickle.dumps(cfg, protocol=pickle.HIGHEST_PROTOCOL), None
         except (pickle.PicklingError, AttributeError, TypeError):  # pickle's refusals
-            self._pickled, self._cfg = None, cfg
+            self._pickled, self._cfg = None, copy.deepcopy(cfg)
 
     def __call__(self) -> DictConfig:
         return pickle.loads(self._pickled) if self._cfg is None else copy.deepcopy(self._cfg)
@@ -154,9 +155,7 @@ class Composition:
     from which each job's config is made by its plain ``key=value`` overrides (:meth:`job`)."""
 
     def __init__(self, hydra: DictConfig) -> None:
-        plain = copy.deepcopy(hydra)
-        with open_dict(plain):
-            del plain["hydra"]
+        plain = without_hydra(hydra)
         self.hydra = Copies(hydra)
         self.plain = Copies(plain)
         full = typed_schema(plain)  # typed once per composition
@@ -194,6 +193,15 @@ class Composition:
             self._converted[override.input_line] = (OmegaConf.to_container(value) if isinstance(
                 value, (DictConfig, ListConfig)) else value)
         return self._converted[override.input_line]
+
+
+def without_hydra(config: DictConfig) -> DictConfig:
+    """A deep copy of a composed config without Hydra's node (the task's config, as Hydra's
+    ``run_job`` makes it)."""
+    task = copy.deepcopy(config)
+    with read_write(task), open_dict(task):
+        del task["hydra"]
+    return task
 
 
 def _derivable(full: DictConfig, plain: DictConfig) -> Copies | None:
