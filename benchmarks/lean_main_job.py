@@ -13,7 +13,7 @@ register()
 catalogue = load_catalogue()
 with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
     base = compose("config")
-for actuator in catalogue.index:
+for actuator in catalogue.ids:
     base.actuator = int(actuator)
     _, summary = compute_workspace(typed_config(base), catalogue)
     print(actuator, f"{summary['feasible_pct']:.2f}")

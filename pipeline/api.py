@@ -93,7 +93,7 @@ def actuator_choice(overrides: Iterable[str] = (), folder: str | Path | None = N
     if catalogue is None:
         raise ConfigError(f"analysis={analysis_name(cfg)}: no actuators to choose from "
                           "(the choice needs analysis=cpr_wwa)")
-    ids = ",".join(str(i) for i in catalogue.index)
+    ids = ",".join(str(i) for i in catalogue.ids)
     jobs = check(["-m", f"actuator={ids}", *overrides, f"hydra.sweep.dir={quoted(folder)}"])
     done = {}
     for job_cfg, job_catalogue in jobs.values():  # every job checked before the first runs

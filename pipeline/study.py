@@ -351,7 +351,7 @@ def checked_commands(name: str, extra: list[str], out_root: Path | None = None,
     out = study_dir(name, extra, out_root)
     if study.designs:  # the lowest and highest designs
         folder = f"hydra.run.dir={quoted(out)}"
-        first = f"actuator={_catalogue([*study.overrides, *extra]).index[0]}"  # an id of the user's catalogue
+        first = f"actuator={_catalogue([*study.overrides, *extra]).ids[0]}"  # an id of the user's catalogue
         try:
             ((cfg, catalogue),) = check([*study.overrides, first, *extra, folder]).values()
         except ConfigError:  # an analysis without actuators has no key actuator: say that instead
@@ -365,7 +365,7 @@ def checked_commands(name: str, extra: list[str], out_root: Path | None = None,
             _check_searchable(cfg, name)
         if study.optimise is not None:
             check_catalogue_objectives(study.optimise, catalogue)
-        ids = [int(i) for i in catalogue.index]
+        ids = catalogue.ids
         variables = study.optimise.variables if study.optimise is not None else {
             "actuator": study.search.actuators, **study.search.variables}
         corners = [(["design"], check([*study.overrides, *extra, *corner,
@@ -490,7 +490,7 @@ def _sweep_values(key: str, values: str, fixed: list[str]) -> str:
         return values
     if key != "actuator":
         raise ConfigError(f"sweep {key}=catalogue: only 'actuator' can sweep the catalogue")
-    return ",".join(str(i) for i in _catalogue(fixed).index)
+    return ",".join(str(i) for i in _catalogue(fixed).ids)
 
 
 def _catalogue(overrides: list[str]):

@@ -8,7 +8,7 @@ from pipeline.errors import ConfigError
 
 
 def test_table1_converted_to_si_and_eq22_constants(catalogue):
-    act = actuator_model(catalogue.loc[1])
+    act = actuator_model(catalogue.row(1))
     n_v, n_m = 30, 30 * 0.6
     j_r = 3579e-7 * n_v * n_m  # g cm^2 -> kg m^2, reflected to the output shaft
     c_m = 0.095 * n_m
@@ -22,12 +22,12 @@ def test_table1_converted_to_si_and_eq22_constants(catalogue):
 
 
 def test_torque_limit_reading_without_efficiency(catalogue):
-    assert actuator_model(catalogue.loc[5], xi_in_torque_limit=False).torque_limit == pytest.approx(0.03 * 26)
+    assert actuator_model(catalogue.row(5), xi_in_torque_limit=False).torque_limit == pytest.approx(0.03 * 26)
 
 
 def test_drive_overrides(catalogue):
-    assert actuator_model(catalogue.loc[2], winch_radius=0.05).winch_radius == 0.05
-    base, geared = actuator_model(catalogue.loc[2]), actuator_model(catalogue.loc[2], gear_ratio=50)
+    assert actuator_model(catalogue.row(2), winch_radius=0.05).winch_radius == 0.05
+    base, geared = actuator_model(catalogue.row(2)), actuator_model(catalogue.row(2), gear_ratio=50)
     assert geared.speed_limit == pytest.approx(base.speed_limit * 25 / 50)
     assert geared.torque_limit == pytest.approx(base.torque_limit * 50 / 25)
 
@@ -56,6 +56,14 @@ ROW = "1,a,300,48,4700,0.6,0.0945,0.095,0,0.369,3579,30,0.6,0.08\n"
          "column torque_constant_mNm_per_A: unit 'mNm_per_A'"),
         (HEADER, "no actuator rows"),
         (HEADER + ROW.replace(",0.6,0.08", ",0.6,"), "row 2, column winch_radius_m: '' is not a number"),
+        ("", "not a readable table (no header row)"),
+        ("\n\n", "not a readable table (no header row)"),
+        (HEADER + ROW.replace("\n", ",7\n"), "row 2 has 15 cells, the header 14"),
+        (HEADER.replace("name,", "name,name,") + ROW, "column name appears more than once"),
+        (HEADER + "2,b\n", "row 2, column power_W: '' is not a number"),  # a short row
+        (HEADER + ROW.replace("300", "1_0e"), "row 2, column power_W: '1_0e' is not a number"),
+        (HEADER + ROW.replace("300", "nan"), "row 2, column power_W: 'nan' is not a number"),
+        (HEADER + ROW.replace("300", "-inf"), "row 2, column power_W: '-inf' is not a number"),
     ],
 )
 def test_malformed_catalogue_names_row_and_column(tmp_path, text, expected):
@@ -65,12 +73,41 @@ def test_malformed_catalogue_names_row_and_column(tmp_path, text, expected):
 
 
 def test_user_catalogue_loads(tmp_path):
-    table = load_catalogue(_write(tmp_path, HEADER + ROW))
-    assert list(table.index) == [1]
-    assert np.isclose(table.loc[1, "inertia_g_cm2"], 3579)
+    catalogue = load_catalogue(_write(tmp_path, HEADER + ROW))
+    assert catalogue.ids == [1]
+    assert np.isclose(catalogue.row(1)["inertia_g_cm2"], 3579)
 
 
 def test_parquet_catalogue_equals_csv(tmp_path, catalogue):
     path = tmp_path / "cat.parquet"
-    catalogue.reset_index().to_parquet(path)
-    pd.testing.assert_frame_equal(load_catalogue(path), catalogue)
+    catalogue.table().reset_index().to_parquet(path)
+    assert load_catalogue(path).rows == catalogue.rows
+
+
+def test_csv_read_as_a_spreadsheet_writes_it(tmp_path):
+    """A byte-order mark, Windows line ends, blank lines, quoted cells and the user's own
+    columns (kept as text) are read as pandas' reader read them."""
+    text = (HEADER.replace("\n", ",price_eur\n") + "\n"
+            + ROW.replace("1,a,", '1,"a, geared",').replace("\n", ",12.5\n"))
+    path = tmp_path / "cat.csv"
+    path.write_bytes(b"\xef\xbb\xbf" + text.replace("\n", "\r\n").encode())
+    catalogue = load_catalogue(path)
+    assert catalogue.ids == [1] and catalogue.columns[-1] == "price_eur"
+    assert catalogue.row(1)["name"] == "a, geared" and catalogue.row(1)["price_eur"] == "12.5"
+    expected = pd.read_csv(path, dtype=str, keep_default_na=False, encoding="utf-8-sig")
+    assert catalogue.row(1)["power_W"] == float(expected.loc[0, "power_W"]) == 300.0
+    table = catalogue.table()
+    assert table.index.name == "id" and list(table.index) == [1]
+    assert table["power_W"].dtype == np.float64 and table.loc[1, "price_eur"] == "12.5"
+    with pytest.raises(KeyError):
+        catalogue.row(2)
+
+
+def test_a_parquet_catalogue_indexed_by_id_is_read(tmp_path, catalogue):
+    """pandas stores a DataFrame's named index as a column of the file: ``id`` is found."""
+    path = tmp_path / "cat.parquet"
+    catalogue.table().to_parquet(path)
+    assert load_catalogue(path).rows == catalogue.rows
+    (tmp_path / "broken.parquet").write_bytes(b"PAR1 not really")
+    with pytest.raises(ConfigError, match="not a readable table"):
+        load_catalogue(tmp_path / "broken.parquet")

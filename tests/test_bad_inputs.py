@@ -16,7 +16,7 @@ pytestmark = pytest.mark.slow
 
 
 def _catalogue_files(folder: Path) -> None:
-    table = load_catalogue().reset_index()
+    table = load_catalogue().table().reset_index()
     table.rename(columns={"power_W": "power_kW"}).to_csv(folder / "unit.csv", index=False)
     table.assign(inertia_g_cm2=-table["inertia_g_cm2"]).to_csv(folder / "inertia.csv", index=False)
     table.astype({"voltage_V": str}).assign(voltage_V="48 V").to_csv(folder / "text.csv", index=False)

@@ -9,7 +9,7 @@ from pipeline.workspace.compute import compute_workspace
 
 @pytest.fixture(scope="module")
 def summary(make_cfg, catalogue):
-    rows = [compute_workspace(make_cfg(f"actuator={a}"), catalogue)[1] for a in catalogue.index]
+    rows = [compute_workspace(make_cfg(f"actuator={a}"), catalogue)[1] for a in catalogue.ids]
     return pd.DataFrame(rows)
 
 

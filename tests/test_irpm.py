@@ -163,7 +163,7 @@ def test_short_cables_make_everything_infeasible(irpm):
 ])
 def test_bad_irpm_values_are_named(make_cfg, catalogue, override, message):
     with pytest.raises(ConfigError) as info:
-        validate(make_cfg("robot=irpm6", override), catalogue.index)
+        validate(make_cfg("robot=irpm6", override), catalogue.ids)
     assert message in str(info.value)
 
 

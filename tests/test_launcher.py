@@ -74,7 +74,7 @@ def test_prepared_configs_are_those_a_job_would_type_itself():
         for overrides in jobs:
             composed = compose(config_name="config", overrides=overrides)
             typed, catalogue = prepared[OmegaConf.to_yaml(composed)]
-            assert OmegaConf.to_yaml(typed) == OmegaConf.to_yaml(validate(composed, catalogue.index))
+            assert OmegaConf.to_yaml(typed) == OmegaConf.to_yaml(validate(composed, catalogue.ids))
 
 
 def test_a_pool_worker_is_sent_the_typed_config_of_its_job():

@@ -48,7 +48,7 @@ def test_a_study_either_sweeps_or_optimises(tmp_path):
 
 
 def test_an_actuator_id_outside_the_catalogue_is_refused():
-    ids = [int(i) for i in load_catalogue().index]
+    ids = load_catalogue().ids
     spec = OptimiseSpec(variables={"actuator": [1, 9], "drive.gear_ratio": {"low": 5, "high": 60}})
     with pytest.raises(ConfigError, match=r"optimise.variables.actuator: id 9 is not in the catalogue \(ids: 1, 2, 3, 4, 5\)"):
         corner_overrides(spec.variables, ids)
@@ -122,7 +122,7 @@ def test_each_trial_is_the_job_its_variables_name(small_run, make_cfg, catalogue
         catalogue)
     assert summary["feasible_pct"] == meeting["feasible_pct"]
     used = (1 - points.loc[points["feasible"], "margin_torque"]).max()
-    rated = catalogue.loc[meeting["actuator"], "torque_Nm"]
+    rated = catalogue.row(meeting["actuator"])["torque_Nm"]
     assert meeting["motor_torque_demand_Nm"] == pytest.approx(used * rated)
     assert meeting["winch_radius_m"] == meeting["drive.winch_radius"]
     assert trials["meets"].tolist() == (trials["feasible_pct"] >= 90).tolist()

@@ -1,5 +1,7 @@
 """Physics invariants of the CPR-8 model: equilibrium, symmetry, monotonicity."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -59,8 +61,8 @@ def test_stronger_motor_never_shrinks_the_workspace(make_cfg, catalogue, column,
     cfg = make_cfg(f"actuator={actuator}", "orientation.psi=0.5", "orientation.theta=0.5",
                    "orientation.phi=0.5")
     base, _ = compute_workspace(cfg, catalogue)
-    stronger = catalogue.copy()
-    stronger.loc[actuator, column] *= 1.5
+    stronger = replace(catalogue, rows=tuple(
+        {**row, column: row[column] * 1.5} if row["id"] == actuator else row for row in catalogue.rows))
     better, _ = compute_workspace(cfg, stronger)
     assert (better["feasible"] >= base["feasible"]).all()
     assert better["feasible"].sum() >= base["feasible"].sum()

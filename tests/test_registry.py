@@ -74,10 +74,10 @@ def test_fewer_cables_than_the_analysis_balances_are_refused(make_cfg, catalogue
             "robot.attachments=[[0,0,0],[0,0,0],[0,0,0],[0,0,0]]", "robot.search.lo=[-0.5,-0.5,0.5]",
             "robot.search.hi=[0.5,0.5,1.5]", "robot.search.step=0.25", f"analysis={analysis}", *extra]
     if needs == 3:
-        validate(make_cfg(*four), catalogue.index)
+        validate(make_cfg(*four), catalogue.ids)
         return
     with pytest.raises(ConfigError, match=f"robot: 4 cables; analysis={analysis} .* needs >= 6 cables"):
-        validate(make_cfg(*four), catalogue.index)
+        validate(make_cfg(*four), catalogue.ids)
 
 
 def test_a_point_platform_gets_the_same_verdicts_with_and_without_moment_rows(make_cfg, catalogue):

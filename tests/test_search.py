@@ -112,7 +112,7 @@ def test_on_the_kernel_the_search_equals_evaluating_every_ratio(make_cfg, catalo
     table = search(spec, catalogue, 90.0, run_job, atol=1e-9)
     for actuator, part in table.groupby("actuator"):
         every = pd.DataFrame([run_job(actuator, [f"drive.gear_ratio={n:g}"])[0] for n in part["gear_ratio"]])
-        value = every.apply(lambda row: OBJECTIVES[objective][2](row, catalogue.loc[actuator]), axis=1)
+        value = every.apply(lambda row: OBJECTIVES[objective][2](row, catalogue.row(actuator)), axis=1)
         meets = every["feasible_pct"].to_numpy() >= 90.0
         found = part[part["meets"]]
         best = value[meets].min() if meets.any() else None
@@ -126,13 +126,13 @@ def test_on_the_kernel_the_search_equals_evaluating_every_ratio(make_cfg, catalo
 
 def test_candidates_are_the_distinct_ratios_each_with_its_smallest_design(catalogue):
     spec = SearchSpec(variables={"drive.winch_radius": [0.035, 0.07], "drive.gear_ratio": [12, 24]})
-    table = candidates(spec, catalogue.loc[1])
+    table = candidates(spec, catalogue.row(1))
     assert table["rho"].tolist() == pytest.approx([12 / 0.07, 12 / 0.035, 24 / 0.035])  # 24/0.07 == 12/0.035
     assert table.loc[1, "winch_radius_m"] == 0.035 and table.loc[1, "overrides"] == [
         "drive.winch_radius=0.035", "drive.gear_ratio=12"]
-    gears = candidates(replace(spec, objective="gear_ratio"), catalogue.loc[1])
+    gears = candidates(replace(spec, objective="gear_ratio"), catalogue.row(1))
     assert gears.loc[1, "gear_ratio"] == 12
-    only_gear = candidates(SearchSpec(variables={"drive.gear_ratio": [10, 20]}), catalogue.loc[3])
+    only_gear = candidates(SearchSpec(variables={"drive.gear_ratio": [10, 20]}), catalogue.row(3))
     assert only_gear["winch_radius_m"].tolist() == [0.08, 0.08] and only_gear.loc[0, "overrides"] == ["drive.gear_ratio=10"]
 
 

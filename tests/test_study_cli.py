@@ -83,7 +83,7 @@ def test_figures_are_drawn_from_the_parquet_results(choice_run, monkeypatch):
 
 
 def test_user_catalogue_of_20_synthetic_actuators(choice_run):
-    table1 = load_catalogue().reset_index()
+    table1 = load_catalogue().table().reset_index()
     rng = np.random.default_rng(7)
     rows = table1.iloc[np.arange(20) % 5].copy()
     for column in ("torque_Nm", "speed_rpm", "resistance_ohm", "inertia_g_cm2", "gear_ratio"):
@@ -118,7 +118,7 @@ def test_user_catalogue_of_20_synthetic_actuators(choice_run):
     ],
 )
 def test_malformed_catalogue_fails_before_any_computation(tmp_path, edit, expected):
-    edit(load_catalogue().reset_index()).to_csv(tmp_path / "bad.csv", index=False)
+    edit(load_catalogue().table().reset_index()).to_csv(tmp_path / "bad.csv", index=False)
     proc = study(tmp_path, "actuator_choice", "catalogue=bad.csv")
     assert proc.returncode == 2
     assert proc.stderr.strip().splitlines() == [f"error: catalogue=bad.csv: {expected}"]

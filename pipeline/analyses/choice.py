@@ -64,7 +64,8 @@ def verdict(choice: pd.DataFrame) -> str:
 def acceptance(summary: pd.DataFrame) -> pd.DataFrame:
     """CPR-ACM repeated for every value of one swept design variable (winch radius, gear ratio,
     mass, v_max): one row per (actuator, value) with x(i_a), the verdict and the main loss."""
-    varying = varying_settings(summary, ignore=("job", "actuator"))
+    varying = varying_settings({c: summary[c].tolist() for c in summary.columns},
+                               ignore=("job", "actuator"))
     if len(varying) != 1:
         raise ValueError(f"acceptance needs exactly one swept design variable, got {varying or 'none'}")
     (parameter,) = varying

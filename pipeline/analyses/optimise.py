@@ -22,27 +22,27 @@ import numpy as np
 import pandas as pd
 from omegaconf import OmegaConf
 
-from pipeline.model.catalogue import NUMERIC_COLUMNS
+from pipeline.model.catalogue import NUMERIC_COLUMNS, Catalogue, as_number
 from pipeline.errors import ConfigError
 
 log = logging.getLogger("pipeline.study")
 SAMPLERS = ("nsga2", "tpe")
 
 
-def _demand(row: pd.Series, actuator: pd.Series) -> float:
+def _demand(row: pd.Series, actuator: dict) -> float:
     """Peak motor torque over the feasible poses: the shaft torque's share of its eq. (32)
     limit times the rated motor torque; the rated torque itself when no pose is feasible."""
     used = 1.0 - row["least_margin_torque"]
     return float(actuator["torque_Nm"] * (used if used == used else 1.0))
 
 
-def _drive(row: pd.Series, actuator: pd.Series, key: str, column: str) -> float:
+def _drive(row: pd.Series, actuator: dict, key: str, column: str) -> float:
     """The drive train's value the job ran with: the override, else the catalogue's."""
     return float(actuator[column] if pd.isna(row.get(key)) else row[key])
 
 
 # name -> (direction, what it is, value from the job's summary row and its catalogue row)
-OBJECTIVES: dict[str, tuple[str, str, Callable[[pd.Series, pd.Series], float]]] = {
+OBJECTIVES: dict[str, tuple[str, str, Callable[[pd.Series, dict], float]]] = {
     "feasible_pct": ("maximize", "feasible share of the geometric workspace (%)",
                      lambda row, actuator: float(row["feasible_pct"])),
     "motor_torque_demand_Nm": ("minimize", "peak motor torque over the feasible poses (N m)", _demand),
@@ -56,7 +56,7 @@ OBJECTIVES: dict[str, tuple[str, str, Callable[[pd.Series, pd.Series], float]]] 
 CATALOGUE = "catalogue."  # catalogue.COLUMN: minimise a column of the user's catalogue (e.g. a price)
 
 
-def objective(name: str) -> tuple[str, str, Callable[[pd.Series, pd.Series], float]]:
+def objective(name: str) -> tuple[str, str, Callable[[pd.Series, dict], float]]:
     """(direction, what it is, value) of an objective: one of :data:`OBJECTIVES`, or
     ``catalogue.COLUMN``, the actuator's value in that column (minimised)."""
     if name in OBJECTIVES:
@@ -65,7 +65,7 @@ def objective(name: str) -> tuple[str, str, Callable[[pd.Series, pd.Series], flo
     return "minimize", f"{column} (catalogue)", lambda row, actuator: float(actuator[column])
 
 
-def check_catalogue_objectives(spec: "OptimiseSpec", catalogue: pd.DataFrame) -> None:
+def check_catalogue_objectives(spec: "OptimiseSpec", catalogue: Catalogue) -> None:
     """ConfigError unless every ``catalogue.COLUMN`` objective names a column of ``catalogue``
     holding a finite number for every actuator."""
     for name in spec.objectives:
@@ -76,12 +76,10 @@ def check_catalogue_objectives(spec: "OptimiseSpec", catalogue: pd.DataFrame) ->
             extra = [c for c in catalogue.columns if c not in ("name", *NUMERIC_COLUMNS)]
             raise ConfigError(f"optimise.objectives: {name}: the catalogue has no column {column!r} "
                               f"(its extra columns: {', '.join(extra) or 'none'})")
-        values = pd.to_numeric(catalogue[column], errors="coerce")
-        bad = ~np.isfinite(values.to_numpy(dtype=float))
-        if bad.any():
-            actuator = catalogue.index[np.flatnonzero(bad)[0]]
-            raise ConfigError(f"optimise.objectives: {name}: actuator {actuator}: "
-                              f"{catalogue.loc[actuator, column]!r} is not a number")
+        for row in catalogue.rows:
+            if not np.isfinite(as_number(row[column])):
+                raise ConfigError(f"optimise.objectives: {name}: actuator {row['id']}: "
+                                  f"{row[column]!r} is not a number")
 
 
 @dataclass
@@ -162,7 +160,7 @@ def corner_overrides(variables: dict[str, Any], ids: list[int]) -> list[list[str
 
 
 def optimise(spec: OptimiseSpec, run_trial: Callable[[int, list[str]], dict],
-             catalogue: pd.DataFrame, required_pct: float) -> pd.DataFrame:
+             catalogue: Catalogue, required_pct: float) -> pd.DataFrame:
     """Run ``spec.budget`` trials; ``run_trial(number, overrides)`` runs one job and returns
     its summary. Returns one row per trial (see the module's docstring)."""
     import optuna
@@ -176,7 +174,7 @@ def optimise(spec: OptimiseSpec, run_trial: Callable[[int, list[str]], dict],
     def run(trial) -> list[float]:
         overrides = [f"{key}={_suggest(trial, key, domain, catalogue)}" for key, domain in spec.variables.items()]
         row = pd.Series(run_trial(trial.number, overrides))
-        actuator = catalogue.loc[int(row["actuator"])]
+        actuator = catalogue.row(int(row["actuator"]))
         measured = {name: objective(name)[2](row, actuator) for name in dict.fromkeys([*OBJECTIVES, *spec.objectives])}
         trial.set_constraint("required_pct", float(required_pct - row["feasible_pct"]))  # <= 0: meets x
         rows.append({"trial": trial.number, **row.to_dict(), **measured})
@@ -191,10 +189,10 @@ def optimise(spec: OptimiseSpec, run_trial: Callable[[int, list[str]], dict],
     return table
 
 
-def _suggest(trial, key: str, domain: Any, catalogue: pd.DataFrame):
+def _suggest(trial, key: str, domain: Any, catalogue: Catalogue):
     kind, *values = variable_domain(key, domain, "")
     if kind == "catalogue":
-        return trial.suggest_categorical(key, [int(i) for i in catalogue.index])
+        return trial.suggest_categorical(key, catalogue.ids)
     if kind == "choices":
         return trial.suggest_categorical(key, values[0])
     low, high, step = values

@@ -41,6 +41,7 @@ import numpy as np
 import pandas as pd
 
 from pipeline.errors import ConfigError
+from pipeline.model.catalogue import Catalogue
 from pipeline.analyses.optimise import OBJECTIVES as MEASURED, variable_domain
 
 VARIABLES = {"drive.winch_radius": "winch_radius_m", "drive.gear_ratio": "gear_ratio"}
@@ -72,9 +73,9 @@ class SearchSpec:
             raise ConfigError(f"{where}: search.objective={self.objective!r}: unknown (known: "
                               f"{', '.join(OBJECTIVES)})")
 
-    def ids(self, catalogue: pd.DataFrame) -> list[int]:
+    def ids(self, catalogue: Catalogue) -> list[int]:
         """The actuator ids searched; ConfigError for one not in ``catalogue``."""
-        known = [int(i) for i in catalogue.index]
+        known = catalogue.ids
         if self.actuators == "catalogue":
             return known
         ids = list(self.actuators) if isinstance(self.actuators, (list, tuple)) else [self.actuators]
@@ -107,7 +108,7 @@ def grid_values(key: str, domain: Any, where: str) -> list[float]:
     return sorted(set(float(v) for v in values))
 
 
-def candidates(spec: SearchSpec, actuator: pd.Series) -> pd.DataFrame:
+def candidates(spec: SearchSpec, actuator: dict) -> pd.DataFrame:
     """One row per distinct ratio rho = N_V / R_i of the variables' grids (ascending), with the
     design that stands for it: the smallest gear ratio for the ``gear_ratio`` objective, else
     the smallest winch radius (every design of one ratio has the same margins)."""
@@ -182,7 +183,7 @@ def branch_and_bound(rho: np.ndarray, values: np.ndarray | None, evaluate: Calla
         pair((i + j) // 2)
 
 
-def search(spec: SearchSpec, catalogue: pd.DataFrame, required_pct: float,
+def search(spec: SearchSpec, catalogue: Catalogue, required_pct: float,
            run_job: Callable[[int, list[str]], tuple[dict, pd.DataFrame]], atol: float) -> pd.DataFrame:
     """Search every actuator of ``spec``; ``run_job(actuator, overrides)`` runs one job and
     returns its summary and points. One row per actuator and candidate ratio
@@ -192,7 +193,7 @@ def search(spec: SearchSpec, catalogue: pd.DataFrame, required_pct: float,
     measure = MEASURED[spec.objective][2]
     tables = []
     for actuator_id in spec.ids(catalogue):
-        actuator = catalogue.loc[actuator_id]
+        actuator = catalogue.row(actuator_id)
         table = candidates(spec, actuator)
         known = None if spec.objective == "motor_torque_demand_Nm" else table[spec.objective].to_numpy()
         jobs: dict[int, dict] = {}

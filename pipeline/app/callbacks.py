@@ -1,15 +1,20 @@
-"""Hydra callbacks: at the end of a multirun, one summary table for the whole sweep."""
+"""Hydra callbacks: at the end of a multirun, one summary table for the whole sweep.
+
+Arrow tables read and built without pandas (``pipeline.workspace.arrow``), like the jobs' own
+files: the main job's process never imports it."""
 
 from __future__ import annotations
 
 import logging
+import math
 from pathlib import Path
 
-import pandas as pd
+import pyarrow as pa
 from hydra.experimental.callback import Callback
 from omegaconf import DictConfig, OmegaConf
 
 from pipeline.app.results import varying_settings, write_parquet
+from pipeline.workspace.arrow import read, sorted_by, texts
 
 log = logging.getLogger("pipeline")
 REPORTED = ["n_points", "n_feasible", "feasible_pct", "volume_m3"]
@@ -18,7 +23,9 @@ REPORTED = ["n_points", "n_feasible", "feasible_pct", "volume_m3"]
 class SweepSummary(Callback):
     """Concatenate the summary.parquet of every job of this sweep into <sweep dir>/summary.parquet,
     with a ``job`` column naming each job's folder, in folder-name order whatever order the jobs
-    ran in. When jobs run in this process they are collected as they end, so folders left by an
+    ran in, then sorted (stably) by the settings the sweep varied. A column some jobs lack (a
+    sweep over analyses) is empty (null) in their rows, and integers meeting floats become
+    floats. When jobs run in this process they are collected as they end, so folders left by an
     earlier sweep into the same directory are not included; with a launcher that runs jobs
     elsewhere (worker processes), every job folder of the sweep directory is read."""
 
@@ -34,19 +41,34 @@ class SweepSummary(Callback):
         job_dirs = sorted(self.job_dirs or (p.parent for p in sweep_dir.glob("*/summary.parquet")))
         for job_dir in job_dirs:
             if (job_dir / "summary.parquet").exists():
-                row = pd.read_parquet(job_dir / "summary.parquet")
-                row.insert(0, "job", job_dir.name)
-                rows.append(row)
+                row = read(job_dir / "summary.parquet").replace_schema_metadata(None)
+                rows.append(row.add_column(0, "job", texts([job_dir.name])))
         if not rows:
             return
-        table = pd.concat(rows, ignore_index=True)
-        varying = varying_settings(table, ignore=("job",))
-        table = table.sort_values(varying, kind="stable").reset_index(drop=True) if varying else table
+        table = pa.concat_tables(rows, promote_options="permissive")
+        varying = varying_settings(
+            {name: table[name].to_pylist() for name in table.column_names}, ignore=("job",))
+        if varying:
+            table = sorted_by(table, varying)
         sweep_yaml = OmegaConf.to_yaml(
-            {"overrides": list(config.hydra.overrides.task), "jobs": len(table)}
+            {"overrides": list(config.hydra.overrides.task), "jobs": table.num_rows}
         )
         write_parquet(table, sweep_dir / "summary.parquet", sweep_yaml)
         shown = [c for c in varying if c not in ("actuator_name",)] + REPORTED
         log.info("sweep summary (%s):\n%s", sweep_dir / "summary.parquet",
-                 table[shown].to_string(index=False))
-        log.info("results in %s (%d job folders)", sweep_dir, len(table))
+                 text_table({name: table[name].to_pylist() for name in shown if name in table.column_names}))
+        log.info("results in %s (%d job folders)", sweep_dir, table.num_rows)
+
+
+def text_table(columns: dict[str, list]) -> str:
+    """Columns (name -> values) as right-aligned text, floats with six decimals (in exponent
+    form when a column spans beyond 1e6 or below 1e-4)."""
+    texts = []
+    for name, values in columns.items():
+        finite = [abs(v) for v in values if isinstance(v, float) and math.isfinite(v) and v != 0]
+        wide = any(v >= 1e6 or v < 1e-4 for v in finite)
+        cells = [name] + [(f"{v:.6e}" if wide else f"{v:.6f}") if isinstance(v, float) else str(v)
+                          for v in values]
+        width = max(map(len, cells))
+        texts.append([cell.rjust(width) for cell in cells])
+    return "\n".join("  ".join(line) for line in zip(*texts))

@@ -22,7 +22,6 @@ from contextlib import contextmanager
 from contextvars import ContextVar
 from pathlib import Path
 
-import pandas as pd
 from hydra.core.hydra_config import HydraConfig
 from hydra.types import RunMode
 from omegaconf import DictConfig, OmegaConf
@@ -35,7 +34,7 @@ from pipeline.app.results import (
     CONFIG_KEY, DIGESTS_KEY, VERSION_KEY, ParquetSink, code_version, digests_json, file_digest,
     read_metadata, write_parquet,
 )
-from pipeline.workspace.lines import simulate_lines
+from pipeline.workspace.arrow import one_row, read
 from pipeline.workspace.compute import analysis_name, compute_workspace
 
 log = logging.getLogger("pipeline")
@@ -55,7 +54,7 @@ def run_job(cfg: DictConfig) -> dict:
         cfg, catalogue = prepared
     else:
         catalogue = load_catalogue(cfg.catalogue) if "catalogue" in cfg else None
-        cfg = validate(cfg, None if catalogue is None else catalogue.index)
+        cfg = validate(cfg, None if catalogue is None else catalogue.ids)
     hydra = HydraConfig.get()
     out = Path(hydra.runtime.output_dir)
     try:
@@ -103,6 +102,8 @@ def _run_locked(cfg: DictConfig, catalogue, out: Path) -> dict:
         return done
     log.info("reading: %s (docs/model.md, sections 4-5)", describe_reading(cfg.model))
     if analysis_name(cfg) == "lines":
+        from pipeline.workspace.lines import simulate_lines  # pandas: only this analysis needs it
+
         samples, points, summary = simulate_lines(cfg, catalogue)
         if cfg.lines.samples.name == "first":  # the verdicts of every line are in points.parquet
             samples = samples[samples["line"] == 0].reset_index(drop=True)
@@ -121,7 +122,7 @@ def _run_locked(cfg: DictConfig, catalogue, out: Path) -> dict:
     else:  # the summary only: each chunk's rows are counted, then dropped
         _, summary = compute_workspace(cfg, catalogue, lambda chunk: None)
         written = []
-    write_parquet(pd.DataFrame([summary]), out / "summary.parquet", config_yaml,
+    write_parquet(one_row(summary), out / "summary.parquet", config_yaml,
                   {DIGESTS_KEY: digests_json(written)})
     lost = ", ".join(
         f"{key[len('lost_'):]} {value}" for key, value in summary.items() if key.startswith("lost_")
@@ -165,7 +166,7 @@ def finished_summary(out: Path, config_yaml: str) -> dict | None:
         if changed:
             log.warning("recomputing %s: %s changed since the job finished", out, ", ".join(changed))
             return None
-        return pd.read_parquet(path).iloc[0].to_dict()
+        return read(path).to_pylist()[0]
     except (OSError, ValueError) as exc:  # pyarrow's errors derive from these
         log.warning("recomputing %s: unreadable summary.parquet (%s)", out, exc)
         return None

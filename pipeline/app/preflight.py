@@ -294,7 +294,7 @@ def check(argv: list[str], reuse: Reuse | None = None) -> dict[str, tuple[DictCo
                 if cfg.catalogue not in catalogues:
                     catalogues[cfg.catalogue] = load_catalogue(cfg.catalogue)
                 catalogue = catalogues[cfg.catalogue]
-            validate(cfg, None if catalogue is None else catalogue.index, typed=True)
+            validate(cfg, None if catalogue is None else catalogue.ids, typed=True)
             prepared[OmegaConf.to_yaml(plain)] = cfg, catalogue
         hydra = hydra_node(jobs[0] if multirun_base is None else multirun_base)
     first = next(iter(prepared.values()))[0]

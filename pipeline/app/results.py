@@ -1,4 +1,7 @@
-"""Parquet output: atomic writes, with the resolved config and the code version in the schema."""
+"""Parquet output: atomic writes, with the resolved config and the code version in the schema.
+
+pyarrow only: a job's own files (points, summary) are Arrow tables, so a job process never
+imports pandas; a pandas DataFrame (the studies' tables) is written as well."""
 
 from __future__ import annotations
 
@@ -11,10 +14,13 @@ from contextlib import contextmanager
 from functools import lru_cache
 from importlib import metadata
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 CONFIG_KEY = "cdpr.config"
 VERSION_KEY = "cdpr.version"
@@ -46,9 +52,11 @@ def code_version() -> str:
     return f"{version}+g{sha}{'.dirty' if dirty else ''}"
 
 
-def write_parquet(frame: pd.DataFrame, path: Path, config_yaml: str, extra: dict | None = None) -> None:
-    """Write ``frame`` to ``path`` via a temporary file and a rename: no half-written file ever
-    carries the final name. ``extra``: more ``cdpr.*`` schema metadata (str values)."""
+def write_parquet(frame: pa.Table | pd.DataFrame, path: Path, config_yaml: str,
+                  extra: dict | None = None) -> None:
+    """Write ``frame`` (an Arrow table or a pandas DataFrame) to ``path`` via a temporary file
+    and a rename: no half-written file ever carries the final name. ``extra``: more ``cdpr.*``
+    schema metadata (str values)."""
     with ParquetSink(path, config_yaml, extra) as sink:
         sink.write(frame)
 
@@ -69,8 +77,8 @@ class ParquetSink:
         self.extra = extra or {}
         self.writer: pq.ParquetWriter | None = None
 
-    def write(self, frame: pd.DataFrame) -> None:
-        table = pa.Table.from_pandas(frame, preserve_index=False)
+    def write(self, frame: pa.Table | pd.DataFrame) -> None:
+        table = frame if isinstance(frame, pa.Table) else pa.Table.from_pandas(frame, preserve_index=False)
         if self.writer is None:
             meta = dict(table.schema.metadata or {})
             meta[CONFIG_KEY.encode()] = self.config_yaml.encode()
@@ -152,9 +160,10 @@ RESULT_COLUMNS = {"analysis", "actuator_name", "actuator_power_W", "n_orientatio
 RESULT_PREFIXES = ("box.", "lost_", "least_margin_", "limit_", "line0_margin_")
 
 
-def varying_settings(table: pd.DataFrame, ignore=()) -> list[str]:
-    """The config columns of a table of job summaries whose value differs between the jobs
-    (what their sweep varied), in column order, except ``ignore``."""
-    return [c for c in table.columns
+def varying_settings(columns: dict[str, list], ignore=()) -> list[str]:
+    """The config columns of a table of job summaries (``columns``: name -> the jobs' values,
+    in column order) whose value differs between the jobs (what their sweep varied), except
+    ``ignore``. Values are compared as text (a list setting is a string in the summary)."""
+    return [c for c, values in columns.items()
             if c not in RESULT_COLUMNS and c not in ignore and not c.startswith(RESULT_PREFIXES)
-            and table[c].astype(str).nunique() > 1]
+            and len({str(v) for v in values}) > 1]

@@ -8,12 +8,8 @@ constants and limits are derived. numpy only: the kernel's worker processes impo
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
-
-if TYPE_CHECKING:
-    import pandas as pd
 
 G_CM2_TO_KG_M2 = 1e-7
 RPM_TO_RAD_S = np.pi / 30.0  # the paper's 1/9.5493 in eq. (30)
@@ -43,13 +39,12 @@ class ActuatorModel:
 
 
 def actuator_model(
-    row: pd.Series,
+    row: dict,
     winch_radius: float | None = None,
     gear_ratio: float | None = None,
     xi_in_torque_limit: bool = True,
 ) -> ActuatorModel:
-    """Turn one catalogue row (a row of :func:`pipeline.model.catalogue.load_catalogue`, named by its
-    id) into SI model constants and limits (section 3, eqs. 22, 30-34).
+    """Turn one catalogue row (:meth:`pipeline.model.catalogue.Catalogue.row`) into SI model constants and limits (section 3, eqs. 22, 30-34).
 
     N_M = N_V xi; C_E = C_e N_V; C_M = C_m N_M; B_C = B_c N_V N_M; J_r = J_M N_V N_M.
     ``winch_radius`` and ``gear_ratio`` replace the catalogue's R_i and N_V when given.
@@ -64,7 +59,7 @@ def actuator_model(
     r_r = row["resistance_ohm"]
     torque_limit = row["torque_Nm"] * (n_m if xi_in_torque_limit else n_v)
     return ActuatorModel(
-        id=int(row.name),
+        id=int(row["id"]),
         name=str(row["name"]),
         power=float(row["power_W"]),
         G_v=j_r * r_r / c_m,

@@ -1,16 +1,24 @@
 """Actuator catalogues: CSV files with units in the column names (Table 1 of Filipovic & Kevac
 2018 is shipped as ``pipeline/data/actuators_table1.csv``), read and checked cell by cell.
+
+A CSV catalogue is read with the standard library (a Parquet one with pandas), so that a job
+process does not import pandas (``docs/performance.md``, "What a process imports");
+:meth:`Catalogue.table` gives the pandas view the studies use.
 """
 
 from __future__ import annotations
 
+import csv
+import math
+from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
-
-import numpy as np
-import pandas as pd
+from typing import TYPE_CHECKING
 
 from pipeline.errors import ConfigError
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 TABLE1 = resources.files("pipeline") / "data" / "actuators_table1.csv"
 
@@ -43,67 +51,128 @@ QUANTITY = {
     "inertia_g_cm2": "inertia",
     "winch_radius_m": "winch_radius",
 }
-def load_catalogue(path: str | Path | None = None) -> pd.DataFrame:
+@dataclass(frozen=True)
+class Catalogue:
+    """A validated actuator catalogue (:func:`load_catalogue`), rows in file order. Each row
+    holds ``id`` (int), ``name`` (text), every column of :data:`NUMERIC_COLUMNS` (float, SI
+    prefixes as the column names say) and the user's own columns (a price, a mass) as text."""
+
+    source: str
+    rows: tuple[dict, ...]
+
+    @property
+    def ids(self) -> list[int]:
+        return [row["id"] for row in self.rows]
+
+    @property
+    def columns(self) -> list[str]:
+        """The columns besides ``id``: name, the numeric ones, the user's own."""
+        return [column for column in self.rows[0] if column != "id"]
+
+    def row(self, actuator: int) -> dict:
+        """The row of id ``actuator`` (KeyError if none: ids are checked against :attr:`ids`
+        when a config is validated)."""
+        for row in self.rows:
+            if row["id"] == actuator:
+                return row
+        raise KeyError(actuator)
+
+    def table(self) -> pd.DataFrame:
+        """The catalogue as a pandas DataFrame indexed by ``id`` (imports pandas)."""
+        import pandas as pd
+
+        return pd.DataFrame(list(self.rows)).set_index("id")
+
+
+def load_catalogue(path: str | Path | None = None) -> Catalogue:
     """Read and validate a catalogue (CSV, or Parquet by its ``.parquet`` suffix); ``None`` is the
-    shipped Table 1. Indexed by integer ``id``. Raises ConfigError naming the row and column."""
+    shipped Table 1. Raises ConfigError naming the row and column."""
     source = TABLE1 if path is None else Path(path)
-    table = _read_as_text(source, path)
-    _check_columns(table, source)
-    if table.empty:
+    header, lines = _read_as_text(source, path)
+    _check_columns(header, source)
+    if not lines:
         raise ConfigError(f"catalogue={source}: no actuator rows")
-    ids = []
-    for row, text in enumerate(table["id"], start=2):
-        if not text.strip().isdigit():
-            raise ConfigError(f"catalogue={source}: row {row}, column id: {text!r} is not an integer")
-        ids.append(int(text))
-    duplicated = pd.Series(ids).duplicated()
-    if duplicated.any():
-        row = int(np.flatnonzero(duplicated)[0]) + 2
-        raise ConfigError(f"catalogue={source}: row {row}, column id: duplicate id {ids[row - 2]}")
-    out = pd.DataFrame({"id": ids, "name": table["name"].astype(str)})
-    for column, (bound, inclusive) in NUMERIC_COLUMNS.items():
-        values = pd.to_numeric(table[column], errors="coerce")
-        for row, (text, value) in enumerate(zip(table[column], values), start=2):
-            if not np.isfinite(value):
-                raise ConfigError(
-                    f"catalogue={source}: row {row}, column {column}: {text!r} is not a number"
-                )
-            if value < bound or (value == bound and not inclusive):
-                rule = ">= 0" if inclusive else "> 0"
-                raise ConfigError(
-                    f"catalogue={source}: row {row}, column {column}: {value:g} must be {rule}"
-                )
-            if column in FRACTIONS and value > 1:
-                raise ConfigError(f"catalogue={source}: row {row}, column {column}: {value:g} must "
-                                  "be a fraction in (0, 1] (per cent? divide by 100)")
-        out[column] = values.astype(float)
-    for column in table.columns.difference(["id", "name", *NUMERIC_COLUMNS], sort=False):
-        out[column] = table[column].to_numpy()  # the user's own columns (a price, a mass), as text
-    return out.set_index("id")
+    rows, seen = [], set()
+    for number, line in enumerate(lines, start=2):  # numbered as in the file, header = row 1
+        if len(line) > len(header):
+            raise ConfigError(f"catalogue={source}: row {number} has {len(line)} cells, the header "
+                              f"{len(header)}")
+        texts = dict(zip(header, line + [""] * (len(header) - len(line))))  # short: empty cells
+        row = {"id": _id(texts["id"], number, source), "name": texts["name"]}
+        if row["id"] in seen:
+            raise ConfigError(f"catalogue={source}: row {number}, column id: duplicate id {row['id']}")
+        seen.add(row["id"])
+        for column in NUMERIC_COLUMNS:
+            row[column] = _number(texts[column], number, column, source)
+        row.update((column, text) for column, text in texts.items() if column not in row)
+        rows.append(row)
+    return Catalogue(str(source), tuple(rows))
 
 
-def _read_as_text(source, path) -> pd.DataFrame:
-    """Every cell as text, so that validation sees exactly what the user wrote. Rows are
-    numbered as in a CSV file (header = row 1) for both formats."""
+def _id(text: str, number: int, source) -> int:
+    if not text.strip().isdigit():
+        raise ConfigError(f"catalogue={source}: row {number}, column id: {text!r} is not an integer")
+    return int(text)
+
+
+def as_number(text: str) -> float:
+    """A cell's number (``float``'s reading of the text); NaN for text that is none."""
     try:
-        if str(source).endswith(".parquet"):
-            return pd.read_parquet(source).astype(str)
-        with source.open("r") as handle:
-            return pd.read_csv(handle, dtype=str, keep_default_na=False)
+        return float(text)
+    except ValueError:
+        return math.nan
+
+
+def _number(text: str, number: int, column: str, source) -> float:
+    """The cell's value, checked against its column's bound (:data:`NUMERIC_COLUMNS`)."""
+    value = as_number(text)
+    if not math.isfinite(value):
+        raise ConfigError(f"catalogue={source}: row {number}, column {column}: {text!r} is not a number")
+    bound, inclusive = NUMERIC_COLUMNS[column]
+    if value < bound or (value == bound and not inclusive):
+        rule = ">= 0" if inclusive else "> 0"
+        raise ConfigError(f"catalogue={source}: row {number}, column {column}: {value:g} must be {rule}")
+    if column in FRACTIONS and value > 1:
+        raise ConfigError(f"catalogue={source}: row {number}, column {column}: {value:g} must "
+                          "be a fraction in (0, 1] (per cent? divide by 100)")
+    return value
+
+
+def _read_as_text(source, path) -> tuple[list[str], list[list[str]]]:
+    """(header, rows): every cell as text, so that validation sees exactly what the user wrote;
+    blank lines are skipped."""
+    try:
+        if str(source).endswith(".parquet"):  # often a DataFrame saved by pandas: read by pandas
+            import pandas as pd
+
+            frame = pd.read_parquet(source)
+            if any(name is not None for name in frame.index.names):  # e.g. indexed by id
+                frame = frame.reset_index()
+            header = [str(name) for name in frame.columns]
+            lines = frame.astype(str).to_numpy().tolist()
+        else:
+            with source.open("r", encoding="utf-8-sig", newline="") as handle:
+                header, *lines = [line for line in csv.reader(handle) if line] or [[]]
     except OSError as exc:
         raise ConfigError(f"catalogue={path}: cannot read ({exc.strerror or exc})") from exc
-    except (ValueError, pd.errors.ParserError) as exc:
+    except (ValueError, csv.Error) as exc:  # pyarrow's and the codec's errors derive from ValueError
         raise ConfigError(f"catalogue={path}: not a readable table ({exc})") from exc
+    if not header:
+        raise ConfigError(f"catalogue={path}: not a readable table (no header row)")
+    repeated = sorted({name for name in header if header.count(name) > 1})
+    if repeated:
+        raise ConfigError(f"catalogue={path}: column {repeated[0]} appears more than once")
+    return header, lines
 
 
-def _check_columns(table: pd.DataFrame, source) -> None:
+def _check_columns(header: list[str], source) -> None:
     """Missing columns; a known quantity in another unit (``power_kW``) is named as such."""
-    missing = [c for c in ("id", "name", *NUMERIC_COLUMNS) if c not in table.columns]
+    missing = [c for c in ("id", "name", *NUMERIC_COLUMNS) if c not in header]
     if not missing:
         return
     for column in missing:
         quantity = QUANTITY.get(column)
-        for other in table.columns:
+        for other in header:
             if quantity and other.startswith(f"{quantity}_") and _quantity(other) == quantity:
                 raise ConfigError(
                     f"catalogue={source}: column {other}: unit {other[len(quantity) + 1:]!r} is "

@@ -18,17 +18,17 @@ from __future__ import annotations
 import logging
 import os
 from contextvars import ContextVar
-from collections import Counter
 from dataclasses import replace
-from typing import Callable
+from typing import TYPE_CHECKING, Callable
 
 import numpy as np
-import pandas as pd
+import pyarrow as pa
 from omegaconf import DictConfig, OmegaConf
 
 from pipeline.model.actuators import actuator_model
 from pipeline.model.dynamics import Load, MotionSpec
 from pipeline.model.geometry import CableRobot
+from pipeline.workspace.arrow import categories, numbers
 from pipeline.workspace.grid import Grid, box_grid, step_grid
 from pipeline.workspace.kernel import WorkspaceProblem, evaluate_chunk
 from pipeline.model.motion import acceleration_set, cartesian_cube, extreme_points, velocity_set
@@ -39,6 +39,9 @@ from pipeline.model.statics import StaticLimits, StaticsSpec
 from pipeline.model.tensions import TensionSpec
 from pipeline.workspace.verdict import classify
 
+if TYPE_CHECKING:
+    import pandas as pd
+
 log = logging.getLogger("pipeline")
 
 CPR_WWA_CRITERIA = ("speed", "torque", "acceleration", "voltage")  # eqs. (30), (32), (33), (34)
@@ -48,7 +51,7 @@ CHUNK_BUDGET_FLOATS = 4_000_000  # largest (poses x cables x set size) array of 
 FEASIBLE_CHUNK_POSES = 4096  # tension.model=feasible: about 1 s per chunk, so progress is visible
 
 
-def build_problem(cfg: DictConfig, catalogue: pd.DataFrame) -> tuple[WorkspaceProblem, Grid]:
+def build_problem(cfg: DictConfig, catalogue) -> tuple[WorkspaceProblem, Grid]:
     """The workspace problem of the configured robot and analysis, and its position grid."""
     robot = build_robot(cfg)
     if cfg.poses is None:
@@ -107,9 +110,9 @@ def _step_grid(cfg: DictConfig, robot: CableRobot) -> Grid:
     return step_grid(robot.box_lo, robot.box_hi, search.step, search.get("spacing", "faces"))
 
 
-def _cpr_wwa(cfg: DictConfig, catalogue: pd.DataFrame, robot):
+def _cpr_wwa(cfg: DictConfig, catalogue, robot):
     actuator = actuator_model(
-        catalogue.loc[cfg.actuator], cfg.drive.winch_radius, cfg.drive.gear_ratio,
+        catalogue.row(cfg.actuator), cfg.drive.winch_radius, cfg.drive.gear_ratio,
         cfg.model.xi_in_torque_limit,
     )
     model = cfg.model
@@ -133,7 +136,7 @@ def _cpr_wwa(cfg: DictConfig, catalogue: pd.DataFrame, robot):
     return motion, actuator, (*gates, *cable_limits(motion.tension, robot), *CPR_WWA_CRITERIA)
 
 
-def _statics(cfg: DictConfig, catalogue: pd.DataFrame, robot):
+def _statics(cfg: DictConfig, catalogue, robot):
     spec = StaticsSpec(
         moment_arm=_name(cfg.model.moment_arm),
         cable_direction=_name(cfg.model.cable_direction),
@@ -208,19 +211,21 @@ ANALYSES = {"cpr_wwa": _cpr_wwa, "statics": _statics, "lines": _cpr_wwa}
 
 
 def compute_workspace(
-    cfg: DictConfig, catalogue: pd.DataFrame, sink: Callable[[pd.DataFrame], None] | None = None
+    cfg: DictConfig, catalogue, sink: Callable[[pa.Table], None] | None = None
 ) -> tuple[pd.DataFrame | None, dict]:
     """Points table (one row per grid pose) and the one-row summary (counts, share, volume) of
     the grid procedure (for ``analysis=lines``, the CPR-WWA grid it is compared with).
 
-    With ``sink``, each chunk's rows go to ``sink`` as soon as the chunk is done and no table is
-    kept (returns None for it): memory stays bounded by a chunk, whatever the grid size."""
+    With ``sink``, each chunk's rows go to ``sink`` as an Arrow table as soon as the chunk is
+    done and no table is kept (returns None for it): memory stays bounded by a chunk, whatever
+    the grid size, and pandas is not imported (``docs/performance.md``, "What a process
+    imports"). Without, the points come back as one pandas DataFrame."""
     return grid_workspace(cfg, *build_problem(cfg, catalogue), sink)
 
 
 def grid_workspace(
     cfg: DictConfig, problem: WorkspaceProblem, grid: Grid,
-    sink: Callable[[pd.DataFrame], None] | None = None,
+    sink: Callable[[pa.Table], None] | None = None,
 ) -> tuple[pd.DataFrame | None, dict]:
     """:func:`compute_workspace` for an already built problem and grid."""
     problem = replace(problem, fused=use_fused(cfg, problem, grid.n_points))
@@ -233,37 +238,41 @@ def grid_workspace(
         chunk_size=bounded_chunk_size(problem, cfg.compute.chunk_size),
         scheduler=cfg.compute.scheduler,
     )
-    parts, n_feasible, lost, by_lp = [], 0, Counter(), 0
+    parts, n_feasible, by_lp = [], 0, 0
+    lost = np.zeros(len(problem.criteria), dtype=np.int64)  # infeasible poses by limiting criterion
     least = dict.fromkeys(problem.criteria, np.inf)
     for span, raw in chunks:
-        points = tabulate(problem, grid.positions[span], raw)
-        n_feasible += int(points["feasible"].sum())
+        margins, feasible, limiting = classify(
+            {name: raw[f"margin_{name}"] for name in problem.criteria}, problem.margin_atol)
+        n_feasible += int(np.count_nonzero(feasible))
         for name in problem.criteria:  # the feasible poses' headroom to each limit
-            least[name] = np.min(points[f"margin_{name}"].to_numpy(), initial=least[name],
-                                 where=points["feasible"].to_numpy())
+            least[name] = np.min(margins[name], initial=least[name], where=feasible)
         by_lp += int(np.count_nonzero(raw.get("lp_poses", False)))
-        lost.update(points.loc[~points["feasible"], "limiting"].value_counts().to_dict())  # 20x Counter of str
+        lost += np.bincount(limiting[~feasible], minlength=len(problem.criteria))
+        points = tabulate(problem, grid.positions[span], raw, margins, feasible, limiting)
         if sink is None:
             parts.append(points)
         else:
             sink(points)
-    counts = {"n_points": grid.n_points, "n_feasible": n_feasible, "lost": lost, "least": least}
+    counts = {"n_points": grid.n_points, "n_feasible": n_feasible,
+              "lost": dict(zip(problem.criteria, lost.tolist())), "least": least}
     if problem.spec.tension.model == "feasible":
         log.info("feasible tension model: %d of %d poses by LP (poor conditioning or fallback), "
                  "the rest by hyperplane shifting", by_lp, grid.n_points)
-    table = pd.concat(parts, ignore_index=True) if sink is None else None
+    table = pa.concat_tables(parts).to_pandas() if sink is None else None
     return table, summarize(cfg, counts, grid.cell_volume, problem)
 
 
-def tabulate(problem: WorkspaceProblem, positions: np.ndarray, raw: dict) -> pd.DataFrame:
-    """One chunk's points: position, orientation, verdict, limiting criterion, margins."""
-    margins, feasible, limiting = classify(
-        {name: raw[f"margin_{name}"] for name in problem.criteria}, problem.margin_atol)
+def tabulate(problem: WorkspaceProblem, positions: np.ndarray, raw: dict,
+             margins: dict[str, np.ndarray], feasible: np.ndarray, limiting: np.ndarray) -> pa.Table:
+    """One chunk's points: position, orientation, verdict, limiting criterion (a dictionary
+    column: int8 codes into the criteria's names), margins; ``margins``, ``feasible`` and
+    ``limiting`` as :func:`pipeline.workspace.verdict.classify` returns them."""
     columns = {"x": positions[:, 0], "y": positions[:, 1], "z": positions[:, 2]}
     for name, value in zip(("psi", "theta", "phi"), problem.orientation):
         columns[name] = np.full(len(positions), value)
     columns["feasible"] = feasible
-    columns["limiting"] = pd.Categorical.from_codes(limiting, categories=list(problem.criteria))
+    columns["limiting"] = categories(limiting, list(problem.criteria))
     for name, margin in margins.items():
         columns[f"margin_{name}"] = margin
     if "jacobian_rank" in raw:
@@ -273,7 +282,8 @@ def tabulate(problem: WorkspaceProblem, positions: np.ndarray, raw: dict) -> pd.
             columns[key] = values
     if "unreachable" in margins:  # |S S^+ w - w| / |w|, worst over the required wrenches
         columns["wrench_residual"] = (1.0 - margins["unreachable"]) * problem.spec.tension.residual_rtol
-    return pd.DataFrame(columns)
+    return pa.table({name: numbers(values) if isinstance(values, np.ndarray) else values
+                     for name, values in columns.items()})
 
 
 # Cost model of the choice between worker processes and this one (docs/performance.md): a

@@ -1,0 +1,84 @@
+"""Arrow columns built from their buffers, and Parquet files read whole, without pandas.
+
+pyarrow's own constructors (``pa.array``, ``pa.scalar``, ``pa.Table.from_pylist``) and
+``pq.read_table`` import pandas, when it is installed, to check whether their input is a pandas
+object: 0.25 s of CPU in a job process that holds none (``docs/performance.md``, "What a process
+imports"). A job's tables are therefore built here with ``pa.Array.from_buffers``, which checks
+nothing (numbers without a copy), and read with ``pq.ParquetFile``. The columns have the types
+``pa.Table.from_pandas`` gives the same values, and a table read back with pandas is the same
+DataFrame (``tests/test_results.py``).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+
+def numbers(values: np.ndarray) -> pa.Array:
+    """A numeric or boolean numpy array as an Arrow array (numbers share its memory)."""
+    values = np.ascontiguousarray(values)
+    if values.dtype == np.bool_:  # Arrow packs booleans into bits
+        buffer = pa.py_buffer(np.packbits(values, bitorder="little"))
+        return pa.Array.from_buffers(pa.bool_(), len(values), [None, buffer])
+    return pa.Array.from_buffers(pa.from_numpy_dtype(values.dtype), len(values),
+                                 [None, pa.py_buffer(values)])
+
+
+def texts(values: list[str | None]) -> pa.Array:
+    """Strings as an Arrow string array; None is null."""
+    encoded = [b"" if value is None else value.encode() for value in values]
+    offsets = np.zeros(len(values) + 1, dtype=np.int32)
+    np.cumsum([len(text) for text in encoded], out=offsets[1:])
+    valid = np.array([value is not None for value in values], dtype=bool)
+    validity = None if valid.all() else pa.py_buffer(np.packbits(valid, bitorder="little"))
+    return pa.Array.from_buffers(pa.string(), len(values),
+                                 [validity, pa.py_buffer(offsets), pa.py_buffer(b"".join(encoded))],
+                                 null_count=int(np.count_nonzero(~valid)))
+
+
+def categories(codes: np.ndarray, names: list[str]) -> pa.DictionaryArray:
+    """A dictionary column (pandas reads it as a Categorical): ``codes`` index ``names``."""
+    return pa.DictionaryArray.from_arrays(numbers(codes), texts(names))
+
+
+def one_row(row: dict) -> pa.Table:
+    """A table of one row: bool, int, float, str and None values become bool, int64, float64,
+    string and null columns (numpy scalars as their Python kind)."""
+    columns = {}
+    for name, value in row.items():
+        if value is None:
+            columns[name] = pa.nulls(1)
+        elif isinstance(value, str):
+            columns[name] = texts([value])
+        elif isinstance(value, (bool, np.bool_)):
+            columns[name] = numbers(np.array([value], dtype=bool))
+        elif isinstance(value, (int, np.integer)):
+            columns[name] = numbers(np.array([value], dtype=np.int64))
+        elif isinstance(value, (float, np.floating)):
+            columns[name] = numbers(np.array([value], dtype=np.float64))
+        else:
+            raise TypeError(f"{name}: {type(value).__name__} is not a summary value")
+    return pa.table(columns)
+
+
+def read(path: Path) -> pa.Table:
+    """A whole Parquet file (``pq.ParquetFile``: no pandas import)."""
+    with pq.ParquetFile(path) as handle:
+        return handle.read()
+
+
+def sorted_by(table: pa.Table, names: list[str]) -> pa.Table:
+    """``table`` sorted stably by the columns ``names`` (ascending, nulls and NaN last, as
+    pandas' ``sort_values``); pyarrow's ``sort_by`` would import pandas."""
+    columns = [table[name].to_pylist() for name in names]
+
+    def key(i: int) -> tuple:
+        return tuple((missing, 0 if missing else value) for value in (column[i] for column in columns)
+                     for missing in [value is None or value != value])
+
+    order = np.array(sorted(range(table.num_rows), key=key), dtype=np.int64)
+    return table.take(numbers(order))
