@@ -182,8 +182,9 @@ def _prepared(task: DictConfig) -> Tuple[str, Any]:
     ``pipeline.app.job.PREPARED`` (None when the preflight of this process has none: the job
     types its config itself)."""
     from pipeline.app.job import PREPARED
+    from pipeline.app.yamltext import to_yaml
 
-    text = OmegaConf.to_yaml(task)
+    text = to_yaml(task)
     return text, PREPARED.pop(text, None)
 
 

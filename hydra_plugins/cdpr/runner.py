@@ -8,7 +8,7 @@ the record, and the task's config is the launcher's (one unpickled copy, with th
 overrides, of the composition without Hydra's node). The rest is Hydra's: the job's folder,
 ``hydra.job.chdir`` (unset is false, Hydra's rule from version_base 1.2, which the app uses),
 its logging, ``.hydra/config.yaml``, ``hydra.yaml`` and ``overrides.yaml`` (the same text:
-OmegaConf's YAML, UTF-8), ``hydra.job.env_set``, the callbacks, the ``JobReturn``
+OmegaConf's YAML, emitted by libyaml: ``pipeline.app.yamltext``, UTF-8), ``hydra.job.env_set``, the callbacks, the ``JobReturn``
 (tests/test_launcher.py compares the files with Hydra's basic launcher's).
 """
 
@@ -22,12 +22,14 @@ from hydra.core.utils import JobReturn, JobRuntime, JobStatus, configure_log, en
 from hydra.types import HydraContext, TaskFunction
 from omegaconf import DictConfig, OmegaConf, open_dict, read_write
 
+from pipeline.app.yamltext import to_yaml
+
 
 def run_job(config: DictConfig, task_cfg: DictConfig, task_function: TaskFunction,
             hydra_context: HydraContext, task_yaml: Optional[str] = None) -> JobReturn:
     """Run ``task_function`` on a sweep job's ``task_cfg`` (``config`` without Hydra's node,
     the launcher's copy) in ``hydra.sweep.dir``/``hydra.sweep.subdir``. ``config`` is the job's
-    own object: its output folder is set in it. ``task_yaml``: ``OmegaConf.to_yaml(task_cfg)``
+    own object: its output folder is set in it. ``task_yaml``: ``to_yaml(task_cfg)``
     if the caller has it (``.hydra/config.yaml``). The task's exception, if any, is the return
     value of a FAILED ``JobReturn``, as with Hydra."""
     old_cwd = os.getcwd()
@@ -54,9 +56,9 @@ def run_job(config: DictConfig, task_cfg: DictConfig, task_function: TaskFunctio
         if config.hydra.output_subdir is not None:
             saved = Path(config.hydra.runtime.output_dir) / str(config.hydra.output_subdir)
             saved.mkdir(parents=True, exist_ok=True)
-            for name, text in (("config.yaml", task_yaml or OmegaConf.to_yaml(task_cfg)),
-                               ("hydra.yaml", OmegaConf.to_yaml(record)),
-                               ("overrides.yaml", OmegaConf.to_yaml(config.hydra.overrides.task))):
+            for name, text in (("config.yaml", task_yaml or to_yaml(task_cfg)),
+                               ("hydra.yaml", to_yaml(record)),
+                               ("overrides.yaml", to_yaml(config.hydra.overrides.task))):
                 (saved / name).write_text(text, encoding="utf-8")
         with env_override(record.hydra.job.env_set):
             hydra_context.callbacks.on_job_start(config=config, task_function=task_function)

@@ -24,12 +24,13 @@ from pathlib import Path
 
 from hydra.core.hydra_config import HydraConfig
 from hydra.types import RunMode
-from omegaconf import DictConfig, OmegaConf
+from omegaconf import DictConfig
 
 from pipeline.model.catalogue import load_catalogue
 from pipeline.app.config import validate
 from pipeline.errors import ConfigError
 from pipeline.app.readings import describe_reading
+from pipeline.app.yamltext import to_yaml
 from pipeline.app.results import (
     CONFIG_KEY, DIGESTS_KEY, VERSION_KEY, ParquetSink, code_version, digests_json, file_digest,
     read_metadata, write_parquet,
@@ -49,7 +50,7 @@ CURRENT: ContextVar[tuple[DictConfig, object] | None] = ContextVar("CURRENT", de
 
 def run_job(cfg: DictConfig) -> dict:
     """Validate, compute the feasible workspace, write the Parquet files; returns the summary."""
-    prepared = CURRENT.get() or PREPARED.pop(OmegaConf.to_yaml(cfg), None)
+    prepared = CURRENT.get() or PREPARED.pop(to_yaml(cfg), None)
     if prepared is not None:
         cfg, catalogue = prepared
     else:
@@ -95,7 +96,7 @@ def folder_lock(out: Path, busy: str = "another run is writing this folder; wait
 
 
 def _run_locked(cfg: DictConfig, catalogue, out: Path) -> dict:
-    config_yaml = OmegaConf.to_yaml(cfg, resolve=True)
+    config_yaml = to_yaml(cfg, resolve=True)
     done = finished_summary(out, config_yaml)
     if done is not None:
         log.info("reused the finished job in %s (same config and code version)", out)

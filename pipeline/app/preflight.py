@@ -37,6 +37,7 @@ from pipeline.model.catalogue import load_catalogue
 from pipeline.app.config import job_dir_name, masked, register, typed_schema, validate
 from pipeline.errors import ConfigError, one_line
 from pipeline.app.resources import CONF_DIR
+from pipeline.app.yamltext import to_yaml
 NO_JOB_FLAGS = {"--help", "-h", "--hydra-help", "--info", "-i", "--cfg", "-c", "--version",
                 "--shell-completion", "-sc", "--resolve", "-p", "--package"}
 FLAGS_WITH_VALUE = {"--config-path", "-cp", "--config-name", "-cn", "--config-dir", "-cd",
@@ -209,7 +210,7 @@ def _derivable(full: DictConfig, plain: DictConfig) -> Copies | None:
     job's is derived, when every value of the files is set and none is an interpolation (a
     typed config holds resolved values, which an override of another key could change); else
     None."""
-    if "${" in OmegaConf.to_yaml(plain):
+    if "${" in to_yaml(plain):
         return None
     try:
         return Copies(masked(full, plain))
@@ -295,7 +296,7 @@ def check(argv: list[str], reuse: Reuse | None = None) -> dict[str, tuple[DictCo
                     catalogues[cfg.catalogue] = load_catalogue(cfg.catalogue)
                 catalogue = catalogues[cfg.catalogue]
             validate(cfg, None if catalogue is None else catalogue.ids, typed=True)
-            prepared[OmegaConf.to_yaml(plain)] = cfg, catalogue
+            prepared[to_yaml(plain)] = cfg, catalogue
         hydra = hydra_node(jobs[0] if multirun_base is None else multirun_base)
     first = next(iter(prepared.values()))[0]
     _check_launcher(hydra.launcher)
