@@ -11,6 +11,7 @@ from __future__ import annotations
 import csv
 import math
 from dataclasses import dataclass
+from functools import cached_property
 from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -72,10 +73,11 @@ class Catalogue:
     def row(self, actuator: int) -> dict:
         """The row of id ``actuator`` (KeyError if none: ids are checked against :attr:`ids`
         when a config is validated)."""
-        for row in self.rows:
-            if row["id"] == actuator:
-                return row
-        raise KeyError(actuator)
+        return self._by_id[actuator]
+
+    @cached_property
+    def _by_id(self) -> dict[int, dict]:
+        return {row["id"]: row for row in self.rows}
 
     def table(self) -> pd.DataFrame:
         """The catalogue as a pandas DataFrame indexed by ``id`` (imports pandas)."""

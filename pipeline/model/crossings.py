@@ -86,7 +86,7 @@ def least_margins(structure, spread, null, wrenches, subsets, others, fixed, pos
                     for c in range(count):
                         high[c], low[c] = max(high[c], target[k, c]), min(low[c], target[k, c])
                 least, settled, hint[f] = _crossing(
-                    a, positive, negative, high, low, earlier_lo[0], earlier_up[0], bounds, 0, 1.0,
+                    a, positive, negative, high, low, earlier_lo[0], earlier_up[0], bounds, np.int64(0), 1.0,
                     hint[f], along, against)
                 unsettled[p] |= not settled
             else:  # one h per wrench, each search capped by the running least

@@ -72,8 +72,8 @@ def _statics_margins(problem, positions: np.ndarray, orientation):
                   np.ascontiguousarray(robot.anchors, dtype=float), np.ascontiguousarray(robot.attachments @ rotation.T),
                   spec.cable_direction == "centre", spec.moment_arm == "base",
                   np.ascontiguousarray(wrench[:, None]), float(spec.rank_rtol), float(lim.rank_rtol),
-                  np.ascontiguousarray(np.broadcast_to(spec.tension.t_min, (m,)), dtype=float),
-                  np.ascontiguousarray(np.broadcast_to(lim.s_max, (m,)), dtype=float), float(lim.scale),
+                  np.array(np.broadcast_to(spec.tension.t_min, (m,)), dtype=float),  # writable copies
+                  np.array(np.broadcast_to(lim.s_max, (m,)), dtype=float), float(lim.scale),
                   np.inf if robot.l_max is None else float(robot.l_max), out, unsettled)
     return {f"margin_{name}": out[:, STATICS_CRITERIA.index(name)] for name in problem.criteria}, unsettled
 
@@ -86,7 +86,8 @@ def _cpr_wwa_margins(problem, positions: np.ndarray, orientation):
     loads = np.ascontiguousarray(np.column_stack([slope[:rows], at_rest[:rows]]))
     centre, half = acceleration_box(spec.accelerations)
     m = robot.n_cables
-    t_max = np.broadcast_to(np.inf if spec.tension.t_max is None else spec.tension.t_max, (m,))
+    t_max = np.array(np.broadcast_to(np.inf if spec.tension.t_max is None else spec.tension.t_max, (m,)),
+                     dtype=float)  # a writable copy: a read-only array is another type to numba
     l_max = np.inf if robot.l_max is None else float(robot.l_max)
     n = len(positions)
     out = np.empty((n, len(CRITERIA)))
@@ -98,7 +99,7 @@ def _cpr_wwa_margins(problem, positions: np.ndarray, orientation):
                   rows, np.ascontiguousarray(spec.velocity_extremes, dtype=float), centre, half, loads,
                   float(spec.rank_rtol), np.array([act.speed_limit, act.torque_limit, act.accel_limit,
                                                    act.voltage_limit], dtype=float),
-                  np.array([act.G_v, act.L_v, act.S_v], dtype=float), np.ascontiguousarray(t_max, dtype=float),
+                  np.array([act.G_v, act.L_v, act.S_v], dtype=float), t_max,
                   l_max, out, rank, unsettled)
     result = {f"margin_{name}": out[:, CRITERIA.index(name)] for name in problem.criteria}
     result["jacobian_rank"] = rank
@@ -122,7 +123,7 @@ def _kernel(positions, anchors, arms, rate_axes, radius, rows, extremes, centre,
     scratch = np.empty((rows, rows))  # G + mu I, then the completed matrix
     iterate, step = np.empty((rows, 1)), np.empty((rows, 1))  # the inverse iteration
     projected = np.empty(rows)  # G w
-    warm = False  # w holds the previous pose's direction (a good start for the next)
+    warm = np.bool_(False)  # w holds the previous pose's direction (a good start for the next)
     inverse_radius = 1.0 / radius
     torque = np.empty((m, 4))  # C (3 columns) and d of M = C a + d, per cable
     speed_limit, torque_limit, accel_limit, voltage_limit = limits[0], limits[1], limits[2], limits[3]
@@ -198,6 +199,7 @@ def _statics(positions, anchors, arms, centre, base, wrench, rtol, singular_rtol
              l_max, out, unsettled):
     """Fill ``out`` (n, 4) with the margins of ``STATICS_CRITERIA`` and ``unsettled``."""
     n, m = positions.shape[0], anchors.shape[0]
+    six = np.int64(6)  # not the literal 6, which numba would compile its callees for once more
     columns = np.empty((m, 6))  # A^T: row i = [u_i; a_i x u_i] (eq. 8)
     lengths = np.empty(m)
     gram = np.empty((6, 6))
@@ -214,14 +216,14 @@ def _statics(positions, anchors, arms, centre, base, wrench, rtol, singular_rtol
             columns[i, 3] = ay * uz - az * uy
             columns[i, 4] = az * ux - ax * uz
             columns[i, 5] = ax * uy - ay * ux
-        _gram(columns, 6, m, gram)
-        ratio = _scaled_cholesky(gram, 6, factor, scale_rows)
+        _gram(columns, six, m, gram)
+        ratio = _scaled_cholesky(gram, six, factor, scale_rows)
         if ratio < BAND * rtol:  # singular or in doubt: numpy's SVD
             unsettled[p] = True
             for k in range(out.shape[1]):
                 out[p, k] = np.nan
             continue
-        _scaled_solve(factor, scale_rows, wrench, 6, solved)
+        _scaled_solve(factor, scale_rows, wrench, six, solved)
         lowest, worst_rating, worst_length = np.inf, -np.inf, -np.inf
         for i in range(m):
             tension = 0.0  # s = A^T (A A^T)^-1 f (eqs. 7, 10)
