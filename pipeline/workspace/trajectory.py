@@ -15,6 +15,7 @@ from pipeline.model.actuators import ActuatorModel
 from pipeline.workspace.criteria.forces import actuator_families
 from pipeline.model.dynamics import MotionSpec, PoseDynamics, centripetal, load_wrenches
 from pipeline.model.geometry import CableRobot
+from pipeline.model.linalg import remembered_pinv
 from pipeline.model.tensions import feasible_tensions
 
 
@@ -76,15 +77,16 @@ def inverse_dynamics(
         speed2 = np.einsum("nj,nj->n", velocities, velocities)[:, None]
         theta_ddot = theta_ddot + centripetal(speed2, along, state.lengths, motion.winch_radius)
     wrench = load_wrenches(motion, accelerations, robot.up, state.rotation)[:, : state.structure.shape[1]]
+    pinv = remembered_pinv(state.structure, motion.rank_rtol)  # the same for every actuator
     margins = {}
     if motion.tension.model == "feasible":
         other = (actuator.G_v * theta_ddot + actuator.L_v * theta_dot)[:, None, :]
         families = actuator_families(motion.tension, motion.winch_radius, actuator, other, other)
-        margins, chosen, _ = feasible_tensions(state.structure, *state.wrench_pinv, wrench[:, None, :],
+        margins, chosen, _ = feasible_tensions(state.structure, *pinv, wrench[:, None, :],
                                                families, motion.tension.residual_rtol, distribution=True)
         torque = chosen[:, 0, :]
     else:
-        torque = np.einsum("nmc,nc->nm", state.wrench_pinv[0], wrench)
+        torque = np.einsum("nmc,nc->nm", pinv[0], wrench)
     if motion.tension.t_max is not None and "tension_max" not in margins:  # pinv: the rating
         margins["tension_max"] = 1.0 - (torque / motion.winch_radius / motion.tension.t_max).max(axis=1)
     if robot.l_max is not None:
