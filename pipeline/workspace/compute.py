@@ -26,6 +26,7 @@ import pyarrow as pa
 from omegaconf import DictConfig, OmegaConf
 
 from pipeline.model.actuators import actuator_model
+from pipeline.model.catalogue import Catalogue
 from pipeline.model.dynamics import Load, MotionSpec
 from pipeline.model.geometry import CableRobot
 from pipeline.workspace.arrow import categories, numbers
@@ -51,7 +52,7 @@ CHUNK_BUDGET_FLOATS = 4_000_000  # largest (poses x cables x set size) array of 
 FEASIBLE_CHUNK_POSES = 4096  # tension.model=feasible: about 1 s per chunk, so progress is visible
 
 
-def build_problem(cfg: DictConfig, catalogue) -> tuple[WorkspaceProblem, Grid]:
+def build_problem(cfg: DictConfig, catalogue: Catalogue | None) -> tuple[WorkspaceProblem, Grid]:
     """The workspace problem of the configured robot and analysis, and its position grid."""
     robot = build_robot(cfg)
     if cfg.poses is None:
@@ -110,7 +111,7 @@ def _step_grid(cfg: DictConfig, robot: CableRobot) -> Grid:
     return step_grid(robot.box_lo, robot.box_hi, search.step, search.get("spacing", "faces"))
 
 
-def _cpr_wwa(cfg: DictConfig, catalogue, robot):
+def _cpr_wwa(cfg: DictConfig, catalogue: Catalogue, robot):
     actuator = actuator_model(
         catalogue.row(cfg.actuator), cfg.drive.winch_radius, cfg.drive.gear_ratio,
         cfg.model.xi_in_torque_limit,
@@ -136,7 +137,7 @@ def _cpr_wwa(cfg: DictConfig, catalogue, robot):
     return motion, actuator, (*gates, *cable_limits(motion.tension, robot), *CPR_WWA_CRITERIA)
 
 
-def _statics(cfg: DictConfig, catalogue, robot):
+def _statics(cfg: DictConfig, catalogue: Catalogue | None, robot):
     spec = StaticsSpec(
         moment_arm=_name(cfg.model.moment_arm),
         cable_direction=_name(cfg.model.cable_direction),
@@ -211,7 +212,7 @@ ANALYSES = {"cpr_wwa": _cpr_wwa, "statics": _statics, "lines": _cpr_wwa}
 
 
 def compute_workspace(
-    cfg: DictConfig, catalogue, sink: Callable[[pa.Table], None] | None = None
+    cfg: DictConfig, catalogue: Catalogue | None, sink: Callable[[pa.Table], None] | None = None
 ) -> tuple[pd.DataFrame | None, dict]:
     """Points table (one row per grid pose) and the one-row summary (counts, share, volume) of
     the grid procedure (for ``analysis=lines``, the CPR-WWA grid it is compared with).

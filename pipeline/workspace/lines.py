@@ -16,6 +16,7 @@ import numpy as np
 import pandas as pd
 from omegaconf import DictConfig
 
+from pipeline.model.catalogue import Catalogue
 from pipeline.workspace.trajectory import inverse_dynamics, sample_margins, trapezoid
 from pipeline.workspace.verdict import classify
 from pipeline.workspace.compute import build_problem, grid_workspace
@@ -24,7 +25,7 @@ QUANTITIES = ("theta_dot", "torque", "voltage")
 DT = 0.01  # s, time step of the simulated lines
 
 
-def simulate_lines(cfg: DictConfig, catalogue: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame, dict]:
+def simulate_lines(cfg: DictConfig, catalogue: Catalogue) -> tuple[pd.DataFrame, pd.DataFrame, dict]:
     """(samples, points, summary): every line sample, the grid points with both verdicts, and
     the CPR-WWA summary extended with the simulated count, the agreement and, per criterion,
     the smallest margin along line O''-F'' (``line0_margin_*``: Fig. 6's verdict per limit)."""
