@@ -46,8 +46,7 @@ class SweepSummary(Callback):
         if not rows:
             return
         table = pa.concat_tables(rows, promote_options="permissive")
-        varying = varying_settings(
-            {name: table[name].to_pylist() for name in table.column_names}, ignore=("job",))
+        varying = varying_settings(table.to_pydict(), ignore=("job",))
         if varying:
             table = sorted_by(table, varying)
         sweep_yaml = OmegaConf.to_yaml(
@@ -56,7 +55,7 @@ class SweepSummary(Callback):
         write_parquet(table, sweep_dir / "summary.parquet", sweep_yaml)
         shown = [c for c in varying if c not in ("actuator_name",)] + REPORTED
         log.info("sweep summary (%s):\n%s", sweep_dir / "summary.parquet",
-                 text_table({name: table[name].to_pylist() for name in shown if name in table.column_names}))
+                 text_table(table.select([name for name in shown if name in table.column_names]).to_pydict()))
         log.info("results in %s (%d job folders)", sweep_dir, table.num_rows)
 
 

@@ -21,9 +21,8 @@ import pyarrow.parquet as pq
 def numbers(values: np.ndarray) -> pa.Array:
     """A numeric or boolean numpy array as an Arrow array (numbers share its memory)."""
     values = np.ascontiguousarray(values)
-    if values.dtype == np.bool_:  # Arrow packs booleans into bits
-        buffer = pa.py_buffer(np.packbits(values, bitorder="little"))
-        return pa.Array.from_buffers(pa.bool_(), len(values), [None, buffer])
+    if values.dtype == np.bool_:
+        return pa.Array.from_buffers(pa.bool_(), len(values), [None, _bits(values)])
     return pa.Array.from_buffers(pa.from_numpy_dtype(values.dtype), len(values),
                                  [None, pa.py_buffer(values)])
 
@@ -34,10 +33,15 @@ def texts(values: list[str | None]) -> pa.Array:
     offsets = np.zeros(len(values) + 1, dtype=np.int32)
     np.cumsum([len(text) for text in encoded], out=offsets[1:])
     valid = np.array([value is not None for value in values], dtype=bool)
-    validity = None if valid.all() else pa.py_buffer(np.packbits(valid, bitorder="little"))
+    validity = None if valid.all() else _bits(valid)
     return pa.Array.from_buffers(pa.string(), len(values),
                                  [validity, pa.py_buffer(offsets), pa.py_buffer(b"".join(encoded))],
                                  null_count=int(np.count_nonzero(~valid)))
+
+
+def _bits(flags: np.ndarray) -> pa.Buffer:
+    """Booleans packed as Arrow packs them (values and validity): one bit each, least first."""
+    return pa.py_buffer(np.packbits(flags, bitorder="little"))
 
 
 def categories(codes: np.ndarray, names: list[str]) -> pa.DictionaryArray:
