@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import subprocess
+import sys
+
 import pytest
 from hydra import compose, initialize_config_dir
 
@@ -27,3 +30,16 @@ def make_cfg():
             return typed_config(compose(config_name="config", overrides=["compute.n_jobs=1", *overrides]))
 
     return _make
+
+
+def job_imports(cwd, *args: str, modules=("pandas", "numba", "scipy")) -> str:
+    """Run ``python -m pipeline *args`` in ``cwd`` in a process that reports at exit, on
+    stderr, ``<module> imported: True|False`` for each of ``modules``; its output."""
+    report = "; ".join(f"print('{m} imported:', '{m}' in sys.modules, file=sys.stderr)" for m in modules)
+    script = ("import atexit, runpy, sys\n"
+              f"atexit.register(lambda: ({report.replace('; ', ', ')}))\n"
+              f"sys.argv = ['pipeline', *{list(args)!r}]\n"
+              "runpy.run_module('pipeline', run_name='__main__', alter_sys=True)\n")
+    done = subprocess.run([sys.executable, "-c", script], cwd=cwd, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr[-2000:]
+    return done.stdout + done.stderr

@@ -1,15 +1,13 @@
 """Arrow columns built from buffers (pipeline.workspace.arrow) against pyarrow's pandas route, and
 a job process that never imports pandas."""
 
-import subprocess
-import sys
-
 import numpy as np
 import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
+from conftest import job_imports
 from pipeline.workspace.arrow import categories, numbers, one_row, read, sorted_by, texts
 
 
@@ -74,26 +72,14 @@ def test_sorted_by_is_pandas_stable_sort_with_missing_values_last():
         assert sorted_by(table, keys)["job"].to_pylist() == expected["job"].tolist(), keys
 
 
-def _job_imports(tmp_path, *args: str) -> str:
-    """Run ``python -m pipeline *args`` in a process that reports at exit whether pandas was
-    imported."""
-    script = ("import atexit, runpy, sys\n"
-              "atexit.register(lambda: print('pandas imported:', 'pandas' in sys.modules, file=sys.stderr))\n"
-              f"sys.argv = ['pipeline', *{list(args)!r}]\n"
-              "runpy.run_module('pipeline', run_name='__main__', alter_sys=True)\n")
-    done = subprocess.run([sys.executable, "-c", script], cwd=tmp_path, capture_output=True, text=True)
-    assert done.returncode == 0, done.stderr[-2000:]
-    return done.stdout + done.stderr
-
-
 def test_the_main_job_and_a_grid_job_never_import_pandas(tmp_path):
     """pandas costs 0.25 s of CPU to import: a job that writes points and summaries, a sweep
     with its summary table, and a rerun that reuses the finished job do without it."""
     sweep = ["-m", "actuator=1,2,3", "grid.n=4", "hydra.sweep.dir=sweep"]
-    assert "pandas imported: False" in _job_imports(tmp_path, *sweep)
-    again = _job_imports(tmp_path, *sweep)  # each job's summary read back, not recomputed
+    assert "pandas imported: False" in job_imports(tmp_path, *sweep)
+    again = job_imports(tmp_path, *sweep)  # each job's summary read back, not recomputed
     assert "reused the finished job" in again and "pandas imported: False" in again
     irpm = ["robot=irpm6", "robot.search.step=1", "hydra.run.dir=irpm"]
-    assert "pandas imported: False" in _job_imports(tmp_path, *irpm)
+    assert "pandas imported: False" in job_imports(tmp_path, *irpm)
     table = pd.read_parquet(tmp_path / "sweep" / "summary.parquet")
     assert table["actuator"].tolist() == [1, 2, 3] and table["job"].is_unique

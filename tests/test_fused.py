@@ -11,13 +11,17 @@ away). Margins are compared within MARGIN_RTOL relative plus MARGIN_ATOL, verdic
 that band around zero."""
 
 import dataclasses
+import importlib
 import subprocess
 import sys
 
 import numpy as np
 import pandas as pd
+import pyarrow.parquet as pq
 import pytest
 
+from conftest import job_imports
+from pipeline.model.jit import compiled_loops
 from pipeline.workspace import fused
 from pipeline.workspace.compute import (
     SWEEP_FUSED, build_problem, compute_workspace, fused_pays, fused_unfit, use_fused,
@@ -110,6 +114,26 @@ def test_random_robots_with_singular_poses_are_left_to_numpy(make_cfg, catalogue
         unsettled_total += unsettled.sum()
         short_total += ((direct["jacobian_rank"] == 5) & ~unsettled).sum()
     assert unsettled_total > 1000 and short_total > 1000  # both the fallback and the deflation ran
+
+
+@pytest.mark.parametrize("overrides", [
+    ["grid.n=15"], ["grid.n=15", "orientation.psi=0.5", "orientation.theta=0.2"],
+    ["grid.n=15", "model.pinv_columns=translational", "tension.t_max=5000", "actuator=5"],
+    ["robot=irpm6"], ["robot=irpm6", "model.moment_arm=base", "model.cable_direction=centre"],
+])
+def test_the_extension_built_ahead_of_time_gives_numbas_own_bits(overrides, make_cfg, catalogue, monkeypatch):
+    """The loops the jobs load (an extension built by numba.pycc, generic CPU) and numba's
+    just-in-time functions (this CPU) compute the same margins to the last bit: neither fuses a
+    multiply and an add (no fast-math), so results do not depend on which one a machine has."""
+    problem, grid = build_problem(make_cfg(*overrides), catalogue)
+    assert compiled_loops(fused.LOOPS).__file__.endswith(".so")  # a C compiler is on this machine
+    extension = fused.margins(problem, grid.positions, problem.orientation)
+    monkeypatch.setattr(fused, "compiled_loops", importlib.import_module)
+    own = fused.margins(problem, grid.positions, problem.orientation)
+    assert extension[0].keys() == own[0].keys()
+    for key in extension[0]:
+        np.testing.assert_array_equal(extension[0][key], own[0][key], err_msg=key)
+    np.testing.assert_array_equal(extension[1], own[1])
 
 
 def test_a_whole_job_writes_the_same_points_with_either_kernel(make_cfg, catalogue):
@@ -205,3 +229,13 @@ def test_a_sweep_loads_the_compiled_kernel_that_one_small_job_does_not(tmp_path)
     sweep = summaries("sweep", "-m", "robot=irpm6", "output.points=false", "robot.gamma_deg=0,15,30")
     assert one["kernel"] == "numpy" and [row["kernel"] for row in sweep] == ["fused"] * 3
     assert int(next(r for r in sweep if r["robot.gamma_deg"] == one["robot.gamma_deg"])["n_feasible"]) == one["n_feasible"]
+
+
+def test_a_job_on_the_compiled_kernels_imports_neither_numba_nor_scipy(tmp_path):
+    """Loading numba (its import and the registries a cached function loads, scipy.linalg
+    among them) cost a job 0.3-0.5 s; the extension built ahead of time needs neither."""
+    for args in (["compute.kernel=fused", "grid.n=10", "hydra.run.dir=cpr8"],
+                 ["robot=irpm6", "compute.kernel=fused", "robot.search.step=1", "hydra.run.dir=irpm"]):
+        out = job_imports(tmp_path, *args)
+        assert "numba imported: False" in out and "scipy imported: False" in out, out[-2000:]
+    assert pq.read_table(tmp_path / "cpr8" / "summary.parquet")["kernel"].to_pylist() == ["fused"]

@@ -1,10 +1,22 @@
-"""A numba cache left half written (a process killed while numba wrote it, a full disk) must not
-stop every later compiled job: pipeline.model.jit.call_compiled removes it and compiles again."""
+"""The two ways pipeline.model.jit runs numba's loops.
 
+Just in time: a numba cache left half written (a process killed while numba wrote it, a full
+disk) must not stop every later compiled job: call_compiled removes it and compiles again.
+
+Ahead of time (compiled_loops): an extension built once per text of the loops module, loaded
+without numba, giving the bits numba's own functions give; built again when damaged or when the
+text changes; built by one process while another waits; kept in the user's cache when the
+module's folder cannot be written; numba's functions, with one warning, without a C compiler."""
+
+import ast
+import importlib
+import os
 import subprocess
 import sys
 import textwrap
 from pathlib import Path
+
+from pipeline.workspace import fused_loops
 
 MODULE = """
 from numba import njit
@@ -59,8 +71,11 @@ sys.path.insert(0, sys.argv[1])
 from conftest import make_cfg
 from pipeline.model import crossings
 from pipeline.model.catalogue import load_catalogue
-from pipeline.workspace import fused
+import importlib
+from pipeline.workspace import fused, fused_loops
 from pipeline.workspace.compute import compute_workspace
+
+fused.compiled_loops = importlib.import_module  # numba's own functions, not the extension
 
 make, catalogue = make_cfg.__wrapped__(), load_catalogue()
 for overrides in (["compute.kernel=fused", "grid.n=4"], ["compute.kernel=fused", "grid.n=4", "orientation.psi=0.5"],
@@ -70,7 +85,7 @@ for overrides in (["compute.kernel=fused", "grid.n=4"], ["compute.kernel=fused",
                   ["robot=irpm6", "compute.kernel=fused", "robot.search.step=2", "tension.t_min=[1,1,1,1,1,1]"],
                   ["tension=feasible", "grid.n=3"], ["robot=irpm6", "tension=feasible", "robot.search.step=2"]):
     compute_workspace(make(*overrides), catalogue)
-for module in (fused, crossings):
+for module in (fused_loops, crossings):
     for name, value in sorted(vars(module).items()):
         if isinstance(value, numba.core.registry.CPUDispatcher):
             print(module.__name__, name, len(value.signatures))
@@ -86,3 +101,110 @@ def test_each_compiled_function_has_one_specialisation():
     assert done.returncode == 0, done.stderr[-2000:]
     counts = dict(line.rsplit(" ", 1) for line in done.stdout.splitlines())
     assert len(counts) >= 10 and set(counts.values()) <= {"0", "1"}, counts
+
+
+LOOPS = """
+import numpy as np
+from numba import njit
+
+EXPORTS = {"spread": "void(f8[::1], f8, f8[:, ::1])"}
+
+
+@njit(cache=True)
+def _scaled(value, factor):
+    return np.sqrt(value) * factor + 1.0 / (value + 3.0)
+
+
+@njit(cache=True)
+def spread(values, factor, out):
+    for i in range(values.shape[0]):
+        out[i, 0] = _scaled(values[i], factor)
+        out[i, 1] = np.sin(values[i]) * np.exp(-values[i] * factor)
+"""
+
+LOAD = """
+import logging, sys
+import numpy as np
+sys.path.insert(0, sys.argv[1])
+logging.basicConfig(level=logging.INFO, format="%(levelname)s %(message)s")
+from pipeline.model.jit import compiled_loops
+loops = compiled_loops("aotme")
+values = np.linspace(0.0, 7.0, 1001)
+out = np.empty((1001, 2))
+loops.spread(values, 0.37, out)
+print(out.tobytes().hex(), getattr(loops, "__file__", ""), "numba" in sys.modules)
+"""
+
+
+def load(folder, **env):
+    """(bits of the loops' result, the file they came from, whether numba was imported, stderr)"""
+    done = subprocess.run([sys.executable, "-c", LOAD, str(folder)], capture_output=True, text=True,
+                          timeout=300, env={**os.environ, "XDG_CACHE_HOME": str(folder / "cache"), **env})
+    assert done.returncode == 0, done.stderr[-3000:]
+    bits, path, numba = done.stdout.split()
+    return bits, Path(path), numba == "True", done.stderr
+
+
+def numba_bits(folder):
+    """The result of the module's own functions (numba just in time), in this process."""
+    sys.path.insert(0, str(folder))
+    try:
+        import numpy as np
+        module = importlib.import_module("aotme")
+        out = np.empty((1001, 2))
+        module.spread(np.linspace(0.0, 7.0, 1001), 0.37, out)
+        return out.tobytes().hex()
+    finally:
+        sys.path.remove(str(folder))
+        sys.modules.pop("aotme", None)
+
+
+def test_loops_built_ahead_of_time_load_without_numba_and_are_rebuilt_when_damaged_or_changed(tmp_path):
+    (tmp_path / "aotme.py").write_text(textwrap.dedent(LOOPS))
+    expected = numba_bits(tmp_path)
+    bits, path, numba, err = load(tmp_path)  # builds it
+    assert bits == expected and path.parent == tmp_path / "__pycache__" and path.suffix == ".so"
+    assert "compiling the loops of aotme ahead of time" in err
+    bits, again, numba, err = load(tmp_path)
+    assert (bits, again, numba) == (expected, path, False) and "compiling" not in err
+    path.write_bytes(path.read_bytes()[:4096])  # damaged
+    bits, again, numba, err = load(tmp_path)
+    assert (bits, again) == (expected, path) and "is damaged" in err and "building it again" in err
+    (tmp_path / "aotme.py").write_text(textwrap.dedent(LOOPS).replace("+ 3.0", "+ 4.0"))
+    bits, changed, numba, err = load(tmp_path)
+    assert changed != path and bits != expected and "compiling the loops of aotme" in err
+    assert sorted(p.name for p in (tmp_path / "__pycache__").glob("aotme_*")) == [
+        changed.name, changed.name + ".sha256"]  # the old one gone
+
+
+def test_two_processes_at_once_build_once_and_an_unwritable_folder_uses_the_user_cache(tmp_path):
+    (tmp_path / "aotme.py").write_text(textwrap.dedent(LOOPS))
+    (tmp_path / "__pycache__").write_text("a file where the folder would be")  # cannot be written
+    env = {**os.environ, "XDG_CACHE_HOME": str(tmp_path / "cache")}
+    both = [subprocess.Popen([sys.executable, "-c", LOAD, str(tmp_path)], stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, text=True, env=env) for _ in range(2)]
+    outcomes = [process.communicate(timeout=300) for process in both]
+    assert [process.returncode for process in both] == [0, 0], outcomes
+    assert sum("compiling the loops of aotme" in err for _, err in outcomes) == 1
+    results = {out.split()[0] for out, _ in outcomes}
+    paths = {Path(out.split()[1]) for out, _ in outcomes}
+    assert results == {numba_bits(tmp_path)}
+    assert len(paths) == 1 and next(iter(paths)).parent == tmp_path / "cache" / "cdpr-studies"
+
+
+def test_without_a_c_compiler_the_loops_run_through_numba_with_one_warning(tmp_path):
+    (tmp_path / "aotme.py").write_text(textwrap.dedent(LOOPS))
+    bits, path, numba, err = load(tmp_path, CC=str(tmp_path / "no-such-compiler"))
+    assert bits == numba_bits(tmp_path) and path == tmp_path / "aotme.py" and numba
+    assert err.count("WARNING the compiled loops of aotme could not be built ahead of time") == 1
+    assert not list(tmp_path.rglob("aotme_*.so"))
+
+
+def test_the_fused_loops_compile_nothing_but_their_own_text():
+    """The extension's key is the text of pipeline/workspace/fused_loops.py: its compiled code
+    may use numpy and numba, nothing of another module that could change without it."""
+    tree = ast.parse(Path(fused_loops.__file__).read_text())
+    imported = {alias.name for node in ast.walk(tree) if isinstance(node, ast.Import) for alias in node.names}
+    imported |= {node.module for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)}
+    assert imported == {"__future__", "numpy", "numba"}
+    assert set(fused_loops.EXPORTS) == {"cpr_wwa", "statics"}

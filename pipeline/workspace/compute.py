@@ -295,7 +295,15 @@ def tabulate(problem: WorkspaceProblem, positions: np.ndarray, raw: dict,
 # The speeds hold for the paper's set of REFERENCE_SET velocities per pose (grid.n_vel = 6);
 # a pose's cost grows with its set. A job estimated above LONG_JOB_S is announced with a warning.
 WORKER_START_S = 0.4
-FUSED_START_S = 0.3  # numba's import and the compiled kernel loaded from its cache
+# The compiled kernels load in about 1 ms from the extension built ahead of time, but cost 0.3 s
+# where they run through numba (no C compiler: pipeline.model.jit), and the first job of an
+# installation that uses them builds the extension (about 5 s): a job whose numpy kernel would
+# take less than FUSED_START_S keeps it, so a small job never pays more than it could save.
+FUSED_START_S = 0.3
+# Fused chunks are computed several times faster than the parent classifies and writes them, so
+# workers pay only for long fused jobs: 405 000 poses took 1.23 s on two workers and 1.10 s in
+# one process, 10^6 poses 1.68 s and 1.92 s (2026-11-24, the extension loaded in each worker).
+FUSED_WORKERS_FROM_S = 1.4  # the fused kernel's time (cost model) from which workers are used
 POSES_PER_SECOND = {"pinv": 200_000, "feasible": 20_000, "fused": 500_000}
 REFERENCE_SET = 93
 LONG_JOB_S = 30.0
@@ -354,12 +362,12 @@ def fused_pays(configs) -> bool:
 def worth_workers(problem: WorkspaceProblem, n_points: int, n_jobs: int, backend: str) -> int:
     """``n_jobs``, or 1 when the cost model says local workers would not pay for their start
     (measured on 2 cores: 125 000 CPR-WWA poses took 1.13x the wall time and 1.44x the CPU on
-    two workers; 10^6 poses 0.7x the wall time). A worker of the fused kernel also loads numba
-    (FUSED_START_S). A Dask cluster is the user's explicit choice."""
+    two workers; 10^6 poses 0.7x the wall time); for the fused kernel, FUSED_WORKERS_FROM_S.
+    A Dask cluster is the user's explicit choice."""
     if backend == "dask" or n_jobs == 1:
         return n_jobs
     serial_s = estimated_seconds(problem, n_points)
-    if serial_s > 2 * (WORKER_START_S + (FUSED_START_S if problem.fused else 0.0)):
+    if serial_s > (FUSED_WORKERS_FROM_S if problem.fused else 2 * WORKER_START_S):
         return n_jobs
     log.debug("compute.n_jobs=%d: about %.2f s of kernel, too little for worker processes to pay "
               "for their start; running here", n_jobs, serial_s)
