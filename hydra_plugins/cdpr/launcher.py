@@ -32,7 +32,7 @@ from hydra.core.singleton import Singleton
 from hydra.core.utils import JobReturn, JobStatus, configure_log, filter_overrides, setup_globals
 from hydra.plugins.launcher import Launcher
 from hydra.types import HydraContext, TaskFunction
-from omegaconf import DictConfig, OmegaConf, open_dict
+from omegaconf import DictConfig, open_dict
 
 from hydra_plugins.cdpr.runner import run_job
 
@@ -115,14 +115,11 @@ class CdprLauncher(Launcher):
     def job_config(self, idx: int, overrides: Sequence[str]) -> Tuple[DictConfig, DictConfig]:
         """The config Hydra's loader composes for these overrides, with job id and number, and
         the task's config: the same without Hydra's node."""
-        from pipeline.app.preflight import Copies, override_dirname, parse, structural, without_hydra
+        from pipeline.app.preflight import Copies, applies_after_composing, derived, parse, structural, without_hydra
 
         parsed = parse(overrides)
-        plain = [o for o in parsed if not structural(o)]
-        derivable = not any(o.is_add() or o.is_delete() or o.is_force_add() or isinstance(o.value(), dict)
-                            for o in parsed)
         loader = self.hydra_context.config_loader
-        if derivable:
+        if all(applies_after_composing(o) for o in parsed):
             files = tuple(o.input_line for o in parsed if structural(o))
             if files not in self._composed:
                 # the command's own files: Hydra's sweep config is their composition (the fixed
@@ -131,14 +128,7 @@ class CdprLauncher(Launcher):
                 composed = (self.config if files == self._sweep_files()
                             else loader.load_sweep_config(self.config, list(files)))
                 self._composed[files] = Copies(composed), Copies(without_hydra(composed))
-            config, task = (copies() for copies in self._composed[files])
-            for override in plain:
-                for node in (config, task):
-                    OmegaConf.update(node, override.key_or_group, override.value(), merge=True)
-            task_overrides = [o for o in parsed if not o.is_hydra_override()]
-            config.hydra.overrides.task = [o.input_line for o in task_overrides]
-            config.hydra.job.override_dirname = override_dirname(
-                task_overrides, config.hydra.job.config.override_dirname)
+            config, task = derived(*(copies() for copies in self._composed[files]), parsed)
         else:
             config = loader.load_sweep_config(self.config, overrides)
             task = without_hydra(config)

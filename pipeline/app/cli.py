@@ -1,7 +1,11 @@
 """The Hydra application: ``python -m pipeline [-m] [key=value ...]`` (``pipeline/__main__.py``).
 
 Every job's config is validated before Hydra starts (``pipeline.app.preflight``): a bad key or value
-exits with status 2 and one line on stderr, and no output folder is created.
+exits with status 2 and one line on stderr, and no output folder is created. A command of run
+mode made of plain overrides then runs on the preflight's composition
+(``pipeline.app.preflight.hydra_run``, ``hydra_plugins.cdpr.runner.run``: the files, logs and
+output of Hydra's run, without its two compositions of the same files); any other command
+(``-m``, a flag such as ``--run`` or ``--config-dir``, ``+``/``~`` overrides) goes through Hydra.
 """
 
 from __future__ import annotations
@@ -13,7 +17,7 @@ from omegaconf import DictConfig
 
 from pipeline.app.config import register
 from pipeline.errors import ConfigError
-from pipeline.app.preflight import check
+from pipeline.app.preflight import Reuse, check, hydra_run
 from pipeline.app.resources import CONF_DIR
 
 register()
@@ -49,12 +53,19 @@ def cli() -> None:
     if "--help" in sys.argv[1:] or "-h" in sys.argv[1:]:  # the keys of this composition, with meanings
         _help([a for a in sys.argv[1:] if a not in ("--help", "-h")])
         return
+    reuse = Reuse(folders_after=False)  # the composition, kept for the job of run mode
     try:
-        PREPARED.update(check(sys.argv[1:]))
+        PREPARED.update(check(sys.argv[1:], reuse))
+        composed = hydra_run(sys.argv[1:], reuse)
     except ConfigError as exc:
         print(f"error: {exc}", file=sys.stderr)
         raise SystemExit(2) from None
-    main()
+    if composed is None:
+        main()
+    else:  # what Hydra's run would compose again twice (pipeline.app.preflight.hydra_run)
+        from hydra_plugins.cdpr.runner import run
+
+        run(*composed, main.__wrapped__)
 
 
 def _help(argv: list[str]) -> None:
