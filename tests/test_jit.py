@@ -16,6 +16,8 @@ import sys
 import textwrap
 from pathlib import Path
 
+import pytest
+
 from pipeline.workspace import fused_loops
 
 MODULE = """
@@ -192,12 +194,15 @@ def test_two_processes_at_once_build_once_and_an_unwritable_folder_uses_the_user
     assert len(paths) == 1 and next(iter(paths)).parent == tmp_path / "cache" / "cdpr-studies"
 
 
-def test_without_a_c_compiler_the_loops_run_through_numba_with_one_warning(tmp_path):
+@pytest.mark.parametrize("broken", [{"CC": "no-such-compiler"}, {"LDSHARED": "false"}])
+def test_without_a_c_compiler_or_a_linker_the_loops_run_through_numba_with_one_warning(tmp_path, broken):
+    """No C compiler (refused before numba compiles anything), or a link that fails (as a full
+    disk would): numba's own functions, the same bits, one warning, no extension left behind."""
     (tmp_path / "aotme.py").write_text(textwrap.dedent(LOOPS))
-    bits, path, numba, err = load(tmp_path, CC=str(tmp_path / "no-such-compiler"))
+    bits, path, numba, err = load(tmp_path, **broken)
     assert bits == numba_bits(tmp_path) and path == tmp_path / "aotme.py" and numba
     assert err.count("WARNING the compiled loops of aotme could not be built ahead of time") == 1
-    assert not list(tmp_path.rglob("aotme_*.so"))
+    assert not list(tmp_path.rglob("aotme_*.so*")) and not list(tmp_path.rglob(".aotme_*"))
 
 
 def test_the_fused_loops_compile_nothing_but_their_own_text():

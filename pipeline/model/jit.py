@@ -77,8 +77,11 @@ def compiled_loops(name: str) -> ModuleType:
     for folder in (origin.parent / "__pycache__", user_cache()):
         try:
             return _load_or_build(name, folder, stem, suffix)
-        except (OSError, ImportError, RuntimeError) as exc:  # unwritable, no compiler, no pycc
+        except OSError as exc:  # this folder cannot be written: the next one
             reasons.append(f"{folder}: {one_line(exc)}")
+        except Exception as exc:  # no compiler or pycc, a failed compile or link: not the folder's
+            reasons.append(f"{folder}: {one_line(exc)}")
+            break
     log.warning("the compiled loops of %s could not be built ahead of time (%s): numba compiles them "
                 "in this process instead (about 0.3 s more per process; a C compiler and setuptools "
                 "avoid it)", name, "; ".join(reasons))
