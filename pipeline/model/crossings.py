@@ -1,7 +1,9 @@
 """The compiled part of hyperplane shifting (``pipeline.model.capacity``): per pose, the
 candidate normals and the least crossing of h(n, s) with n . w, for every criterion family,
-over the required wrench set. One small problem per pose, in a loop compiled by numba (cached
-on disk after the first call, imported only by the ``feasible`` tension model).
+over the required wrench set. One small problem per pose, in a loop compiled by numba, ahead of
+time into an extension module (``pipeline.model.jit.compiled_loops``, with the signature of
+``EXPORTS``; numba's own function where none can be built), used only by the ``feasible``
+tension model.
 
 Per pose and family, with the earlier families' (relaxed) bounds [L_i, U_i] and this family's
 [lower_i + s c_i, upper_i - s c_i], the side of cable i that h(n, s) reads is
@@ -36,6 +38,11 @@ from numba import njit
 from pipeline.model.capacity import BIG, DEPENDENT_RTOL, PARALLEL_RTOL
 
 SETTLE_RTOL = 1e-12  # a crossing is found when h is within this share of n . w
+_A = "[:, :, ::1]"  # C-contiguous, three axes
+EXPORTS = {  # the one signature of the function capacity.shifted_margins calls
+    "least_margins": f"b1[::1](f8{_A}, f8{_A}, f8{_A}, f8{_A}, i8[:, ::1], i8[:, ::1], f8[:, :, :, ::1], "
+                     f"f8[:, :, :, :, ::1], i8[::1], b1[::1], f8, f8[:, ::1])",
+}
 
 
 @njit(cache=True)

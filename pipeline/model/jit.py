@@ -3,8 +3,9 @@
 
 - **ahead of time** (:func:`compiled_loops`): a loops module that declares ``EXPORTS`` (name ->
   signature) is compiled by ``numba.pycc`` into an extension module, once for each text of the
-  module, and kept in the ``__pycache__`` folder beside it (or the user's cache folder,
-  ``$XDG_CACHE_HOME/cdpr-studies``, where that one cannot be written). A process then loads its
+  module (and of the package's modules it imports constants from), and kept in the
+  ``__pycache__`` folder beside it (or the user's cache folder, ``$XDG_CACHE_HOME/cdpr-studies``,
+  where that one cannot be written). A process then loads its
   loops in about a millisecond without importing numba, whose import and the registries it
   loads with a cached function (``scipy.linalg`` among them) cost 0.3 s of CPU in every process
   (docs/performance.md). Building it takes about 10 s once and needs a C compiler; the first
@@ -36,6 +37,9 @@ import inspect
 import logging
 import os
 import pickle
+import re
+import subprocess
+import sys
 import tempfile
 import time
 import warnings
@@ -49,6 +53,7 @@ log = logging.getLogger(__name__)
 # Part of an extension's key with the module's text: a change in how extensions are built
 # builds them again.
 BUILD = b"numba.pycc, generic CPU, 1\n"
+BUILD_TIMEOUT_S = 600
 
 
 def call_compiled(function, *args):
@@ -71,7 +76,7 @@ def compiled_loops(name: str) -> ModuleType:
     time, loaded or built once a process; the module itself (numba's just-in-time functions),
     with a warning, where no extension can be built."""
     origin = Path(importlib.util.find_spec(name).origin)
-    stem = f"{origin.stem}_{hashlib.sha256(BUILD + origin.read_bytes()).hexdigest()[:16]}"
+    stem = f"{origin.stem}_{hashlib.sha256(BUILD + _compiled_text(origin, name)).hexdigest()[:16]}"
     suffix = importlib.machinery.EXTENSION_SUFFIXES[0]
     reasons = []
     for folder in (origin.parent / "__pycache__", user_cache()):
@@ -86,6 +91,17 @@ def compiled_loops(name: str) -> ModuleType:
                 "in this process instead (about 0.3 s more per process; a C compiler and setuptools "
                 "avoid it)", name, "; ".join(reasons))
     return importlib.import_module(name)
+
+
+def _compiled_text(origin: Path, name: str) -> bytes:
+    """What an extension is built from, its key: the loops module's text and that of each
+    module of its own package it imports names from (constants its compiled code reads)."""
+    text = origin.read_bytes()
+    package = name.split(".")[0].encode()
+    imported = re.findall(rb"^from (" + re.escape(package) + rb"(?:\.\w+)+) import", text,
+                          re.MULTILINE)
+    origins = (Path(importlib.util.find_spec(module.decode()).origin) for module in imported)
+    return b"".join([text, *(path.read_bytes() for path in origins)])
 
 
 def user_cache() -> Path:
@@ -127,20 +143,22 @@ def _load(stem: str, path: Path) -> ModuleType:
 
 def _build(name: str, stem: str, folder: Path, path: Path) -> None:
     """Compile ``name``'s EXPORTS into the extension ``path``, and remove the extensions of
-    the module's earlier texts."""
-    with warnings.catch_warnings():  # pycc is "pending deprecation" since numba 0.57
-        warnings.simplefilter("ignore")
-        from numba.pycc import CC
-    module = importlib.import_module(name)
+    the module's earlier texts. The compiler runs in a process of its own, whose numba cache is
+    empty: numba's cache of a helper would keep the value of a constant imported from another
+    module after that module changed (numba keys it by its own file), and this process does
+    not import numba."""
     start = time.perf_counter()
-    compiler = CC(stem, source_module=module)  # RuntimeError at once without a C compiler
     log.info("compiling the loops of %s ahead of time (once for this version of its text)", name)
     with tempfile.TemporaryDirectory(dir=folder, prefix=f".{stem}-") as scratch:
-        compiler.output_dir = scratch
-        for export, signature in module.EXPORTS.items():
-            compiler.export(export, signature)(getattr(module, export).py_func)
-        compiler.compile()
-        built = Path(scratch) / compiler.output_file
+        env = {**os.environ, "NUMBA_CACHE_DIR": str(Path(scratch) / "numba"),
+               "PYTHONPATH": os.pathsep.join(entry or os.getcwd() for entry in sys.path)}
+        done = subprocess.run([sys.executable, "-m", __name__, name, stem, scratch], env=env,
+                              capture_output=True, text=True, timeout=BUILD_TIMEOUT_S)
+        if done.returncode != 0:
+            errors = re.findall(r"^(?:\w+\.)*\w*(?:Error|Exception): .*$", done.stderr, re.MULTILINE)
+            raise RuntimeError(errors[-1] if errors
+                               else done.stderr.strip()[-500:] or f"exit {done.returncode}")
+        built = Path(scratch) / done.stdout.strip()
         digest = built.with_name(built.name + ".sha256")
         digest.write_text(hashlib.sha256(built.read_bytes()).hexdigest())
         os.replace(built, path)  # each file whole or absent: a reader checks one against the other
@@ -149,3 +167,22 @@ def _build(name: str, stem: str, folder: Path, path: Path) -> None:
         if not older.name.startswith(stem):
             older.unlink(missing_ok=True)
     log.info("compiled %s in %.1f s", path, time.perf_counter() - start)
+
+
+def _compile(name: str, stem: str, output_dir: str) -> None:
+    """The compiler's process (``python -m pipeline.model.jit NAME STEM DIR``): ``name``'s
+    EXPORTS into DIR/<the extension's file name>, which it prints."""
+    with warnings.catch_warnings():  # pycc is "pending deprecation" since numba 0.57
+        warnings.simplefilter("ignore")
+        from numba.pycc import CC
+    module = importlib.import_module(name)
+    compiler = CC(stem, source_module=module)  # RuntimeError at once without a C compiler
+    compiler.output_dir = output_dir
+    for export, signature in module.EXPORTS.items():
+        compiler.export(export, signature)(getattr(module, export).py_func)
+    compiler.compile()
+    print(compiler.output_file)
+
+
+if __name__ == "__main__":
+    _compile(*sys.argv[1:])
