@@ -35,11 +35,18 @@ def make_cfg():
 def job_imports(cwd, *args: str, modules=("pandas", "numba", "scipy")) -> str:
     """Run ``python -m pipeline *args`` in ``cwd`` in a process that reports at exit, on
     stderr, ``<module> imported: True|False`` for each of ``modules``; its output."""
-    report = "; ".join(f"print('{m} imported:', '{m}' in sys.modules, file=sys.stderr)" for m in modules)
-    script = ("import atexit, runpy, sys\n"
-              f"atexit.register(lambda: ({report.replace('; ', ', ')}))\n"
+    return job_at_exit(cwd, *args, report=", ".join(
+        f"print('{m} imported:', '{m}' in sys.modules, file=sys.stderr)" for m in modules))
+
+
+def job_at_exit(cwd, *args: str, report: str, status: int = 0) -> str:
+    """Run ``python -m pipeline *args`` in ``cwd`` in a process that evaluates ``report`` (an
+    expression, ``sys`` and ``gc`` imported) when it exits, after the command; its stdout and
+    stderr. The process must end with ``status``."""
+    script = ("import atexit, gc, runpy, sys\n"
+              f"atexit.register(lambda: ({report}))\n"
               f"sys.argv = ['pipeline', *{list(args)!r}]\n"
               "runpy.run_module('pipeline', run_name='__main__', alter_sys=True)\n")
     done = subprocess.run([sys.executable, "-c", script], cwd=cwd, capture_output=True, text=True)
-    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.returncode == status, done.stderr[-2000:]
     return done.stdout + done.stderr
