@@ -8,7 +8,7 @@
   where that one cannot be written). A process then loads its
   loops in about a millisecond without importing numba, whose import and the registries it
   loads with a cached function (``scipy.linalg`` among them) cost 0.3 s of CPU in every process
-  (docs/performance.md). Building it takes about 10 s once and needs a C compiler; the first
+  (docs/performance.md). Building it takes 8-17 s once and needs a C compiler; the first
   process that needs it builds it while the others wait (a lock), and writes it under a
   temporary name renamed when whole, with its digest beside it: an extension that does not
   match its digest (damaged) is built again, never loaded; where none can be built (no C compiler, no

@@ -297,7 +297,7 @@ def tabulate(problem: WorkspaceProblem, positions: np.ndarray, raw: dict,
 WORKER_START_S = 0.4
 # The compiled kernels load in about 1 ms from the extension built ahead of time, but cost 0.3 s
 # where they run through numba (no C compiler: pipeline.model.jit), and the first job of an
-# installation that uses them builds the extension (about 5 s): a job whose numpy kernel would
+# installation that uses them builds the extension (about 17 s): a job whose numpy kernel would
 # take less than FUSED_START_S keeps it, so a small job never pays more than it could save.
 FUSED_START_S = 0.3
 # Fused chunks are computed several times faster than the parent classifies and writes them, so
