@@ -21,9 +21,9 @@ def test_workers_only_when_the_kernel_outlasts_their_start(make_cfg, catalogue):
     orientations = build_problem(make_cfg("orientation.total.bound=0.1", "orientation.total.n=3"), catalogue)[0]
     assert len(orientations.orientations) == 27
     assert worth_workers(orientations, 10_000, 2, "loky") == 2  # 270 000 evaluations
-    fused = dataclasses.replace(problem, fused=True)  # FUSED_WORKERS_FROM_S = 1.4 s at 500 000 poses/s
-    assert worth_workers(fused, 650_000, 2, "loky") == 1
-    assert worth_workers(fused, 750_000, 2, "loky") == 2
+    fused = dataclasses.replace(problem, fused=True)  # FUSED_WORKERS_FROM_S = 1.5 s at 10^6 poses/s
+    assert worth_workers(fused, 1_400_000, 2, "loky") == 1
+    assert worth_workers(fused, 1_600_000, 2, "loky") == 2
 
 
 def test_chunks_on_two_workers_equal_one_process(make_cfg, catalogue, monkeypatch):

@@ -301,10 +301,11 @@ WORKER_START_S = 0.4
 # take less than FUSED_START_S keeps it, so a small job never pays more than it could save.
 FUSED_START_S = 0.3
 # Fused chunks are computed several times faster than the parent classifies and writes them, so
-# workers pay only for long fused jobs: 405 000 poses took 1.23 s on two workers and 1.10 s in
-# one process, 10^6 poses 1.68 s and 1.92 s (2026-11-24, the extension loaded in each worker).
-FUSED_WORKERS_FROM_S = 1.4  # the fused kernel's time (cost model) from which workers are used
-POSES_PER_SECOND = {"pinv": 200_000, "feasible": 20_000, "fused": 500_000}
+# workers pay only for long fused jobs: 10^6 poses took 1.44-1.49 s on two workers and 1.38-1.41 s
+# in one process at zero orientation (1.28-1.34 s and 1.10-1.13 s at 0.5 rad), 2.2 x 10^6 poses
+# 2.17 s and 2.60-2.66 s (2026-11-24, the inlined loops; one core runs them at 1.5-3 M poses/s).
+FUSED_WORKERS_FROM_S = 1.5  # the fused kernel's time (cost model) from which workers are used
+POSES_PER_SECOND = {"pinv": 200_000, "feasible": 20_000, "fused": 1_000_000}
 REFERENCE_SET = 93
 LONG_JOB_S = 30.0
 
