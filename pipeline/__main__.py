@@ -1,4 +1,5 @@
-"""``python -m pipeline [-m] [key=value ...]``: the Hydra application of ``pipeline.app.cli``.
+"""``python -m pipeline [-m] [key=value ...]`` (and the ``cdpr`` command): the Hydra application
+of ``pipeline.app.cli``.
 
 The process lives for one command, so Python's cyclic garbage collector is kept off what lives
 as long as the process: paused while the application is imported (modules, classes, grammars:
@@ -10,12 +11,18 @@ a 0.66 s job (docs/performance.md, "The garbage collector of a one-command proce
 
 import gc
 
-gc.disable()
-from pipeline.app.cli import cli  # noqa: E402 (imported with the collector paused)
 
-gc.freeze()
-gc.enable()
-try:
-    cli()
-finally:
+def main() -> None:
+    gc.disable()
+    from pipeline.app.cli import cli  # imported with the collector paused
+
     gc.freeze()
+    gc.enable()
+    try:
+        cli()
+    finally:
+        gc.freeze()
+
+
+if __name__ == "__main__":
+    main()
