@@ -42,8 +42,6 @@ import numpy as np
 
 RELAX = 1e-9  # extra relaxation (in units of each family's scale) of earlier families' bounds
 MAX_NORMALS = 2000  # 2 C(m, q - 1) candidate normals per pose beyond which the LP is cheaper
-DEPENDENT_RTOL = 1e-9  # volume / product of lengths below it: a normal's vectors are dependent
-PARALLEL_RTOL = 1e-10  # |n . S_i| below this share of |S_i|: column i lies in the facet
 BIG = 1e150  # an infinite side: larger than any wrench or bound, and no overflow in a sum
 
 
@@ -93,5 +91,5 @@ def shifted_margins(structure: np.ndarray, wrenches: np.ndarray, families) -> tu
     least_margins = compiled_loops("pipeline.model.crossings").least_margins
     unsettled = call_compiled(least_margins, np.ascontiguousarray(structure), spread, null,
                               np.ascontiguousarray(wrenches), subsets, others, fixed, posed, where,
-                              varies, RELAX, found)
+                              varies, RELAX, BIG, found)
     return {family.name: found[f] for f, family in enumerate(families)}, unsettled

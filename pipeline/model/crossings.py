@@ -35,29 +35,30 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from pipeline.model.capacity import BIG, DEPENDENT_RTOL, PARALLEL_RTOL
-
 SETTLE_RTOL = 1e-12  # a crossing is found when h is within this share of n . w
+DEPENDENT_RTOL = 1e-9  # volume / product of lengths below it: a normal's vectors are dependent
+PARALLEL_RTOL = 1e-10  # |n . S_i| below this share of |S_i|: column i lies in the facet
 _A = "[:, :, ::1]"  # C-contiguous, three axes
 EXPORTS = {  # the one signature of the function capacity.shifted_margins calls
     "least_margins": f"b1[::1](f8{_A}, f8{_A}, f8{_A}, f8{_A}, i8[:, ::1], i8[:, ::1], f8[:, :, :, ::1], "
-                     f"f8[:, :, :, :, ::1], i8[::1], b1[::1], f8, f8[:, ::1])",
+                     f"f8[:, :, :, :, ::1], i8[::1], b1[::1], f8, f8, f8[:, ::1])",
 }
 
 
 @njit(cache=True)
 def least_margins(structure, spread, null, wrenches, subsets, others, fixed, posed, where, varies,
-                  relax_rtol, margins):
+                  relax_rtol, big, margins):
     """Fill ``margins`` (F, n) with each family's nested capacity margin, least over the K
     wrenches, and return (n,) poses whose search did not settle. ``structure`` (n, q, m) of
     full row rank; ``spread`` (n, q, m) (S^+)^T and ``null`` (n, m, d) an orthonormal basis of
     the null space of S, or both (n, 0, 0) (see :func:`_normals`); ``wrenches`` (n, K, q);
     ``subsets`` (C, q - 1) the column subsets whose normals are the candidates (with both
-    signs), ``others`` (C, d + 1) the other columns; the families' (lower, upper, scale), +-BIG
+    signs), ``others`` (C, d + 1) the other columns; the families' (lower, upper, scale), +-``big``
     for no side, in ``fixed`` (3, F1, K, m) for those that are the same at every pose and in
     ``posed`` (3, F2, n, K, m) for the others, family f at ``where[f]`` in fixed when >= 0, at
     -1 - where[f] in posed otherwise; ``varies`` (F,): whether a family's bounds change with the
-    wrench; ``relax_rtol``: extra relaxation of earlier bounds."""
+    wrench; ``relax_rtol``: extra relaxation of earlier bounds; ``big``: the caller's infinite side
+    (``capacity.BIG``), also returned, negated, by a search that did not settle."""
     n, q, m = structure.shape
     wrench_count = wrenches.shape[1]
     count = subsets.shape[0]
@@ -78,8 +79,8 @@ def least_margins(structure, spread, null, wrenches, subsets, others, fixed, pos
         for c in range(count):
             for i in range(m):
                 positive[i, c], negative[i, c] = max(a[c, i], 0.0), max(-a[c, i], 0.0)
-        earlier_lo[:] = -BIG
-        earlier_up[:] = BIG
+        earlier_lo[:] = -big
+        earlier_up[:] = big
         agree = True  # the earlier bounds are the same for every wrench
         for f in range(families):
             if where[f] >= 0:
@@ -94,7 +95,7 @@ def least_margins(structure, spread, null, wrenches, subsets, others, fixed, pos
                         high[c], low[c] = max(high[c], target[k, c]), min(low[c], target[k, c])
                 least, settled, hint[f] = _crossing(
                     a, positive, negative, high, low, earlier_lo[0], earlier_up[0], bounds, np.int64(0), 1.0,
-                    hint[f], along, against)
+                    hint[f], along, against, big)
                 unsettled[p] |= not settled
             else:  # one h per wrench, each search capped by the running least
                 least, first = 1.0, limiting[f]
@@ -102,7 +103,7 @@ def least_margins(structure, spread, null, wrenches, subsets, others, fixed, pos
                     k = first + r if first + r < wrench_count else first + r - wrench_count
                     value, settled, hint[f] = _crossing(
                         a, positive, negative, target[k], target[k], earlier_lo[k], earlier_up[k],
-                        bounds, k, least, hint[f], along, against)
+                        bounds, k, least, hint[f], along, against, big)
                     unsettled[p] |= not settled
                     if value < least:
                         least, limiting[f] = value, k
@@ -117,7 +118,7 @@ def least_margins(structure, spread, null, wrenches, subsets, others, fixed, pos
                 for k in range(wrench_count):
                     own[k], settled, _ = _crossing(
                         a, positive, negative, target[k], target[k], earlier_lo[k], earlier_up[k],
-                        bounds, k, 0.0, hint[f], along, against)
+                        bounds, k, 0.0, hint[f], along, against, big)
                     unsettled[p] |= not settled
             for k in range(wrench_count):
                 relax = own[k] - relax_rtol
@@ -275,7 +276,7 @@ def _take(x, i, amount, j, size):
 
 @njit(cache=True)
 def _crossing(a, positive, negative, high, low, earlier_lo, earlier_up, bounds, k, cap, hint, along,
-              against):
+              against, big):
     """(least s <= cap, settled, the normal that set it) at which h(n, s) >= n . w holds for
     every candidate: n_c against ``high[c]``, -n_c (index C + c) against ``-low[c]``; the
     family's bounds are those of wrench k. The ``hint`` normal is followed first, then every
@@ -292,7 +293,7 @@ def _crossing(a, positive, negative, high, low, earlier_lo, earlier_up, bounds, 
     goal = high[row] if hint < count else -low[row]
     best, settled = _descend(a[row], sign, goal, earlier_lo, earlier_up, lo, up, c, best)
     if not settled:
-        return -BIG, False, hint
+        return -big, False, hint
     limiting = hint
     _heights(best, positive, negative, earlier_lo, earlier_up, lo, up, c, along, against)
     for j in range(count):
@@ -301,7 +302,7 @@ def _crossing(a, positive, negative, high, low, earlier_lo, earlier_up, bounds, 
                 continue  # also at any smaller s: h does not increase with s
             s, settled = _descend(a[j], sign, goal, earlier_lo, earlier_up, lo, up, c, best)
             if not settled:
-                return -BIG, False, index
+                return -big, False, index
             if s < best:
                 best, limiting = s, index
     return best, True, limiting

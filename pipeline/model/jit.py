@@ -3,9 +3,8 @@
 
 - **ahead of time** (:func:`compiled_loops`): a loops module that declares ``EXPORTS`` (name ->
   signature) is compiled by ``numba.pycc`` into an extension module, once for each text of the
-  module (and of the package's modules it imports constants from), and kept in the
-  ``__pycache__`` folder beside it (or the user's cache folder, ``$XDG_CACHE_HOME/cdpr-studies``,
-  where that one cannot be written). A process then loads its
+  module, and kept in the ``__pycache__`` folder beside it (or the user's cache folder,
+  ``$XDG_CACHE_HOME/cdpr-studies``, where that one cannot be written). A process then loads its
   loops in about a millisecond without importing numba, whose import and the registries it
   loads with a cached function (``scipy.linalg`` among them) cost 0.3 s of CPU in every process
   (docs/performance.md). Building it takes 8-17 s once and needs a C compiler; the first
@@ -19,6 +18,12 @@
   leaves a truncated file, and numba then fails on every later call with a pickle error instead
   of compiling again. So a call that meets an unreadable cache removes the module's cache files,
   says so, and compiles once more: the result is the same, only the first call is slower.
+
+Either way the compiled code must depend on the loops module's own text only (numpy, numba,
+its own constants; any other value is an argument): that text is the extension's key, and
+numba keys its cache of the just-in-time functions by the module's file alone, so a constant
+imported from another module would be kept, stale, after that module changed
+(``tests/test_jit.py`` checks the imports).
 
 Both ways compile the same functions, with numba's default options (no fast-math, so no fused
 multiply-add), for the generic CPU of the platform (ahead of time) or this one (just in time);
@@ -76,7 +81,7 @@ def compiled_loops(name: str) -> ModuleType:
     time, loaded or built once a process; the module itself (numba's just-in-time functions),
     with a warning, where no extension can be built."""
     origin = Path(importlib.util.find_spec(name).origin)
-    stem = f"{origin.stem}_{hashlib.sha256(BUILD + _compiled_text(origin, name)).hexdigest()[:16]}"
+    stem = f"{origin.stem}_{hashlib.sha256(BUILD + origin.read_bytes()).hexdigest()[:16]}"
     suffix = importlib.machinery.EXTENSION_SUFFIXES[0]
     reasons = []
     for folder in (origin.parent / "__pycache__", user_cache()):
@@ -91,17 +96,6 @@ def compiled_loops(name: str) -> ModuleType:
                 "in this process instead (about 0.3 s more per process; a C compiler and setuptools "
                 "avoid it)", name, "; ".join(reasons))
     return importlib.import_module(name)
-
-
-def _compiled_text(origin: Path, name: str) -> bytes:
-    """What an extension is built from, its key: the loops module's text and that of each
-    module of its own package it imports names from (constants its compiled code reads)."""
-    text = origin.read_bytes()
-    package = name.split(".")[0].encode()
-    imported = re.findall(rb"^from (" + re.escape(package) + rb"(?:\.\w+)+) import", text,
-                          re.MULTILINE)
-    origins = (Path(importlib.util.find_spec(module.decode()).origin) for module in imported)
-    return b"".join([text, *(path.read_bytes() for path in origins)])
 
 
 def user_cache() -> Path:
@@ -144,9 +138,8 @@ def _load(stem: str, path: Path) -> ModuleType:
 def _build(name: str, stem: str, folder: Path, path: Path) -> None:
     """Compile ``name``'s EXPORTS into the extension ``path``, and remove the extensions of
     the module's earlier texts. The compiler runs in a process of its own, whose numba cache is
-    empty: numba's cache of a helper would keep the value of a constant imported from another
-    module after that module changed (numba keys it by its own file), and this process does
-    not import numba."""
+    empty (the extension is compiled from the text it is keyed by, not from numba's cache,
+    keyed by the file's time and size), and this process does not import numba."""
     start = time.perf_counter()
     log.info("compiling the loops of %s ahead of time (once for this version of its text)", name)
     with tempfile.TemporaryDirectory(dir=folder, prefix=f".{stem}-") as scratch:
