@@ -18,7 +18,7 @@ from urllib.parse import quote
 import pandas as pd
 
 from pipeline.analyses.choice import verdict
-from pipeline.analyses.evidence import POINTS, scores
+from pipeline.analyses.evidence import POINTS, scores, sensitivity
 from pipeline.app.readings import describe_reading
 from pipeline.analyses.figures import caption, label
 from pipeline.analyses.optimise import OBJECTIVES
@@ -237,23 +237,28 @@ def _evidence(studies_dir: Path) -> list[str]:
             "differ from the defaults). ✓ the model agrees with the paper, ✗ it does not; a count "
             "that does not agree says how many grid points it is off. Score: facts matched, then "
             "the grid points off on the others (fewer is better); docs/model.md sections 4 and 5 "
-            "give the reasons for the defaults.", ""]
+            "give the reasons for the defaults. *Read the other way*: the best reading were that "
+            "fact's verdict inverted for every reading (its grid points left out); where it "
+            "names another reading, the best score rests on that fact.", ""]
     for name, paper in (("evidence_cpr8", "CPR-8 (Filipovic & Kevac 2018)"),
                         ("evidence_irpm", "IRPM (Hamed & Zohoor)")):
         table = pd.read_parquet(studies_dir / name / "evidence.parquet")
         score = scores(table)
+        best_other_way = sensitivity(table)
         readings = [*score.loc[score["default"], "reading"], *score.loc[~score["default"], "reading"]]
         rows += [f"### {paper}", "",
-                 "| fact | source | " + " | ".join(md(r) for r in readings) + " |",
-                 "| --- | --- |" + " --- |" * len(readings)]
+                 "| fact | source | read the other way | " + " | ".join(md(r) for r in readings) + " |",
+                 "| --- | --- | --- |" + " --- |" * len(readings)]
         for (fact, source, statement), part in table.groupby(["fact", "source", "statement"], sort=False):
             cells = part.set_index("reading").loc[readings]
-            rows.append(f"| {md(statement)} | {md(source)} | " + " | ".join(
+            other = best_other_way[fact]
+            other = "same best" if other == score["reading"].iloc[0] else f"best: {other}"
+            rows.append(f"| {md(statement)} | {md(source)} | {md(other)} | " + " | ".join(
                 md(("✓ " if c.matches else "✗ ") + c.value
                    + (f", {c.distance:.0f} off" if not c.matches and c.unit == POINTS else ""))
                 for c in cells.itertuples()) + " |")
         by = score.set_index("reading").loc[readings]
-        rows += ["| **score** | | " + " | ".join(
+        rows += ["| **score** | | | " + " | ".join(
             f"**{r.matched} of {r.facts}**, {r.points:g} points" for r in by.itertuples()) + " |", ""]
         best = score.iloc[0]
         rows += [f"Best joint score: {md(best['reading'])} ({best['matched']} of {best['facts']} "

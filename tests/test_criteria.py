@@ -26,7 +26,7 @@ def test_voltage_and_acceleration_margins_equal_literal_enumeration(make_cfg, ca
     act = problem.limits
     # every (velocity k_v, acceleration k_a) combination, eq. (21)
     thdd = dyn.shaft_accel_from_velocity[:, :, :, None] + dyn.shaft_accel_from_acceleration[:, :, None, :]
-    u = act.G_v * thdd + act.L_v * dyn.shaft_speed[:, :, :, None] + act.S_v * dyn.shaft_torque[:, :, None, :]
+    u = act.G_v * thdd + act.L_v * dyn.shaft_speed[:, :, :, None] - act.S_v * dyn.shaft_torque[:, :, None, :]
     u_margin = 1 - np.abs(u).max(axis=(1, 2, 3)) / act.voltage_limit
     a_margin = 1 - np.abs(thdd).max(axis=(1, 2, 3)) / act.accel_limit
     np.testing.assert_allclose(voltage(dyn, act), u_margin, rtol=0, atol=1e-12)

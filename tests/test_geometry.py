@@ -71,8 +71,8 @@ def test_analytic_jacobian_matches_finite_differences(orientation):
 
 
 def test_cpr8_jacobian_is_rank_5_at_zero_orientation_and_6_when_rotated():
-    """Carrier top face is a 0.07 scale copy of the frame top: the four upper cables meet in one
-    point, the four lower ones in the point h_o below it, so J loses rank (issue 2)."""
+    """docs/model.md section 1: J loses one rank wherever the carrier is level (psi = theta = 0),
+    at every yaw; tilted it has full rank."""
     positions = ROBOT.box_lo + RNG.random((50, 3)) * (ROBOT.box_hi - ROBOT.box_lo)
     sigma0 = np.linalg.svd(_dyn(positions, (0, 0, 0)).jacobian, compute_uv=False)
     sigma1 = np.linalg.svd(_dyn(positions, (0.5, 0.5, 0.5)).jacobian, compute_uv=False)
@@ -80,3 +80,58 @@ def test_cpr8_jacobian_is_rank_5_at_zero_orientation_and_6_when_rotated():
     assert (sigma1[:, 5] / sigma1[:, 0]).min() > 1e-4
     assert (_dyn(positions, (0, 0, 0)).jacobian_rank == 5).all()
     assert (_dyn(positions, (0.5, 0.5, 0.5)).jacobian_rank == 6).all()
+
+
+def vertical_screw(robot, position, phi):
+    """docs/model.md section 1: with psi = theta = 0 every lower cable is its upper partner moved
+    down by h_o, so a rotation about a vertical axis through Q with a vertical speed keeps both
+    of a pair at constant length when it keeps the upper one. For the four upper cables
+    (anchors a_i at z = 0, attachments p_i) that asks cross(p_i - Q, p_i - a_i) = c for all
+    four, a linear system in (Q_x, Q_y, c). Returns p-dot (unit yaw rate) and the system's
+    residual; the residual is zero when the four equations are dependent."""
+    rot = rotation_matrix(0.0, 0.0, phi)
+    upper = robot.anchors[:, 2] == 0.0
+    points = (position + robot.attachments[upper] @ rot.T)[:, :2]
+    arms = points - robot.anchors[upper, :2]
+    cross = lambda u, v: u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
+    # cross(p - Q, arm) = cross(p, arm) - cross(Q, arm) = c  ->  Q_x arm_y - Q_y arm_x + c = cross(p, arm)
+    system = np.column_stack([arms[:, 1], -arms[:, 0], np.ones(4)])
+    (qx, qy, c), residual, *_ = np.linalg.lstsq(system, cross(points, arms), rcond=None)
+    drop = position[2] + robot.attachments[upper, 2][0]  # (p_i - a_i)_z, the same for all four
+    velocity = np.array([-(position[1] - qy), position[0] - qx, -c / drop])
+    return np.concatenate([velocity, [0.0, 0.0, 1.0]]), float(np.sum(residual))
+
+
+@pytest.mark.parametrize("phi", [0.0, 0.5, 1.2, -2.0])
+def test_a_level_carrier_has_a_vertical_screw_in_the_null_space_at_every_yaw(phi):
+    """The carrier's top face has the frame's aspect ratio (l s = d w: 0.224 x 2.2 = 0.154 x 3.2),
+    which makes the four upper equations dependent at every yaw (their alternating sum is
+    2 cos(phi) (s l / 2 - d w / 2) = 0), so the screw exists and J has rank 5."""
+    positions = ROBOT.box_lo + RNG.random((30, 3)) * (ROBOT.box_hi - ROBOT.box_lo)
+    jac = _dyn(positions, (0.0, 0.0, phi)).jacobian
+    for position, rows in zip(positions, jac):
+        twist, residual = vertical_screw(ROBOT, position, phi)
+        assert residual < 1e-20
+        assert np.abs(rows @ twist).max() < 1e-12 * np.abs(rows).max() * np.abs(twist).max()
+    sigma = np.linalg.svd(jac, compute_uv=False)
+    assert (sigma[:, 5] / sigma[:, 0]).max() < 1e-12
+    assert (_dyn(positions, (0.0, 0.0, phi)).jacobian_rank == 5).all()
+
+
+def test_another_aspect_ratio_has_full_rank_except_at_a_quarter_turn():
+    """A carrier 20 % longer (l s != d w): the alternating sum 2 cos(phi) (s l / 2 - d w / 2)
+    vanishes only at phi = +-90 deg, so level J has full rank at phi = 0 and 0.5 rad (the screw's
+    equations are inconsistent) and rank 5 at a quarter turn."""
+    longer = cpr8(3.2, 2.2, 2.2, 0.224 * 1.2, 0.154, 0.140)
+    positions = longer.box_lo + RNG.random((30, 3)) * (longer.box_hi - longer.box_lo)
+    motion = MotionSpec(np.zeros((1, 3)), np.zeros((1, 3)), Load(2.0, 9.81), np.full(8, 0.08))
+    for phi, rank in ((0.0, 6), (0.5, 6), (np.pi / 2, 5)):
+        dyn = PoseDynamics(longer, positions, (0.0, 0.0, phi), motion)
+        sigma = np.linalg.svd(dyn.jacobian, compute_uv=False)
+        ratio = sigma[:, 5] / sigma[:, 0]
+        residual = vertical_screw(longer, positions[0], phi)[1]
+        if rank == 5:
+            assert (ratio < 1e-12).all() and residual < 1e-20
+        else:
+            assert (ratio > 1e-6).all() and residual > 1e-8
+        assert (dyn.jacobian_rank == rank).all()

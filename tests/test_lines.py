@@ -52,18 +52,21 @@ def test_actuator_1_zero_orientation_line_O_F_within_all_limits(lines, reading):
 
 def test_actuator_1_at_half_a_radian_violates_torque_not_speed_fig_6b(lines):
     """Fig. 6b: torque violated on some cables, speed and voltage within limits. With the full
-    pseudo-inverse (docs/model.md) torque fails on cables 1, 3 and 8 and speed holds; the
-    voltage of cable 1 exceeds 48 V by 4.6 % at cruise speed, where the paper shows it within
-    the limit (documented disagreement). The translational reading shows no violation at all."""
+    pseudo-inverse (docs/model.md) torque fails on cables 1, 3 and 8 and speed and voltage hold
+    (peak 0.977 x 48 V, cable 5): cable 1 pays out at cruise under 1.7 x its torque limit, the
+    braking quadrant, where the load lowers the voltage below the back-EMF. The translational
+    reading shows no violation at all."""
     samples, _, summary = lines("actuator=1", "model.pinv_columns=full", *ROT)
     first = line_of(samples)
     over = [c for c in range(1, 9) if (first[f"torque_{c}"].abs() > summary["limit_torque"]).any()]
     assert over == [1, 3, 8]
     assert first["margin_torque"].min() == pytest.approx(-0.705, abs=0.002)
     assert (first["margin_speed"] >= 0).all()
-    assert first["margin_voltage"].min() == pytest.approx(-0.046, abs=0.002)
+    assert first["margin_voltage"].min() == pytest.approx(0.023, abs=0.002)
     worst = first[[f"voltage_{c}" for c in range(1, 9)]].abs().max().idxmax()
-    assert worst == "voltage_1"
+    assert worst == "voltage_5"
+    cruise = first[(first["theta_dot_1"] > 16) & (first["torque_1"] > summary["limit_torque"])]
+    assert len(cruise) > 10 and (cruise["voltage_1"] < cruise["voltage_5"].abs()).all()
     translational, _, _ = lines("actuator=1", "model.pinv_columns=translational", *ROT)
     assert (line_of(translational).filter(like="margin_") >= 0).all().all()
 
@@ -86,10 +89,10 @@ def test_power_balance_where_the_wrench_is_reachable(lines):
 
 
 AGREEMENT = {  # (reading, orientation) -> % of the 216 grid points where lines and grid agree, acts 1-5
-    ("translational", "zero"): [100.0, 98.15, 98.15, 99.07, 100.0],
+    ("translational", "zero"): [100.0, 98.15, 98.15, 100.0, 100.0],
     ("translational", "rot05"): [99.54, 100.0, 99.07, 98.61, 100.0],
     ("full", "zero"): [100.0, 94.44, 98.15, 99.07, 100.0],
-    ("full", "rot05"): [97.69, 97.22, 94.91, 74.54, 100.0],
+    ("full", "rot05"): [97.69, 97.22, 94.91, 81.02, 100.0],
 }
 
 

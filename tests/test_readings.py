@@ -12,8 +12,8 @@ from pipeline.workspace.compute import compute_workspace
 
 ROTATED = ("orientation.psi=0.5", "orientation.theta=0.5", "orientation.phi=0.5")
 READINGS = {
-    "default": ((), [216, 208, 184, 184, 0], [182, 120, 30, 9, 0]),
-    "grid_centred": (("grid.spacing=centred",), [216, 216, 208, 184, 0], [190, 131, 30, 3, 0]),
+    "default": ((), [216, 208, 184, 184, 0], [182, 120, 30, 10, 0]),
+    "grid_centred": (("grid.spacing=centred",), [216, 216, 208, 184, 0], [190, 131, 30, 4, 0]),
     "lower_anchors_at_floor": (("robot.lower_anchor_drop=2.2",), [208, 80, 8, 0, 0], [216, 216, 202, 158, 0]),
 }
 
@@ -30,8 +30,10 @@ def test_reading_counts(make_cfg, catalogue, reading):
 
 
 @pytest.mark.parametrize("overrides,paper,newton", [
-    (("motion.t_dec=0.91", "model.pinv_columns=translational"), ([216, 204, 184, 184, 9], [207, 191, 183, 180, 8]),
+    (("motion.t_dec=0.91", "model.pinv_columns=translational"), ([216, 204, 184, 184, 9], [207, 191, 183, 182, 8]),
      ([216, 208, 184, 184, 14], [207, 193, 183, 183, 16])),
+    (("motion.t_dec=0.91",), ([216, 192, 184, 178, 0], [179, 109, 16, 1, 0]),
+     ([216, 204, 184, 181, 0], [180, 117, 25, 3, 0])),
     (("model.acceleration_set=colon", "model.pinv_columns=translational"),
      ([216, 208, 184, 184, 28], [207, 193, 183, 183, 26]),
      ([216, 208, 184, 184, 34], [208, 195, 183, 183, 34])),
@@ -40,7 +42,7 @@ def test_sign_of_the_inertial_term_matters_only_for_an_asymmetric_acceleration_s
         make_cfg, catalogue, overrides, paper, newton):
     """Eq. (31) as printed flips a against Newton's law with z up; the default box is symmetric
     (t_acc = t_dec), so only a braking time of its own or the colon set tells them apart
-    (forces only, the reading of docs/model.md's table)."""
+    (docs/model.md's table: forces only, and all six columns with the braking time)."""
     for inertia, expected in (("paper", paper), ("newton", newton)):
         for orientation, counts in zip(((), ROTATED), expected):
             got = [compute_workspace(make_cfg(f"actuator={a}", f"model.inertia={inertia}", *overrides,

@@ -84,10 +84,11 @@ def test_report_compares_paper_and_ours_and_carries_the_figures(studies, tmp_pat
     assert "| full, zero orientation | 100.00 | 94.44 |" in text
     assert "| 0.2 | 183.2 | 64.8 |" in text
     assert "| translational, zero orientation | 66.7 (216 → 144) |" in text
-    assert "| fact | source | default | jdot=true |" in text  # the evidence, default first
-    assert "| a \\| claim | Table 2 | ✓ 216 of 216 | ✗ 212 of 216, 4 off |" in text
-    assert "| a \\| claim | Fig. 13 | ✓ 216 of 216 | ✗ 212 of 216 |" in text  # pairs: no points off
-    assert "| **score** | | **1 of 1**, 0 points | **0 of 1**, 4 points |" in text
+    assert "| fact | source | read the other way | default | jdot=true |" in text  # default first
+    # one fact: read the other way, the other reading matches it and wins
+    assert "| a \\| claim | Table 2 | best: jdot=true | ✓ 216 of 216 | ✗ 212 of 216, 4 off |" in text
+    assert "| a \\| claim | Fig. 13 | best: jdot=true | ✓ 216 of 216 | ✗ 212 of 216 |" in text  # pairs: no points off
+    assert "| **score** | | | **1 of 1**, 0 points | **0 of 1**, 4 points |" in text
     assert "Best joint score: default (1 of 1 facts, 0 grid points off)." in text
     assert "![fig9](figures/actuator_choice/fig9.png)" in text
     assert (tmp_path / "report" / "figures" / "actuator_choice" / "fig9.png").read_bytes() == (

@@ -19,8 +19,9 @@ RPM_TO_RAD_S = np.pi / 30.0  # the paper's 1/9.5493 in eq. (30)
 class ActuatorModel:
     """One catalogue actuator in SI units, seen behind the gearbox (output shaft).
 
-    Model constants of eq. (22): ``G_v`` (V s^2/rad), ``L_v`` (V s/rad), ``S_v`` (V/(N m)), with
-    u = G_v * theta_ddot + L_v * theta_dot + S_v * M (eq. 21). Limits: ``speed_limit`` (rad/s,
+    Model constants of eq. (22): ``G_v`` (V s^2/rad), ``L_v`` (V s/rad), ``S_v`` (V/(N m)), all
+    positive, with u = G_v * theta_ddot + L_v * theta_dot - S_v * M (eq. 21 with the physical
+    sign of the load term, :attr:`load_gain`; M = R t the cable's load torque). Limits: ``speed_limit`` (rad/s,
     eq. 30), ``torque_limit`` (N m, eq. 32), ``accel_limit`` (rad/s^2, eq. 33), ``voltage_limit``
     (V, eq. 34). ``winch_radius`` R_i (m) of eq. (18).
     """
@@ -36,6 +37,17 @@ class ActuatorModel:
     accel_limit: float
     voltage_limit: float
     winch_radius: float
+
+    @property
+    def load_gain(self) -> float:
+        """Volts per N m of the cable's load torque M = R t (eq. 20) in eq. (21): -S_v.
+
+        theta > 0 pays the cable out (eq. 18), so a pulling cable turns the drum forwards and the
+        motor must hold it back: the drum's torque balance J_r theta_ddot = C_M i - B_C theta_dot + M
+        and the armature's u = R_r i + C_E theta_dot give u = G_v theta_ddot + L_v theta_dot - S_v M
+        (eq. 22's constants). Paying out under tension is the braking quadrant (u below the
+        back-EMF), hoisting the motoring one (docs/model.md section 2)."""
+        return -self.S_v
 
 
 def actuator_model(

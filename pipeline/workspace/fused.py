@@ -98,7 +98,7 @@ def _cpr_wwa_margins(problem, positions: np.ndarray, orientation):
                   rows, np.ascontiguousarray(spec.velocity_extremes, dtype=float), centre, half, loads,
                   float(spec.rank_rtol), np.array([act.speed_limit, act.torque_limit, act.accel_limit,
                                                    act.voltage_limit], dtype=float),
-                  np.array([act.G_v, act.L_v, act.S_v], dtype=float), t_max,
+                  np.array([act.G_v, act.L_v, act.load_gain], dtype=float), t_max,
                   l_max, out, rank, unsettled)
     result = {f"margin_{name}": out[:, CRITERIA.index(name)] for name in problem.criteria}
     result["jacobian_rank"] = rank

@@ -69,7 +69,7 @@ def _cpr_wwa(positions, anchors, arms, rate_axes, radius, rows, extremes, centre
     inverse_radius = 1.0 / radius
     torque = np.empty((m, 4))  # C (3 columns) and d of M = C a + d, per cable
     speed_limit, torque_limit, accel_limit, voltage_limit = limits[0], limits[1], limits[2], limits[3]
-    g_v, l_v, s_v = gains[0], gains[1], gains[2]
+    g_v, l_v, load_gain = gains[0], gains[1], gains[2]  # load_gain = -S_v (ActuatorModel.load_gain)
     for p in range(n):
         for i in range(m):  # eqs. (1)-(19): J row i = [u_i, ((R b_i) x u_i) . E] / R_i
             lengths[i], ux, uy, uz = _cable(positions, p, anchors, arms, i, True)
@@ -113,13 +113,13 @@ def _cpr_wwa(positions, anchors, arms, rate_axes, radius, rows, extremes, centre
             worst_speed = max(worst_speed, max(high, -low))
             middle = spread = 0.0  # eq. (33): J a over the acceleration box
             t_middle, t_spread = torque[i, 3], 0.0  # eq. (32): C a + d
-            v_middle, v_spread = s_v * torque[i, 3], 0.0  # eq. (34): (G_v J + S_v C) a + S_v d
+            v_middle, v_spread = load_gain * torque[i, 3], 0.0  # eq. (34): (G_v J - S_v C) a - S_v d
             for k in range(3):
                 middle += jac[i, k] * centre[k]
                 spread += abs(jac[i, k]) * half[k]
                 t_middle += torque[i, k] * centre[k]
                 t_spread += abs(torque[i, k]) * half[k]
-                coefficient = g_v * jac[i, k] + s_v * torque[i, k]
+                coefficient = g_v * jac[i, k] + load_gain * torque[i, k]
                 v_middle += coefficient * centre[k]
                 v_spread += abs(coefficient) * half[k]
             worst_accel = max(worst_accel, max(middle + spread, -(middle - spread)))

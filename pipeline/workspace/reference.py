@@ -51,7 +51,7 @@ def literal_margins(
                 centripetal = ((v @ v) - (unit @ v) ** 2) / (length * motion.winch_radius)
             for torque, j_a in per_acceleration:  # every combination k = (v, a)
                 theta_ddot = j_a + centripetal
-                u = act.G_v * theta_ddot + act.L_v * theta_dot + act.S_v * torque  # eq. (21)
+                u = act.G_v * theta_ddot + act.L_v * theta_dot - act.S_v * torque  # eq. (21): the motor holds M
                 for c, values in enumerate((theta_dot, torque, theta_ddot, u)):
                     worst[c] = max(worst[c], float(np.abs(values).max()))
         for c, name in enumerate(names):

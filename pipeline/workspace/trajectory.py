@@ -64,7 +64,7 @@ def inverse_dynamics(
     """Per-sample actuator quantities (n, m) for poses (n, 3) with their own velocity and
     acceleration (constant orientation): shaft speed theta_dot = J p_dot (eq. 19), shaft
     acceleration J p_ddot (+ J-dot p_dot when ``motion.jdot``), load torque M = (J^T)^+ F with
-    F = m (p_ddot - g e_z) (eqs. 20, 31), voltage u (eq. 21). Also the wrench residual
+    F = m (p_ddot - g e_z) (eqs. 20, 31), voltage u = G_v theta_ddot + L_v theta_dot - S_v M (eq. 21). Also the wrench residual
     |J^T M - F| and both sides of the power balance, sum_i M_i theta_dot_i and F . p_dot (n,).
     Under ``tension.model=feasible`` M is the LP's choice (``pipeline.model.tensions``) for each
     sample's own wrench, speed and acceleration, and ``margins`` holds that model's margins."""
@@ -96,7 +96,7 @@ def inverse_dynamics(
         "theta_dot": theta_dot,
         "theta_ddot": theta_ddot,
         "torque": torque,
-        "voltage": actuator.G_v * theta_ddot + actuator.L_v * theta_dot + actuator.S_v * torque,
+        "voltage": actuator.G_v * theta_ddot + actuator.L_v * theta_dot + actuator.load_gain * torque,
         "wrench_residual": np.linalg.norm(reached - wrench, axis=1),
         "power_cables": np.einsum("nm,nm->n", torque, theta_dot),
         "power_load": np.einsum("nj,nj->n", wrench[:, :3], velocities),

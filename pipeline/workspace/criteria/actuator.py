@@ -61,15 +61,16 @@ def acceleration(dyn: PoseDynamics, act: ActuatorModel) -> np.ndarray:
 
 
 def voltage(dyn: PoseDynamics, act: ActuatorModel) -> np.ndarray:
-    """Eq. (34) with u of eq. (21): |G_v theta_ddot + L_v theta_dot + S_v M| <= U_mot over every
-    (velocity, acceleration) pair; the velocity part and the acceleration part are separable.
+    """Eq. (34) with u of eq. (21): |G_v theta_ddot + L_v theta_dot - S_v M| <= U_mot over every
+    (velocity, acceleration) pair (the motor holds the load torque M: ``ActuatorModel.load_gain``);
+    the velocity part and the acceleration part are separable.
     Without J-dot the velocity part is L_v theta_dot (L_v >= 0), whose range is L_v times the
     range of theta_dot, already known from eq. (30)."""
     if feasible_model(dyn):
         return feasible_margins(dyn, act)["voltage"]
     torque_coefficients, torque_offset = dyn.torque_affine
-    from_acceleration = dyn.acceleration_range(  # G_v J a + S_v M, affine in a
-        act.G_v * dyn.jacobian[:, :, :3] + act.S_v * torque_coefficients, act.S_v * torque_offset
+    from_acceleration = dyn.acceleration_range(  # G_v J a - S_v M, affine in a
+        act.G_v * dyn.jacobian[:, :, :3] + act.load_gain * torque_coefficients, act.load_gain * torque_offset
     )
     return _margin(max_abs_sum_of_ranges(voltage_from_velocity(dyn, act), from_acceleration),
                    act.voltage_limit)

@@ -43,7 +43,7 @@ def feasible_distribution(state, limits) -> np.ndarray:
 def tension_families(state, limits) -> list[Family]:
     """The intervals on the cable forces x, in gate order. CPR-8 (x = M = R t, per required
     acceleration a_k, :func:`actuator_families`): the voltage must hold for every velocity of
-    the set, |G_v J a_k + L_v theta_dot + S_v M| <= U (eqs. 21, 34). IRPM (x = s): slack
+    the set, |G_v J a_k + L_v theta_dot - S_v M| <= U (eqs. 21, 34). IRPM (x = s): slack
     s >= t_min and s <= s_max (eq. 10), in units of ``StaticLimits.scale`` and s_max."""
     tension = tension_spec(state)
     if isinstance(state, PoseStatics):
@@ -59,8 +59,9 @@ def tension_families(state, limits) -> list[Family]:
 
 def actuator_families(tension, radius, act: ActuatorModel, high, low) -> list[Family]:
     """CPR-8 families on x = M = R t: slack M >= R t_min, the cable rating M <= R t_max, torque
-    |M| <= T (eq. 32), voltage -U <= other + S_v M <= U (eqs. 21, 34), where ``other`` (the
-    G_v theta_ddot + L_v theta_dot part) ranges in [low, high] (n, K, m)."""
+    |M| <= T (eq. 32), voltage -U <= other - S_v M <= U (eqs. 21, 34; the motor holds M,
+    ``ActuatorModel.load_gain``), where ``other`` (the G_v theta_ddot + L_v theta_dot part)
+    ranges in [low, high] (n, K, m): (high - U) / S_v <= M <= (low + U) / S_v."""
     torque_limit = act.torque_limit
     families = [Family("slack", radius * tension.t_min, np.inf, torque_limit)]
     if tension.t_max is not None:
@@ -68,7 +69,7 @@ def actuator_families(tension, radius, act: ActuatorModel, high, low) -> list[Fa
         families.append(Family("tension_max", -np.inf, rating, rating))
     families.append(Family("torque", -torque_limit, torque_limit, torque_limit))
     volts, s_v = act.voltage_limit, act.S_v
-    families.append(Family("voltage", (-volts - low) / s_v, (volts - high) / s_v, volts / s_v))
+    families.append(Family("voltage", (high - volts) / s_v, (low + volts) / s_v, volts / s_v))
     return families
 
 
