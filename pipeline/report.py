@@ -200,7 +200,8 @@ def _irpm(studies_dir: Path) -> list[str]:
     table = fig13.pivot_table(index="robot.r_end", columns="robot.gamma_deg", values="volume_m3")
     rows = ["## IRPM (Hamed & Zohoor), Fig. 13", "",
             "The paper withholds its point counts; its conclusions are checked in docs/model.md "
-            "section 5. Volume (m³) at r_base = 6 m:", "",
+            "section 5. Volume (m³) at r_base = 6 m of section III's workspace (0 ≤ s, l ≤ l_max; "
+            "no s_max, as the paper defines it):", "",
             "| r_end / r_base | " + " | ".join(f"γ = {g:g}°" for g in table.columns) + " |",
             "| --- |" + " --- |" * len(table.columns)]
     for r_end, values in table.iterrows():

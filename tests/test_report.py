@@ -45,7 +45,7 @@ def studies(tmp_path, make_cfg, catalogue):
     lines = pd.DataFrame([simulate_lines(make_cfg("analysis=lines", f"actuator={a}"), catalogue)[2]
                           for a in (1, 2)]).assign(case="zero", case_label="zero orientation")
     lines.to_parquet(root / "line_simulation" / "summary.parquet")
-    irpm = pd.DataFrame([compute_workspace(make_cfg("robot=irpm6", f"robot.r_end={r}",
+    irpm = pd.DataFrame([compute_workspace(make_cfg("robot=irpm6", "tension.t_max=null", f"robot.r_end={r}",
                                                     f"robot.gamma_deg={g}"), catalogue)[1]
                          for r in (1.2, 6.0) for g in (0, 30)])
     irpm.to_parquet(root / "irpm_fig13_end_ratio" / "summary.parquet")
@@ -82,7 +82,8 @@ def test_report_compares_paper_and_ours_and_carries_the_figures(studies, tmp_pat
     assert "| 5 | 11.11 | 14.81 | no → no | slack 72, torque 112 |" in text
     assert "Accepted at x = 90 % with pulling cables: none." in text
     assert "| full, zero orientation | 100.00 | 94.44 |" in text
-    assert "| 0.2 | 183.2 | 64.8 |" in text
+    assert "| 0.2 | 235.2 | 88.0 |" in text and "| 1.0 | 235.2 | 88.0 |" in text
+    assert "γ = 0°: 1.00, γ = 30°: 1.00." in text  # section III: the spread over r_end
     assert "| translational, zero orientation | 66.7 (216 → 144) |" in text
     assert "| fact | source | read the other way | default | jdot=true |" in text  # default first
     # one fact: read the other way, the other reading matches it and wins
