@@ -90,7 +90,8 @@ def screenshot(report: Path, path: Path, view: int | None = None) -> None:
     try:
         with tempfile.TemporaryDirectory() as profile:
             subprocess.run([chromium(), *FLAGS, f"--user-data-dir={profile}", f"--screenshot={path.resolve()}",
-                            "--window-size=1280,1100" if view is None else "--window-size=1280,620", "--hide-scrollbars", "--virtual-time-budget=60000",
+                            "--window-size=1280,1100" if view is None else "--window-size=1280,620",
+                            "--hide-scrollbars", "--virtual-time-budget=60000",
                             page.resolve().as_uri()],
                            capture_output=True, text=True, timeout=300, check=True)
     finally:

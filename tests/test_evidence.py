@@ -70,7 +70,8 @@ def test_cpr8_table_has_every_published_fact_for_every_reading(cpr8):
 
 @pytest.mark.parametrize("reading, expected", [
     # fact -> (value, matches, distance); the two readings of eq. (20) pull apart here
-    ("pinv_columns=translational", {"table2_actuator_4": ("85.19 % (184)", False, 4), "table2_actuator_5": ("11.11 % (24)", False, 8),
+    ("pinv_columns=translational", {"table2_actuator_4": ("85.19 % (184)", False, 4),
+                                    "table2_actuator_5": ("11.11 % (24)", False, 8),
                  "fig5b_much_smaller": ("95.4 % (206)", False, 12), "fig6b_torque": ("peak 0.600 × limit", False, 0.400),
                  "fig6b_voltage": ("peak 0.985 × limit", True, 0)}),
     ("default", {"table2_actuator_4": ("85.19 % (184)", False, 4), "table2_actuator_5": ("0.00 % (0)", False, 16),

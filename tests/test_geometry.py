@@ -93,7 +93,10 @@ def vertical_screw(robot, position, phi):
     upper = robot.anchors[:, 2] == 0.0
     points = (position + robot.attachments[upper] @ rot.T)[:, :2]
     arms = points - robot.anchors[upper, :2]
-    cross = lambda u, v: u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
+
+    def cross(u, v):
+        return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
+
     # cross(p - Q, arm) = cross(p, arm) - cross(Q, arm) = c  ->  Q_x arm_y - Q_y arm_x + c = cross(p, arm)
     system = np.column_stack([arms[:, 1], -arms[:, 0], np.ones(4)])
     (qx, qy, c), residual, *_ = np.linalg.lstsq(system, cross(points, arms), rcond=None)

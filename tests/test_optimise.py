@@ -167,8 +167,10 @@ def test_a_column_of_the_users_catalogue_is_an_objective(tmp_path, monkeypatch):
 
 
 @pytest.mark.parametrize("prices, objective, message", [
-    (["900", "400", "n/a", "150", "90"], "catalogue.price_EUR", "optimise.objectives: catalogue.price_EUR: actuator 3: 'n/a' is not a number"),
-    (["900", "400", "250", "150", "90"], "catalogue.cost", "catalogue.cost: the catalogue has no column 'cost' (its extra columns: price_EUR)"),
+    (["900", "400", "n/a", "150", "90"], "catalogue.price_EUR",
+     "optimise.objectives: catalogue.price_EUR: actuator 3: 'n/a' is not a number"),
+    (["900", "400", "250", "150", "90"], "catalogue.cost",
+     "catalogue.cost: the catalogue has no column 'cost' (its extra columns: price_EUR)"),
 ])
 def test_a_catalogue_objective_needs_a_number_for_every_actuator(tmp_path, monkeypatch, prices, objective, message):
     priced_study(monkeypatch)

@@ -59,7 +59,8 @@ class Callbacks:
             try:
                 getattr(callback, name)(**kwargs)
             except Exception as exc:  # Hydra's rule: a callback does not stop the run
-                warnings.warn(f"Callback {type(callback).__name__}.{name} raised {type(exc).__name__}: {exc}")
+                warnings.warn(f"Callback {type(callback).__name__}.{name} raised {type(exc).__name__}: {exc}",
+                              stacklevel=2)
 
     def on_run_start(self, config: DictConfig, **kwargs: Any) -> None:
         self._notify("on_run_start", config=config, **kwargs)

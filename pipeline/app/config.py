@@ -367,8 +367,9 @@ class ChoiceConfig:
 class ModelConfig:
     """Readings of the ambiguous equations; each default is the best fit to all the published
     evidence (studies evidence_cpr8 and evidence_irpm), except ``cable_direction``, whose better
-    fit describes another robot (docs/model.md sections 4-5 give every reading's numbers). ``pinv_columns``: eq. (20) with all six columns of J (full) or forces
-    only (translational); ``velocity_boundary``: |v| = V_cmax in the set of eq. (26) or not;
+    fit describes another robot (docs/model.md sections 4-5 give every reading's numbers).
+    ``pinv_columns``: eq. (20) with all six columns of J (full) or forces only (translational);
+    ``velocity_boundary``: |v| = V_cmax in the set of eq. (26) or not;
     ``acceleration_set``: the box's corners or MATLAB's colon (eqs. 27-29); ``inertia``: eq.
     (31)'s sign as printed (paper) or Newton's; ``jdot``: the centripetal term of the shaft
     acceleration; ``xi_in_torque_limit``: xi in eq. (32); ``moment_arm`` and ``cable_direction``:

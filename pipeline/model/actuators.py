@@ -56,7 +56,8 @@ def actuator_model(
     gear_ratio: float | None = None,
     xi_in_torque_limit: bool = True,
 ) -> ActuatorModel:
-    """Turn one catalogue row (:meth:`pipeline.model.catalogue.Catalogue.row`) into SI model constants and limits (section 3, eqs. 22, 30-34).
+    """Turn one catalogue row (:meth:`pipeline.model.catalogue.Catalogue.row`) into SI model
+    constants and limits (section 3, eqs. 22, 30-34).
 
     N_M = N_V xi; C_E = C_e N_V; C_M = C_m N_M; B_C = B_c N_V N_M; J_r = J_M N_V N_M.
     ``winch_radius`` and ``gear_ratio`` replace the catalogue's R_i and N_V when given.

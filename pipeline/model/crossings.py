@@ -188,8 +188,8 @@ def _normals(structure, spread, null, wrenches, subsets, others, vectors, a, tar
 def _perpendicular(vectors, size):
     """Write into column size - 1 of ``vectors`` (rows :size) the unit vector perpendicular to
     its first size - 1 columns (the generalised cross product up to size 4; else Gram-Schmidt,
-    twice, then the residual of the axis farthest from their span); False when their volume is at most DEPENDENT_RTOL times the product of
-    their lengths (dependent vectors span no facet)."""
+    twice, then the residual of the axis farthest from their span); False when their volume is
+    at most DEPENDENT_RTOL times the product of their lengths (dependent vectors span no facet)."""
     last = size - 1
     if 2 <= size <= 4:  # closed forms: the (generalised) cross product of the columns
         lengths = 1.0
