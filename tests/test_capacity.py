@@ -6,13 +6,11 @@ Tolerance: margins agree within MARGIN_ATOL (dimensionless, in units of each fam
 HiGHS's own primal feasibility tolerance (1e-7) is the larger of the two errors. Verdicts are
 compared outside that band around zero."""
 
-import importlib
 import logging
 
 import numpy as np
 import pytest
 
-from pipeline.model import jit
 from pipeline.model.capacity import shifted_margins
 from pipeline.workspace.criteria.forces import tension_families
 from pipeline.model.geometry import structure_matrix
@@ -111,25 +109,6 @@ def test_fuzz_of_random_robots_poses_and_limits_gives_the_lp_margins():
         feasible += np.all([v >= 0 for v in exact.values()], axis=0).sum()
         total += exact["slack"].size
     assert 0.1 < feasible / total < 0.9  # the fuzz reaches both verdicts
-
-
-def test_the_extension_built_ahead_of_time_gives_numbas_own_bits(monkeypatch):
-    """The crossing search the jobs load (an extension built by numba.pycc) and numba's own
-    function give the same margins and the same unsettled poses to the last bit, on random
-    robots of every path (forces only, forces and moments, normals through the null space)."""
-    assert jit.compiled_loops("pipeline.model.crossings").__file__.endswith(".so")
-    rng = np.random.default_rng(41)
-    for rows, cables in [(3, 4), (3, 8), (6, 8), (6, 10)]:
-        structure, wrenches, families = random_problems(rng, rows, cables, 60)
-        pinv, rank = batched_pinv(structure, 1e-9)
-        _, projected = reachability(structure, pinv, wrenches)
-        extension = shifted_margins(structure, projected, families)
-        with monkeypatch.context() as patch:
-            patch.setattr(jit, "compiled_loops", importlib.import_module)
-            own = shifted_margins(structure, projected, families)
-        for name in extension[0]:
-            np.testing.assert_array_equal(extension[0][name], own[0][name], err_msg=name)
-        np.testing.assert_array_equal(extension[1], own[1])
 
 
 def test_wrench_dependent_bounds_and_coincident_cables_give_the_lp_margins():

@@ -60,7 +60,7 @@ def shifted_margins(structure: np.ndarray, wrenches: np.ndarray, families) -> tu
     ``wrenches`` (n, K, q); ``families`` are :class:`pipeline.model.tensions.Family`. Also (n,)
     whether a pose needs the LP after all (a crossing search that did not settle). The work per
     pose is compiled (``pipeline.model.crossings``); here the bounds are laid out for it."""
-    from pipeline.model.jit import call_compiled, compiled_loops
+    from pipeline.model.jit import compiled_loops
 
     n, k, q = wrenches.shape
     m = structure.shape[2]
@@ -89,7 +89,6 @@ def shifted_margins(structure: np.ndarray, wrenches: np.ndarray, families) -> tu
                 fixed[which, where[f]] = values[0] if values.ndim == 3 else values
     found = np.empty((len(families), n))
     least_margins = compiled_loops("pipeline.model.crossings").least_margins
-    unsettled = call_compiled(least_margins, np.ascontiguousarray(structure), spread, null,
-                              np.ascontiguousarray(wrenches), subsets, others, fixed, posed, where,
-                              varies, RELAX, BIG, found)
+    unsettled = least_margins(np.ascontiguousarray(structure), spread, null, np.ascontiguousarray(wrenches),
+                              subsets, others, fixed, posed, where, varies, RELAX, BIG, found)
     return {family.name: found[f] for f, family in enumerate(families)}, unsettled

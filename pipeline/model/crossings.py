@@ -1,9 +1,9 @@
 """The compiled part of hyperplane shifting (``pipeline.model.capacity``): per pose, the
 candidate normals and the least crossing of h(n, s) with n . w, for every criterion family,
-over the required wrench set. One small problem per pose, in a loop compiled by numba, ahead of
-time into an extension module (``pipeline.model.jit.compiled_loops``, with the signature of
-``EXPORTS``; numba's own function where none can be built), used only by the ``feasible``
-tension model.
+over the required wrench set. One small problem per pose, in a loop compiled by numba with the
+signature of ``SIGNATURES`` and cached (``pipeline.model.jit.compiled_loops``), used only by the
+``feasible`` tension model. ``least_margins`` comes last: numba compiles it where it is
+defined, so what it calls must be defined before it.
 
 Per pose and family, with the earlier families' (relaxed) bounds [L_i, U_i] and this family's
 [lower_i + s c_i, upper_i - s c_i], the side of cable i that h(n, s) reads is
@@ -39,95 +39,10 @@ SETTLE_RTOL = 1e-12  # a crossing is found when h is within this share of n . w
 DEPENDENT_RTOL = 1e-9  # volume / product of lengths below it: a normal's vectors are dependent
 PARALLEL_RTOL = 1e-10  # |n . S_i| below this share of |S_i|: column i lies in the facet
 _A = "[:, :, ::1]"  # C-contiguous, three axes
-EXPORTS = {  # the one signature of the function capacity.shifted_margins calls
+SIGNATURES = {  # the one signature of the function capacity.shifted_margins calls
     "least_margins": f"b1[::1](f8{_A}, f8{_A}, f8{_A}, f8{_A}, i8[:, ::1], i8[:, ::1], f8[:, :, :, ::1], "
                      f"f8[:, :, :, :, ::1], i8[::1], b1[::1], f8, f8, f8[:, ::1])",
 }
-
-
-@njit(cache=True)
-def least_margins(structure, spread, null, wrenches, subsets, others, fixed, posed, where, varies,
-                  relax_rtol, big, margins):
-    """Fill ``margins`` (F, n) with each family's nested capacity margin, least over the K
-    wrenches, and return (n,) poses whose search did not settle. ``structure`` (n, q, m) of
-    full row rank; ``spread`` (n, q, m) (S^+)^T and ``null`` (n, m, d) an orthonormal basis of
-    the null space of S, or both (n, 0, 0) (see :func:`_normals`); ``wrenches`` (n, K, q);
-    ``subsets`` (C, q - 1) the column subsets whose normals are the candidates (with both
-    signs), ``others`` (C, d + 1) the other columns; the families' (lower, upper, scale), +-``big``
-    for no side, in ``fixed`` (3, F1, K, m) for those that are the same at every pose and in
-    ``posed`` (3, F2, n, K, m) for the others, family f at ``where[f]`` in fixed when >= 0, at
-    -1 - where[f] in posed otherwise; ``varies`` (F,): whether a family's bounds change with the
-    wrench; ``relax_rtol``: extra relaxation of earlier bounds; ``big``: the caller's infinite side
-    (``capacity.BIG``), also returned, negated, by a search that did not settle."""
-    n, q, m = structure.shape
-    wrench_count = wrenches.shape[1]
-    count = subsets.shape[0]
-    families = where.shape[0]
-    a = np.zeros((count, m))
-    positive, negative = np.zeros((m, count)), np.zeros((m, count))  # max(+-a, 0), cable-major
-    target = np.zeros((wrench_count, count))
-    high, low = np.empty(count), np.empty(count)
-    along, against = np.empty(count), np.empty(count)  # h(n_c, s), h(-n_c, s)
-    earlier_lo, earlier_up = np.empty((wrench_count, m)), np.empty((wrench_count, m))
-    own = np.empty(wrench_count)
-    vectors = np.empty((max(q, m - q + 1), max(q, m - q + 1)))
-    hint = np.zeros(families, dtype=np.int64)  # the normal (2 C with signs), and the wrench,
-    limiting = np.zeros(families, dtype=np.int64)  # that limited the last pose: tried first
-    unsettled = np.zeros(n, dtype=np.bool_)
-    for p in range(n):
-        _normals(structure[p], spread[p], null[p], wrenches[p], subsets, others, vectors, a, target)
-        for c in range(count):
-            for i in range(m):
-                positive[i, c], negative[i, c] = max(a[c, i], 0.0), max(-a[c, i], 0.0)
-        earlier_lo[:] = -big
-        earlier_up[:] = big
-        agree = True  # the earlier bounds are the same for every wrench
-        for f in range(families):
-            if where[f] >= 0:
-                bounds = (fixed[0, where[f]], fixed[1, where[f]], fixed[2, where[f]])
-            else:
-                bounds = (posed[0, -1 - where[f], p], posed[1, -1 - where[f], p], posed[2, -1 - where[f], p])
-            shared = agree and not varies[f]
-            if shared:  # one h per normal: the largest n . w_k decides
-                high[:], low[:] = target[0], target[0]
-                for k in range(1, wrench_count):
-                    for c in range(count):
-                        high[c], low[c] = max(high[c], target[k, c]), min(low[c], target[k, c])
-                least, settled, hint[f] = _crossing(
-                    a, positive, negative, high, low, earlier_lo[0], earlier_up[0], bounds, np.int64(0), 1.0,
-                    hint[f], along, against, big)
-                unsettled[p] |= not settled
-            else:  # one h per wrench, each search capped by the running least
-                least, first = 1.0, limiting[f]
-                for r in range(wrench_count):
-                    k = first + r if first + r < wrench_count else first + r - wrench_count
-                    value, settled, hint[f] = _crossing(
-                        a, positive, negative, target[k], target[k], earlier_lo[k], earlier_up[k],
-                        bounds, k, least, hint[f], along, against, big)
-                    unsettled[p] |= not settled
-                    if value < least:
-                        least, limiting[f] = value, k
-            margins[f, p] = least
-            if f == families - 1:
-                break
-            own[:] = 0.0  # every wrench's margin is >= least >= 0: the same relaxation
-            if least < 0.0 and shared:  # the later families relax by each wrench's own margin
-                unsettled[p] |= not _own_margins(a, positive, negative, target, earlier_lo[0],
-                                                 earlier_up[0], bounds, along, against, own)
-            elif least < 0.0:
-                for k in range(wrench_count):
-                    own[k], settled, _ = _crossing(
-                        a, positive, negative, target[k], target[k], earlier_lo[k], earlier_up[k],
-                        bounds, k, 0.0, hint[f], along, against, big)
-                    unsettled[p] |= not settled
-            for k in range(wrench_count):
-                relax = own[k] - relax_rtol
-                lo, up, c = bounds[0][k], bounds[1][k], bounds[2][k]
-                for i in range(m):
-                    earlier_lo[k, i] = max(earlier_lo[k, i], lo[i] + relax * c[i])
-                    earlier_up[k, i] = min(earlier_up[k, i], up[i] - relax * c[i])
-            agree = agree and not varies[f] and least >= 0.0
-    return unsettled
 
 
 @njit(cache=True)
@@ -379,3 +294,88 @@ def _descend(row, sign, goal, earlier_lo, earlier_up, lo, up, c, s):
             return -np.inf, False
         s -= gap / slope
     return s, False
+
+
+@njit(SIGNATURES["least_margins"], cache=True)
+def least_margins(structure, spread, null, wrenches, subsets, others, fixed, posed, where, varies,
+                  relax_rtol, big, margins):
+    """Fill ``margins`` (F, n) with each family's nested capacity margin, least over the K
+    wrenches, and return (n,) poses whose search did not settle. ``structure`` (n, q, m) of
+    full row rank; ``spread`` (n, q, m) (S^+)^T and ``null`` (n, m, d) an orthonormal basis of
+    the null space of S, or both (n, 0, 0) (see :func:`_normals`); ``wrenches`` (n, K, q);
+    ``subsets`` (C, q - 1) the column subsets whose normals are the candidates (with both
+    signs), ``others`` (C, d + 1) the other columns; the families' (lower, upper, scale), +-``big``
+    for no side, in ``fixed`` (3, F1, K, m) for those that are the same at every pose and in
+    ``posed`` (3, F2, n, K, m) for the others, family f at ``where[f]`` in fixed when >= 0, at
+    -1 - where[f] in posed otherwise; ``varies`` (F,): whether a family's bounds change with the
+    wrench; ``relax_rtol``: extra relaxation of earlier bounds; ``big``: the caller's infinite side
+    (``capacity.BIG``), also returned, negated, by a search that did not settle."""
+    n, q, m = structure.shape
+    wrench_count = wrenches.shape[1]
+    count = subsets.shape[0]
+    families = where.shape[0]
+    a = np.zeros((count, m))
+    positive, negative = np.zeros((m, count)), np.zeros((m, count))  # max(+-a, 0), cable-major
+    target = np.zeros((wrench_count, count))
+    high, low = np.empty(count), np.empty(count)
+    along, against = np.empty(count), np.empty(count)  # h(n_c, s), h(-n_c, s)
+    earlier_lo, earlier_up = np.empty((wrench_count, m)), np.empty((wrench_count, m))
+    own = np.empty(wrench_count)
+    vectors = np.empty((max(q, m - q + 1), max(q, m - q + 1)))
+    hint = np.zeros(families, dtype=np.int64)  # the normal (2 C with signs), and the wrench,
+    limiting = np.zeros(families, dtype=np.int64)  # that limited the last pose: tried first
+    unsettled = np.zeros(n, dtype=np.bool_)
+    for p in range(n):
+        _normals(structure[p], spread[p], null[p], wrenches[p], subsets, others, vectors, a, target)
+        for c in range(count):
+            for i in range(m):
+                positive[i, c], negative[i, c] = max(a[c, i], 0.0), max(-a[c, i], 0.0)
+        earlier_lo[:] = -big
+        earlier_up[:] = big
+        agree = True  # the earlier bounds are the same for every wrench
+        for f in range(families):
+            if where[f] >= 0:
+                bounds = (fixed[0, where[f]], fixed[1, where[f]], fixed[2, where[f]])
+            else:
+                bounds = (posed[0, -1 - where[f], p], posed[1, -1 - where[f], p], posed[2, -1 - where[f], p])
+            shared = agree and not varies[f]
+            if shared:  # one h per normal: the largest n . w_k decides
+                high[:], low[:] = target[0], target[0]
+                for k in range(1, wrench_count):
+                    for c in range(count):
+                        high[c], low[c] = max(high[c], target[k, c]), min(low[c], target[k, c])
+                least, settled, hint[f] = _crossing(
+                    a, positive, negative, high, low, earlier_lo[0], earlier_up[0], bounds, np.int64(0), 1.0,
+                    hint[f], along, against, big)
+                unsettled[p] |= not settled
+            else:  # one h per wrench, each search capped by the running least
+                least, first = 1.0, limiting[f]
+                for r in range(wrench_count):
+                    k = first + r if first + r < wrench_count else first + r - wrench_count
+                    value, settled, hint[f] = _crossing(
+                        a, positive, negative, target[k], target[k], earlier_lo[k], earlier_up[k],
+                        bounds, k, least, hint[f], along, against, big)
+                    unsettled[p] |= not settled
+                    if value < least:
+                        least, limiting[f] = value, k
+            margins[f, p] = least
+            if f == families - 1:
+                break
+            own[:] = 0.0  # every wrench's margin is >= least >= 0: the same relaxation
+            if least < 0.0 and shared:  # the later families relax by each wrench's own margin
+                unsettled[p] |= not _own_margins(a, positive, negative, target, earlier_lo[0],
+                                                 earlier_up[0], bounds, along, against, own)
+            elif least < 0.0:
+                for k in range(wrench_count):
+                    own[k], settled, _ = _crossing(
+                        a, positive, negative, target[k], target[k], earlier_lo[k], earlier_up[k],
+                        bounds, k, 0.0, hint[f], along, against, big)
+                    unsettled[p] |= not settled
+            for k in range(wrench_count):
+                relax = own[k] - relax_rtol
+                lo, up, c = bounds[0][k], bounds[1][k], bounds[2][k]
+                for i in range(m):
+                    earlier_lo[k, i] = max(earlier_lo[k, i], lo[i] + relax * c[i])
+                    earlier_up[k, i] = min(earlier_up[k, i], up[i] - relax * c[i])
+            agree = agree and not varies[f] and least >= 0.0
+    return unsettled

@@ -299,11 +299,11 @@ def tabulate(problem: WorkspaceProblem, positions: np.ndarray, raw: dict,
 # The speeds hold for the paper's set of REFERENCE_SET velocities per pose (grid.n_vel = 6);
 # a pose's cost grows with its set. A job estimated above LONG_JOB_S is announced with a warning.
 WORKER_START_S = 0.4
-# The compiled kernels load in about 1 ms from the extension built ahead of time, but cost 0.3 s
-# where they run through numba (no C compiler: pipeline.model.jit), and the first job of an
-# installation that uses them builds the extension (about 17 s): a job whose numpy kernel would
-# take less than FUSED_START_S keeps it, so a small job never pays more than it could save.
-FUSED_START_S = 0.3
+# The compiled kernels cost a process 0.35-0.4 s to load from numba's cache (numba's import, with
+# scipy.linalg, and the machine code: pipeline.model.jit), and the first process on a machine
+# compiles them (about 15 s): a job whose numpy kernel would take less than FUSED_START_S keeps
+# it, so a small job never pays more than it could save.
+FUSED_START_S = 0.4
 # Fused chunks are computed several times faster than the parent classifies and writes them, so
 # workers pay only for long fused jobs: 10^6 poses took 1.44-1.49 s on two workers and 1.38-1.41 s
 # in one process at zero orientation (1.28-1.34 s and 1.10-1.13 s at 0.5 rad), 2.2 x 10^6 poses

@@ -34,7 +34,7 @@ They apply to the ``pinv`` tension model (CPR-WWA: without J-dot, on the extreme
 a product acceleration set, both readings of eqs. 27-29), without per-pose cable quantities
 (``pipeline.workspace.compute.fused_unfit``); a job uses them when the cost model says they pay
 for their start (``compute.kernel=auto``, ``pipeline.workspace.compute.use_fused``). A process
-loads them from an extension module built ahead of time, without importing numba
+loads them from numba's cache, or numba compiles them the first time on a machine
 (``pipeline.model.jit.compiled_loops``).
 """
 
@@ -44,7 +44,7 @@ import numpy as np
 
 from pipeline.model.dynamics import MotionSpec, acceleration_box, inertia_sign, load_wrench_terms
 from pipeline.model.geometry import euler_rate_axes, rotation_matrix
-from pipeline.model.jit import call_compiled, compiled_loops
+from pipeline.model.jit import compiled_loops
 
 CRITERIA = ("speed", "torque", "acceleration", "voltage", "tension_max", "length")  # columns of cpr_wwa
 STATICS_CRITERIA = ("singular", "slack", "tension_max", "length")  # columns of statics
@@ -67,13 +67,13 @@ def _statics_margins(problem, positions: np.ndarray, orientation):
     n = len(positions)
     out = np.empty((n, len(STATICS_CRITERIA)))
     unsettled = np.zeros(n, dtype=np.bool_)
-    call_compiled(compiled_loops(LOOPS).statics, np.ascontiguousarray(positions, dtype=float),
-                  np.ascontiguousarray(robot.anchors, dtype=float), np.ascontiguousarray(robot.attachments @ rotation.T),
-                  spec.cable_direction == "centre", spec.moment_arm == "base",
-                  np.ascontiguousarray(wrench[:, None]), float(spec.rank_rtol), float(lim.rank_rtol),
-                  np.array(np.broadcast_to(spec.tension.t_min, (m,)), dtype=float),  # writable copies
-                  np.array(np.broadcast_to(lim.s_max, (m,)), dtype=float), float(lim.scale),
-                  np.inf if robot.l_max is None else float(robot.l_max), out, unsettled)
+    compiled_loops(LOOPS).statics(
+        np.ascontiguousarray(positions, dtype=float), np.ascontiguousarray(robot.anchors, dtype=float),
+        np.ascontiguousarray(robot.attachments @ rotation.T), spec.cable_direction == "centre",
+        spec.moment_arm == "base", np.ascontiguousarray(wrench[:, None]), float(spec.rank_rtol),
+        float(lim.rank_rtol), np.array(np.broadcast_to(spec.tension.t_min, (m,)), dtype=float),  # writable copies
+        np.array(np.broadcast_to(lim.s_max, (m,)), dtype=float), float(lim.scale),
+        np.inf if robot.l_max is None else float(robot.l_max), out, unsettled)
     return {f"margin_{name}": out[:, STATICS_CRITERIA.index(name)] for name in problem.criteria}, unsettled
 
 
@@ -92,14 +92,13 @@ def _cpr_wwa_margins(problem, positions: np.ndarray, orientation):
     out = np.empty((n, len(CRITERIA)))
     rank = np.zeros(n, dtype=np.int8)
     unsettled = np.zeros(n, dtype=np.bool_)
-    call_compiled(compiled_loops(LOOPS).cpr_wwa, np.ascontiguousarray(positions, dtype=float),
-                  np.ascontiguousarray(robot.anchors, dtype=float), np.ascontiguousarray(robot.attachments @ rotation.T),
-                  np.ascontiguousarray(euler_rate_axes(*orientation)), np.ascontiguousarray(spec.winch_radius, dtype=float),
-                  rows, np.ascontiguousarray(spec.velocity_extremes, dtype=float), centre, half, loads,
-                  float(spec.rank_rtol), np.array([act.speed_limit, act.torque_limit, act.accel_limit,
-                                                   act.voltage_limit], dtype=float),
-                  np.array([act.G_v, act.L_v, act.load_gain], dtype=float), t_max,
-                  l_max, out, rank, unsettled)
+    compiled_loops(LOOPS).cpr_wwa(
+        np.ascontiguousarray(positions, dtype=float), np.ascontiguousarray(robot.anchors, dtype=float),
+        np.ascontiguousarray(robot.attachments @ rotation.T), np.ascontiguousarray(euler_rate_axes(*orientation)),
+        np.ascontiguousarray(spec.winch_radius, dtype=float), rows,
+        np.ascontiguousarray(spec.velocity_extremes, dtype=float), centre, half, loads, float(spec.rank_rtol),
+        np.array([act.speed_limit, act.torque_limit, act.accel_limit, act.voltage_limit], dtype=float),
+        np.array([act.G_v, act.L_v, act.load_gain], dtype=float), t_max, l_max, out, rank, unsettled)
     result = {f"margin_{name}": out[:, CRITERIA.index(name)] for name in problem.criteria}
     result["jacobian_rank"] = rank
     return result, unsettled

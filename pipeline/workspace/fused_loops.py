@@ -2,11 +2,11 @@
 one pass over the poses each, and their helpers (the routes they take are in that module's
 docstring).
 
-``pipeline.model.jit.compiled_loops`` compiles them ahead of time into an extension module with
-the signatures of ``EXPORTS`` (the types ``fused`` passes), so that a job loads them without
-importing numba; where that cannot be built, these functions run as they are, compiled by numba
-in each process. The extension is keyed by this file's text: its compiled code uses nothing but
-numpy and this file (``tests/test_jit.py`` checks the imports).
+numba compiles them with the signatures of ``SIGNATURES`` (the types ``fused`` passes) when the
+module is first imported on a machine, and caches them (``pipeline.model.jit.compiled_loops``).
+numba keys that cache by this file: the compiled code uses nothing but numpy and this file
+(``tests/test_jit.py`` checks the imports). The two entry points come last: numba compiles them
+where they are defined, so what they call must be defined before them.
 
 The helpers are inlined into the two loops (``inline="always"``, numba's own inlining) and the
 CPR-WWA loop is compiled once for each number of rows of the pseudo-inverse (3 or 6, a
@@ -26,26 +26,11 @@ DROPPED = 0.1  # |w^T J^T| / (rtol sigma_max) below which the SVD surely drops t
 SHIFT = 1e-14  # mu / trace(G) of the inverse iteration
 
 _M, _V, _F = "f8[:, ::1]", "f8[::1]", "f8"  # a C-contiguous matrix, vector, a float
-EXPORTS = {  # name -> its one signature
+SIGNATURES = {  # name -> its one signature
     "cpr_wwa": f"void({_M}, {_M}, {_M}, {_M}, {_V}, i8, {_M}, {_V}, {_V}, {_M}, {_F}, {_V}, {_V}, {_V}, {_F}, "
                f"{_M}, i1[::1], b1[::1])",
     "statics": f"void({_M}, {_M}, {_M}, b1, b1, {_M}, {_F}, {_F}, {_V}, {_V}, {_F}, {_F}, {_M}, b1[::1])",
 }
-
-
-@njit(cache=True)
-def cpr_wwa(positions, anchors, arms, rate_axes, radius, rows, extremes, centre, half, loads, rtol,
-            limits, gains, t_max, l_max, out, rank, unsettled):
-    """Fill ``out`` (n, 6) with the margins of ``fused.CRITERIA``, ``rank`` and ``unsettled``:
-    :func:`_cpr_wwa` with its number of rows (3 or 6) as a constant."""
-    if rows == 6:
-        _cpr_wwa(positions, anchors, arms, rate_axes, radius, 6, extremes, centre, half, loads, rtol,
-                 limits, gains, t_max, l_max, out, rank, unsettled)
-    elif rows == 3:
-        _cpr_wwa(positions, anchors, arms, rate_axes, radius, 3, extremes, centre, half, loads, rtol,
-                 limits, gains, t_max, l_max, out, rank, unsettled)
-    else:
-        raise ValueError("the pseudo-inverse has 3 or 6 rows")
 
 
 @njit(cache=True, inline="always")
@@ -134,53 +119,6 @@ def _cpr_wwa(positions, anchors, arms, rate_axes, radius, rows, extremes, centre
         out[p, 3] = 1.0 - worst_voltage / voltage_limit
         out[p, 4] = 1.0 - worst_rating
         out[p, 5] = 1.0 - worst_length
-
-
-@njit(cache=True)
-def statics(positions, anchors, arms, centre, base, wrench, rtol, singular_rtol, t_min, s_max, scale,
-             l_max, out, unsettled):
-    """Fill ``out`` (n, 4) with the margins of ``fused.STATICS_CRITERIA`` and ``unsettled``."""
-    n, m = positions.shape[0], anchors.shape[0]
-    six = np.int64(6)  # not the literal 6, which numba would compile its callees for once more
-    columns = np.empty((m, 6))  # A^T: row i = [u_i; a_i x u_i] (eq. 8)
-    lengths = np.empty(m)
-    gram = np.empty((6, 6))
-    factor = np.empty((6, 6))
-    scale_rows = np.empty(6)
-    solved = np.empty((6, 1))
-    for p in range(n):
-        for i in range(m):
-            lengths[i], ux, uy, uz = _cable(positions, p, anchors, arms, i, not centre)
-            ax, ay, az = arms[i, 0], arms[i, 1], arms[i, 2]
-            if base:  # moments about the base centre (eq. 9): a_i = r + R d_i
-                ax, ay, az = ax + positions[p, 0], ay + positions[p, 1], az + positions[p, 2]
-            columns[i, 0], columns[i, 1], columns[i, 2] = ux, uy, uz
-            columns[i, 3] = ay * uz - az * uy
-            columns[i, 4] = az * ux - ax * uz
-            columns[i, 5] = ax * uy - ay * ux
-        _gram(columns, six, m, gram)
-        ratio = _scaled_cholesky(gram, six, factor, scale_rows)
-        if ratio < BAND * rtol:  # singular or in doubt: numpy's SVD
-            unsettled[p] = True
-            for k in range(out.shape[1]):
-                out[p, k] = np.nan
-            continue
-        _scaled_solve(factor, scale_rows, wrench, six, solved)
-        lowest, worst_rating, worst_length = np.inf, -np.inf, -np.inf
-        for i in range(m):
-            tension = 0.0  # s = A^T (A A^T)^-1 f (eqs. 7, 10)
-            for r in range(6):
-                tension += columns[i, r] * solved[r, 0]
-            lowest = min(lowest, tension - t_min[i])
-            worst_rating = max(worst_rating, tension / s_max[i])
-            worst_length = max(worst_length, lengths[i] / l_max)
-        if ratio >= singular_rtol:
-            out[p, 0] = (ratio - singular_rtol) / (1.0 - singular_rtol)
-        else:
-            out[p, 0] = ratio / singular_rtol - 1.0
-        out[p, 1] = lowest / scale
-        out[p, 2] = 1.0 - worst_rating
-        out[p, 3] = 1.0 - worst_length
 
 
 @njit(cache=True, inline="always")
@@ -311,3 +249,65 @@ def _drop_one(jac, gram, rows, m, rtol, factor, scale, w, warm, along, deflated,
         return False
     _scaled_solve(factor, scale, loads, rows, solved)
     return True
+
+
+@njit(SIGNATURES["cpr_wwa"], cache=True)
+def cpr_wwa(positions, anchors, arms, rate_axes, radius, rows, extremes, centre, half, loads, rtol,
+            limits, gains, t_max, l_max, out, rank, unsettled):
+    """Fill ``out`` (n, 6) with the margins of ``fused.CRITERIA``, ``rank`` and ``unsettled``:
+    :func:`_cpr_wwa` with its number of rows (3 or 6) as a constant."""
+    if rows == 6:
+        _cpr_wwa(positions, anchors, arms, rate_axes, radius, 6, extremes, centre, half, loads, rtol,
+                 limits, gains, t_max, l_max, out, rank, unsettled)
+    elif rows == 3:
+        _cpr_wwa(positions, anchors, arms, rate_axes, radius, 3, extremes, centre, half, loads, rtol,
+                 limits, gains, t_max, l_max, out, rank, unsettled)
+    else:
+        raise ValueError("the pseudo-inverse has 3 or 6 rows")
+
+
+@njit(SIGNATURES["statics"], cache=True)
+def statics(positions, anchors, arms, centre, base, wrench, rtol, singular_rtol, t_min, s_max, scale,
+             l_max, out, unsettled):
+    """Fill ``out`` (n, 4) with the margins of ``fused.STATICS_CRITERIA`` and ``unsettled``."""
+    n, m = positions.shape[0], anchors.shape[0]
+    six = np.int64(6)  # not the literal 6, which numba would compile its callees for once more
+    columns = np.empty((m, 6))  # A^T: row i = [u_i; a_i x u_i] (eq. 8)
+    lengths = np.empty(m)
+    gram = np.empty((6, 6))
+    factor = np.empty((6, 6))
+    scale_rows = np.empty(6)
+    solved = np.empty((6, 1))
+    for p in range(n):
+        for i in range(m):
+            lengths[i], ux, uy, uz = _cable(positions, p, anchors, arms, i, not centre)
+            ax, ay, az = arms[i, 0], arms[i, 1], arms[i, 2]
+            if base:  # moments about the base centre (eq. 9): a_i = r + R d_i
+                ax, ay, az = ax + positions[p, 0], ay + positions[p, 1], az + positions[p, 2]
+            columns[i, 0], columns[i, 1], columns[i, 2] = ux, uy, uz
+            columns[i, 3] = ay * uz - az * uy
+            columns[i, 4] = az * ux - ax * uz
+            columns[i, 5] = ax * uy - ay * ux
+        _gram(columns, six, m, gram)
+        ratio = _scaled_cholesky(gram, six, factor, scale_rows)
+        if ratio < BAND * rtol:  # singular or in doubt: numpy's SVD
+            unsettled[p] = True
+            for k in range(out.shape[1]):
+                out[p, k] = np.nan
+            continue
+        _scaled_solve(factor, scale_rows, wrench, six, solved)
+        lowest, worst_rating, worst_length = np.inf, -np.inf, -np.inf
+        for i in range(m):
+            tension = 0.0  # s = A^T (A A^T)^-1 f (eqs. 7, 10)
+            for r in range(6):
+                tension += columns[i, r] * solved[r, 0]
+            lowest = min(lowest, tension - t_min[i])
+            worst_rating = max(worst_rating, tension / s_max[i])
+            worst_length = max(worst_length, lengths[i] / l_max)
+        if ratio >= singular_rtol:
+            out[p, 0] = (ratio - singular_rtol) / (1.0 - singular_rtol)
+        else:
+            out[p, 0] = ratio / singular_rtol - 1.0
+        out[p, 1] = lowest / scale
+        out[p, 2] = 1.0 - worst_rating
+        out[p, 3] = 1.0 - worst_length
