@@ -1,9 +1,13 @@
 """Structured configuration (Hydra + OmegaConf dataclasses) and its semantic validation.
 
-The dataclasses give every key a type, so a wrong key or a non-numeric value fails while the
-config is composed. :func:`validate` then checks values against the physics (positive masses,
-a carrier that fits in its frame, a catalogue id that exists) and raises :class:`ConfigError`
-naming the offending key and value.
+The dataclasses give every key a type and its value rules, and no value: every default lives
+once, in the YAML files of ``conf/`` (``conf/config.yaml`` and its groups), which are what a
+user reads, overrides and DVC tracks as parameters (``tests/test_config_schema.py`` checks that
+no field declares a default and that every declared key of each robot x analysis x tension
+combination gets one). A wrong key or a non-numeric value fails while the config is typed;
+:func:`validate` then checks values against the physics (positive masses, a carrier that fits
+in its frame, a catalogue id that exists) and raises :class:`ConfigError` naming the offending
+key and value.
 """
 
 from __future__ import annotations
@@ -27,11 +31,10 @@ JOBLIB_BACKENDS = ("loky", "threading", "multiprocessing", "sequential", "dask")
 # constraints): ``rule(check, default)`` declares a field, :func:`check_values` applies every
 # declared rule of a typed config once, and a schema's ``check_fields`` holds its rules between
 # fields. A check returns None when the value is fine, else what it must be.
-def rule(check, default=MISSING, factory=None):
-    """A dataclass field whose (non-null) value must pass ``check``."""
-    if factory is not None:
-        return field(default_factory=factory, metadata={"check": check})
-    return field(default=default, metadata={"check": check})
+def rule(check):
+    """A dataclass field whose (non-null) value must pass ``check``; its value comes from the
+    YAML files (no default here: one source of each default)."""
+    return field(default=MISSING, metadata={"check": check})
 
 
 def positive(value):
@@ -189,10 +192,10 @@ class Cpr8Config:
     """CPR-8 robot (Fig. 1). ``lower_anchor_drop``: depth of O', F', G', H' below O, F, G, H
     (null = h_o as eqs. 14-17)."""
 
-    name: str = "cpr8"
+    name: str = MISSING
     frame: FrameConfig = field(default_factory=FrameConfig)
     carrier: CarrierConfig = field(default_factory=CarrierConfig)
-    lower_anchor_drop: Optional[float] = rule(non_negative, None)
+    lower_anchor_drop: Optional[float] = rule(non_negative)
 
     @staticmethod
     def check_fields(robot: DictConfig) -> None:
@@ -229,11 +232,11 @@ class Irpm6Config:
     """6-cable IRPM (Hamed & Zohoor, Figs. 1-4): base and platform radii (m), pair angle gamma
     (deg), longest cable l_max (m), the search box of section III."""
 
-    name: str = "irpm6"
-    r_base: float = rule(positive, 6.0)
-    r_end: float = rule(positive, 1.2)
-    gamma_deg: float = rule(lambda v: None if 0 <= v < 120 else "must be in [0, 120) (pairs would overlap)", 0.0)
-    l_max: float = rule(positive, 15.0)
+    name: str = MISSING
+    r_base: float = rule(positive)
+    r_end: float = rule(positive)
+    gamma_deg: float = rule(lambda v: None if 0 <= v < 120 else "must be in [0, 120) (pairs would overlap)")
+    l_max: float = rule(positive)
     search: SearchConfig = field(default_factory=SearchConfig)
 
 
@@ -242,7 +245,7 @@ class PointsSearchConfig(SearchConfig):
     """Searched box and step (m); ``spacing``: ``faces`` (lo + k step up to hi, as the IRPM) or
     ``centres`` (lo + (k + 1/2) step, the centres of the cells of side step inside the box)."""
 
-    spacing: str = "faces"
+    spacing: str = MISSING
 
 
 @dataclass
@@ -252,12 +255,12 @@ class PointsConfig:
     (fixed frame) and attachments (platform frame), lists of [x, y, z] in m; optional cable
     names; the up direction; the longest cable l_max (m, null = none); the search box."""
 
-    name: str = "points"
+    name: str = MISSING
     anchors: Any = MISSING
     attachments: Any = MISSING
-    cable_names: Optional[list[str]] = None
-    up: list[float] = field(default_factory=lambda: [0.0, 0.0, 1.0])
-    l_max: Optional[float] = rule(positive, None)
+    cable_names: Optional[list[str]] = MISSING
+    up: list[float] = MISSING
+    l_max: Optional[float] = rule(positive)
     search: PointsSearchConfig = field(default_factory=PointsSearchConfig)
 
 
@@ -267,8 +270,8 @@ class TotalOrientationConfig:
     offsets on a grid of ``n`` values per angle in [-bound, bound] rad (n = 1: constant
     orientation)."""
 
-    bound: float = rule(non_negative, 0.0)
-    n: int = rule(at_least(1), 1)
+    bound: float = rule(non_negative)
+    n: int = rule(at_least(1))
 
 
 @dataclass
@@ -276,22 +279,24 @@ class OrientationConfig:
     """Carrier orientation, Euler angles of eq. (9) in rad; ``total`` widens it to the
     total-orientation workspace around it."""
 
-    psi: float = rule(finite, 0.0)
-    theta: float = rule(finite, 0.0)
-    phi: float = rule(finite, 0.0)
+    psi: float = rule(finite)
+    theta: float = rule(finite)
+    phi: float = rule(finite)
     total: TotalOrientationConfig = field(default_factory=TotalOrientationConfig)
 
 
 @dataclass
 class WrenchConfig:
-    """Applied wrench f_ext of eq. (11) of the IRPM paper, N and N m (the paper gives kN)."""
+    """Applied wrench f_ext of eq. (11) of the IRPM paper, N and N m (the paper gives kN), added to
+    the load's weight and ``load.external`` in every analysis (``robot=irpm6`` sets the paper's
+    f_z = 100 kN: the platform's weight, Z down)."""
 
-    fx: float = rule(force, 0.0)
-    fy: float = rule(force, 0.0)
-    fz: float = rule(force, 100_000.0)
-    mx: float = rule(force, 0.0)
-    my: float = rule(force, 0.0)
-    mz: float = rule(force, 0.0)
+    fx: float = rule(force)
+    fy: float = rule(force)
+    fz: float = rule(force)
+    mx: float = rule(force)
+    my: float = rule(force)
+    mz: float = rule(force)
 
 
 @dataclass
@@ -299,52 +304,59 @@ class LimitsConfig:
     """``s_max``: the IRPM paper's name (eq. 10) for ``tension.t_max``, kept as an alias: when
     given it replaces ``tension.t_max``."""
 
-    s_max: Any = None
+    s_max: Any = MISSING
 
 
 @dataclass
 class TensionConfig:
-    """``model``: pinv (papers) or feasible (cables only pull). ``t_min``: smallest tension (N).
-    ``t_max``: cable rating (N) in every analysis; each a number or one per cable, null = none (CPR-WWA: the motor torque limit
-    / R_i only); ``limits.s_max`` is an alias. ``residual_rtol``: a required wrench is unreachable when the equilibrium
-    residual exceeds this fraction of it."""
+    """The config group ``tension=pinv|feasible`` and its keys. ``model``: pinv (the papers'
+    minimum-norm forces, any sign) or feasible (cables only pull: hyperplane shifting, LPs where
+    it cannot settle). ``t_min``: smallest tension (N; pinv checks it in statics only).
+    ``t_max``: cable rating (N) in every analysis; each a number or one per cable, null = none
+    (CPR-WWA: the motor torque limit / R_i only; ``robot=irpm6`` sets the paper's 55 kN);
+    ``limits.s_max`` is an alias. ``residual_rtol``: a required wrench is unreachable when the
+    equilibrium residual exceeds this fraction of it."""
 
-    model: TensionModel = TensionModel.pinv
-    t_min: Any = 0.0
-    t_max: Any = None
-    residual_rtol: float = rule(positive, 1e-6)
+    model: TensionModel = MISSING
+    t_min: Any = MISSING
+    t_max: Any = MISSING
+    residual_rtol: float = rule(positive)
 
 
 @dataclass
 class GridConfig:
-    """N points per axis of the geometric workspace (section 3; the paper uses N = 6).
-    ``n_vel``: N of the velocity grid of eqs. (23)-(25); null ties it to ``n`` as in the paper.
-    Set it for dense position grids: n_vel = n = 40 would test 33 371 velocities per pose."""
+    """N points per axis of the CPR-8's geometric workspace (section 3; the paper uses N = 6);
+    ``spacing``: linspace puts them on both faces (step (d - 2 d_e) / (N - 1)), centred at the N
+    cell centres. ``n_vel``: N of the velocity grid of eqs. (23)-(25); null ties it to ``n`` as
+    in the paper (6 for robots without ``grid.n``). Set it for dense position grids: n_vel = n =
+    40 would test 33 371 velocities per pose."""
 
-    n: int = rule(at_least(2), 6)
-    n_vel: Optional[int] = rule(at_least(1), None)
-    spacing: Spacing = Spacing.linspace
+    n: int = rule(at_least(2))
+    n_vel: Optional[int] = rule(at_least(1))
+    spacing: Spacing = MISSING
 
 
 @dataclass
 class MotionConfig:
     """Trapezoidal reference motion: V_cmax (m/s), t_acc and t_dec (s)."""
 
-    v_max: float = rule(positive, 1.3)
-    t_acc: float = rule(positive, 1.82)
-    t_dec: float = rule(positive, 1.82)
+    v_max: float = rule(positive)
+    t_acc: float = rule(positive)
+    t_dec: float = rule(positive)
 
 
 @dataclass
 class LoadConfig:
-    """Load mass m (kg) of eq. (31), gravitational acceleration g (m/s^2, along -up of the robot),
-    centre of mass (m, platform frame) and a constant external wrench [f_x f_y f_z M_x M_y M_z]
-    (N, N m) the cables must also balance, in every analysis."""
+    """Load mass m (kg) of eq. (31) (0: a massless platform), gravitational acceleration g
+    (m/s^2, along -up of the robot), centre of mass (m, platform frame) and a constant external
+    wrench [f_x f_y f_z M_x M_y M_z] (N, N m) the cables must also balance: the weight, its moment
+    and the external wrench enter every analysis. Masses are bounded at 1e8 kg and forces at
+    1e9 N (N m): far past any cable robot, where a mistyped exponent would reach the LP solver."""
 
-    mass: float = rule(mass_kg, 2.0)
-    gravity: float = rule(non_negative, 9.81)
-    com: list[float] = rule(vector(3, "x y z, m, platform frame"), factory=lambda: [0.0] * 3)
-    external: list[float] = rule(vector(6, "fx fy fz mx my mz", MAX_FORCE), factory=lambda: [0.0] * 6)
+    mass: float = rule(mass_kg)
+    gravity: float = rule(non_negative)
+    com: list[float] = rule(vector(3, "x y z, m, platform frame"))
+    external: list[float] = rule(vector(6, "fx fy fz mx my mz", MAX_FORCE))
 
 
 @dataclass
@@ -352,15 +364,15 @@ class DriveConfig:
     """Design overrides of the catalogue's drive train, for every cable: winch radius R_i (m) and
     gear ratio N_V. null keeps each actuator's catalogue value."""
 
-    winch_radius: Optional[float] = rule(positive, None)
-    gear_ratio: Optional[float] = rule(positive, None)
+    winch_radius: Optional[float] = rule(positive)
+    gear_ratio: Optional[float] = rule(positive)
 
 
 @dataclass
 class ChoiceConfig:
     """CPR-ACM (section 4): an actuator is accepted when its feasible share x(i_a) >= required_pct."""
 
-    required_pct: float = rule(lambda v: None if 0 < v <= 100 else "must be in (0, 100]", 90.0)
+    required_pct: float = rule(lambda v: None if 0 < v <= 100 else "must be in (0, 100]")
 
 
 @dataclass
@@ -378,69 +390,76 @@ class ModelConfig:
     the largest) count as zero (1e-12 to 0.1). ``margin_atol``: margins within it of zero are exactly 0 and
     satisfied (``pipeline.workspace.verdict``), so a pose on a limit gets the same verdict on every CPU."""
 
-    pinv_columns: PinvColumns = PinvColumns.full
-    velocity_boundary: VelocityBoundary = VelocityBoundary.exclude
-    acceleration_set: AccelerationSet = AccelerationSet.corners
-    inertia: Inertia = Inertia.paper
-    moment_arm: MomentArm = MomentArm.platform
-    cable_direction: CableDirection = CableDirection.attachment
-    jdot: bool = False
-    xi_in_torque_limit: bool = True
+    pinv_columns: PinvColumns = MISSING
+    velocity_boundary: VelocityBoundary = MISSING
+    acceleration_set: AccelerationSet = MISSING
+    inertia: Inertia = MISSING
+    moment_arm: MomentArm = MISSING
+    cable_direction: CableDirection = MISSING
+    jdot: bool = MISSING
+    xi_in_torque_limit: bool = MISSING
     rank_rtol: float = rule(lambda v: None if 1e-12 <= v <= 0.1 else (
         "must be in [1e-12, 0.1]: below, rounding (about 1e-16) hides a singular matrix from the "
-        "rank test; above, well-conditioned poses count as singular"), 1e-9)
-    margin_atol: float = rule(lambda v: None if 0 <= v <= 1e-3 else "must be in [0, 1e-3]", 1e-9)
+        "rank test; above, well-conditioned poses count as singular"))
+    margin_atol: float = rule(lambda v: None if 0 <= v <= 1e-3 else "must be in [0, 1e-3]")
 
 
 @dataclass
 class ComputeConfig:
     """Parallel execution: joblib backend, workers (capped at the machine's cores except on
-    Dask), poses per chunk. ``backend=dask`` runs the chunks on the Dask scheduler at
-    ``scheduler`` (null: a local cluster of n_jobs workers). ``max_poses``: the most pose x
-    orientation evaluations a job may take (checked before any work; raise it knowingly).
-    ``kernel``: auto (the compiled kernels where they apply and pay, for the job or its sweep),
-    numpy or fused (docs/performance.md)."""
+    Dask), poses per chunk (lowered automatically so that a chunk's largest array stays under
+    32 MB). ``backend=dask`` runs the chunks on the Dask scheduler at ``scheduler`` (null: a
+    local cluster of n_jobs workers). ``max_poses``: the most pose x orientation evaluations a
+    job may take (checked before any work; raise it knowingly). ``kernel``: auto (the compiled
+    kernels where they apply and the numpy kernel would take over 0.4 s, about 80 000 poses, or
+    the job's sweep together would), numpy, or fused (refused where they do not apply:
+    tension=feasible, model.jdot=true, output.cables=true). The verdicts are the same either
+    way; the summary's ``kernel`` says which ran (docs/performance.md)."""
 
-    n_jobs: int = rule(lambda v: None if v != 0 else "must be a positive count or negative (joblib style)", 2)
-    backend: str = rule(lambda v: None if v in JOBLIB_BACKENDS else f"must be one of {', '.join(JOBLIB_BACKENDS)}", "loky")
-    chunk_size: int = rule(positive, 20_000)
-    scheduler: Optional[str] = None
-    max_poses: int = 50_000_000
-    kernel: Kernel = Kernel.auto
+    n_jobs: int = rule(lambda v: None if v != 0 else "must be a positive count or negative (joblib style)")
+    backend: str = rule(lambda v: None if v in JOBLIB_BACKENDS else f"must be one of {', '.join(JOBLIB_BACKENDS)}")
+    chunk_size: int = rule(positive)
+    scheduler: Optional[str] = MISSING
+    max_poses: int = MISSING
+    kernel: Kernel = MISSING
 
 
 @dataclass
 class LinesConfig:
     """Straight-line simulations (analysis=lines, section 3.1.3 of the CPR-8 paper): samples =
-    first writes the samples of line O''-F'' only (what Fig. 6 draws), all those of every line.
-    The verdicts of every line are in points.parquet either way."""
+    first writes the samples of line O''-F'' only (what Fig. 6 draws, 0.13 MB a job), all those
+    of every line (5.4 MB a job). The verdicts of every line are in points.parquet either way."""
 
-    samples: LineSamples = LineSamples.first
+    samples: LineSamples = MISSING
 
 
 @dataclass
 class OutputConfig:
-    """``cables``: add per-pose cable lengths and tensions to points.parquet
-    (``pipeline.workspace.quantities``). ``points``: write the per-pose table points.parquet (false: the
-    summary only, for sweeps whose figures read summaries; a study that draws clouds or
-    compares poses refuses it)."""
+    """``cables``: add per-pose ``length_<cable>`` (m) and ``tension_<cable>`` (statics) or
+    ``tension_min_/tension_max_<cable>`` over the acceleration set (CPR-WWA), N, to
+    points.parquet: the forces the checked model uses (``pipeline.workspace.quantities``).
+    ``points``: write the per-pose table points.parquet (false: the summary only, for sweeps
+    whose figures read summaries; a study that draws clouds or compares poses refuses it)."""
 
-    cables: bool = False
-    points: bool = True
+    cables: bool = MISSING
+    points: bool = MISSING
 
 
 @dataclass
 class Config:
-    """The job: ``analysis`` (cpr_wwa, statics or lines), ``actuator`` (the id of a catalogue
-    row), ``catalogue`` (a CSV or Parquet path; null = Table 1 of the CPR-8 paper, shipped),
-    ``poses`` (a list of [x, y, z] positions in m checked instead of the robot's grid; null =
-    the grid). A job has the keys of conf/config.yaml plus those of its tension, analysis and
-    robot files, and only those (:func:`typed_config` checks them against this schema)."""
+    """The job: ``analysis``, a config group (cpr_wwa: dynamics and actuator limits; statics:
+    wrench and tensions; lines: the paper's straight lines; ``robot=irpm6`` and ``points`` pick
+    statics), ``actuator`` (the id of a catalogue row), ``catalogue`` (a CSV or Parquet path;
+    null = Table 1 of the CPR-8 paper, shipped in pipeline/data), ``poses`` (a list of [x, y, z]
+    positions in m checked instead of the robot's grid, e.g. ``poses=[[0,0,5]]``; null = the
+    grid; the summary's volume_m3 is then NaN). A job has the keys of conf/config.yaml plus
+    those of its tension, analysis and robot files, and only those (:func:`typed_config` checks
+    them against this schema)."""
 
     robot: Any = MISSING
-    analysis: Analysis = Analysis.cpr_wwa
-    actuator: int = 1
-    catalogue: Optional[str] = None
+    analysis: Analysis = MISSING
+    actuator: int = MISSING
+    catalogue: Optional[str] = MISSING
     orientation: OrientationConfig = field(default_factory=OrientationConfig)
     grid: GridConfig = field(default_factory=GridConfig)
     motion: MotionConfig = field(default_factory=MotionConfig)
@@ -454,7 +473,7 @@ class Config:
     compute: ComputeConfig = field(default_factory=ComputeConfig)
     output: OutputConfig = field(default_factory=OutputConfig)
     lines: LinesConfig = field(default_factory=LinesConfig)
-    poses: Any = None
+    poses: Any = MISSING
 
 
 def register() -> None:

@@ -3,19 +3,32 @@ words, for its log line, the report and the evidence studies."""
 
 from __future__ import annotations
 
-from dataclasses import fields
+import functools
 
-from pipeline.app.config import ModelConfig
+from omegaconf import OmegaConf
+
+from pipeline.app.resources import CONF_DIR
 
 SETTINGS = ("rank_rtol", "margin_atol")  # model.* keys that are tolerances, not readings
 
 
 def reading_name(switches: dict) -> str:
     """``default``, or the switches that differ from the defaults (``pinv_columns=full``)."""
-    defaults = {f"model.{f.name}": f.default for f in fields(ModelConfig)}
+    defaults = default_readings()
     differ = [f"{key[6:]}={_text(value)}" for key, value in switches.items()
-              if _text(value) != _text(defaults[key])]
+              if _text(value) != defaults.get(key)]
     return ", ".join(differ) or "default"
+
+
+@functools.cache
+def default_readings() -> dict[str, str]:
+    """``model.<switch>`` -> its default, as text, from the analysis files of ``conf/`` (the one
+    place defaults live: CPR-WWA's readings in cpr_wwa.yaml, the IRPM's in statics.yaml)."""
+    readings = {}
+    for path in sorted((CONF_DIR / "analysis").glob("*.yaml")):
+        for key, value in (OmegaConf.load(path).get("model") or {}).items():
+            readings[f"model.{key}"] = _text(value)
+    return readings
 
 
 def describe_reading(model) -> str:
