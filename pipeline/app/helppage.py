@@ -44,7 +44,7 @@ def page(overrides: list[str], typed: DictConfig, version: str) -> str:
         if name not in plain:
             schema = ROBOT_SCHEMAS[typed.robot.name] if name == "robot" else _field_schema(Config, name)
             lines += _section(name, typed[name], schema)
-    lines += ["", "docs: README.md (every key with its default), docs/model.md (the readings), "
+    lines += ["", "docs: docs/config.md (every key with its type and value), docs/model.md (the readings), "
               "docs/api.md (Python)."]
     return "\n".join(lines) + "\n"
 
