@@ -13,6 +13,13 @@ anchors' bounding box; it is sampled at the cell centres of side ``--step``.
 
 Only single-body models with straight cables are imported (one rigid link, two attachments per
 cable); anything else, or a file that is not such XML, stops with one line and exit status 2.
+
+The importer writes only a new file of the user's: an existing file is replaced only with
+``--force``, a target inside the package's own ``conf/`` (where it would replace or hide a
+shipped file: run from a checkout, ``conf/robot/`` is that folder) is refused, and so is a
+shipped robot's name (``cpr8``, ``irpm6``, ``points``), which the file would hide under
+``--config-dir``. Names from the files (the source's, the cables') are written as quoted YAML
+scalars or with control characters replaced, so no name can become a key.
 """
 
 from __future__ import annotations
@@ -26,7 +33,10 @@ from pathlib import Path
 import numpy as np
 
 from pipeline.errors import ConfigError
+from pipeline.app.resources import CONF_DIR
 from pipeline.app.results import code_version, write_text
+
+SHIPPED_ROBOTS = tuple(sorted(p.stem for p in (CONF_DIR / "robot").glob("*.yaml")))
 
 
 def read_cables(path: Path, cable_set: str | None = None) -> dict:
@@ -101,7 +111,7 @@ def robot_yaml(cables: dict, body: dict | None, step: float, source: str, box=No
         lo, hi = anchors.min(axis=0), anchors.max(axis=0)
     lines = [
         "# @package _global_",
-        f"# Imported from CASPR: {source}. Anchors: link 0; attachments: link 1 (platform frame).",
+        f"# Imported from CASPR: {_one_line(source)}. Anchors: link 0; attachments: link 1 (platform frame).",
         "defaults:",
         "  - /robot/points",
         "  - _self_",
@@ -167,7 +177,27 @@ def _limit(values: list[float]) -> str:
 
 
 def _quoted(name: str) -> str:
-    return "'" + name.replace("'", "''") + "'"
+    """A single-quoted YAML scalar: a quote doubled, control characters (a line break would end
+    the scalar) replaced by '?'."""
+    return "'" + _one_line(name).replace("'", "''") + "'"
+
+
+def _one_line(text: str) -> str:
+    """``text`` without control characters (a newline in a comment would start a YAML key)."""
+    return re.sub(r"[\x00-\x1f\x7f\x85\u2028\u2029]", "?", text)
+
+
+def checked_target(out: Path, force: bool) -> Path:
+    """``out`` if the importer may write it, else ConfigError saying why and what to do."""
+    if out.stem in SHIPPED_ROBOTS:
+        raise ConfigError(f"--out={out}: robot={out.stem} is a shipped robot, which this file would hide "
+                          f"under --config-dir; choose another name (shipped: {', '.join(SHIPPED_ROBOTS)})")
+    if out.resolve().is_relative_to(CONF_DIR.resolve()):
+        raise ConfigError(f"--out={out}: inside the package's own configs ({CONF_DIR.resolve()}); write to a "
+                          "folder of your own, e.g. --out myconf/robot/NAME.yaml, and run with --config-dir myconf")
+    if out.exists() and not force:
+        raise ConfigError(f"--out={out}: exists; give --force to replace it")
+    return out
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -178,6 +208,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--cable-set", help="cable_set id (default: the file's default_cable_set)")
     parser.add_argument("--step", type=float, default=0.1, help="search grid step, m (default 0.1)")
     parser.add_argument("--out", type=Path, help="file to write (default conf/robot/<name>.yaml)")
+    parser.add_argument("--force", action="store_true", help="replace an existing --out file")
     parser.add_argument("--lo", type=float, nargs=3, help="search box corner x y z, m")
     parser.add_argument("--hi", type=float, nargs=3, help="search box corner x y z, m")
     args = parser.parse_args(argv)
@@ -196,7 +227,7 @@ def main(argv: list[str] | None = None) -> None:
         if body is None and "com" in cables["reference"]:
             raise ConfigError(f"{args.cables}: attachments relative to the centre of mass need --bodies")
         name = re.sub(r"_cables$", "", args.cables.stem).lower()
-        out = args.out or Path("conf") / "robot" / f"{name}.yaml"
+        out = checked_target(args.out or Path("conf") / "robot" / f"{name}.yaml", args.force)
         text = robot_yaml(cables, body, args.step, args.cables.name, box)
         try:
             out.parent.mkdir(parents=True, exist_ok=True)

@@ -133,3 +133,44 @@ def test_unknown_cable_set_and_a_second_body_are_named(tmp_path):
     done = run(tmp_path, "pipeline.caspr", "a_cables.xml", "--bodies", "two_bodies.xml")
     assert done.returncode == 2 and "exactly one <link_rigid> (found 2)" in done.stderr
     assert not (tmp_path / "conf").exists()
+
+
+def test_the_importer_writes_only_a_new_file_of_the_users(tmp_path):
+    """It replaced any robot file without asking: run from a checkout, a model named cpr8
+    replaced the shipped conf/robot/cpr8.yaml and the main job computed the imported robot."""
+    from pipeline.app.resources import CONF_DIR
+
+    (tmp_path / "demo_cables.xml").write_text(GOOD)
+    (tmp_path / "cpr8_cables.xml").write_text(GOOD)
+    target = tmp_path / "mine" / "robot" / "demo.yaml"
+    assert run(tmp_path, "pipeline.caspr", "demo_cables.xml", "--out", str(target)).returncode == 0
+    target.write_text("# edited by hand\n")
+    again = run(tmp_path, "pipeline.caspr", "demo_cables.xml", "--out", str(target))
+    assert again.returncode == 2 and again.stderr.strip().endswith("exists; give --force to replace it")
+    assert target.read_text() == "# edited by hand\n"
+    assert run(tmp_path, "pipeline.caspr", "demo_cables.xml", "--out", str(target), "--force").returncode == 0
+    assert "anchors" in target.read_text()
+    shipped = run(tmp_path, "pipeline.caspr", "cpr8_cables.xml", "--out", str(tmp_path / "mine" / "robot" / "cpr8.yaml"))
+    assert shipped.returncode == 2 and "robot=cpr8 is a shipped robot" in shipped.stderr
+    assert not (tmp_path / "mine" / "robot" / "cpr8.yaml").exists()
+    inside = CONF_DIR / "robot" / "caspr_test_never_written.yaml"
+    package = run(tmp_path, "pipeline.caspr", "demo_cables.xml", "--out", str(inside))
+    assert package.returncode == 2 and "inside the package's own configs" in package.stderr
+    assert not inside.exists()
+    for done in (again, shipped, package):
+        assert len(done.stderr.strip().splitlines()) == 1
+
+
+def test_names_from_the_files_cannot_become_yaml_keys(tmp_path):
+    """A source file or cable name holding line breaks was written as is into a comment or a
+    scalar: the next line became a key of the robot file (a hydra.callbacks entry ran code)."""
+    evil = "x\nhydra:\n  callbacks: {a: {_target_: builtins.print}}\n#"
+    source = tmp_path / f"{evil}_cables.xml"
+    source.write_text(GOOD.replace('name="cable 1"', 'name="one&#10;hydra: 1"'))
+    target = tmp_path / "mine" / "robot" / "odd.yaml"
+    done = run(tmp_path, "pipeline.caspr", str(source), "--out", str(target))
+    assert done.returncode == 0, done.stderr
+    text = target.read_text()
+    assert set(yaml.safe_load(text)) == {"defaults", "robot", "tension"}
+    assert yaml.safe_load(text)["robot"]["cable_names"][0] == "one?hydra: 1"
+    assert text.splitlines()[1].startswith("# Imported from CASPR: x?hydra:?  callbacks:")
