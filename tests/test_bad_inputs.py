@@ -189,3 +189,41 @@ def _refused(check, value):
         return check(value) is not None
     except TypeError:
         return False
+
+
+def test_files_users_share_cannot_set_hydra_and_run_code(tmp_path):
+    """A robot file given through --config-dir set hydra.callbacks (a builtins.open(..., 'w')
+    callback truncated a file, exit 0); so did +hydra.callbacks on the command line. Refused,
+    one line, exit 2, nothing written; a robot file of its own keys still runs."""
+    victim = tmp_path / "victim.txt"
+    victim.write_text("keep me\n")
+    robots = tmp_path / "mine" / "robot"
+    robots.mkdir(parents=True)
+    good = ("defaults: [points, _self_]\n"  # IPAnema 1 (README), a coarse grid
+            "anchors: [[-2, 1.5, 2], [2, 1.5, 2], [2, -1.5, 2], [-2, -1.5, 2], [-2, 1.5, 0], [2, 1.5, 0], "
+            "[2, -1.5, 0], [-2, -1.5, 0]]\n"
+            "attachments: [[-0.06, 0.06, 0], [0.06, 0.06, 0], [0.06, -0.06, 0], [-0.06, -0.06, 0], "
+            "[-0.06, 0.06, 0], [0.06, 0.06, 0], [0.06, -0.06, 0], [-0.06, -0.06, 0]]\n"
+            "search: {lo: [-1, -1, 0.5], hi: [1, 1, 1.5], step: 0.5}\n")
+    (robots / "tri.yaml").write_text(good)
+    callback = f"{{_target_: builtins.open, file: {victim}, mode: w}}"
+    cases = {
+        "global.yaml": f"# @package _global_\ndefaults: [points, _self_]\nhydra: {{callbacks: {{x: {callback}}}}}\n",
+        "plugin.yaml": "defaults: [points, {override /hydra/launcher: basic}, _self_]\n",
+    }
+    for name, text in cases.items():
+        bad = tmp_path / f"conf_{name}" / "robot"
+        bad.mkdir(parents=True)
+        (bad / "tri.yaml").write_text(good)
+        (bad / name).write_text(text)
+        done = subprocess.run([sys.executable, "-m", "pipeline", "--config-dir", str(bad.parent), "robot=tri",
+                               "hydra.run.dir=out"], cwd=tmp_path, capture_output=True, text=True, timeout=120)
+        assert done.returncode == 2, done.stderr
+        assert done.stderr.count("\n") == 1 and f"robot/{name} sets Hydra's own settings" in done.stderr
+    line = subprocess.run([sys.executable, "-m", "pipeline", f"+hydra.callbacks.x={callback}", "hydra.run.dir=out"],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert line.returncode == 2 and "a Hydra callback runs code" in line.stderr
+    assert victim.read_text() == "keep me\n" and not (tmp_path / "out").exists()
+    fine = subprocess.run([sys.executable, "-m", "pipeline", "--config-dir", str(robots.parent), "robot=tri",
+                           "hydra.run.dir=out"], cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert fine.returncode == 0, fine.stderr

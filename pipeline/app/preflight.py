@@ -249,6 +249,10 @@ def check(argv: list[str], reuse: Reuse | None = None) -> dict[str, tuple[DictCo
         raise ConfigError(one_line(exc)) from exc
     if jobs is None:
         return {}
+    for override in parse(_overrides(argv)):
+        if override.key_or_group.startswith("hydra.callbacks") and not override.is_delete():
+            raise ConfigError(f"{override.input_line}: a Hydra callback runs code; the command line may "
+                              "remove the project's (~hydra.callbacks.sweep_summary), not add or change one")
     register()
     search_path = _search_path(argv)
     # a caller's trials differ in their folder too: that value is set on Hydra's node afterwards
@@ -421,7 +425,8 @@ def _existing_ancestor(folder: Path) -> Path:
 
 def _search_path(argv: list[str]) -> tuple[str, ...]:
     """``--config-dir DIR`` (``-cd DIR``, ``--config-dir=DIR``) as the override Hydra applies for
-    it, so that the preflight composes from the user's folder as the job will."""
+    it, so that the preflight composes from the user's folder as the job will; its files are
+    checked first (:func:`_check_user_files`)."""
     for i, arg in enumerate(argv):
         folder = None
         if arg in ("--config-dir", "-cd") and i + 1 < len(argv):
@@ -432,8 +437,38 @@ def _search_path(argv: list[str]) -> tuple[str, ...]:
             path = Path(folder).expanduser().resolve()
             if not path.is_dir():
                 raise ConfigError(f"--config-dir={folder}: no such folder")
+            _check_user_files(path)
             return (f"hydra.searchpath=[file://{path}]",)
     return ()
+
+
+USER_FILE_BYTES = 1 << 20  # a robot file of a thousand cables is about 100 kB
+
+
+def _check_user_files(folder: Path) -> None:
+    """The YAML files of a user's config folder (robot, analysis and tension files, often shared
+    or imported) carry their own keys only: one that sets Hydra's node or picks a Hydra plugin
+    (``hydra:``, ``override hydra/...``, whose callbacks, launchers and environment run code)
+    is refused with one line naming it, as is a file too large or not YAML."""
+    import yaml
+
+    for path in sorted(folder.rglob("*.yaml")):
+        where = path.relative_to(folder)
+        if path.stat().st_size > USER_FILE_BYTES:
+            raise ConfigError(f"--config-dir={folder}: {where}: {path.stat().st_size} bytes "
+                              f"(a config file is at most {USER_FILE_BYTES} bytes)")
+        try:
+            data = yaml.safe_load(path.read_text(encoding="utf-8"))
+        except (yaml.YAMLError, UnicodeDecodeError) as exc:
+            raise ConfigError(f"--config-dir={folder}: {where}: not YAML ({one_line(exc)})") from None
+        if not isinstance(data, dict):
+            continue
+        defaults = data.get("defaults") if isinstance(data.get("defaults"), list) else []
+        entries = [str(next(iter(d))) if isinstance(d, dict) and d else str(d) for d in defaults]
+        if "hydra" in data or any(re.match(r"(override\s+)?/?hydra(/|$|_settings)", e) for e in entries):
+            raise ConfigError(f"--config-dir={folder}: {where} sets Hydra's own settings (callbacks, "
+                              "launchers, environment: they run code); a robot, analysis or tension file "
+                              "carries its own keys only")
 
 
 def _missing_option(exc: MissingConfigException, parsed: list[Override]) -> str:
