@@ -10,6 +10,8 @@ from pathlib import Path
 import pytest
 from omegaconf import OmegaConf
 
+from pipeline.app import preflight
+from pipeline.errors import ConfigError
 from pipeline.model.catalogue import load_catalogue
 
 pytestmark = pytest.mark.slow
@@ -128,7 +130,26 @@ def listing(root: Path) -> set[str]:
     return {str(p.relative_to(root)) for p in (root / "outputs").rglob("*")}
 
 
-@pytest.mark.parametrize("module, args, expected", CASES, ids=[" ".join(c[1]) or c[0] for c in CASES])
+# Run end to end (a process, its exit status, its stderr, the files): every study and report case,
+# and one job case of each kind (a bad value, a sweep, a bad catalogue file, a grammar error).
+END_TO_END = {"actuator=9", "-m actuator=1,2,9", "catalogue=truncated.parquet", "actuator=[1,2",
+              "-m actuator=1,2 hydra.launcher.n_jobs=0", "grid.n=1000000"}
+IN_PROCESS = [c for c in CASES if c[0] == "pipeline" and " ".join(c[1]) not in END_TO_END]
+PROCESSES = [c for c in CASES if c not in IN_PROCESS]
+
+
+@pytest.mark.parametrize("module, args, expected", IN_PROCESS, ids=[" ".join(c[1]) for c in IN_PROCESS])
+def test_the_preflight_names_the_bad_key_and_value(workdir, monkeypatch, module, args, expected):
+    """What `python -m pipeline ARGS` prints after ``error: `` (pipeline.app.cli), in-process."""
+    monkeypatch.chdir(workdir)
+    before = listing(workdir)
+    with pytest.raises(ConfigError) as raised:
+        preflight.check(args)
+    assert expected in str(raised.value) and "\n" not in str(raised.value)
+    assert listing(workdir) == before
+
+
+@pytest.mark.parametrize("module, args, expected", PROCESSES, ids=[" ".join(c[1]) or c[0] for c in PROCESSES])
 def test_one_line_error_nonzero_exit_and_no_new_output(workdir, module, args, expected):
     before = listing(workdir)
     proc = subprocess.run([sys.executable, "-m", module, *args], cwd=workdir,
