@@ -29,6 +29,12 @@ def _catalogue_files(folder: Path) -> None:
     data = (folder / "cat.parquet").read_bytes()
     (folder / "truncated.parquet").write_bytes(data[: len(data) // 2])
     (folder / "empty.csv").write_text("")
+    robots = folder / "robots" / "robot"
+    robots.mkdir(parents=True)
+    (robots / "noanchors.yaml").write_text("defaults: [points, _self_]\nattachments: [[0, 0, 0], [0, 0, 0]]\n"
+                                           "search: {lo: [0, 0, 0], hi: [1, 1, 1], step: 0.5}\n")
+    (robots / "empty.yaml").write_text("")
+    (robots / "list.yaml").write_text("- 1\n- 2\n")
 
 
 @pytest.fixture(scope="module")
@@ -113,6 +119,12 @@ CASES = [
     ("pipeline", ["orientation.total.n=1000", "orientation.total.bound=0.1"], "compute.max_poses"),
     ("pipeline", ["-m", "load.mass=1,2,inf"], "load.mass=inf"),
     ("pipeline", ["robot=irpm6", "actuator=3"], "no such key for robot=irpm6 with analysis=statics"),
+    # a traceback of OmegaConf's, a misleading "robot.name=None", a limit blamed on the grid, a crash in the job
+    ("pipeline", ["--config-dir", "robots", "robot=noanchors"], "robot.anchors: no value given"),
+    ("pipeline", ["--config-dir", "robots", "robot=empty"], "robot: the robot file gives no robot keys"),
+    ("pipeline", ["--config-dir", "robots", "robot=list"], "robot: the robot file gives no robot keys"),
+    ("pipeline", ["compute.max_poses=-1"], "compute.max_poses=-1: must be >= 1"),
+    ("pipeline", ["drive.gear_ratio=1e308"], "drive.gear_ratio=1e+308: must be > 0 and at most 1e+05"),
     ("pipeline.study", ["no_such_study"], "study 'no_such_study' not found"),
     ("pipeline.study", ["actuator_choice", "catalogue=text.csv"], "row 2, column voltage_V: '48 V'"),
     ("pipeline.study", ["actuator_choice", "catalogue=dup.csv"], "row 3, column id: duplicate id 1"),

@@ -32,3 +32,27 @@ def test_small_study_on_dask_equals_the_local_study(tmp_path):
     pd.testing.assert_frame_equal(dask, local)
     log = (tmp_path / "dask" / "actuator_choice" / "jobs" / "actuator=1" / "pipeline.log").read_text()
     assert "chunks on the Dask cluster tcp://" in log
+
+
+def test_a_local_dask_cluster_is_capped_at_the_cores_like_loky(make_cfg, catalogue, monkeypatch, caplog):
+    """compute.backend=dask compute.n_jobs=8 started 10 processes on 2 cores (loky was capped,
+    Dask was not): a cluster started here gets at most one worker per core, with the warning."""
+    import os
+
+    import dask.distributed
+
+    started = []
+
+    class Refused(Exception):
+        pass
+
+    def cluster(n_workers, **_):
+        started.append(n_workers)
+        raise Refused
+
+    monkeypatch.setattr(dask.distributed, "LocalCluster", cluster)
+    cfg = make_cfg("grid.n=10", "compute.chunk_size=100", "compute.backend=dask", "compute.n_jobs=8")
+    with caplog.at_level("WARNING"), pytest.raises(Refused):
+        compute_workspace(cfg, catalogue)
+    assert started == [min(8, os.cpu_count())]
+    assert any("capped at the" in r.getMessage() for r in caplog.records) == (os.cpu_count() < 8)

@@ -361,11 +361,12 @@ class LoadConfig:
 
 @dataclass
 class DriveConfig:
-    """Design overrides of the catalogue's drive train, for every cable: winch radius R_i (m) and
-    gear ratio N_V. null keeps each actuator's catalogue value."""
+    """Design overrides of the catalogue's drive train, for every cable: winch radius R_i (m, at
+    most 10) and gear ratio N_V (at most 1e5: past any gearbox, where the drive's constants of
+    eq. 22 would overflow). null keeps each actuator's catalogue value."""
 
-    winch_radius: Optional[float] = rule(positive)
-    gear_ratio: Optional[float] = rule(positive)
+    winch_radius: Optional[float] = rule(lambda v: None if 0 < v <= 10 else "must be > 0 and at most 10 m")
+    gear_ratio: Optional[float] = rule(lambda v: None if 0 < v <= 1e5 else "must be > 0 and at most 1e+05")
 
 
 @dataclass
@@ -406,8 +407,8 @@ class ModelConfig:
 
 @dataclass
 class ComputeConfig:
-    """Parallel execution: joblib backend, workers (capped at the machine's cores except on
-    Dask), poses per chunk (lowered automatically so that a chunk's largest array stays under
+    """Parallel execution: joblib backend, workers (capped at the machine's cores, except on a
+    Dask scheduler elsewhere), poses per chunk (lowered automatically so that a chunk's largest array stays under
     32 MB). ``backend=dask`` runs the chunks on the Dask scheduler at ``scheduler`` (null: a
     local cluster of n_jobs workers). ``max_poses``: the most pose x orientation evaluations a
     job may take (checked before any work; raise it knowingly). ``kernel``: auto (the compiled
@@ -420,7 +421,7 @@ class ComputeConfig:
     backend: str = rule(lambda v: None if v in JOBLIB_BACKENDS else f"must be one of {', '.join(JOBLIB_BACKENDS)}")
     chunk_size: int = rule(positive)
     scheduler: Optional[str] = MISSING
-    max_poses: int = MISSING
+    max_poses: int = rule(at_least(1))
     kernel: Kernel = MISSING
 
 
@@ -513,7 +514,11 @@ def typed_schema(cfg: DictConfig) -> DictConfig:
     """``cfg`` merged into the typed schema (every declared key, typed nodes that check any
     later assignment); :func:`masked` keeps the keys ``cfg`` has."""
     unknown_keys(cfg, Config)
-    name = cfg.robot.get("name") if isinstance(cfg.get("robot"), DictConfig) else None
+    robot = cfg.get("robot")
+    if not isinstance(robot, DictConfig) or "name" not in robot:
+        raise ConfigError("robot: the robot file gives no robot keys (an empty file, or not a mapping of "
+                          "keys): start your own with 'defaults: [points, _self_]'")
+    name = robot.get("name")
     if name not in ROBOT_SCHEMAS:
         raise ConfigError(f"robot.name={name}: unknown robot ({', '.join(ROBOT_SCHEMAS)})")
     unknown_keys(cfg.robot, ROBOT_SCHEMAS[name], "robot.")

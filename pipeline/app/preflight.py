@@ -279,7 +279,11 @@ def check(argv: list[str], reuse: Reuse | None = None) -> dict[str, tuple[DictCo
     def build(overrides: list[str]) -> tuple[DictConfig, DictConfig]:
         """(the job's typed config, its config as Hydra composes it)"""
         parsed, composition = composed_for(overrides)
-        return composition.job(parsed)
+        try:
+            return composition.job(parsed)
+        except MissingMandatoryValue as exc:  # ??? in a file, and not given
+            raise ConfigError(f"{exc.full_key}: no value given (a required key: set it in the file or on "
+                              f"the command line, e.g. {exc.full_key}=...)") from None
 
     def hydra_node(overrides: list[str]) -> DictConfig:
         parsed, composition = composed_for(overrides)

@@ -45,7 +45,8 @@ def iter_chunks(
     """(slice, ``function(problem, positions[slice])``) for every chunk, in order, as each
     finishes: a caller can write results out chunk by chunk (bounded memory)."""
     workers = n_jobs if n_jobs > 0 else max((os.cpu_count() or 1) + 1 + n_jobs, 1)  # joblib's rule
-    if backend != "dask" and workers > (os.cpu_count() or 1):  # more would only thrash memory
+    here = backend != "dask" or not scheduler  # loky, or a Dask cluster started on this machine
+    if here and workers > (os.cpu_count() or 1):  # more would only thrash memory
         log.warning("compute.n_jobs=%d: capped at the %d cores of this machine", n_jobs, os.cpu_count())
         workers = os.cpu_count() or 1
     slices = chunk_slices(len(positions), workers, chunk_size)
