@@ -217,14 +217,16 @@ def _tensions(studies_dir: Path) -> list[str]:
     rows = ["## CPR-8, the paper's torques against cables that can only pull", "",
             "No paper number: the papers never check the sign of a tension. Share of the "
             "minimum-norm (pinv) feasible points that stay feasible when the tensions must pull "
-            "(`tension.model=feasible`), in %, and the feasible counts pinv → pulling of 216:", "",
+            "(`tension.model=feasible`), in %, and the feasible counts pinv → pulling of 216 (with the "
+            "poses only the pulling model finds feasible, *new*):", "",
             "| wrench rows, orientation | " + " | ".join(
                 f"act. {a}" for a in sorted(table["actuator"].unique())) + " |",
             "| --- |" + " --- |" * table["actuator"].nunique()]
     table = table.sort_values("wrench_rows", ascending=False, kind="stable")  # the paper's first
     for (reading, case), part in table.groupby(["wrench_rows", "case_label"], sort=False):
         cells = [f"{'–' if pd.isna(r.survive_pct) else f'{r.survive_pct:.1f}'} "
-                 f"({r.n_paper} → {r.n_physical})" for r in part.sort_values("actuator").itertuples()]
+                 f"({r.n_paper} → {r.n_physical}{f', {r.n_gained} new' if r.n_gained else ''})"
+                 for r in part.sort_values("actuator").itertuples()]
         rows.append(f"| {md(reading)}, {md(case)} | " + " | ".join(md(c) for c in cells) + " |")
     return rows + ["", "Forces only is the paper's reading of eq. (20); forces and moments "
                    "(`full`) also keeps the carrier's orientation (docs/model.md section 7).", ""]

@@ -34,6 +34,10 @@ def _catalogue_files(folder: Path) -> None:
     (robots / "noanchors.yaml").write_text("defaults: [points, _self_]\nattachments: [[0, 0, 0], [0, 0, 0]]\n"
                                            "search: {lo: [0, 0, 0], hi: [1, 1, 1], step: 0.5}\n")
     (robots / "empty.yaml").write_text("")
+    (robots / "square.yaml").write_text(  # 8 cables, a 2 x 2 x 1 m box
+        "defaults: [points, _self_]\nanchors: [[-2, 1.5, 2], [2, 1.5, 2], [2, -1.5, 2], [-2, -1.5, 2], "
+        "[-2, 1.5, 0], [2, 1.5, 0], [2, -1.5, 0], [-2, -1.5, 0]]\nattachments: [[0, 0, 0], [0, 0, 0], [0, 0, 0], "
+        "[0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0]]\nsearch: {lo: [-1, -1, 0.5], hi: [1, 1, 1.5], step: 0.5}\n")
     (robots / "list.yaml").write_text("- 1\n- 2\n")
 
 
@@ -124,6 +128,11 @@ CASES = [
     ("pipeline", ["--config-dir", "robots", "robot=empty"], "robot: the robot file gives no robot keys"),
     ("pipeline", ["--config-dir", "robots", "robot=list"], "robot: the robot file gives no robot keys"),
     ("pipeline", ["compute.max_poses=-1"], "compute.max_poses=-1: must be >= 1"),
+    # a ZeroDivisionError after the run folder existed; a sweep of 10^8 jobs hung while it was listed
+    ("pipeline", ["--config-dir", "robots", "robot=square", "robot.search.step=5", "robot.search.spacing=centres"],
+     "robot.search.step=5.0: no grid point in the search box"),
+    ("pipeline", ["-m", "actuator=range(0,10000)", "load.mass=range(1,10001)"],
+     "-m: 1e+08 jobs (actuator: 10000 x load.mass: 10000); at most 100000"),
     ("pipeline", ["drive.gear_ratio=1e308"], "drive.gear_ratio=1e+308: must be > 0 and at most 1e+05"),
     ("pipeline.study", ["no_such_study"], "study 'no_such_study' not found"),
     ("pipeline.study", ["actuator_choice", "catalogue=text.csv"], "row 2, column voltage_V: '48 V'"),

@@ -85,6 +85,8 @@ def test_report_compares_paper_and_ours_and_carries_the_figures(studies, tmp_pat
     assert "| 0.2 | 235.2 | 88.0 |" in text and "| 1.0 | 235.2 | 88.0 |" in text
     assert "γ = 0°: 1.00, γ = 30°: 1.00." in text  # section III: the spread over r_end
     assert "| translational, zero orientation | 66.7 (216 → 144) |" in text
+    # actuator 5: every paper point survives and 8 more hold (was "100.0 (24 → 32)": 32 of 24?)
+    assert "| 100.0 (24 → 32, 8 new) |" in text
     assert "| fact | source | read the other way | default | jdot=true |" in text  # default first
     # one fact: read the other way, the other reading matches it and wins
     assert "| a \\| claim | Table 2 | best: jdot=true | ✓ 216 of 216 | ✗ 212 of 216, 4 off |" in text

@@ -632,6 +632,11 @@ def _validate_size(cfg: DictConfig) -> None:
         raise ConfigError(f"grid.n_vel={n_vel}: the velocity grid would have {(n_vel + 1) ** 3:.3g} "
                           f"candidates; at most grid.n_vel={limit}")
     poses = grid_size(cfg)
+    if poses == 0:  # a cell of side step larger than the box: no centre inside it
+        search = cfg.robot.search
+        raise ConfigError(f"robot.search.step={search.step}: no grid point in the search box (cells of that side "
+                          f"do not fit between lo={list(search.lo)} and hi={list(search.hi)}); use a smaller "
+                          "step or spacing: faces")
     orientations = orientation_count(cfg.orientation)
     if poses * orientations > cfg.compute.max_poses:
         raise ConfigError(

@@ -18,6 +18,7 @@ from __future__ import annotations
 import copy
 import functools
 import itertools
+import math
 import os
 import pickle
 import re
@@ -29,7 +30,7 @@ from typing import Any
 from hydra import compose, initialize_config_dir
 from hydra.errors import MissingConfigException
 from hydra.core.override_parser.overrides_parser import OverridesParser
-from hydra.core.override_parser.types import Override
+from hydra.core.override_parser.types import ChoiceSweep, Override, RangeSweep
 from omegaconf import DictConfig, ListConfig, OmegaConf, open_dict, read_write
 from omegaconf.errors import ConfigAttributeError, ConfigKeyError, MissingMandatoryValue
 
@@ -60,9 +61,18 @@ def job_overrides(argv: list[str]) -> list[list[str]] | None:
     return expand_sweep(parsed)
 
 
+MAX_JOBS = 100_000  # jobs one command may launch: a typo in a range could ask for 10^8
+
+
 def expand_sweep(parsed: list[Override]) -> list[list[str]]:
     """The basic sweeper's jobs: the cartesian product of every override's values, in command
-    order (``pipeline.sweeper`` launches exactly these)."""
+    order (``pipeline.sweeper`` launches exactly these). Counted first: more than MAX_JOBS is a
+    ConfigError naming the sweeps, before any list is made."""
+    counts = {o.get_key_element(): _sweep_count(o) for o in parsed if o.is_sweep_override()}
+    if math.prod(counts.values()) > MAX_JOBS:
+        sizes = " x ".join(f"{key}: {count:g}" for key, count in counts.items())
+        raise ConfigError(f"-m: {math.prod(counts.values()):.3g} jobs ({sizes}); at most {MAX_JOBS} in "
+                          "one command (split the sweep, or sweep fewer values)")
     values: dict[str, list[str]] = {}  # a repeated key keeps its place and takes its last values
     for override in parsed:
         key = override.get_key_element()
@@ -74,6 +84,14 @@ def expand_sweep(parsed: list[Override]) -> list[list[str]]:
         else:
             values[key] = [f"{key}={override.get_value_element_as_str()}"]
     return [list(job) for job in itertools.product(*values.values())]
+
+
+def _sweep_count(override: Override) -> float:
+    """How many values a sweep override gives, without listing a range's."""
+    value = override.value()
+    if isinstance(value, RangeSweep):
+        return max(0, math.ceil((value.stop - value.start) / value.step)) if value.step else math.inf
+    return len(value.list) if isinstance(value, ChoiceSweep) else 1
 
 
 def _other_sweeper(parsed: list[Override]) -> bool:
