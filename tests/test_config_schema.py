@@ -56,3 +56,17 @@ def test_every_key_of_every_combination_gets_its_value_from_the_yaml(robot, anal
 
 def test_the_rule_helper_declares_no_default():
     assert config.rule(config.positive).default is MISSING
+
+
+@pytest.mark.parametrize("robot, model", [("cpr8", "pinv"), ("irpm6", "pinv"), ("points", "feasible")])
+def test_a_users_robot_checks_cables_that_only_pull_by_default(robot, model):
+    """The papers' robots keep their papers' minimum-norm forces; a robot given by its points
+    (and every file built on it: your own, an imported CASPR model) checks pulling cables: with
+    more cables than freedoms the minimum-norm forces are rarely all positive (0 % feasible)."""
+    from hydra import compose, initialize_config_dir
+
+    from pipeline.app.resources import CONF_DIR
+
+    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
+        assert compose(config_name="config", overrides=[f"robot={robot}"]).tension.model == model
+        assert compose(config_name="config", overrides=[f"robot={robot}", "tension=pinv"]).tension.model == "pinv"

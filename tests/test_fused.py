@@ -182,7 +182,7 @@ def test_a_points_robot_with_eight_cables_gives_the_numpy_statics_margins(make_c
     anchors = [[0, 0, 3], [4, 0, 3], [4, 4, 3], [0, 4, 3], [0, 0, 0], [4, 0, 0], [4, 4, 0], [0, 4, 0]]
     attachments = [[-0.1, -0.1, 0.05], [0.1, -0.1, 0.05], [0.1, 0.1, 0.05], [-0.1, 0.1, 0.05],
                    [-0.1, -0.1, -0.05], [0.1, -0.1, -0.05], [0.1, 0.1, -0.05], [-0.1, 0.1, -0.05]]
-    cfg = make_cfg("robot=points", f"robot.anchors={anchors}", f"robot.attachments={attachments}",
+    cfg = make_cfg("robot=points", "tension=pinv", f"robot.anchors={anchors}", f"robot.attachments={attachments}",
                    "robot.search.lo=[0.3,0.3,0.3]", "robot.search.hi=[3.7,3.7,2.7]", "robot.search.step=0.2",
                    "robot.l_max=4.5", "tension.t_min=1", "load.mass=30")
     problem, grid = build_problem(cfg, catalogue)

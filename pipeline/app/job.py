@@ -39,6 +39,10 @@ from pipeline.workspace.arrow import one_row, read
 from pipeline.workspace.compute import analysis_name, compute_workspace
 
 log = logging.getLogger("pipeline")
+TENSION_MODELS = {  # what each tension model checks, for the job's log
+    "pinv": "the papers' minimum-norm cable forces, which may push; tension=feasible: cables that only pull",
+    "feasible": "cables that only pull; tension=pinv: the papers' minimum-norm forces, which may push",
+}
 # The typed, validated config and catalogue of every job the preflight of this process checked,
 # by the YAML of the config Hydra composes for it (``pipeline.app.preflight.check``): a job run in
 # this process takes them from here instead of typing, validating and reading them again.
@@ -102,6 +106,7 @@ def _run_locked(cfg: DictConfig, catalogue, out: Path) -> dict:
         log.info("reused the finished job in %s (same config and code version)", out)
         return done
     log.info("reading: %s (docs/model.md, sections 4-5)", describe_reading(cfg.model))
+    log.info("tension model: %s (%s)", cfg.tension.model.value, TENSION_MODELS[cfg.tension.model.value])
     if analysis_name(cfg) == "lines":
         from pipeline.workspace.lines import simulate_lines  # pandas: only this analysis needs it
 
