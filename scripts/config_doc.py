@@ -47,13 +47,18 @@ give the value: `default` is `robot=cpr8 analysis=cpr_wwa tension=pinv`.
 """
 
 
+def composed(overrides: list[str]) -> dict[str, object]:
+    """Key path -> value of the config composed with ``overrides``."""
+    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
+        return dict(_leaves(compose(config_name="config", overrides=overrides)))
+
+
 def values() -> dict[str, tuple[object, str]]:
     """Key path -> (its YAML value, the first composition that has it)."""
     found: dict[str, tuple[object, str]] = {}
-    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
-        for name, overrides in COMPOSITIONS.items():
-            for key, value in _leaves(compose(config_name="config", overrides=overrides)):
-                found.setdefault(key, (value, name))
+    for name, overrides in COMPOSITIONS.items():
+        for key, value in composed(overrides).items():
+            found.setdefault(key, (value, name))
     return found
 
 
@@ -118,15 +123,11 @@ def page() -> str:
     found = values()
     lines = [HEADER]
     for name, schema in config.ROBOT_SCHEMAS.items():
-        sub = {k: v for k, v in found.items()}
-        if name != "cpr8":  # each robot's own values
-            with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
-                sub.update({k: (v, f"robot={name}") for k, v in _leaves(
-                    compose(config_name="config", overrides=[f"robot={name}"])) if k.startswith("robot.")})
-        _section(f"robot={name}", schema, "robot.", sub, lines)
+        own = composed([f"robot={name}"])  # each robot's own values
+        where = "default" if name == "cpr8" else f"robot={name}"
+        _section(f"robot={name}", schema, "robot.",
+                 {**found, **{k: (v, where) for k, v in own.items() if k.startswith("robot.")}}, lines)
         if name != "cpr8":
-            with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
-                own = dict(_leaves(compose(config_name="config", overrides=[f"robot={name}"])))
             others = [f"`{key}={_value(value)}`" for key, value in own.items()
                       if not key.startswith("robot.") and key in found and found[key][0] != value]
             if others:

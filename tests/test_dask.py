@@ -44,7 +44,7 @@ def test_a_local_dask_cluster_is_capped_at_the_cores_like_loky(make_cfg, catalog
     started = []
 
     class Refused(Exception):
-        pass
+        """Raised instead of starting the cluster: the test needs only its size."""
 
     def cluster(n_workers, **_):
         started.append(n_workers)
