@@ -16,7 +16,7 @@ state: no matplotlib backend, no logging handlers.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from datetime import datetime
 from pathlib import Path
 from typing import Iterable
@@ -27,7 +27,7 @@ from pipeline.analyses.choice import choose, verdict
 from pipeline.errors import ConfigError
 from pipeline.analyses.figures import StudyResults
 from pipeline.app.job import execute
-from pipeline.app.preflight import check, quoted
+from pipeline.app.plan import Job, plan, quoted
 from pipeline.app.results import read_metadata
 from pipeline.study import OUTPUT_DIR, study_dir
 from pipeline.workspace.compute import analysis_name
@@ -75,8 +75,7 @@ def workspace(overrides: Iterable[str] = (), folder: str | Path | None = None,
     (the command line's ``--config-dir``). Raises ConfigError for bad input (nothing written)."""
     overrides = _listed(overrides, config_dir)
     folder = Path(folder) if folder is not None else _new_folder()
-    ((cfg, catalogue),) = check([*overrides, f"hydra.run.dir={quoted(folder)}"]).values()
-    return _run(cfg, catalogue, folder)
+    return _run(plan([*overrides, f"hydra.run.dir={quoted(folder)}"]).jobs[0])
 
 
 def actuator_choice(overrides: Iterable[str] = (), folder: str | Path | None = None,
@@ -89,15 +88,15 @@ def actuator_choice(overrides: Iterable[str] = (), folder: str | Path | None = N
         raise ConfigError("actuator=...: the choice runs every actuator of the catalogue; "
                           "use workspace() for one")
     folder = Path(folder) if folder is not None else _new_folder()
-    ((cfg, catalogue),) = check([*overrides, f"hydra.run.dir={quoted(folder)}"]).values()
-    if catalogue is None:
-        raise ConfigError(f"analysis={analysis_name(cfg)}: no actuators to choose from "
+    (first,) = plan([*overrides, f"hydra.run.dir={quoted(folder)}"]).jobs
+    if first.catalogue is None:
+        raise ConfigError(f"analysis={analysis_name(first.cfg)}: no actuators to choose from "
                           "(the choice needs analysis=cpr_wwa)")
-    ids = ",".join(str(i) for i in catalogue.ids)
-    jobs = check(["-m", f"actuator={ids}", *overrides, f"hydra.sweep.dir={quoted(folder)}"])
+    ids = ",".join(str(i) for i in first.catalogue.ids)
+    jobs = plan(["-m", f"actuator={ids}", *overrides, f"hydra.sweep.dir={quoted(folder)}"]).jobs
     done = {}
-    for job_cfg, job_catalogue in jobs.values():  # every job checked before the first runs
-        done[int(job_cfg.actuator)] = _run(job_cfg, job_catalogue, folder / f"actuator={job_cfg.actuator}")
+    for job in jobs:  # every job checked before the first runs
+        done[int(job.cfg.actuator)] = _run(replace(job, folder=folder / f"actuator={job.cfg.actuator}"))
     table = choose(pd.DataFrame([ws.summary for ws in done.values()]))
     return Choice(table, verdict(table), done)
 
@@ -113,10 +112,9 @@ def load_study(name: str, out_root: str | Path | None = None,
     return StudyResults(directory)
 
 
-def _run(cfg, catalogue, folder: Path) -> Workspace:
-    folder.mkdir(parents=True, exist_ok=True)
-    execute(cfg, catalogue, folder)
-    return Workspace.read(folder)
+def _run(job: Job) -> Workspace:
+    execute(job)
+    return Workspace.read(job.folder)
 
 
 def _listed(overrides: Iterable[str], config_dir: str | Path | None = None) -> list[str]:

@@ -4,8 +4,8 @@ A study (one paper figure or table) is a YAML file ``studies/NAME.yaml`` holding
 fixed overrides, the swept keys, the analyses that turn the sweep summary into tables, and the
 figures. Running it is always the same three steps:
 
-1. the sweep, as one ``python -m pipeline -m`` command (Hydra, the preflight) run in this
-   process, into ``outputs/studies/NAME/jobs/`` (one command per case, into ``jobs/CASE/``,
+1. the sweep, as one ``python -m pipeline -m`` command (planned, then run in this process:
+   ``pipeline.app.plan``, ``pipeline.app.run``), into ``outputs/studies/NAME/jobs/`` (one command per case, into ``jobs/CASE/``,
    when the study declares ``cases``), gathered into ``outputs/studies/NAME/summary.parquet``;
 2. the analyses (``ANALYSES``), each written as ``outputs/studies/NAME/<analysis>.parquet``;
 3. the figures (``pipeline.analyses.figures``), drawn from those Parquet files only, into
@@ -36,14 +36,14 @@ from omegaconf import OmegaConf
 
 from pipeline.model.catalogue import load_catalogue
 from pipeline.analyses.choice import acceptance, choose, verdict
-from pipeline.app.cli import launch
 from pipeline.errors import ConfigError, one_line
 from pipeline.analyses.evidence import evidence, scores
 from pipeline.analyses.figures import SERIES_DIR, FigureSpec, StudyResults, render
-from pipeline.app.job import PREPARED, changed_files, execute, folder_lock
+from pipeline.app.job import changed_files, execute, folder_lock
 from pipeline.analyses.optimise import (OptimiseSpec, best_drive, check_catalogue_objectives, corner_overrides, optimise,
                                trial_folder)
-from pipeline.app.preflight import Reuse, check, parse, quoted
+from pipeline.app.plan import Plan, Reuse, parse, plan, quoted
+from pipeline.app.run import run as run_jobs
 from pipeline.app.resources import STUDIES_DIR
 from pipeline.app.results import code_version, write_csv, write_parquet, write_text
 from pipeline.analyses.search import SearchSpec, exact_drive, search
@@ -203,7 +203,7 @@ def claim_study_dir(out: Path, name: str, extra: list[str], force: bool) -> str:
 
 def run_study(name: str, extra: list[str], out_root: Path | None = None,
               figures_only: bool = False, launcher: str = "pool",
-              checked: list[tuple[list[str], dict]] | None = None, force: bool = False) -> list[Path]:
+              checked: list[tuple[list[str], Plan]] | None = None, force: bool = False) -> list[Path]:
     """Sweep (unless ``figures_only``), analyses and figures of one study; returns the files.
     The jobs of an interrupted run of the same study are reused (``_start_or_resume``).
     ``checked``: the study's sweep commands if already checked (:func:`checked_commands`)."""
@@ -220,7 +220,7 @@ def run_study(name: str, extra: list[str], out_root: Path | None = None,
 
 
 def _run_study(name: str, extra: list[str], out: Path, figures_only: bool,
-               checked: list[tuple[list[str], dict]] | None, force: bool) -> list[Path]:
+               checked: list[tuple[list[str], Plan]] | None, force: bool) -> list[Path]:
     """:func:`run_study` once the study's folder is held."""
     study = load_study(name)
     cases = study.cases or {"": []}
@@ -234,20 +234,16 @@ def _run_study(name: str, extra: list[str], out: Path, figures_only: bool,
             _start_or_resume(out / "jobs", [[OmegaConf.to_yaml({
                 "optimise": study.optimise and asdict(study.optimise),
                 "search": study.search and asdict(study.search), "extra_overrides": extra})]])
-            ((cfg, catalogue),) = checked[0][1].values()
-            summary, searched = _designs(study, extra, out / "jobs", catalogue, cfg)
+            first = checked[0][1].jobs[0]
+            summary, searched = _designs(study, extra, out / "jobs", first.catalogue, first.cfg)
             if searched is not None:
                 write_parquet(searched, out / "search.parquet", provenance)
                 write_csv(searched, out / "search.csv")
         else:
             _start_or_resume(out / "jobs", commands)
-            for command, prepared in checked:
-                PREPARED.update(prepared)  # the jobs take the configs the preflight typed
-                try:
-                    launch(command)  # a failed job exits as python -m pipeline would
-                finally:
-                    PREPARED.clear()
-                _log_to_console()  # Hydra set up logging for its jobs
+            for _, planned in checked:
+                run_jobs(planned)
+                _log_to_console()  # the jobs had Hydra's logging
             summary = _gather(out / "jobs", cases, study.case_labels)
         write_parquet(summary, out / "summary.parquet", provenance)
     results = StudyResults(out)
@@ -339,10 +335,10 @@ def metrics(summary: pd.DataFrame, tables: dict[str, pd.DataFrame]) -> dict:
 
 
 def checked_commands(name: str, extra: list[str], out_root: Path | None = None,
-                     launcher: str = "pool") -> list[tuple[list[str], dict]]:
-    """The sweep commands of a study (one per case), every job of them validated by the
-    preflight: bad input fails here, before anything is written or removed. Each with the
-    typed configs of its jobs (``pipeline.app.job.PREPARED``)."""
+                     launcher: str = "pool") -> list[tuple[list[str], Plan]]:
+    """The sweep commands of a study (one per case), each with its plan (every job checked):
+    bad input fails here, before anything is written or removed. A design study: its lowest
+    and highest designs, planned the same way."""
     study = load_study(name)
     changed = [o for o in extra if _key(o) not in ALWAYS_EXCLUDED]
     if changed and not study.extra_overrides:
@@ -353,11 +349,12 @@ def checked_commands(name: str, extra: list[str], out_root: Path | None = None,
         folder = f"hydra.run.dir={quoted(out)}"
         first = f"actuator={_catalogue([*study.overrides, *extra]).ids[0]}"  # an id of the user's catalogue
         try:
-            ((cfg, catalogue),) = check([*study.overrides, first, *extra, folder]).values()
+            job = plan([*study.overrides, first, *extra, folder]).jobs[0]
         except ConfigError:  # an analysis without actuators has no key actuator: say that instead
-            ((cfg, catalogue),) = check([*study.overrides, *extra, folder]).values()
-            if catalogue is not None:
+            job = plan([*study.overrides, *extra, folder]).jobs[0]
+            if job.catalogue is not None:
                 raise
+        cfg, catalogue = job.cfg, job.catalogue
         if catalogue is None:  # the objectives and the search read the job's catalogue actuator
             raise ConfigError(f"analysis={analysis_name(cfg)}: study {name} designs a catalogue "
                               "actuator's drive train; this analysis has no actuator (use analysis=cpr_wwa)")
@@ -368,17 +365,17 @@ def checked_commands(name: str, extra: list[str], out_root: Path | None = None,
         ids = catalogue.ids
         variables = study.optimise.variables if study.optimise is not None else {
             "actuator": study.search.actuators, **study.search.variables}
-        corners = [(["design"], check([*study.overrides, *extra, *corner,
-                                       f"hydra.run.dir={quoted(trial_folder(out / 'jobs', 0))}"]))
+        corners = [(["design"], plan([*study.overrides, *extra, *corner,
+                                      f"hydra.run.dir={quoted(trial_folder(out / 'jobs', 0))}"]))
                    for corner in corner_overrides(variables, ids)]
         return corners
     commands = [sweep_command(study, [*overrides, *extra], out / "jobs" / case, launcher)
                 for case, overrides in (study.cases or {"": []}).items()]
-    reuse = Reuse()  # the cases share their config files: composed once, each folder set after
-    checked = [(command, check(command, reuse)) for command in commands]
+    reuse = Reuse()  # the cases share their config files: composed once
+    checked = [(command, plan(command, reuse)) for command in commands]
     needs = [f.kind for f in study.figures if f.kind in NEEDS_POINTS] + [
         a for a in study.analyses if a in NEEDS_POINTS]
-    if needs and any(not cfg.output.points for _, jobs in checked for cfg, _ in jobs.values()):
+    if needs and any(not job.cfg.output.points for _, planned in checked for job in planned.jobs):
         raise ConfigError(f"output.points=false: study {name} reads every job's points.parquet "
                           f"({', '.join(dict.fromkeys(needs))})")
     return checked
@@ -444,10 +441,8 @@ def _designs(study: StudySpec, extra: list[str], jobs_dir: Path, catalogue,
     reuse = Reuse()  # every trial has the same config files and catalogue: read once
 
     def run(folder: Path, overrides: list[str]) -> dict:
-        ((job_cfg, job_catalogue),) = check([*study.overrides, *extra, *overrides,
-                                             f"hydra.run.dir={quoted(folder)}"], reuse).values()
-        folder.mkdir(parents=True, exist_ok=True)
-        return {"job": folder.name, **execute(job_cfg, job_catalogue, folder)}
+        (job,) = plan([*study.overrides, *extra, *overrides, f"hydra.run.dir={quoted(folder)}"], reuse).jobs
+        return {"job": folder.name, **execute(job)}
 
     def run_searched(actuator: int, overrides: list[str]) -> tuple[dict, pd.DataFrame]:
         folder = jobs_dir / "_".join([f"search_a{actuator}", *(

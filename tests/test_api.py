@@ -43,7 +43,7 @@ def test_workspace_gives_table_2_and_the_command_line_points(tmp_path, monkeypat
 
 
 def test_a_folder_name_may_hold_the_override_grammars_characters(tmp_path, monkeypatch):
-    """The folder goes to Hydra quoted (pipeline.app.preflight.quoted): =, commas, quotes, spaces."""
+    """The folder goes to Hydra quoted (pipeline.app.plan.quoted): =, commas, quotes, spaces."""
     monkeypatch.chdir(tmp_path)
     for name in ("grid=centred,n=6", "it's here", "trailing\\"):
         ws = api.workspace(["actuator=1"], folder=name)

@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 from omegaconf import OmegaConf
 
-from pipeline.app import preflight
+from pipeline.app.plan import plan
 from pipeline.errors import ConfigError
 from pipeline.model.catalogue import load_catalogue
 
@@ -160,12 +160,12 @@ PROCESSES = [c for c in CASES if c not in IN_PROCESS]
 
 
 @pytest.mark.parametrize("module, args, expected", IN_PROCESS, ids=[" ".join(c[1]) for c in IN_PROCESS])
-def test_the_preflight_names_the_bad_key_and_value(workdir, monkeypatch, module, args, expected):
+def test_the_plan_names_the_bad_key_and_value(workdir, monkeypatch, module, args, expected):
     """What `python -m pipeline ARGS` prints after ``error: `` (pipeline.app.cli), in-process."""
     monkeypatch.chdir(workdir)
     before = listing(workdir)
     with pytest.raises(ConfigError) as raised:
-        preflight.check(args)
+        plan(args)
     assert expected in str(raised.value) and "\n" not in str(raised.value)
     assert listing(workdir) == before
 

@@ -22,7 +22,7 @@ import pytest
 from conftest import job_imports
 from pipeline.workspace import fused
 from pipeline.workspace.compute import (
-    SWEEP_FUSED, build_problem, compute_workspace, fused_pays, fused_unfit, use_fused,
+    build_problem, compute_workspace, fused_pays, fused_unfit, use_fused,
 )
 from pipeline.workspace.kernel import evaluate_chunk
 from pipeline.workspace.verdict import classify
@@ -131,15 +131,11 @@ def test_a_whole_job_writes_the_same_points_with_either_kernel(make_cfg, catalog
 def test_auto_uses_the_compiled_kernel_only_where_it_applies_and_pays(make_cfg, catalogue):
     small = make_cfg()
     assert not use_fused(small, build_problem(small, catalogue)[0], 216)  # the main job's grid
-    token = SWEEP_FUSED.set(True)  # a sweep that pays as a whole
-    try:
-        assert use_fused(small, build_problem(small, catalogue)[0], 216)
-        assert not use_fused(make_cfg("compute.kernel=numpy"), build_problem(small, catalogue)[0], 216)
-        feasible = make_cfg("tension=feasible")
-        assert not use_fused(feasible, build_problem(feasible, catalogue)[0], 216)
-    finally:
-        SWEEP_FUSED.reset(token)
-    assert not use_fused(small, build_problem(small, catalogue)[0], 216)  # not a process's history
+    # a sweep that pays as a whole (the plan's decision, pipeline.app.plan)
+    assert use_fused(small, build_problem(small, catalogue)[0], 216, sweep_pays=True)
+    assert not use_fused(make_cfg("compute.kernel=numpy"), build_problem(small, catalogue)[0], 216, sweep_pays=True)
+    feasible = make_cfg("tension=feasible")
+    assert not use_fused(feasible, build_problem(feasible, catalogue)[0], 216, sweep_pays=True)
     large = make_cfg("grid.n=60")
     assert use_fused(large, build_problem(large, catalogue)[0], 60 ** 3)
     jdot = make_cfg("grid.n=60", "model.jdot=true")

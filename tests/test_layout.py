@@ -41,3 +41,33 @@ def test_every_layer_is_a_package_with_its_modules():
         assert (ROOT / name / "__init__.py").exists()
         assert len(list((ROOT / name).glob("*.py"))) >= 5
     assert sorted(p.stem for p in ROOT.glob("*.py")) == ["__init__", "__main__", "api", "caspr", "errors", "report", "study"]
+
+
+def test_no_two_modules_import_each_other_and_hydra_only_through_its_public_api():
+    """The import graph of the package (imports inside functions included) has no cycle, no
+    module reaches into Hydra's private modules (``hydra._internal``), and no Hydra plugin of
+    the project's own remains (the runner is ``pipeline.app.run``; Hydra's launchers run
+    through its stock application, ``pipeline.app.cli.main``)."""
+    graph = {}
+    for path in sorted(ROOT.rglob("*.py")):
+        name = ".".join(("pipeline", *path.relative_to(ROOT).with_suffix("").parts)).removesuffix(".__init__")
+        graph[name] = {other for other in imported(path) if other != name}
+        for node in ast.walk(ast.parse(path.read_text())):
+            modules = ([alias.name for alias in node.names] if isinstance(node, ast.Import)
+                       else [node.module or ""] if isinstance(node, ast.ImportFrom) else [])
+            assert not any(m.startswith(("hydra._internal", "hydra_plugins")) for m in modules), (name, modules)
+    done, active = set(), []
+
+    def visit(module):
+        assert module not in active, " -> ".join([*active[active.index(module):], module])
+        if module in done or module not in graph:
+            return
+        active.append(module)
+        for other in sorted(graph[module]):
+            visit(other)
+        active.pop()
+        done.add(module)
+
+    for module in graph:
+        visit(module)
+    assert not (ROOT.parent / "hydra_plugins").exists()

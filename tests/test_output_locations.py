@@ -1,5 +1,5 @@
 """Output problems (issue 16, item 7): one line naming the path, exit 2, nothing written and no
-temporary file left, whether found before the job (preflight) or while it writes."""
+temporary file left, whether found before the job (the plan) or while it writes."""
 
 import subprocess
 import sys

@@ -5,7 +5,7 @@ import logging
 
 import pytest
 
-from pipeline.app.preflight import check
+from pipeline.app.plan import plan
 from pipeline.workspace import fused, parallel
 from pipeline.workspace.progress import Progress, clock_text
 from pipeline.workspace.compute import announce_cost, build_problem, compute_workspace, estimated_seconds
@@ -59,7 +59,8 @@ def test_clock_text(seconds, text):
 def test_a_dense_grid_without_n_vel_is_announced_with_the_key_to_change(caplog):
     """40^3 poses with grid.n_vel null test 33 371 velocities each: about a minute on 2 cores
     by the cost model, so a warning names grid.n_vel; with grid.n_vel=6 the job is quiet."""
-    ((cfg, catalogue),) = check(["grid.n=40"]).values()
+    (job,) = plan(["grid.n=40"]).jobs
+    cfg, catalogue = job.cfg, job.catalogue
     problem, grid = build_problem(cfg, catalogue)
     assert problem.spec.set_size() == 33371
     assert estimated_seconds(problem, grid.n_points) == pytest.approx(64000 * 33371 / 93 / 200_000)
@@ -69,7 +70,7 @@ def test_a_dense_grid_without_n_vel_is_announced_with_the_key_to_change(caplog):
     assert record.getMessage().startswith("this job evaluates 64000 poses x 1 orientations: about 0:57 on 2 cores")
     assert "grid.n_vel is null, so each pose tests 33371 velocities" in record.getMessage()
     caplog.clear()
-    ((quick, _),) = check(["grid.n=40", "grid.n_vel=6"]).values()
+    quick = plan(["grid.n=40", "grid.n_vel=6"]).jobs[0].cfg
     problem, grid = build_problem(quick, catalogue)
     with caplog.at_level(logging.WARNING, logger="pipeline"):
         announce_cost(quick, problem, grid.n_points, 2)

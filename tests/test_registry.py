@@ -103,7 +103,7 @@ def test_tension_is_a_config_group_that_sets_its_own_keys_only(make_cfg):
 
 def test_an_unknown_tension_option_is_refused_before_anything_runs():
     from pipeline.errors import ConfigError
-    from pipeline.app.preflight import check
+    from pipeline.app.plan import plan
 
     with pytest.raises(ConfigError, match="tension=lp"):
-        check(["-m", "tension=pinv,lp"])
+        plan(["-m", "tension=pinv,lp"])

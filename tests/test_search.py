@@ -241,5 +241,5 @@ def test_a_users_catalogue_without_actuator_1_is_searched(tmp_path):
     table = pd.read_csv(TABLE1, dtype=str).iloc[[0, 2]].assign(id=["7", "9"])
     table.to_csv(tmp_path / "mine.csv", index=False)
     corners = checked_commands("smallest_gear_ratio", [f"catalogue={tmp_path / 'mine.csv'}"], tmp_path / "out")
-    actuators = [cfg.actuator for _, jobs in corners for cfg, _ in jobs.values()]
+    actuators = [job.cfg.actuator for _, planned in corners for job in planned.jobs]
     assert actuators == [7, 9]

@@ -1,4 +1,5 @@
-"""Hydra callbacks: at the end of a multirun, one summary table for the whole sweep.
+"""The sweep summary: at the end of a sweep, one table for all its jobs (:func:`gather`, called by
+``pipeline.app.run``, and by Hydra's callback :class:`SweepSummary` when Hydra runs the sweep).
 
 Arrow tables read and built without pandas (``pipeline.workspace.arrow``), like the jobs' own
 files: the main job's process never imports it."""
@@ -20,14 +21,37 @@ log = logging.getLogger("pipeline")
 REPORTED = ["n_points", "n_feasible", "feasible_pct", "volume_m3"]
 
 
-class SweepSummary(Callback):
-    """Concatenate the summary.parquet of every job of this sweep into <sweep dir>/summary.parquet,
+def gather(sweep_dir: Path, job_dirs: list[Path], overrides: list[str]) -> None:
+    """Concatenate the summary.parquet of every job of a sweep into <sweep dir>/summary.parquet,
     with a ``job`` column naming each job's folder, in folder-name order whatever order the jobs
     ran in, then sorted (stably) by the settings the sweep varied. A column some jobs lack (a
     sweep over analyses) is empty (null) in their rows, and integers meeting floats become
-    floats. When jobs run in this process they are collected as they end, so folders left by an
-    earlier sweep into the same directory are not included; with a launcher that runs jobs
-    elsewhere (worker processes), every job folder of the sweep directory is read."""
+    floats. ``job_dirs``: the sweep's jobs (folders left by an earlier sweep into the same
+    directory are not included); empty: every job folder of the sweep directory.
+    ``overrides``: the sweep command's, recorded in the table's metadata."""
+    rows = []
+    for job_dir in sorted(job_dirs or (p.parent for p in sweep_dir.glob("*/summary.parquet"))):
+        if (job_dir / "summary.parquet").exists():
+            row = read(job_dir / "summary.parquet").replace_schema_metadata(None)
+            rows.append(row.add_column(0, "job", texts([job_dir.name])))
+    if not rows:
+        return
+    table = pa.concat_tables(rows, promote_options="permissive")
+    varying = varying_settings(table.to_pydict(), ignore=("job",))
+    if varying:
+        table = sorted_by(table, varying)
+    sweep_yaml = OmegaConf.to_yaml({"overrides": list(overrides), "jobs": table.num_rows})
+    write_parquet(table, sweep_dir / "summary.parquet", sweep_yaml)
+    shown = [c for c in varying if c not in ("actuator_name",)] + REPORTED
+    log.info("sweep summary (%s):\n%s", sweep_dir / "summary.parquet",
+             text_table(table.select([name for name in shown if name in table.column_names]).to_pydict()))
+    log.info("results in %s (%d job folders)", sweep_dir, table.num_rows)
+
+
+class SweepSummary(Callback):
+    """:func:`gather` at the end of a sweep Hydra runs (its launchers: the jobs may run
+    elsewhere: without a job that ended in this process, every job folder of the sweep
+    directory is read)."""
 
     def __init__(self) -> None:
         self.job_dirs: list[Path] = []
@@ -36,27 +60,7 @@ class SweepSummary(Callback):
         self.job_dirs.append(Path(config.hydra.runtime.output_dir))
 
     def on_multirun_end(self, config: DictConfig, **kwargs) -> None:
-        sweep_dir = Path(config.hydra.sweep.dir)
-        rows = []
-        job_dirs = sorted(self.job_dirs or (p.parent for p in sweep_dir.glob("*/summary.parquet")))
-        for job_dir in job_dirs:
-            if (job_dir / "summary.parquet").exists():
-                row = read(job_dir / "summary.parquet").replace_schema_metadata(None)
-                rows.append(row.add_column(0, "job", texts([job_dir.name])))
-        if not rows:
-            return
-        table = pa.concat_tables(rows, promote_options="permissive")
-        varying = varying_settings(table.to_pydict(), ignore=("job",))
-        if varying:
-            table = sorted_by(table, varying)
-        sweep_yaml = OmegaConf.to_yaml(
-            {"overrides": list(config.hydra.overrides.task), "jobs": table.num_rows}
-        )
-        write_parquet(table, sweep_dir / "summary.parquet", sweep_yaml)
-        shown = [c for c in varying if c not in ("actuator_name",)] + REPORTED
-        log.info("sweep summary (%s):\n%s", sweep_dir / "summary.parquet",
-                 text_table(table.select([name for name in shown if name in table.column_names]).to_pydict()))
-        log.info("results in %s (%d job folders)", sweep_dir, table.num_rows)
+        gather(Path(config.hydra.sweep.dir), self.job_dirs, list(config.hydra.overrides.task))
 
 
 def text_table(columns: dict[str, list]) -> str:

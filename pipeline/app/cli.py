@@ -1,81 +1,101 @@
-"""The Hydra application: ``python -m pipeline [-m] [key=value ...]`` (``pipeline/__main__.py``).
+"""The command line: ``python -m pipeline [-m] [key=value ...]`` (``pipeline/__main__.py``).
 
-Every job's config is validated before Hydra starts (``pipeline.app.preflight``): a bad key or value
-exits with status 2 and one line on stderr, and no output folder is created. A command of run
-mode made of plain overrides then runs on the preflight's composition
-(``pipeline.app.preflight.hydra_run``, ``hydra_plugins.cdpr.runner.run``: the files, logs and
-output of Hydra's run, without its two compositions of the same files); any other command
-(``-m``, a flag such as ``--run`` or ``--config-dir``, ``+``/``~`` overrides) goes through Hydra.
+Hydra composes, the pipeline plans and runs: every job of the command is planned and checked
+(:func:`pipeline.app.plan.plan`: a bad key or value exits with status 2 and one line on stderr,
+and no folder is made), then run (:func:`pipeline.app.run.run`). A command that names one of
+Hydra's own launchers or sweepers (``hydra/launcher=submitit_slurm``, ``hydra/sweeper=optuna``),
+or a flag that Hydra answers (``--cfg``, ``--info``, ``--run``, ``--hydra-help``,
+``--shell-completion``), is checked the same way and then handed to Hydra's stock application
+(:func:`main`), whose task runs each job through the same :func:`pipeline.app.job.execute`.
 """
 
 from __future__ import annotations
 
 import sys
+from pathlib import Path
 
 import hydra
 from omegaconf import DictConfig
 
 from pipeline.app.config import register
-from pipeline.errors import ConfigError
-from pipeline.app.preflight import Reuse, check, hydra_run
 from pipeline.app.resources import CONF_DIR
+from pipeline.errors import ConfigError
 
 register()
+OURS = {"-m", "--multirun", "--config-dir", "-cd"}  # the flags the pipeline's own runner takes
 
 
 @hydra.main(version_base="1.3", config_path=str(CONF_DIR), config_name="config")
 def main(cfg: DictConfig) -> dict:
-    from pipeline.app.job import run_job
+    """Hydra's stock application: one job of the config Hydra composed, in the folder Hydra made
+    (any Hydra launcher runs it: a worker, a SLURM task)."""
+    from hydra.core.hydra_config import HydraConfig
+    from hydra.types import RunMode
 
-    return run_job(cfg)  # the summary: the launcher's progress line reports it
+    from pipeline.app.config import validate
+    from pipeline.app.job import execute, log
+    from pipeline.app.plan import Job
+    from pipeline.model.catalogue import load_catalogue
 
-
-def launch(argv: list[str]) -> None:
-    """Run a command the preflight has checked in this process, as if it were Hydra's command
-    line (``python -m pipeline.study`` runs its sweeps so: the code is imported, and the jobs'
-    worker processes started, once). Hydra reads its command line from ``sys.argv`` only."""
-    saved = sys.argv
-    sys.argv = [saved[0], *argv]
+    hydra_cfg = HydraConfig.get()
     try:
-        main()
-    finally:
-        sys.argv = saved
+        catalogue = load_catalogue(cfg.catalogue) if "catalogue" in cfg else None
+        typed = validate(cfg, None if catalogue is None else catalogue.ids)
+        summary = execute(Job(None, tuple(hydra_cfg.overrides.task), Path(hydra_cfg.runtime.output_dir),
+                              typed, catalogue, cfg, ()))
+    except ConfigError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        raise SystemExit(2) from None
+    if hydra_cfg.mode == RunMode.RUN:  # a sweep says where its folder is when it ends (its summary)
+        log.info("results in %s", hydra_cfg.runtime.output_dir)
+    return summary
+
+
+def hydra_flag(argv: list[str]) -> bool:
+    """Whether the command has a flag Hydra answers (``--cfg``, ``--run``, ...)."""
+    return any(a.split("=", 1)[0] not in OURS for a in argv if a.startswith("-"))
 
 
 def cli() -> None:
-    from pipeline.app.job import PREPARED
-
-    if sys.argv[1:] == ["--version"]:  # the project's version (Hydra's flag prints Hydra's)
+    argv = sys.argv[1:]
+    if argv == ["--version"]:  # the project's version (Hydra's flag prints Hydra's)
         from pipeline.app.results import code_version
 
         print(f"cdpr-studies {code_version()} (Hydra {hydra.__version__})")
         return
-    if "--help" in sys.argv[1:] or "-h" in sys.argv[1:]:  # the keys of this composition, with meanings
-        _help([a for a in sys.argv[1:] if a not in ("--help", "-h")])
+    if "--help" in argv or "-h" in argv:  # the keys of this composition, with meanings
+        _help([a for a in argv if a not in ("--help", "-h")])
         return
-    reuse = Reuse(folders_after=False)  # the composition, kept for the job of run mode
+    from pipeline.app.plan import plan
+
     try:
-        PREPARED.update(check(sys.argv[1:], reuse))
-        composed = hydra_run(sys.argv[1:], reuse)
+        for flag in ("--config-name", "-cn", "--config-path", "-cp", "--experimental-rerun"):
+            if flag in argv or any(a.startswith(flag + "=") for a in argv):
+                raise ConfigError(f"{flag}: the pipeline composes conf/config.yaml; your own files: "
+                                  "--config-dir DIR (DIR/robot/NAME.yaml, ...)")
+        planned = plan(argv)  # None: a command that launches no job
+        if planned is None or planned.by_hydra or hydra_flag(argv):
+            main()
+            return
+        from pipeline.app.run import run
+
+        run(planned)
     except ConfigError as exc:
         print(f"error: {exc}", file=sys.stderr)
         raise SystemExit(2) from None
-    if composed is None:
-        main()
-    else:  # what Hydra's run would compose again twice (pipeline.app.preflight.hydra_run)
-        from hydra_plugins.cdpr.runner import run
-
-        run(*composed, main.__wrapped__)
 
 
 def _help(argv: list[str]) -> None:
     from pipeline.app.helppage import page
+    from pipeline.app.plan import plan
     from pipeline.app.results import code_version
 
     try:
-        ((typed, _),) = check([a for a in argv if a not in ("-m", "--multirun")]).values()
+        planned = plan([a for a in argv if a not in ("-m", "--multirun")])
+        if planned is None or len(planned.jobs) != 1:
+            raise ValueError
     except (ConfigError, ValueError) as exc:  # ValueError: a sweep, several jobs
         print(f"error: {exc if isinstance(exc, ConfigError) else 'give one value per key with --help'}",
               file=sys.stderr)
         raise SystemExit(2) from None
-    print(page(argv, typed, code_version()), end="")
+    print(page(argv, planned.jobs[0].cfg, code_version()), end="")

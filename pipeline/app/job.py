@@ -1,5 +1,5 @@
-"""The Hydra task: one job writes points.parquet (samples.parquet for lines) and, last,
-summary.parquet in its folder.
+"""One job (:func:`execute`): points.parquet (samples.parquet for lines) and, last, summary.parquet
+in its folder.
 
 A job whose folder already holds a summary.parquet written with the same resolved config and
 the same code version is not recomputed: every file is written to a temporary name and renamed
@@ -17,17 +17,12 @@ from __future__ import annotations
 import fcntl
 import json
 import logging
-import sys
 from contextlib import contextmanager
-from contextvars import ContextVar
 from pathlib import Path
 
-from hydra.core.hydra_config import HydraConfig
-from hydra.types import RunMode
 from omegaconf import DictConfig
 
-from pipeline.model.catalogue import load_catalogue
-from pipeline.app.config import validate
+from pipeline.app.plan import Job
 from pipeline.errors import ConfigError
 from pipeline.app.readings import describe_reading
 from pipeline.app.yamltext import to_yaml
@@ -43,42 +38,17 @@ TENSION_MODELS = {  # what each tension model checks, for the job's log
     "pinv": "the papers' minimum-norm cable forces, which may push; tension=feasible: cables that only pull",
     "feasible": "cables that only pull; tension=pinv: the papers' minimum-norm forces, which may push",
 }
-# The typed, validated config and catalogue of every job the preflight of this process checked,
-# by the YAML of the config Hydra composes for it (``pipeline.app.preflight.check``): a job run in
-# this process takes them from here instead of typing, validating and reading them again.
-PREPARED: dict[str, tuple[DictConfig, object]] = {}
-# The entry of PREPARED for the job the ``cdpr`` launcher is running, which it found by the YAML
-# it writes as the job's .hydra/config.yaml (hydra_plugins/cdpr/launcher.py): not dumped twice.
-CURRENT: ContextVar[tuple[DictConfig, object] | None] = ContextVar("CURRENT", default=None)
 
 
-def run_job(cfg: DictConfig) -> dict:
-    """Validate, compute the feasible workspace, write the Parquet files; returns the summary."""
-    prepared = CURRENT.get() or PREPARED.pop(to_yaml(cfg), None)
-    if prepared is not None:
-        cfg, catalogue = prepared
-    else:
-        catalogue = load_catalogue(cfg.catalogue) if "catalogue" in cfg else None
-        cfg = validate(cfg, None if catalogue is None else catalogue.ids)
-    hydra = HydraConfig.get()
-    out = Path(hydra.runtime.output_dir)
+def execute(job: Job) -> dict:
+    """Run one planned job (:mod:`pipeline.app.plan`) into its folder, made if needed, under its
+    lock (or reuse it when finished); returns the summary. Output errors (a full disk, a folder
+    gone read-only while writing) are raised as ConfigError naming the path."""
+    out = job.folder
     try:
-        summary = execute(cfg, catalogue, out)
-    except ConfigError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        raise SystemExit(2) from None
-    if hydra.mode == RunMode.RUN:  # a sweep says where its folder is when it ends (callbacks)
-        log.info("results in %s", out)
-    return summary
-
-
-def execute(cfg: DictConfig, catalogue, out: Path) -> dict:
-    """Run one validated job into the existing folder ``out`` under its lock (or reuse it when
-    finished); returns the summary. Output errors (a full disk, a folder gone read-only while
-    writing) are raised as ConfigError naming the path."""
-    try:
+        out.mkdir(parents=True, exist_ok=True)
         with folder_lock(out):
-            return _run_locked(cfg, catalogue, out)
+            return _run_locked(job.cfg, job.catalogue, out, job.fused)
     except OSError as exc:
         raise ConfigError(f"cannot write {exc.filename or out}: {exc.strerror or exc}") from None
 
@@ -99,7 +69,7 @@ def folder_lock(out: Path, busy: str = "another run is writing this folder; wait
             fcntl.flock(handle, fcntl.LOCK_UN)
 
 
-def _run_locked(cfg: DictConfig, catalogue, out: Path) -> dict:
+def _run_locked(cfg: DictConfig, catalogue, out: Path, sweep_pays: bool) -> dict:
     config_yaml = to_yaml(cfg, resolve=True)
     done = finished_summary(out, config_yaml)
     if done is not None:
@@ -123,10 +93,10 @@ def _run_locked(cfg: DictConfig, catalogue, out: Path) -> dict:
             written.append(out / "points.parquet")
     elif cfg.output.points:  # streamed chunk by chunk: memory bounded by a chunk, not by the grid
         with ParquetSink(out / "points.parquet", config_yaml) as sink:
-            _, summary = compute_workspace(cfg, catalogue, sink.write)
+            _, summary = compute_workspace(cfg, catalogue, sink.write, sweep_pays)
         written = [out / "points.parquet"]
     else:  # the summary only: each chunk's rows are counted, then dropped
-        _, summary = compute_workspace(cfg, catalogue, lambda chunk: None)
+        _, summary = compute_workspace(cfg, catalogue, lambda chunk: None, sweep_pays)
         written = []
     write_parquet(one_row(summary), out / "summary.parquet", config_yaml,
                   {DIGESTS_KEY: digests_json(written)})

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import logging
 import os
-from contextvars import ContextVar
 from dataclasses import replace
 from typing import TYPE_CHECKING, Callable
 
@@ -212,7 +211,8 @@ ANALYSES = {"cpr_wwa": _cpr_wwa, "statics": _statics, "lines": _cpr_wwa}
 
 
 def compute_workspace(
-    cfg: DictConfig, catalogue: Catalogue | None, sink: Callable[[pa.Table], None] | None = None
+    cfg: DictConfig, catalogue: Catalogue | None, sink: Callable[[pa.Table], None] | None = None,
+    sweep_pays: bool = False,
 ) -> tuple[pd.DataFrame | None, dict]:
     """Points table (one row per grid pose) and the one-row summary (counts, share, volume) of
     the grid procedure (for ``analysis=lines``, the CPR-WWA grid it is compared with).
@@ -220,16 +220,17 @@ def compute_workspace(
     With ``sink``, each chunk's rows go to ``sink`` as an Arrow table as soon as the chunk is
     done and no table is kept (returns None for it): memory stays bounded by a chunk, whatever
     the grid size, and pandas is not imported (``docs/performance.md``, "What a process
-    imports"). Without, the points come back as one pandas DataFrame."""
-    return grid_workspace(cfg, *build_problem(cfg, catalogue), sink)
+    imports"). Without, the points come back as one pandas DataFrame. ``sweep_pays``: the job's
+    sweep pays, as a whole, for the compiled kernels (:func:`fused_pays`)."""
+    return grid_workspace(cfg, *build_problem(cfg, catalogue), sink, sweep_pays)
 
 
 def grid_workspace(
     cfg: DictConfig, problem: WorkspaceProblem, grid: Grid,
-    sink: Callable[[pa.Table], None] | None = None,
+    sink: Callable[[pa.Table], None] | None = None, sweep_pays: bool = False,
 ) -> tuple[pd.DataFrame | None, dict]:
     """:func:`compute_workspace` for an already built problem and grid."""
-    problem = replace(problem, fused=use_fused(cfg, problem, grid.n_points))
+    problem = replace(problem, fused=use_fused(cfg, problem, grid.n_points, sweep_pays))
     workers = worth_workers(problem, grid.n_points, cfg.compute.n_jobs, cfg.compute.backend)
     announce_cost(cfg, problem, grid.n_points, workers)
     if problem.fused or problem.spec.tension.model == "feasible":
@@ -336,20 +337,15 @@ def fused_unfit(cfg: DictConfig) -> str | None:
     return None
 
 
-# Whether the sweep a job belongs to pays, as a whole, for the compiled kernels (fused_pays):
-# set by the launcher around each job it runs (hydra_plugins/cdpr), False for a job run alone.
-# A job's kernel follows from its sweep, never from what its process ran before.
-SWEEP_FUSED: ContextVar[bool] = ContextVar("SWEEP_FUSED", default=False)
-
-
-def use_fused(cfg: DictConfig, problem: WorkspaceProblem, n_points: int) -> bool:
+def use_fused(cfg: DictConfig, problem: WorkspaceProblem, n_points: int, sweep_pays: bool = False) -> bool:
     """``compute.kernel``: fused (checked by the config), numpy, or auto: the compiled kernels
-    where they apply and either the job's sweep pays for them (``SWEEP_FUSED``) or the numpy
-    kernel would take longer than their start (FUSED_START_S)."""
+    where they apply and either the job's sweep pays for them (``sweep_pays``, decided by the
+    plan: a job's kernel follows from its sweep, never from what its process ran before) or the
+    numpy kernel would take longer than their start (FUSED_START_S)."""
     kernel = _name(cfg.compute.kernel)
     if kernel != "auto":
         return kernel == "fused"
-    pays = SWEEP_FUSED.get() or estimated_seconds(problem, n_points) > FUSED_START_S
+    pays = sweep_pays or estimated_seconds(problem, n_points) > FUSED_START_S
     return pays and fused_unfit(cfg) is None
 
 

@@ -67,11 +67,9 @@ def iter_chunks(
 
 
 def _verbose(name: str) -> bool:
-    """Whether the run asked for ``name``'s log lines (``hydra.verbose=true`` or ``=[name]``)."""
-    from hydra.core.hydra_config import HydraConfig
-
-    verbose = HydraConfig.get().verbose if HydraConfig.initialized() else False
-    return verbose is True or (not isinstance(verbose, (bool, str)) and name in verbose) or verbose == name
+    """Whether the run asked for ``name``'s debug lines (``hydra.verbose=true`` or ``=[name]``
+    set its logger, or the root's, to DEBUG)."""
+    return logging.getLogger(name).isEnabledFor(logging.DEBUG)
 
 
 @contextlib.contextmanager
@@ -81,10 +79,11 @@ def _engine(backend: str, workers: int, scheduler: str | None):
     if backend != "dask":
         yield backend
         return
+    verbose = _verbose("distributed")  # before Dask's import sets its loggers' levels
     from dask.distributed import Client, LocalCluster
     from joblib import parallel_config
 
-    if not _verbose("distributed"):  # dozens of INFO lines per cluster otherwise
+    if not verbose:  # dozens of INFO lines per cluster otherwise
         logging.getLogger("distributed").setLevel(logging.WARNING)
 
     if scheduler:

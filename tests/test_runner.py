@@ -1,5 +1,6 @@
-"""The ``cdpr`` launcher (one composition per set of config files, jobs derived from it) and the
-preflight's typed configs handed to the jobs give exactly what Hydra's basic launcher gives."""
+"""The pipeline's runner (``pipeline.app.plan`` then ``pipeline.app.run``: one composition per set
+of config files, jobs derived from it) writes exactly what Hydra's own application writes with its
+basic launcher (``hydra/launcher=basic`` hands the command to Hydra: ``pipeline.app.cli.main``)."""
 
 import subprocess
 import sys
@@ -10,7 +11,7 @@ from hydra import compose, initialize_config_dir
 from omegaconf import OmegaConf
 
 from pipeline.app.config import validate
-from pipeline.app.preflight import check, job_overrides
+from pipeline.app.plan import job_overrides, plan
 from pipeline.app.resources import CONF_DIR
 
 # group choices (composed per set of files), plain values (derived), and a dict value (merged
@@ -50,7 +51,7 @@ def job_files(folder: Path) -> dict[str, bytes]:
     return files
 
 
-def test_cdpr_launcher_writes_what_the_basic_launcher_writes(tmp_path):
+def test_the_runner_writes_what_hydras_basic_launcher_writes(tmp_path):
     basic = job_files(sweep(tmp_path / "basic", "hydra/launcher=basic"))
     assert len([n for n in basic if n.endswith("points.parquet")]) == 16
     for name, launcher in (("serial", ["hydra/launcher=cdpr"]), ("pool", ["hydra.launcher.n_jobs=2"])):
@@ -63,45 +64,25 @@ def test_cdpr_launcher_writes_what_the_basic_launcher_writes(tmp_path):
     assert orientation["theta"] == 0.1 and orientation["psi"] == 0.0
 
 
-def test_prepared_configs_are_those_a_job_would_type_itself():
-    """Every job's entry in what the preflight hands over is keyed by the config Hydra composes
-    for that job and holds the config the job would otherwise type and validate."""
+def test_planned_configs_are_those_a_job_would_type_itself():
+    """Every planned job holds the config Hydra composes for it and the typed config Hydra's own
+    task (``pipeline.app.cli.main``) would type and validate from it."""
     argv = ["-m", *SWEEP[:3], "robot=cpr8", "model.pinv_columns=full"]
-    prepared = check(argv)
+    planned = plan(argv).jobs
     jobs = job_overrides(argv)
-    assert len(jobs) == 8
+    assert len(jobs) == len(planned) == 8
     with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3", job_name="test"):
-        for overrides in jobs:
+        for job, overrides in zip(planned, jobs):
             composed = compose(config_name="config", overrides=overrides)
-            typed, catalogue = prepared[OmegaConf.to_yaml(composed)]
-            assert OmegaConf.to_yaml(typed) == OmegaConf.to_yaml(validate(composed, catalogue.ids))
-
-
-def test_a_pool_worker_is_sent_the_typed_config_of_its_job():
-    """The launcher finds each job's entry by the job's config without Hydra's node (what the
-    task function receives) and takes it out, so that it is sent to one worker only."""
-    from hydra_plugins.cdpr.launcher import _prepared
-
-    from pipeline.app.job import PREPARED
-
-    argv = ["-m", "robot=irpm6", "robot.gamma_deg=0,30"]
-    PREPARED.update(check(argv))
-    try:
-        with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3", job_name="test"):
-            for overrides in job_overrides(argv):
-                task = compose(config_name="config", overrides=overrides)
-                _, (typed, _) = _prepared(task)
-                assert typed.robot.gamma_deg == float(overrides[-1].split("=")[1])
-        assert PREPARED == {}
-    finally:
-        PREPARED.clear()
+            assert OmegaConf.to_yaml(job.config) == OmegaConf.to_yaml(composed)
+            assert OmegaConf.to_yaml(job.cfg) == OmegaConf.to_yaml(validate(composed, job.catalogue.ids))
 
 
 def test_job_folder_settings_are_honoured_as_by_the_basic_launcher(tmp_path):
-    """``hydra.job.chdir=true`` and ``hydra.job.env_set``: the cdpr launcher's own job runner
-    (``hydra_plugins.cdpr.runner``) writes the files the basic launcher writes, and nothing in
-    the folder the command was started from. A sweep over values only: its jobs are derived
-    from Hydra's sweep config, fixed values and group choice included, without a composition."""
+    """``hydra.job.chdir=true`` and ``hydra.job.env_set``: the runner writes the files the basic
+    launcher writes, and nothing in the folder the command was started from. A sweep over
+    values only: its jobs are derived from one composition, fixed values and group choice
+    included."""
     settings = ["robot=cpr8", "actuator=1,2", "load.mass=3", "grid.n=3", "hydra.job.chdir=true",
                 "+hydra.job.env_set.CDPR_NOTE=x"]
 

@@ -1,0 +1,560 @@
+"""The plan of a command: every job it launches, composed, typed, validated and given its folder
+before anything is written (``plan(argv) -> Plan``; :mod:`pipeline.app.run` runs it).
+
+Hydra composes: each set of config files a command names (its config-group choices, ``+``/``~``
+overrides, ``--config-dir``) is composed once through Hydra's compose API
+(:class:`Composition`), and a sweep (``-m``) is expanded as Hydra's basic sweeper expands it,
+with Hydra's override parser: the cartesian product of every override's values, in command
+order. Each job's plain ``key=value`` overrides are applied to a copy of its composition with
+the typed merge Hydra's config loader uses (the dataclass schema rejects a bad key or type), the
+job is validated (:func:`pipeline.app.config.validate`) and its folder named by Hydra's rules
+(``hydra.run.dir``, or ``hydra.sweep.dir``/``hydra.sweep.subdir`` with Hydra's
+``override_dirname``). The first problem is a ConfigError with one line naming the key and
+value: nothing is written.
+"""
+
+from __future__ import annotations
+
+import copy
+import functools
+import itertools
+import math
+import os
+import pickle
+import re
+import shutil
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from hydra import compose, initialize_config_dir
+from hydra.core.override_parser.overrides_parser import OverridesParser
+from hydra.core.override_parser.types import ChoiceSweep, Override, RangeSweep
+from hydra.errors import MissingConfigException
+from omegaconf import DictConfig, ListConfig, OmegaConf, open_dict, read_write
+from omegaconf.errors import ConfigAttributeError, ConfigKeyError, MissingMandatoryValue
+
+from pipeline.app.config import masked, register, typed_schema, validate
+from pipeline.app.resources import CONF_DIR
+from pipeline.app.yamltext import to_yaml
+from pipeline.errors import ConfigError, one_line
+from pipeline.model.catalogue import Catalogue, load_catalogue
+
+# Hydra's flags that launch no job (Hydra answers them), and those that take a value
+NO_JOB_FLAGS = {"--help", "-h", "--hydra-help", "--info", "-i", "--cfg", "-c", "--version",
+                "--shell-completion", "-sc", "--resolve", "-p", "--package"}
+FLAGS_WITH_VALUE = {"--config-path", "-cp", "--config-name", "-cn", "--config-dir", "-cd",
+                    "--experimental-rerun"}
+MAX_JOBS = 100_000  # jobs one command may launch: a typo in a range could ask for 10^8
+
+
+@dataclass(frozen=True)
+class Job:
+    """One job of a plan: what :func:`pipeline.app.job.execute` runs."""
+
+    number: int | None  # its place in the sweep (Hydra's hydra.job.num); None in run mode
+    overrides: tuple[str, ...]  # as given, in command order (hydra.* included)
+    folder: Path
+    cfg: DictConfig  # typed and validated
+    catalogue: Catalogue | None  # None for an analysis without actuators
+    config: DictConfig  # as Hydra composes it, without Hydra's node (.hydra/config.yaml)
+    files: tuple[str, ...]  # the key of its composition in the plan
+    fused: bool = False  # its sweep pays, as a whole, for the compiled kernels (compute.fused_pays)
+
+
+@dataclass
+class Plan:
+    """Every job of a command, checked, in launch order, and what :mod:`pipeline.app.run` needs
+    to write Hydra's records of them (the compositions, by their files)."""
+
+    jobs: list[Job]
+    multirun: bool
+    sweep_dir: Path | None  # the sweep's folder (None in run mode)
+    workers: int  # jobs at a time (hydra.launcher.n_jobs)
+    overrides: tuple[str, ...]  # the command's (sweeps unexpanded)
+    files: tuple[str, ...]  # the key of the composition of its fixed part (the sweep's config)
+    gather: bool  # the sweep summary (Hydra's callback sweep_summary, which ~hydra.callbacks.sweep_summary drops)
+    compositions: dict
+    by_hydra: bool  # the command names one of Hydra's launchers or sweepers: Hydra runs it (pipeline.app.cli)
+
+    def record(self, job: Job) -> DictConfig:
+        """The job's config with Hydra's node, as Hydra's run or launcher records it
+        (``.hydra/hydra.yaml``, and the job's logging settings)."""
+        return self.compositions[job.files].record(_parsed(job.overrides), _parsed(list(self.overrides)),
+                                                   job.number, job.folder, self.sweep_dir)
+
+    def sweep_record(self) -> DictConfig:
+        """The sweep's config with Hydra's node, as Hydra's sweeper records it (``multirun.yaml``):
+        the command's overrides, its sweeps unexpanded, with the folder of the sweep."""
+        command = _parsed(list(self.overrides))
+        config = self.compositions[self.files].hydra_node(command, command)
+        config.hydra.sweep.dir = str(self.sweep_dir)
+        return config
+
+    @property
+    def task_overrides(self) -> list[str]:
+        """The command's overrides but Hydra's (the sweep summary's record)."""
+        return [o.input_line for o in _parsed(list(self.overrides)) if not o.is_hydra_override()]
+
+
+@dataclass
+class Reuse:
+    """What :func:`plan` may keep across calls over the same config files and catalogues (a
+    study's trials, planned one by one): each set of files composed and typed once, each
+    catalogue read once."""
+
+    compositions: dict = field(default_factory=dict)
+    catalogues: dict = field(default_factory=dict)
+
+
+def plan(argv: list[str], reuse: Reuse | None = None) -> Plan | None:
+    """The checked plan of a command line (Hydra's grammar: ``-m``, ``--config-dir DIR``,
+    overrides); None for a command that launches no job (``--cfg``, ``--info``: Hydra's).
+    Raises ConfigError for the first job whose config cannot be composed or is invalid, or whose
+    folder cannot be written."""
+    overrides = _overrides(argv)
+    if overrides is None:
+        return None
+    multirun = _is_multirun(argv)
+    parsed = parse(overrides)
+    for override in parsed:
+        if override.key_or_group.startswith("hydra.callbacks") and not override.is_delete():
+            raise ConfigError(f"{override.input_line}: a Hydra callback runs code; the command line may "
+                              "remove the project's (~hydra.callbacks.sweep_summary), not add or change one")
+    jobs = _expanded(parsed) if multirun else [overrides]
+    register()
+    search_path = _search_path(argv)
+    mode = "hydra.mode=MULTIRUN" if multirun else "hydra.mode=RUN"
+    reuse = Reuse() if reuse is None else reuse
+    base = [o for o in parsed if not o.is_sweep_override()]  # what Hydra composes the sweep's config from
+
+    def composition(job_parsed: list[Override]) -> tuple[tuple[str, ...], Composition]:
+        files = (*search_path, *(o.input_line for o in job_parsed if structural(o)), mode)
+        if files not in reuse.compositions:
+            try:
+                composed = compose(config_name="config", overrides=list(files), return_hydra_config=True)
+            except MissingConfigException as exc:  # a group option with no file
+                raise ConfigError(_missing_option(exc, job_parsed)) from exc
+            except Exception as exc:  # composition errors come as Hydra and OmegaConf types
+                raise ConfigError(one_line(exc)) from exc
+            reuse.compositions[files] = Composition(composed)
+        return files, reuse.compositions[files]
+
+    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3", job_name="pipeline"):
+        base_files, first = composition(base)
+        first.job(base)  # a bad key or value named first (Hydra composes a sweep's own config from these)
+        hydra = first.hydra_node(base, parsed)
+        choices = hydra.hydra.runtime.choices
+        by_hydra = (choices.get("hydra/launcher"), choices.get("hydra/sweeper")) != ("cdpr", "basic")
+        if not by_hydra:
+            _check_launcher(hydra, base)
+        sweep_dir = Path(str(hydra.hydra.sweep.dir)) if multirun else None
+        planned, folders = [], []
+        for number, job in enumerate(jobs):
+            job_parsed = parse(job)
+            files, composed = composition(job_parsed)
+            cfg, config = composed.job(job_parsed)
+            catalogue = None
+            if "catalogue" in cfg:  # analyses with an actuator
+                if cfg.catalogue not in reuse.catalogues:
+                    reuse.catalogues[cfg.catalogue] = load_catalogue(cfg.catalogue)
+                catalogue = reuse.catalogues[cfg.catalogue]
+            validate(cfg, None if catalogue is None else catalogue.ids, typed=True)
+            folder = composed.folder(job_parsed, parsed, number if multirun else None, sweep_dir)
+            folders.append(folder)
+            planned.append(Job(number if multirun else None, tuple(job), folder, cfg, catalogue, config, files))
+    _check_output_folders(folders, planned[0].cfg, len(planned))
+    if len(planned) > 1:
+        from pipeline.workspace.compute import fused_pays
+
+        if fused_pays(job.cfg for job in planned):
+            planned = [Job(**{**job.__dict__, "fused": True}) for job in planned]
+    gather = "sweep_summary" in (OmegaConf.select(hydra, "hydra.callbacks") or {})
+    return Plan(planned, multirun, sweep_dir, 1 if by_hydra else hydra.hydra.launcher.n_jobs, tuple(overrides),
+                base_files, gather, reuse.compositions, by_hydra)
+
+
+def _check_launcher(hydra: DictConfig, parsed: list[Override]) -> None:
+    """The settings of the runner's launcher (``hydra/launcher=cdpr``, the default): the number
+    of jobs at a time, and no other (naming one of Hydra's launchers, ``hydra/launcher=joblib``,
+    hands the command to Hydra: ``pipeline.app.cli``)."""
+    n_jobs = hydra.hydra.launcher.n_jobs
+    if isinstance(n_jobs, bool) or not isinstance(n_jobs, int) or n_jobs < 1:
+        raise ConfigError(f"hydra.launcher.n_jobs={n_jobs}: must be a whole number >= 1 (jobs at a time)")
+    for override in parsed:
+        key = override.key_or_group
+        if key.startswith("hydra.launcher.") and key != "hydra.launcher.n_jobs":
+            raise ConfigError(f"{override.input_line}: the pipeline's runner reads hydra.launcher.n_jobs only; "
+                              "Hydra's own joblib launcher takes the others (hydra/launcher=joblib)")
+
+
+def job_overrides(argv: list[str]) -> list[list[str]] | None:
+    """The override list of every job the command would launch; None when it launches none."""
+    overrides = _overrides(argv)
+    if overrides is None or not _is_multirun(argv):
+        return None if overrides is None else [overrides]
+    return _expanded(parse(overrides))
+
+
+def _expanded(parsed: list[Override]) -> list[list[str]]:
+    """The jobs of a sweep. A sweep another sweeper chooses the values of (Optuna: the command
+    goes to Hydra, ``pipeline.app.cli``) is checked with its other overrides only: one job, the
+    sweep's fixed part."""
+    if other_sweeper(parsed):
+        return [[o.input_line for o in parsed if not o.is_sweep_override()]]
+    return expand_sweep(parsed)
+
+
+def expand_sweep(parsed: list[Override]) -> list[list[str]]:
+    """The basic sweeper's jobs: the cartesian product of every override's values, in command
+    order. Counted first: more than MAX_JOBS is a ConfigError naming the sweeps, before any
+    list is made."""
+    counts = {o.get_key_element(): _sweep_count(o) for o in parsed if o.is_sweep_override()}
+    if math.prod(counts.values()) > MAX_JOBS:
+        sizes = " x ".join(f"{key}: {count:g}" for key, count in counts.items())
+        raise ConfigError(f"-m: {math.prod(counts.values()):.3g} jobs ({sizes}); at most {MAX_JOBS} in "
+                          "one command (split the sweep, or sweep fewer values)")
+    values: dict[str, list[str]] = {}  # a repeated key keeps its place and takes its last values
+    for override in parsed:
+        key = override.get_key_element()
+        if override.is_interval_sweep():
+            raise ConfigError(f"{override.input_line}: interval sweeps need a sweeper that samples "
+                              "them (e.g. hydra/sweeper=optuna)")
+        if override.is_sweep_override():
+            values[key] = [f"{key}={value}" for value in override.sweep_string_iterator()]
+        else:
+            values[key] = [f"{key}={override.get_value_element_as_str()}"]
+    return [list(job) for job in itertools.product(*values.values())]
+
+
+def _sweep_count(override: Override) -> float:
+    """How many values a sweep override gives, without listing a range's."""
+    value = override.value()
+    if isinstance(value, RangeSweep):
+        return max(0, math.ceil((value.stop - value.start) / value.step)) if value.step else math.inf
+    return len(value.list) if isinstance(value, ChoiceSweep) else 1
+
+
+def other_sweeper(parsed: list[Override]) -> bool:
+    """The command picks a sweeper other than Hydra's basic one, which this runner expands."""
+    return any(o.key_or_group == "hydra/sweeper" and o.value() != "basic" for o in parsed)
+
+
+def _overrides(argv: list[str]) -> list[str] | None:
+    overrides, skip = [], False
+    for arg in argv:
+        if skip:
+            skip = False
+        elif arg in NO_JOB_FLAGS:
+            return None
+        elif arg in FLAGS_WITH_VALUE:
+            skip = True
+        elif not arg.startswith("-"):
+            overrides.append(arg)
+    return overrides
+
+
+def _is_multirun(argv: list[str]) -> bool:
+    return "-m" in argv or "--multirun" in argv
+
+
+def quoted(value) -> str:
+    """``value`` as a quoted value of Hydra's override grammar, so a folder name may hold
+    ``=``, ``,``, spaces and quotes (``hydra.run.dir=`` + ``quoted(folder)``)."""
+    text = re.sub(r"(\\+)(?='|$)", r"\1\1", str(value))  # backslashes escape only before a quote
+    return "'" + text.replace("'", "\\'") + "'"
+
+
+def parse(overrides: list[str]) -> list[Override]:
+    """Hydra's parse of each override; a grammar error names the override it is in."""
+    return [override for text in overrides for override in _parse_one(text)]
+
+
+_parsed = parse
+
+
+@functools.lru_cache(maxsize=4096)
+def _parse_one(text: str) -> tuple[Override, ...]:
+    """One override parsed (about 0.3 ms with Hydra's grammar; the jobs of a sweep repeat the
+    same ``key=value`` texts, read only, so each is parsed once)."""
+    try:
+        return tuple(OverridesParser.create().parse_overrides([text]))
+    except Exception as exc:  # Hydra's override grammar errors have several types
+        raise ConfigError(f"{text}: {one_line(exc)}") from exc
+
+
+class Copies:
+    """Fresh copies of one config, each equal to what ``copy.deepcopy`` makes, at a fraction of
+    its cost: the config is pickled once and each copy unpickled (about 1.0 ms against 4.8 ms
+    for a composed config with Hydra's node). The copies are of ``cfg`` as it is now. A config
+    that pickle cannot write (a structured config whose class it cannot find by name) is
+    deep-copied instead."""
+
+    def __init__(self, cfg: DictConfig) -> None:
+        try:
+            self._pickled, self._cfg = pickle.dumps(cfg, protocol=pickle.HIGHEST_PROTOCOL), None
+        except (pickle.PicklingError, AttributeError, TypeError):  # pickle's refusals
+            self._pickled, self._cfg = None, copy.deepcopy(cfg)
+
+    def __call__(self) -> DictConfig:
+        return pickle.loads(self._pickled) if self._cfg is None else copy.deepcopy(self._cfg)
+
+
+class Composition:
+    """One set of config files, composed once by Hydra: the config with Hydra's node, the job
+    config without it, and its typed version (:func:`pipeline.app.config.typed_schema`, every
+    declared key), from which each job is made by its plain overrides (:meth:`job`)."""
+
+    def __init__(self, composed: DictConfig) -> None:
+        plain = without_hydra(composed)
+        self.hydra = Copies(composed)
+        self.plain = Copies(plain)
+        full = typed_schema(plain)  # typed once per composition
+        self._full = Copies(full)
+        self._typed = _derivable(full, plain)
+        self._scratch = full  # where each override text is typed, once (:meth:`_typed_value`)
+        self._converted: dict[str, Any] = {}
+
+    def job(self, parsed: list[Override]) -> tuple[DictConfig, DictConfig]:
+        """(the job's typed config, its config as Hydra composes it) for its parsed overrides,
+        each plain one applied to both in command order: the first override that is not a key
+        of this robot and analysis, or whose value is not of the key's declared type, raises,
+        as does a required key (``???``) left without a value."""
+        plain = self.plain()
+        overrides = [o for o in parsed if not structural(o) and not o.is_hydra_override()]
+        try:
+            if self._typed is None or any(_not_derivable(o) for o in overrides):
+                full = self._full()
+                for override in overrides:
+                    _apply(plain, override)  # a key this robot and analysis have
+                    _apply(full, override)  # of the declared type
+                return masked(full, plain), plain
+            typed = self._typed()
+            for override in overrides:
+                _apply(plain, override)
+                OmegaConf.update(typed, override.key_or_group, self._typed_value(override), merge=False)
+            return typed, plain
+        except MissingMandatoryValue as exc:  # ??? in a file, and not given
+            raise ConfigError(f"{exc.full_key}: no value given (a required key: set it in the file or on "
+                              f"the command line, e.g. {exc.full_key}=...)") from None
+
+    def _typed_value(self, override: Override) -> Any:
+        """The override's value as its key's declared type makes it, typed once per override
+        text: a value's type depends on its key only, in one composition."""
+        if override.input_line not in self._converted:
+            _apply(self._scratch, override)  # ConfigError for a value of the wrong type
+            value = OmegaConf.select(self._scratch, override.key_or_group)
+            self._converted[override.input_line] = (OmegaConf.to_container(value) if isinstance(
+                value, (DictConfig, ListConfig)) else value)
+        return self._converted[override.input_line]
+
+    def hydra_node(self, parsed: list[Override], command: list[Override]) -> DictConfig:
+        """The composition with every plain override of a job applied in command order (Hydra's
+        node's too), and Hydra's records of them (``hydra.overrides``: the job's task overrides,
+        the command's own Hydra overrides and mode; ``hydra.job.override_dirname``): what
+        Hydra's config loader composes for the job of a command."""
+        config = self.hydra()
+        for override in parsed:
+            if not structural(override):
+                try:
+                    OmegaConf.update(config, override.key_or_group, override.value(), merge=True)
+                except Exception as exc:  # OmegaConf key and type errors of Hydra's node
+                    raise ConfigError(f"{override.input_line}: {one_line(exc)}") from exc
+        hydra = config.hydra
+        task = [o for o in parsed if not o.is_hydra_override()]
+        hydra.overrides.hydra = [*(o.input_line for o in command if o.is_hydra_override()), f"hydra.mode={hydra.mode.name}"]
+        hydra.overrides.task = [o.input_line for o in task]
+        hydra.job.override_dirname = override_dirname(task, hydra.job.config.override_dirname)
+        return config
+
+    def folder(self, parsed: list[Override], command: list[Override], number: int | None,
+               sweep_dir: Path | None) -> Path:
+        """The job's folder by Hydra's rules (``hydra.run.dir``; ``hydra.sweep.dir`` and
+        ``hydra.sweep.subdir`` in a sweep), as written (relative to the working folder or not)."""
+        return _folder(self._numbered(parsed, command, number, sweep_dir).hydra, number)
+
+    def record(self, parsed: list[Override], command: list[Override], number: int | None,
+               folder: Path | None, sweep_dir: Path | None) -> DictConfig:
+        """The job's config with Hydra's node as Hydra records it: its number in a sweep, the
+        sweep's folder (resolved once for the command), its output folder (absolute)."""
+        config = self._numbered(parsed, command, number, sweep_dir)
+        with read_write(config.hydra.runtime), open_dict(config.hydra.runtime):
+            config.hydra.runtime.output_dir = os.path.abspath(folder or _folder(config.hydra, number))
+        return config
+
+    def _numbered(self, parsed: list[Override], command: list[Override], number: int | None,
+                  sweep_dir: Path | None) -> DictConfig:
+        config = self.hydra_node(parsed, command)
+        if number is not None:
+            config.hydra.job.id = config.hydra.job.num = number
+            config.hydra.sweep.dir = str(sweep_dir)
+        return config
+
+
+def _folder(hydra: DictConfig, number: int | None) -> Path:
+    """A job's folder from Hydra's node: ``hydra.run.dir``, or in a sweep (``number``)
+    ``hydra.sweep.dir``/``hydra.sweep.subdir``."""
+    try:
+        return Path(str(hydra.run.dir) if number is None else os.path.join(str(hydra.sweep.dir), str(hydra.sweep.subdir)))
+    except Exception as exc:  # an interpolation of the folder that cannot resolve
+        raise ConfigError(f"hydra.{'run' if number is None else 'sweep'}: {one_line(exc)}") from exc
+
+
+def without_hydra(config: DictConfig) -> DictConfig:
+    """A deep copy of a composed config without Hydra's node (the task's config)."""
+    task = copy.deepcopy(config)
+    with read_write(task), open_dict(task):
+        del task["hydra"]
+    return task
+
+
+def _derivable(full: DictConfig, plain: DictConfig) -> Copies | None:
+    """The typed job config of no override (``full`` masked to ``plain``'s keys), from which each
+    job's is derived, when every value of the files is set and none is an interpolation (a
+    typed config holds resolved values, which an override of another key could change); else
+    None."""
+    if "${" in to_yaml(plain):
+        return None
+    try:
+        return Copies(masked(full, plain))
+    except MissingMandatoryValue:  # ??? in the files: the overrides give it
+        return None
+
+
+def _not_derivable(override: Override) -> bool:
+    """A plain override whose typed value depends on more than its own text: a dict (merged
+    into the key's current value) or an interpolation (resolved against the job's config)."""
+    value = override.value()
+    return isinstance(value, dict) or "${" in str(value)
+
+
+NAME_MAX = 255  # bytes in one folder name (Linux, macOS)
+BYTES_PER_POSE = 200  # a points.parquet row with its margins, generously
+BYTES_PER_JOB = 512 * 1024  # Hydra's files, the log and the summary of one job
+
+
+def _check_output_folders(folders: list[Path], first: DictConfig, n_jobs: int) -> None:
+    """The jobs' folders can be made and written and their disk has room: a path through a
+    file, a folder name over 255 bytes, a read-only place or a full disk is one line naming the
+    path, before anything is written. ``first``: the first job's valid config."""
+    from pipeline.workspace.compute import grid_size
+
+    for folder in folders:
+        _writable(folder)
+    needed = n_jobs * (BYTES_PER_JOB + BYTES_PER_POSE * grid_size(first))  # a sweep varies values, not grids
+    probe = _existing_ancestor(folders[0])
+    free = shutil.disk_usage(probe).free
+    if free < needed:
+        raise ConfigError(f"{folders[0]}: needs about {needed / 2**20:.1f} MiB, {free / 2**20:.1f} MiB "
+                          f"free on its disk ({probe})")
+
+
+def override_dirname(parsed: list[Override], naming) -> str:
+    """Hydra's ``hydra.job.override_dirname`` of a job (its config loader's rule): the task
+    overrides but the excluded keys, sorted, joined with the item separator, every ``=``
+    replaced by the key-value separator. ``naming``: ``hydra.job.config.override_dirname``."""
+    lines = sorted(o.input_line for o in parsed
+                   if not o.is_hydra_override() and o.key_or_group not in naming.exclude_keys)
+    return naming.item_sep.join(lines).replace("=", naming.kv_sep)
+
+
+def _writable(folder: Path) -> None:
+    for part in folder.parts:
+        if len(os.fsencode(part)) > NAME_MAX:
+            raise ConfigError(f"{folder}: a folder name of {len(os.fsencode(part))} bytes (at most "
+                              f"{NAME_MAX}): choose a shorter hydra.run.dir, or sweep fewer or shorter values")
+    probe = _existing_ancestor(folder)
+    if not probe.is_dir():
+        raise ConfigError(f"{folder}: {probe} is a file, not a folder")
+    if not os.access(probe, os.W_OK | os.X_OK):
+        raise ConfigError(f"{folder}: {probe} is not writable")
+
+
+def _existing_ancestor(folder: Path) -> Path:
+    probe = folder.absolute()
+    while not probe.exists() and probe != probe.parent:
+        probe = probe.parent
+    return probe
+
+
+def _search_path(argv: list[str]) -> tuple[str, ...]:
+    """``--config-dir DIR`` (``-cd DIR``, ``--config-dir=DIR``) as the override Hydra applies for
+    it, so that the plan composes from the user's folder; its files are checked first
+    (:func:`_check_user_files`)."""
+    for i, arg in enumerate(argv):
+        folder = None
+        if arg in ("--config-dir", "-cd") and i + 1 < len(argv):
+            folder = argv[i + 1]
+        elif arg.startswith("--config-dir="):
+            folder = arg.split("=", 1)[1]
+        if folder is not None:
+            path = Path(folder).expanduser().resolve()
+            if not path.is_dir():
+                raise ConfigError(f"--config-dir={folder}: no such folder")
+            _check_user_files(path)
+            return (f"hydra.searchpath=[file://{path}]",)
+    return ()
+
+
+USER_FILE_BYTES = 1 << 20  # a robot file of a thousand cables is about 100 kB
+
+
+def _check_user_files(folder: Path) -> None:
+    """The YAML files of a user's config folder (robot, analysis and tension files, often shared
+    or imported) carry their own keys only: one that sets Hydra's node or picks a Hydra plugin
+    (``hydra:``, ``override hydra/...``, whose callbacks, launchers and environment run code)
+    is refused with one line naming it, as is a file too large or not YAML."""
+    import yaml
+
+    for path in sorted(folder.rglob("*.yaml")):
+        where = path.relative_to(folder)
+        if path.stat().st_size > USER_FILE_BYTES:
+            raise ConfigError(f"--config-dir={folder}: {where}: {path.stat().st_size} bytes "
+                              f"(a config file is at most {USER_FILE_BYTES} bytes)")
+        try:
+            data = yaml.safe_load(path.read_text(encoding="utf-8"))
+        except (yaml.YAMLError, UnicodeDecodeError) as exc:
+            raise ConfigError(f"--config-dir={folder}: {where}: not YAML ({one_line(exc)})") from None
+        if not isinstance(data, dict):
+            continue
+        defaults = data.get("defaults") if isinstance(data.get("defaults"), list) else []
+        entries = [str(next(iter(d))) if isinstance(d, dict) and d else str(d) for d in defaults]
+        if "hydra" in data or any(re.match(r"(override\s+)?/?hydra(/|$|_settings)", e) for e in entries):
+            raise ConfigError(f"--config-dir={folder}: {where} sets Hydra's own settings (callbacks, "
+                              "launchers, environment: they run code); a robot, analysis or tension file "
+                              "carries its own keys only")
+
+
+def _missing_option(exc: MissingConfigException, parsed: list[Override]) -> str:
+    """'group=option: no such option (options: ...)' for the override that named it."""
+    for override in parsed:
+        group = override.key_or_group
+        if (CONF_DIR / group).is_dir() and not group.startswith("hydra") and f"{group}/{override.value()}" in str(exc):
+            options = sorted(f.stem for f in (CONF_DIR / group).glob("*.yaml"))
+            return (f"{override.input_line}: no such option of the {group} group "
+                    f"(options: {', '.join(options)}; your own: --config-dir DIR with DIR/{group}/NAME.yaml)")
+    return one_line(exc)
+
+
+def structural(override: Override) -> bool:
+    """Overrides that change which config files are composed, or that Hydra must merge into
+    them itself: config groups (Hydra's own included), ``+``, ``++``, ``~``, a package, Hydra's
+    search path. Plain ``key=value`` overrides, Hydra's ``hydra.*`` keys too, apply after."""
+    key = override.key_or_group
+    return (
+        override.is_add() or override.is_delete() or override.is_force_add()
+        or override.is_sweep_override() or override.package is not None
+        or key.startswith("hydra/") or key == "hydra.searchpath" or (CONF_DIR / key).is_dir()
+        or isinstance(override.value(), dict)
+    )
+
+
+def _apply(cfg: DictConfig, override: Override) -> None:
+    """``key=value`` merged into the typed config, as Hydra's own override does."""
+    try:
+        OmegaConf.update(cfg, override.key_or_group, override.value(), merge=True)
+    except (ConfigAttributeError, ConfigKeyError):  # not a key of this job's robot and analysis
+        raise ConfigError(f"{override.input_line}: no such key for robot={cfg.robot.name} with "
+                          f"analysis={cfg.analysis} (a key of another analysis or robot, or a typo)") from None
+    except Exception as exc:  # OmegaConf raises key, type and validation errors
+        raise ConfigError(f"{override.input_line}: {one_line(exc)}") from exc
