@@ -5,8 +5,8 @@ The process lives for one command, so Python's cyclic garbage collector is kept 
 as long as the process: paused while the application is imported (modules, classes, grammars:
 nothing there becomes garbage), whose objects are then frozen (``gc.freeze``: the job's
 collections do not scan them), and every object frozen when the command ends, so that the
-interpreter's shutdown does not scan them all again before the process exits: about 0.08 s of
-a 0.66 s job (docs/performance.md, "The garbage collector of a one-command process").
+interpreter's shutdown does not scan them all again before the process exits
+(docs/performance.md, "The garbage collector of a one-command process").
 """
 
 import gc

@@ -62,7 +62,7 @@ def write_parquet(frame: pa.Table | pd.DataFrame, path: Path, config_yaml: str,
 
 
 ZSTD_ROWS = 1000  # zstd for tables that stream chunks of at least this many rows (points), snappy
-# for the small ones (a summary's one row: 1.8 ms instead of 4.4 ms, where zstd gains nothing)
+# for the small ones (a summary's one row, where zstd costs more than it gains)
 
 
 class ParquetSink:

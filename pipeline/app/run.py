@@ -18,7 +18,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from hydra.core.utils import configure_log, env_override
-from omegaconf import DictConfig, ListConfig, OmegaConf
+from omegaconf import DictConfig, ListConfig, OmegaConf, open_dict
 
 from pipeline.app.callbacks import gather
 from pipeline.app.job import execute
@@ -88,21 +88,24 @@ def run(plan: Plan, hydra_logging: bool = True) -> list[dict]:
 def _prepare(plan: Plan, job: Job, hydra_logging: bool) -> Setting:
     """The job's folder and Hydra's records in it, written here (the plan's compositions stay
     in this process); the settings it runs with."""
-    record = plan.record(job)
+    record = plan.record(job)  # a fresh copy, ours to change
     hydra = record.hydra
-    job.folder.mkdir(parents=True, exist_ok=True)
-    if hydra.output_subdir is not None:
-        saved = job.folder / str(hydra.output_subdir)
-        saved.mkdir(parents=True, exist_ok=True)
-        for name, node in (("config.yaml", job.config), ("hydra.yaml", OmegaConf.masked_copy(record, "hydra")),
-                           ("overrides.yaml", hydra.overrides.task)):
-            (saved / name).write_text(to_yaml(node), encoding="utf-8")
     logging_cfg = None if hydra.job_logging is None else OmegaConf.create(
         OmegaConf.to_container(hydra.job_logging, resolve=True))
     verbose = OmegaConf.create(OmegaConf.to_container(hydra.verbose)) if isinstance(hydra.verbose, ListConfig) \
         else hydra.verbose
-    return Setting(hydra_logging, logging_cfg, verbose, {str(k): str(v) for k, v in hydra.job.env_set.items()},
-                   bool(hydra.job.chdir))
+    setting = Setting(hydra_logging, logging_cfg, verbose, {str(k): str(v) for k, v in hydra.job.env_set.items()},
+                      bool(hydra.job.chdir))
+    job.folder.mkdir(parents=True, exist_ok=True)
+    if hydra.output_subdir is not None:
+        saved = job.folder / str(hydra.output_subdir)
+        saved.mkdir(parents=True, exist_ok=True)
+        with open_dict(record):  # Hydra's record of its own node: the config but the job's keys
+            for key in [key for key in record if key != "hydra"]:
+                del record[key]
+        for name, node in (("config.yaml", job.config), ("hydra.yaml", record), ("overrides.yaml", hydra.overrides.task)):
+            (saved / name).write_text(to_yaml(node), encoding="utf-8")
+    return setting
 
 
 def run_job(job: Job, setting: Setting) -> dict:

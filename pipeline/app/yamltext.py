@@ -1,14 +1,12 @@
 """A config's YAML text as ``OmegaConf.to_yaml`` writes it, emitted by libyaml.
 
-``OmegaConf.to_yaml`` emits with PyYAML's pure-Python emitter: 3.8 ms for a job's Hydra node,
-2.2 ms for its config, and a sweep job's config is written as text four times (its key in the
-preflight and in the launcher, ``.hydra/config.yaml`` and ``hydra.yaml``, the summary's
-metadata): 11 % of the CPU of ``python -m pipeline.study --all``. The same representation
-emitted by libyaml (PyYAML's C emitter, when PyYAML was built with it) takes 40 % of the time
-for the same text: ``tests/test_yamltext.py`` compares both on the configs of the papers'
-robots, Hydra's node, strings YAML could misread and random Unicode text. Where libyaml escapes
-a character PyYAML writes as it is (beyond U+FFFF, and U+0085), and without libyaml, the text
-is OmegaConf's own.
+``OmegaConf.to_yaml`` emits with PyYAML's pure-Python emitter; every job writes its config as
+text three times (``.hydra/config.yaml``, ``hydra.yaml``, the summary's metadata), a large part
+of a study's CPU. The same representation emitted by libyaml (PyYAML's C emitter, when PyYAML
+was built with it) takes a fraction of the time for the same text: ``tests/test_yamltext.py``
+compares both on the configs of the papers' robots, Hydra's node, strings YAML could misread and
+random Unicode text. Where libyaml escapes a character PyYAML writes as it is (beyond U+FFFF,
+and U+0085), and without libyaml, the text is OmegaConf's own.
 """
 
 from __future__ import annotations

@@ -3,10 +3,10 @@ once a process.
 
 A loops module declares ``SIGNATURES`` (name -> numba signature) and decorates those functions
 with ``@njit(SIGNATURES[name], cache=True)``: numba compiles them, with everything they call,
-when the module is first imported on a machine (about 15 s for the fused loops, 8 s for the
-crossing search) and keeps the machine code in its cache (``__pycache__`` beside the module, or
-numba's user cache where that cannot be written); later processes load it (numba's import and
-the cache: 0.35-0.4 s, ``pipeline.workspace.compute.FUSED_START_S``). A signature also keeps
+when the module is first imported on a machine (seconds, once) and keeps the machine code in
+its cache (``__pycache__`` beside the module, or numba's user cache where that cannot be
+written); later processes load it (numba's import and the cache, what
+``pipeline.workspace.compute.FUSED_START_S`` allows for; docs/performance.md). A signature also keeps
 numba from compiling a second specialisation for another argument type (a literal, a read-only
 array): such a call is a TypeError instead of seconds of compiling.
 

@@ -2,9 +2,9 @@
 
 pyarrow's own constructors (``pa.array``, ``pa.scalar``, ``pa.Table.from_pylist``) and
 ``pq.read_table`` import pandas, when it is installed, to check whether their input is a pandas
-object: 0.25 s of CPU in a job process that holds none (``docs/performance.md``, "What a process
-imports"). A job's tables are therefore built here with ``pa.Array.from_buffers``, which checks
-nothing (numbers without a copy), and read with ``pq.ParquetFile``. The columns have the types
+object, in a job process that holds none (``docs/performance.md``, "What a process imports"). A
+job's tables are therefore built here with ``pa.Array.from_buffers``, which checks nothing
+(numbers without a copy), and read with ``pq.ParquetFile``. The columns have the types
 ``pa.Table.from_pandas`` gives the same values, and a table read back with pandas is the same
 DataFrame (``tests/test_results.py``).
 """

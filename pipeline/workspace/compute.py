@@ -234,7 +234,7 @@ def grid_workspace(
     workers = worth_workers(problem, grid.n_points, cfg.compute.n_jobs, cfg.compute.backend)
     announce_cost(cfg, problem, grid.n_points, workers)
     if problem.fused or problem.spec.tension.model == "feasible":
-        # one pose first: the compiled loops are loaded, or built once (15 s), before the
+        # one pose first: the compiled loops are loaded, or built once, before the
         # progress clock starts, which would count that in the first chunk's time
         evaluate_chunk(problem, grid.positions[:1])
     chunks = iter_chunks(
@@ -300,15 +300,13 @@ def tabulate(problem: WorkspaceProblem, positions: np.ndarray, raw: dict,
 # The speeds hold for the paper's set of REFERENCE_SET velocities per pose (grid.n_vel = 6);
 # a pose's cost grows with its set. A job estimated above LONG_JOB_S is announced with a warning.
 WORKER_START_S = 0.4
-# The compiled kernels cost a process 0.35-0.4 s to load from numba's cache (numba's import, with
-# scipy.linalg, and the machine code: pipeline.model.jit), and the first process on a machine
-# compiles them (about 15 s): a job whose numpy kernel would take less than FUSED_START_S keeps
-# it, so a small job never pays more than it could save.
+# The compiled kernels cost a process FUSED_START_S to load from numba's cache (numba's import,
+# with scipy.linalg, and the machine code: pipeline.model.jit), and the first process on a machine
+# compiles them: a job whose numpy kernel would take less keeps it, so a small job never pays
+# more than it could save.
 FUSED_START_S = 0.4
 # Fused chunks are computed several times faster than the parent classifies and writes them, so
-# workers pay only for long fused jobs: 10^6 poses took 1.44-1.49 s on two workers and 1.38-1.41 s
-# in one process at zero orientation (1.28-1.34 s and 1.10-1.13 s at 0.5 rad), 2.2 x 10^6 poses
-# 2.17 s and 2.60-2.66 s (2026-11-24, the inlined loops; one core runs them at 1.5-3 M poses/s).
+# workers pay only for long fused jobs (benchmarks/LOG.md, 2026-11-24: about 1.5 x 10^6 poses).
 FUSED_WORKERS_FROM_S = 1.5  # the fused kernel's time (cost model) from which workers are used
 POSES_PER_SECOND = {"pinv": 200_000, "feasible": 20_000, "fused": 1_000_000}
 REFERENCE_SET = 93

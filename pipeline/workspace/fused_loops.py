@@ -12,8 +12,7 @@ The helpers are inlined into the two loops (``inline="always"``, numba's own inl
 CPR-WWA loop is compiled once for each number of rows of the pseudo-inverse (3 or 6, a
 constant): the compiler then sees every small loop's trip count and keeps the 6 x 6 algebra in
 registers, unrolled. The arithmetic is the same, in the same order (no fast-math), so the
-margins are the same to the last bit; a 125 000-pose job's loop took 0.08 s instead of 0.14 s
-(docs/performance.md).
+margins are the same to the last bit (benchmarks/LOG.md: what inlining saved).
 """
 
 from __future__ import annotations

@@ -56,7 +56,7 @@ def iter_chunks(
             yield s, function(problem, positions[s])
             progress.step()
         return
-    from joblib import Parallel, delayed  # only here: 50 ms of imports a one-chunk job skips
+    from joblib import Parallel, delayed  # only here: imports a one-chunk job skips
 
     with _engine(backend, workers, scheduler) as joblib_backend:
         runner = Parallel(n_jobs=workers, backend=joblib_backend, return_as="generator")
