@@ -28,7 +28,6 @@ from hydra import compose, initialize_config_dir  # noqa: E402
 
 from pipeline.model.catalogue import load_catalogue  # noqa: E402
 from pipeline.app.config import register, typed_config  # noqa: E402
-from pipeline.workspace.criteria.forces import tension_families, tension_spec  # noqa: E402
 from pipeline.workspace.kernel import evaluate_chunk  # noqa: E402
 from pipeline.app.resources import CONF_DIR  # noqa: E402
 from pipeline.model.tensions import feasible_tensions  # noqa: E402
@@ -67,7 +66,7 @@ def margins_rates(problem, grid) -> tuple[float, float, float]:
     def inputs(positions):  # the structure matrices, wrenches and limits, built before timing
         state = problem.spec.state(problem.robot, positions, problem.orientation)
         return (state.structure, *state.wrench_pinv, state.required_wrenches,
-                tension_families(state, problem.limits), tension_spec(state).residual_rtol)
+                state.force_families(problem.limits), state.tension.residual_rtol)
 
     arguments = inputs(grid.positions)
     feasible_tensions(*arguments)  # warm-up: load the compiled search, import the LP solver

@@ -25,7 +25,7 @@ import pandas as pd
 
 from pipeline.analyses.choice import choose, verdict
 from pipeline.errors import ConfigError
-from pipeline.analyses.figures import StudyResults
+from pipeline.analyses.results import StudyResults
 from pipeline.app.job import execute
 from pipeline.app.plan import Job, plan, quoted
 from pipeline.app.results import read_metadata

@@ -38,7 +38,8 @@ from pipeline.model.catalogue import load_catalogue
 from pipeline.analyses.choice import acceptance, choose, verdict
 from pipeline.errors import ConfigError, one_line
 from pipeline.analyses.evidence import evidence, scores
-from pipeline.analyses.figures import SERIES_DIR, FigureSpec, StudyResults, render
+from pipeline.analyses.figures import SERIES_DIR, FigureSpec, render
+from pipeline.analyses.results import StudyResults
 from pipeline.app.job import changed_files, execute, folder_lock
 from pipeline.analyses.optimise import (OptimiseSpec, best_drive, check_catalogue_objectives, corner_overrides, optimise,
                                trial_folder)

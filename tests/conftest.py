@@ -5,10 +5,12 @@ from __future__ import annotations
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 from hydra import compose, initialize_config_dir
 
 from pipeline.model.catalogue import load_catalogue
+from pipeline.model.dynamics import load_wrenches
 from pipeline.app.config import register, typed_config
 from pipeline.app.resources import CONF_DIR
 
@@ -50,3 +52,21 @@ def job_at_exit(cwd, *args: str, report: str, status: int = 0) -> str:
     done = subprocess.run([sys.executable, "-c", script], cwd=cwd, capture_output=True, text=True)
     assert done.returncode == status, done.stderr[-2000:]
     return done.stdout + done.stderr
+
+
+def shaft_torque(dyn) -> np.ndarray:
+    """(n, m, k_a) the load torques M = (J^T)^+ F of eq. (20) at every acceleration of the set,
+    enumerated (the reference of ``PoseDynamics.torque_affine``'s ranges)."""
+    wrenches = load_wrenches(dyn.motion, dyn.motion.accelerations, dyn.robot.up, dyn.rotation)
+    pinv = dyn.wrench_pinv[0]
+    return np.einsum("nmc,ac->nma", pinv, wrenches[:, :pinv.shape[2]])
+
+
+def shaft_accel_from_acceleration(dyn) -> np.ndarray:
+    """(n, m, k_a) J p_ddot at every acceleration of the set, enumerated."""
+    return np.einsum("nmj,aj->nma", dyn.jacobian[:, :, :3], dyn.motion.accelerations)
+
+
+def wrenches(dyn) -> np.ndarray:
+    """(k_a, 6) F of eq. (31) at every acceleration of the set."""
+    return load_wrenches(dyn.motion, dyn.motion.accelerations, dyn.robot.up, dyn.rotation)

@@ -12,7 +12,6 @@ import numpy as np
 import pytest
 
 from pipeline.model.capacity import shifted_margins
-from pipeline.workspace.criteria.forces import tension_families
 from pipeline.model.geometry import structure_matrix
 from pipeline.model.linalg import batched_pinv
 from pipeline.model.tensions import Family, capacity_margins, reachability
@@ -50,7 +49,7 @@ def test_paper_grid_every_actuator_gives_the_lp_margins(columns, angle, make_cfg
         problem, grid = build_problem(cfg, catalogue)
         state = problem.spec.state(problem.robot, grid.positions, problem.orientation)
         fast, exact, by_lp = both_ways(state.structure, state.required_wrenches,
-                                       tension_families(state, problem.limits))
+                                       state.force_families(problem.limits))
         assert_same(fast, exact)
         fallbacks, total = fallbacks + by_lp.sum(), total + len(by_lp)
     assert fallbacks <= 0.01 * total
@@ -63,7 +62,7 @@ def test_irpm_six_normals_per_pose_give_its_closed_form(gamma, make_cfg, catalog
     problem, grid = build_problem(make_cfg("robot=irpm6", f"robot.gamma_deg={gamma}",
                                            "tension=feasible", "tension.t_min=100"), catalogue)
     state = problem.spec.state(problem.robot, grid.positions[::7], problem.orientation)
-    families = tension_families(state, problem.limits)
+    families = state.force_families(problem.limits)
     pinv, rank = batched_pinv(state.structure, 1e-9)
     full = rank == 6
     assert full.mean() > 0.9

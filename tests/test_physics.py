@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from pipeline.model.dynamics import PoseDynamics
+from conftest import shaft_accel_from_acceleration, shaft_torque, wrenches
 from pipeline.workspace.compute import build_problem, compute_workspace
 
 
@@ -15,7 +16,7 @@ def _dyn(make_cfg, catalogue, *overrides):
 
 
 def _residual(dyn, columns):
-    return np.einsum("nmc,nma->nca", dyn.jacobian[:, :, :columns], dyn.shaft_torque) - dyn.wrenches[:, :columns].T
+    return np.einsum("nmc,nma->nca", dyn.jacobian[:, :, :columns], shaft_torque(dyn)) - wrenches(dyn)[:, :columns].T
 
 
 def test_translational_pinv_balances_the_force_exactly(make_cfg, catalogue):
@@ -35,7 +36,7 @@ def test_full_pinv_at_rank_5_balances_wrenches_in_the_range_only(make_cfg, catal
     its range and is balanced exactly; a horizontal force generally is not (least squares)."""
     dyn = _dyn(make_cfg, catalogue, "model.pinv_columns=full")
     residual = np.linalg.norm(_residual(dyn, 6), axis=1)  # (n, k_a)
-    vertical = np.abs(dyn.wrenches[:, :2]).sum(axis=1) == 0
+    vertical = np.abs(wrenches(dyn)[:, :2]).sum(axis=1) == 0
     assert not vertical.any()  # the corner set always has a horizontal part
     pure_weight = dyn.jacobian[:, :, :6]
     m = np.einsum("nmc,c->nm", np.linalg.pinv(np.transpose(pure_weight, (0, 2, 1)), rtol=1e-9),
@@ -75,4 +76,4 @@ def test_centripetal_term_dominates_shaft_acceleration_on_the_paper_grid(make_cf
     dyn = _dyn(make_cfg, catalogue, "model.jdot=true")
     assert dyn.shaft_accel_from_velocity.min() >= 0  # |v|^2 >= (u.v)^2
     assert dyn.shaft_accel_from_velocity.max() == pytest.approx(156.76, abs=0.01)
-    assert np.abs(dyn.shaft_accel_from_acceleration).max() == pytest.approx(15.464, abs=0.001)
+    assert np.abs(shaft_accel_from_acceleration(dyn)).max() == pytest.approx(15.464, abs=0.001)

@@ -11,7 +11,7 @@ import yaml
 
 import pipeline.report
 from pipeline.analyses.choice import choose
-from pipeline.analyses.figures import StudyResults
+from pipeline.analyses.results import StudyResults
 from pipeline.analyses.survival import survival
 from pipeline.analyses.views import write_view
 from pipeline.workspace.lines import simulate_lines

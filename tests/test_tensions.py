@@ -12,7 +12,7 @@ from scipy.optimize import nnls
 
 from pipeline.model.actuators import ActuatorModel
 from pipeline.workspace.criteria import REGISTRY
-from pipeline.workspace.criteria.forces import tension_families
+from conftest import shaft_torque
 from pipeline.model.dynamics import Load, MotionSpec, load_wrenches
 from pipeline.analyses.figures import caption
 from pipeline.model.geometry import CableRobot
@@ -50,7 +50,7 @@ def test_symmetric_four_cable_point_mass_gets_the_analytic_tensions():
     length = np.sqrt(2 * HALF**2 + depth**2)
     tension = MASS * GRAVITY * length / (4 * depth)  # each cable carries a quarter of the weight
     margins, chosen, _ = feasible_tensions(state.structure, *state.wrench_pinv, state.required_wrenches,
-                                           tension_families(state, ACTUATOR), 1e-6, distribution=True)
+                                           state.force_families(ACTUATOR), 1e-6, distribution=True)
     assert chosen[0, 0] / RADIUS == pytest.approx(np.full(4, tension), rel=1e-7)
     torque = RADIUS * tension
     assert margins["slack"][0] == pytest.approx(torque / ACTUATOR.torque_limit, rel=1e-7)
@@ -85,7 +85,7 @@ def test_a_pose_that_needs_a_pushing_cable_is_slack_never_feasible():
     paper = WorkspaceProblem(robot, np.zeros((1, 3)), pinv, ACTUATOR, FEASIBLE_CPR_WWA[2:])
     assert verdicts(paper, positions)[0].tolist() == [True, True, True]
     state = pinv.state(robot, positions[:1], (0, 0, 0))
-    assert (state.shaft_torque < 0).all()
+    assert (shaft_torque(state) < 0).all()
 
 
 def test_irpm_feasible_model_is_the_papers_criterion(make_cfg, catalogue):
@@ -113,7 +113,7 @@ def test_cpr8_lp_never_loses_a_pose_whose_minimum_norm_torques_are_valid(make_cf
             cfg = [f"actuator={actuator}", *angles, FORCES]
             problem, grid = build_problem(make_cfg(*cfg), catalogue)
             state = problem.spec.state(problem.robot, grid.positions, problem.orientations[0])
-            pulling = (state.shaft_torque >= 0).all(axis=(1, 2))
+            pulling = (shaft_torque(state) >= 0).all(axis=(1, 2))
             paper, _ = compute_workspace(make_cfg(*cfg), catalogue)
             ours, _ = compute_workspace(make_cfg(*cfg, "tension.model=feasible"), catalogue)
             valid = pulling & paper["feasible"].to_numpy()
@@ -134,7 +134,7 @@ def test_slack_agrees_with_an_independent_nonnegative_least_squares(columns, ori
                                            *angles), catalogue)
     state = problem.spec.state(problem.robot, grid.positions, problem.orientations[0])
     margins, *_ = feasible_tensions(state.structure, *state.wrench_pinv, state.required_wrenches,
-                                   tension_families(state, problem.limits), 1e-6)
+                                   state.force_families(problem.limits), 1e-6)
     wrenches = state.required_wrenches
     residual = np.array([max(nnls(s, w)[1] / np.linalg.norm(w) for w in wrenches) for s in state.structure])
     clear = np.abs(margins["slack"]) > 1e-6
@@ -148,7 +148,7 @@ def test_the_box_vertices_decide_every_acceleration_inside_it(make_cfg, catalogu
     is never below its minimum over the eight vertices (tested for slack, the first family)."""
     problem, grid = build_problem(make_cfg("tension.model=feasible", FORCES), catalogue)
     state = problem.spec.state(problem.robot, grid.positions, problem.orientations[0])
-    families = tension_families(state, problem.limits)
+    families = state.force_families(problem.limits)
     vertices, *_ = feasible_tensions(state.structure, *state.wrench_pinv, state.required_wrenches,
                                     families[:1], 1e-6)
     rng = np.random.default_rng(0)
@@ -262,7 +262,7 @@ def test_accelerating_upwards_needs_more_tension_under_newton(inertia, factor):
     motion = replace(hanging_motion(), accelerations=np.array([[0.0, 0.0, 1.0]]), inertia=inertia)
     state = motion.state(square_robot(), np.array([[0.0, 0.0, -depth]]), (0.0, 0.0, 0.0))
     length = np.sqrt(2 * HALF**2 + depth**2)
-    assert state.shaft_torque[0, :, 0] / RADIUS == pytest.approx(np.full(4, MASS * factor * length / (4 * depth)))
+    assert shaft_torque(state)[0, :, 0] / RADIUS == pytest.approx(np.full(4, MASS * factor * length / (4 * depth)))
 
 
 @pytest.mark.parametrize("model", ["pinv", "feasible"])

@@ -18,7 +18,7 @@ import pytest
 
 from pipeline.model.geometry import rotation_matrix
 from pipeline.workspace.compute import build_problem
-from pipeline.workspace.criteria.forces import actuator_families
+from pipeline.model.actuators import actuator_families
 from pipeline.workspace.kernel import evaluate_chunk
 from pipeline.workspace.trajectory import inverse_dynamics
 

@@ -24,6 +24,7 @@ from pipeline.workspace.criteria import COLOURS, FEASIBLE_COLOUR
 from pipeline.errors import ConfigError
 from pipeline.app.results import write_csv
 from pipeline.analyses.views import write_view
+from pipeline.analyses.results import StudyResults
 
 STYLE = "pipeline.styles.paper"
 MANY_BARS = 10  # a choice bar chart with more actuators turns its labels upright
@@ -67,26 +68,6 @@ class FigureSpec:
     bars: bool = False
     legend: Optional[str] = None
     table: Optional[str] = None
-
-
-class StudyResults:
-    """Read access to one study's outputs: the summary, analysis tables, job points."""
-
-    def __init__(self, directory: Path):
-        self.directory = Path(directory)
-
-    @property
-    def summary(self) -> pd.DataFrame:
-        return pd.read_parquet(self.directory / "summary.parquet")
-
-    def table(self, name: str) -> pd.DataFrame:
-        return pd.read_parquet(self.directory / f"{name}.parquet")
-
-    def points(self, job: str) -> pd.DataFrame:
-        return pd.read_parquet(self.directory / "jobs" / job / "points.parquet")
-
-    def samples(self, job: str) -> pd.DataFrame:
-        return pd.read_parquet(self.directory / "jobs" / job / "samples.parquet")
 
 
 def render(spec: FigureSpec, results: StudyResults, out_dir: Path) -> list[Path]:

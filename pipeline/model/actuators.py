@@ -11,6 +11,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pipeline.model.tensions import Family
+
 G_CM2_TO_KG_M2 = 1e-7
 RPM_TO_RAD_S = np.pi / 30.0  # the paper's 1/9.5493 in eq. (30)
 
@@ -37,6 +39,10 @@ class ActuatorModel:
     accel_limit: float
     voltage_limit: float
     winch_radius: float
+
+    def described(self) -> dict:
+        """What a job's summary says of its actuator."""
+        return {"actuator_name": self.name, "actuator_power_W": self.power}
 
     @property
     def load_gain(self) -> float:
@@ -84,3 +90,19 @@ def actuator_model(
         voltage_limit=float(row["voltage_V"]),
         winch_radius=float(row["winch_radius_m"] if winch_radius is None else winch_radius),
     )
+
+
+def actuator_families(tension, radius, act: ActuatorModel, high, low) -> list[Family]:
+    """CPR-8 families on x = M = R t: slack M >= R t_min, the cable rating M <= R t_max, torque
+    |M| <= T (eq. 32), voltage -U <= other - S_v M <= U (eqs. 21, 34; the motor holds M,
+    ``ActuatorModel.load_gain``), where ``other`` (the G_v theta_ddot + L_v theta_dot part)
+    ranges in [low, high] (n, K, m): (high - U) / S_v <= M <= (low + U) / S_v."""
+    torque_limit = act.torque_limit
+    families = [Family("slack", radius * tension.t_min, np.inf, torque_limit)]
+    if tension.t_max is not None:
+        rating = radius * tension.t_max
+        families.append(Family("tension_max", -np.inf, rating, rating))
+    families.append(Family("torque", -torque_limit, torque_limit, torque_limit))
+    volts, s_v = act.voltage_limit, act.S_v
+    families.append(Family("voltage", (high - volts) / s_v, (low + volts) / s_v, volts / s_v))
+    return families

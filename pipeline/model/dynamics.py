@@ -3,27 +3,23 @@
 A :class:`PoseDynamics` holds one chunk of n positions at one constant orientation. Each property
 is an array over (pose, cable[, velocity | acceleration]) built with numpy batched operations: no
 Python loop over poses. Criteria (``pipeline.workspace.criteria``) read the properties they need. The
-geometric part (:class:`PoseGeometry`) is shared with the statics of ``pipeline.model.statics``.
+geometric part and the interface every chunk state offers (:class:`pipeline.model.geometry.PoseGeometry`)
+are shared with the statics of ``pipeline.model.statics``.
 """
 
 from __future__ import annotations
 
 import itertools
 from dataclasses import dataclass, field
+from typing import ClassVar
 from functools import cached_property
 
 import numpy as np
 
 from pipeline.model.linalg import batched_pinv
 from pipeline.model.tensions import TensionSpec
-from pipeline.model.geometry import (
-    CableRobot,
-    cable_vectors,
-    euler_rate_axes,
-    length_jacobian,
-    rotation_matrix,
-    structure_matrix,
-)
+from pipeline.model.actuators import ActuatorModel, actuator_families
+from pipeline.model.geometry import CableRobot, PoseGeometry, euler_rate_axes, length_jacobian
 
 
 @dataclass(frozen=True)
@@ -70,6 +66,7 @@ class MotionSpec:
     velocity_extremes: np.ndarray | None = None
     tension: TensionSpec = field(default_factory=TensionSpec)
     inertia: str = "paper"
+    kind: ClassVar[str] = "cpr_wwa"  # which compiled kernel evaluates it (pipeline.workspace.fused)
 
     def state(self, robot: CableRobot, positions: np.ndarray, orientation) -> "PoseDynamics":
         return PoseDynamics(robot, positions, orientation, self)
@@ -79,52 +76,50 @@ class MotionSpec:
         return max(len(self.velocities), len(self.accelerations))
 
 
-class PoseGeometry:
-    """Cable vectors, lengths and directions for positions (n, 3) at one orientation."""
-
-    def __init__(self, robot: CableRobot, positions: np.ndarray, orientation):
-        self.robot = robot
-        self.positions = np.asarray(positions, dtype=float)
-        self.orientation = tuple(float(a) for a in orientation)
-
-    @cached_property
-    def rotation(self) -> np.ndarray:
-        return rotation_matrix(*self.orientation)
-
-    @cached_property
-    def vectors(self) -> np.ndarray:
-        """(n, m, 3) cable vectors anchor -> attachment point (eqs. 1-17)."""
-        return cable_vectors(self.robot, self.positions, self.rotation)
-
-    @cached_property
-    def lengths(self) -> np.ndarray:
-        """(n, m) cable lengths k, h, m, n, k', h', m', n' (eqs. 10-17)."""
-        return np.linalg.norm(self.vectors, axis=2)
-
-    @cached_property
-    def unit(self) -> np.ndarray:
-        """(n, m, 3) unit cable directions; zero where a cable has zero length."""
-        lengths = self.lengths[..., None]
-        return np.divide(self.vectors, lengths, out=np.zeros_like(self.vectors), where=lengths > 0)
-
-    @cached_property
-    def arms(self) -> np.ndarray:
-        """(n, m, 3) R b_i: attachment points from the platform's reference point, fixed axes."""
-        return np.broadcast_to(self.robot.attachments @ self.rotation.T, self.vectors.shape)
-
-    @cached_property
-    def structure_matrix(self) -> np.ndarray:
-        """(n, 6, m) A = [u_i; (R b_i) x u_i] (``geometry.structure_matrix``): A t balances the
-        wrench on the platform, moments about its reference point."""
-        return structure_matrix(self.unit, self.arms)
-
-
 class PoseDynamics(PoseGeometry):
     """Lazily evaluated CPR-WWA quantities (eqs. 18-22) for a chunk of poses."""
+
+    ranges_over_a_set = True  # the forces range over the acceleration set
 
     def __init__(self, robot: CableRobot, positions: np.ndarray, orientation, motion: MotionSpec):
         super().__init__(robot, positions, orientation)
         self.motion = motion
+
+    @property
+    def tension(self) -> TensionSpec:
+        return self.motion.tension
+
+    @cached_property
+    def force_range(self) -> tuple[np.ndarray, np.ndarray]:
+        """(n, m) largest and smallest cable tension t = M / R over the acceleration set, M the
+        minimum-norm load torques of eq. (20)."""
+        high, low = self.acceleration_range(*self.torque_affine)
+        return self.forces_of(high), self.forces_of(low)
+
+    def forces_of(self, torques: np.ndarray) -> np.ndarray:
+        """Cable tensions t = M / R_i of load torques M (the ``feasible`` model's variables)."""
+        return torques / self.motion.winch_radius
+
+    def force_families(self, act: ActuatorModel) -> list:
+        """The intervals on x = M = R t, per required acceleration a_k
+        (:func:`pipeline.model.actuators.actuator_families`): the voltage must hold for every
+        velocity of the set, |G_v J a_k + L_v theta_dot - S_v M| <= U (eqs. 21, 34)."""
+        high, low = self.voltage_from_velocity(act)  # (n, m)
+        accel = act.G_v * np.einsum("nmj,kj->nkm", self.jacobian[:, :, :3], self.wrench_accelerations)
+        return actuator_families(self.tension, self.motion.winch_radius, act,
+                                 accel + high[:, None, :], accel + low[:, None, :])
+
+    def voltage_from_velocity(self, act: ActuatorModel) -> tuple[np.ndarray, np.ndarray]:
+        """(max, min) (n, m) of the velocity part of eq. (21), L_v theta_dot (+ G_v J-dot p-dot)."""
+        if self.motion.jdot:
+            values = act.L_v * self.shaft_speed + act.G_v * self.shaft_accel_from_velocity
+            return values.max(axis=-1), values.min(axis=-1)
+        high, low = self.shaft_speed_range
+        return act.L_v * high, act.L_v * low
+
+    def diagnostics(self) -> dict[str, np.ndarray]:
+        """The rank of J^T per pose, and the base's columns."""
+        return {"jacobian_rank": self.jacobian_rank.astype(np.int8), **super().diagnostics()}
 
     @cached_property
     def jacobian(self) -> np.ndarray:
@@ -181,11 +176,6 @@ class PoseDynamics(PoseGeometry):
         return pinv @ slope[:rows], pinv @ at_rest[:rows]
 
     @cached_property
-    def shaft_accel_from_acceleration(self) -> np.ndarray:
-        """(n, m, k_a) J p_ddot: the part of theta_ddot linear in the carrier acceleration."""
-        return np.einsum("nmj,aj->nma", self.jacobian[:, :, :3], self.motion.accelerations)
-
-    @cached_property
     def shaft_accel_from_velocity(self) -> np.ndarray:
         """(n, m, k_v) J-dot p_dot = (|v|^2 - (u.v)^2) / (l R) at constant orientation; zeros
         unless ``motion.jdot``."""
@@ -195,11 +185,6 @@ class PoseDynamics(PoseGeometry):
         along = np.einsum("nmj,vj->nmv", self.unit, v)
         speed2 = np.einsum("vj,vj->v", v, v)[None, None, :]
         return centripetal(speed2, along, self.lengths[..., None], self.motion.winch_radius[None, :, None])
-
-    @cached_property
-    def wrenches(self) -> np.ndarray:
-        """(k_a, 6) F of eq. (31) for every acceleration of the set."""
-        return load_wrenches(self.motion, self.motion.accelerations, self.robot.up, self.rotation)
 
     @cached_property
     def structure(self) -> np.ndarray:
@@ -233,12 +218,6 @@ class PoseDynamics(PoseGeometry):
         """(n,) numerical rank of the J^T used in eq. (20)."""
         return self.wrench_pinv[1]
 
-    @cached_property
-    def shaft_torque(self) -> np.ndarray:
-        """(n, m, k_a) load torques M = (J^T)^+ F behind the gearbox (eq. 20)."""
-        pinv = self.wrench_pinv[0]
-        columns = pinv.shape[2]
-        return np.einsum("nmc,ac->nma", pinv, self.wrenches[:, :columns])
 
 
 def load_wrench_terms(load: Load, sign: float, up: np.ndarray, rotation: np.ndarray):

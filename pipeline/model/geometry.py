@@ -21,6 +21,7 @@ J^T = blockdiag(I, E^T) A diag(1 / R_i), E the angular velocity per Euler rate
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -120,3 +121,62 @@ def _dry(a: float) -> np.ndarray:
 def _drz(a: float) -> np.ndarray:
     c, s = np.cos(a), np.sin(a)
     return np.array([[-s, -c, 0.0], [c, -s, 0.0], [0.0, 0.0, 0.0]])
+
+
+class PoseGeometry:
+    """Cable vectors, lengths and directions for positions (n, 3) at one orientation: the base of
+    the per-chunk states (``PoseDynamics`` for CPR-WWA, ``PoseStatics`` for the statics), which
+    offer the criteria one interface, so that no criterion asks which state it was given:
+
+    - ``tension``: the :class:`pipeline.model.tensions.TensionSpec` the forces are checked by;
+    - ``force_range``: (high, low) (n, m), each cable's tension (N) under the minimum-norm model,
+      the largest and smallest over the state's wrench set (one wrench for the statics);
+    - ``forces_of(x)``: the tensions (N) of the variables x of the ``feasible`` model's families;
+    - ``force_families(limits)``: the intervals each criterion puts on x (``feasible`` model);
+    - ``ranges_over_a_set``: whether the forces range over a set (per-cable min and max columns)
+      or are one value per cable;
+    - ``diagnostics()``: per-pose columns beside the margins (the Jacobian's rank, the poses the
+      ``feasible`` model's LPs solved, ``tension_lp``, set by the criteria that ran them).
+    """
+
+    tension_lp: np.ndarray | None = None
+
+    def __init__(self, robot: CableRobot, positions: np.ndarray, orientation):
+        self.robot = robot
+        self.positions = np.asarray(positions, dtype=float)
+        self.orientation = tuple(float(a) for a in orientation)
+
+    @cached_property
+    def rotation(self) -> np.ndarray:
+        return rotation_matrix(*self.orientation)
+
+    @cached_property
+    def vectors(self) -> np.ndarray:
+        """(n, m, 3) cable vectors anchor -> attachment point (eqs. 1-17)."""
+        return cable_vectors(self.robot, self.positions, self.rotation)
+
+    @cached_property
+    def lengths(self) -> np.ndarray:
+        """(n, m) cable lengths k, h, m, n, k', h', m', n' (eqs. 10-17)."""
+        return np.linalg.norm(self.vectors, axis=2)
+
+    @cached_property
+    def unit(self) -> np.ndarray:
+        """(n, m, 3) unit cable directions; zero where a cable has zero length."""
+        lengths = self.lengths[..., None]
+        return np.divide(self.vectors, lengths, out=np.zeros_like(self.vectors), where=lengths > 0)
+
+    @cached_property
+    def arms(self) -> np.ndarray:
+        """(n, m, 3) R b_i: attachment points from the platform's reference point, fixed axes."""
+        return np.broadcast_to(self.robot.attachments @ self.rotation.T, self.vectors.shape)
+
+    @cached_property
+    def structure_matrix(self) -> np.ndarray:
+        """(n, 6, m) A = [u_i; (R b_i) x u_i] (``geometry.structure_matrix``): A t balances the
+        wrench on the platform, moments about its reference point."""
+        return structure_matrix(self.unit, self.arms)
+
+    def diagnostics(self) -> dict[str, np.ndarray]:
+        """Per-pose columns besides the margins: the poses the feasible model's LPs solved."""
+        return {} if self.tension_lp is None else {"lp_poses": self.tension_lp}

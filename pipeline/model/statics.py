@@ -9,14 +9,15 @@ s = A^-1 f_ext (eq. 10), for other cable counts the minimum-norm least-squares s
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import ClassVar
 from functools import cached_property
 
 import numpy as np
 
-from pipeline.model.dynamics import Load, PoseGeometry, load_wrench_terms
+from pipeline.model.dynamics import Load, load_wrench_terms
 from pipeline.model.linalg import batched_pinv, gram, gram_ratio
-from pipeline.model.geometry import CableRobot, structure_matrix
-from pipeline.model.tensions import TensionSpec
+from pipeline.model.geometry import CableRobot, PoseGeometry, structure_matrix
+from pipeline.model.tensions import Family, TensionSpec
 
 
 @dataclass(frozen=True)
@@ -42,6 +43,7 @@ class StaticsSpec:
     rank_rtol: float = 1e-9
     tension: TensionSpec = field(default_factory=TensionSpec)
     load: Load = field(default_factory=Load)
+    kind: ClassVar[str] = "statics"  # which compiled kernel evaluates it (pipeline.workspace.fused)
 
     def state(self, robot: CableRobot, positions: np.ndarray, orientation) -> "PoseStatics":
         return PoseStatics(robot, positions, orientation, self)
@@ -62,13 +64,40 @@ class StaticLimits:
     rank_rtol: float
     scale: float
 
+    def described(self) -> dict:
+        """What a job's summary says of its limits besides the config: nothing."""
+        return {}
+
 
 class PoseStatics(PoseGeometry):
     """Lazily evaluated structure matrix, conditioning and cable tensions of a chunk of poses."""
 
+    ranges_over_a_set = False  # one wrench: one tension per cable
+
     def __init__(self, robot: CableRobot, positions: np.ndarray, orientation, spec: StaticsSpec):
         super().__init__(robot, positions, orientation)
         self.spec = spec
+
+    @property
+    def tension(self) -> TensionSpec:
+        return self.spec.tension
+
+    @property
+    def force_range(self) -> tuple[np.ndarray, np.ndarray]:
+        """(n, m) the tensions of eq. (10), the largest and the smallest: one wrench."""
+        return self.tensions, self.tensions
+
+    def forces_of(self, tensions: np.ndarray) -> np.ndarray:
+        """The ``feasible`` model's variables are the tensions s themselves (N)."""
+        return tensions
+
+    def force_families(self, limits: StaticLimits) -> list[Family]:
+        """The intervals on s: slack s >= t_min and s <= s_max (eq. 10), in units of
+        ``StaticLimits.scale`` and s_max."""
+        slack = Family("slack", self.tension.t_min, np.inf, limits.scale)
+        if not np.isfinite(limits.s_max).all():
+            return [slack]
+        return [slack, Family("tension_max", -np.inf, limits.s_max, limits.s_max)]
 
     @cached_property
     def vectors(self) -> np.ndarray:

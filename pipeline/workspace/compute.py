@@ -407,9 +407,7 @@ def summarize(cfg: DictConfig, counts: dict, cell_volume: float, problem) -> dic
     n_points, n_feasible = counts["n_points"], counts["n_feasible"]
     row = flatten(OmegaConf.to_container(cfg, resolve=True, enum_to_str=True))
     row["analysis"] = analysis_name(cfg)
-    if hasattr(problem.limits, "power"):  # an actuator
-        row["actuator_name"] = problem.limits.name
-        row["actuator_power_W"] = problem.limits.power
+    row.update(problem.limits.described())  # the actuator's name and power, for CPR-WWA
     row["n_orientations"] = len(problem.orientations)
     row["kernel"] = "fused" if problem.fused else "numpy"  # which code computed the margins
     for axis, lo, hi in zip("xyz", problem.robot.box_lo, problem.robot.box_hi):

@@ -42,7 +42,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipeline.model.dynamics import MotionSpec, acceleration_box, inertia_sign, load_wrench_terms
+from pipeline.model.dynamics import acceleration_box, inertia_sign, load_wrench_terms
 from pipeline.model.geometry import euler_rate_axes, rotation_matrix
 from pipeline.model.jit import compiled_loops
 
@@ -54,9 +54,7 @@ LOOPS = "pipeline.workspace.fused_loops"  # the compiled loops, and the constant
 def margins(problem, positions: np.ndarray, orientation) -> tuple[dict[str, np.ndarray], np.ndarray]:
     """``margin_<criterion>`` (n,) (and CPR-WWA's ``jacobian_rank``) at one orientation, and
     (n,) the poses left unsettled (their entries are NaN: evaluate them with numpy)."""
-    if isinstance(problem.spec, MotionSpec):
-        return _cpr_wwa_margins(problem, positions, orientation)
-    return _statics_margins(problem, positions, orientation)
+    return MARGINS[problem.spec.kind](problem, positions, orientation)
 
 
 def _statics_margins(problem, positions: np.ndarray, orientation):
@@ -104,3 +102,4 @@ def _cpr_wwa_margins(problem, positions: np.ndarray, orientation):
     return result, unsettled
 
 
+MARGINS = {"cpr_wwa": _cpr_wwa_margins, "statics": _statics_margins}  # by the spec's kind

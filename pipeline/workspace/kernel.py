@@ -66,10 +66,7 @@ def _criteria(problem: WorkspaceProblem, positions: np.ndarray, orientation, cab
     result = cable_quantities(state, problem.limits) if cables else {}
     for name in problem.criteria:
         result[f"margin_{name}"] = REGISTRY[name].function(state, problem.limits)
-    if hasattr(state, "jacobian_rank"):
-        result["jacobian_rank"] = state.jacobian_rank.astype(np.int8)
-    if hasattr(state, "tension_lp"):  # the feasible model's LP fallback (pipeline.model.tensions)
-        result["lp_poses"] = state.tension_lp
+    result.update(state.diagnostics())  # the Jacobian's rank, the poses the feasible model's LPs solved
     return result
 
 

@@ -13,25 +13,21 @@ from __future__ import annotations
 import numpy as np
 
 from pipeline.workspace.criteria.forces import feasible_distribution
-from pipeline.model.statics import PoseStatics
 
 
 def cable_quantities(state, limits) -> dict[str, np.ndarray]:
     """(n,) arrays keyed by column name for one chunk's state (``PoseStatics``/``PoseDynamics``)."""
     names = state.robot.cable_names
     columns = {f"length_{name}": state.lengths[:, i] for i, name in enumerate(names)}
-    if isinstance(state, PoseStatics):
-        tensions = (state.tensions if state.spec.tension.model == "pinv"
-                    else feasible_distribution(state, limits)[:, 0, :])
-        columns.update({f"tension_{name}": tensions[:, i] for i, name in enumerate(names)})
-        return columns
-    radius = state.motion.winch_radius
-    if state.motion.tension.model == "pinv":
-        high, low = state.acceleration_range(*state.torque_affine)
+    if state.tension.model == "pinv":
+        high, low = state.force_range
     else:
-        chosen = feasible_distribution(state, limits)
-        high, low = chosen.max(axis=1), chosen.min(axis=1)
+        chosen = feasible_distribution(state, limits)  # (n, K, m) over the required wrenches
+        high, low = state.forces_of(chosen.max(axis=1)), state.forces_of(chosen.min(axis=1))
+    if not state.ranges_over_a_set:
+        columns.update({f"tension_{name}": high[:, i] for i, name in enumerate(names)})
+        return columns
     for i, name in enumerate(names):
-        columns[f"tension_min_{name}"] = low[:, i] / radius[i]
-        columns[f"tension_max_{name}"] = high[:, i] / radius[i]
+        columns[f"tension_min_{name}"] = low[:, i]
+        columns[f"tension_max_{name}"] = high[:, i]
     return columns

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pipeline.model.actuators import ActuatorModel
-from pipeline.workspace.criteria.forces import actuator_families
+from pipeline.model.actuators import actuator_families
 from pipeline.model.dynamics import MotionSpec, PoseDynamics, centripetal, load_wrenches
 from pipeline.model.geometry import CableRobot
 from pipeline.model.linalg import remembered_pinv

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from pipeline.model.actuators import ActuatorModel
-from pipeline.workspace.criteria.forces import feasible_margins, feasible_model, voltage_from_velocity
+from pipeline.workspace.criteria.forces import feasible_margins, feasible_model
 from pipeline.model.dynamics import PoseDynamics
 
 
@@ -72,5 +72,5 @@ def voltage(dyn: PoseDynamics, act: ActuatorModel) -> np.ndarray:
     from_acceleration = dyn.acceleration_range(  # G_v J a - S_v M, affine in a
         act.G_v * dyn.jacobian[:, :, :3] + act.load_gain * torque_coefficients, act.load_gain * torque_offset
     )
-    return _margin(max_abs_sum_of_ranges(voltage_from_velocity(dyn, act), from_acceleration),
+    return _margin(max_abs_sum_of_ranges(dyn.voltage_from_velocity(act), from_acceleration),
                    act.voltage_limit)

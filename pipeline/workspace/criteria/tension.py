@@ -7,7 +7,6 @@ from __future__ import annotations
 import numpy as np
 
 from pipeline.workspace.criteria.forces import feasible_margins, feasible_model
-from pipeline.model.statics import PoseStatics
 
 
 def unreachable(state, limits) -> np.ndarray:
@@ -22,14 +21,11 @@ def slack(state, limits) -> np.ndarray:
     over all valid tension distributions (CPR-8: in units of the torque limit)."""
     if feasible_model(state):
         return feasible_margins(state, limits)["slack"]
-    return (state.tensions - state.spec.tension.t_min).min(axis=1) / limits.scale
+    return (state.force_range[1] - state.tension.t_min).min(axis=1) / limits.scale
 
 
 def tension_max(state, limits) -> np.ndarray:
     """Eq. (10): s_i <= s_max (IRPM), or the cable rating ``tension.t_max`` (CPR-8)."""
     if feasible_model(state):
         return feasible_margins(state, limits)["tension_max"]
-    if isinstance(state, PoseStatics):
-        return 1.0 - (state.tensions / limits.s_max).max(axis=1)  # s_max: scalar or per cable
-    high, _ = state.acceleration_range(*state.torque_affine)  # largest M_i = R_i t_i over the set
-    return 1.0 - (high / state.motion.winch_radius / state.motion.tension.t_max).max(axis=1)
+    return 1.0 - (state.force_range[0] / state.tension.t_max).max(axis=1)  # t_max: scalar or per cable
