@@ -29,7 +29,7 @@ from pipeline.analyses.results import StudyResults
 from pipeline.app.job import execute
 from pipeline.app.plan import Job, plan, quoted
 from pipeline.app.results import read_metadata
-from pipeline.study import OUTPUT_DIR, study_dir
+from pipeline.study import OUTPUT_DIR, first_actuator_job, study_dir
 from pipeline.workspace.compute import analysis_name
 
 API_DIR = Path("outputs") / "api"
@@ -88,7 +88,7 @@ def actuator_choice(overrides: Iterable[str] = (), folder: str | Path | None = N
         raise ConfigError("actuator=...: the choice runs every actuator of the catalogue; "
                           "use workspace() for one")
     folder = Path(folder) if folder is not None else _new_folder()
-    (first,) = plan([*overrides, f"hydra.run.dir={quoted(folder)}"]).jobs
+    first = first_actuator_job(overrides, folder)
     if first.catalogue is None:
         raise ConfigError(f"analysis={analysis_name(first.cfg)}: no actuators to choose from "
                           "(the choice needs analysis=cpr_wwa)")

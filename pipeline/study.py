@@ -43,7 +43,7 @@ from pipeline.analyses.results import StudyResults
 from pipeline.app.job import changed_files, execute, folder_lock
 from pipeline.analyses.optimise import (OptimiseSpec, best_drive, check_catalogue_objectives, corner_overrides, optimise,
                                trial_folder)
-from pipeline.app.plan import Plan, Reuse, parse, plan, quoted
+from pipeline.app.plan import Job, Plan, Reuse, parse, plan, quoted
 from pipeline.app.run import run as run_jobs
 from pipeline.app.resources import STUDIES_DIR
 from pipeline.app.results import code_version, write_csv, write_parquet, write_text
@@ -347,14 +347,7 @@ def checked_commands(name: str, extra: list[str], out_root: Path | None = None,
                           "their own settings; it takes compute.* overrides only")
     out = study_dir(name, extra, out_root)
     if study.designs:  # the lowest and highest designs
-        folder = f"hydra.run.dir={quoted(out)}"
-        first = f"actuator={_catalogue([*study.overrides, *extra]).ids[0]}"  # an id of the user's catalogue
-        try:
-            job = plan([*study.overrides, first, *extra, folder]).jobs[0]
-        except ConfigError:  # an analysis without actuators has no key actuator: say that instead
-            job = plan([*study.overrides, *extra, folder]).jobs[0]
-            if job.catalogue is not None:
-                raise
+        job = first_actuator_job([*study.overrides, *extra], out)
         cfg, catalogue = job.cfg, job.catalogue
         if catalogue is None:  # the objectives and the search read the job's catalogue actuator
             raise ConfigError(f"analysis={analysis_name(cfg)}: study {name} designs a catalogue "
@@ -486,10 +479,24 @@ def _sweep_values(key: str, values: str, fixed: list[str]) -> str:
         return values
     if key != "actuator":
         raise ConfigError(f"sweep {key}=catalogue: only 'actuator' can sweep the catalogue")
-    return ",".join(str(i) for i in _catalogue(fixed).ids)
+    return ",".join(str(i) for i in catalogue_of(fixed).ids)
 
 
-def _catalogue(overrides: list[str]):
+def first_actuator_job(overrides: list[str], folder: Path) -> Job:
+    """The one job of ``overrides`` (into ``folder``) checked with the first id of the catalogue
+    they name, which a user's may not number 1 (an ``actuator=`` among the overrides wins); for
+    an analysis without actuators, the job as it is (its catalogue None)."""
+    where = f"hydra.run.dir={quoted(folder)}"
+    try:
+        return plan([f"actuator={catalogue_of(overrides).ids[0]}", *overrides, where]).jobs[0]
+    except ConfigError:  # an analysis without actuators has no key actuator: say that instead
+        job = plan([*overrides, where]).jobs[0]
+        if job.catalogue is not None:
+            raise
+        return job
+
+
+def catalogue_of(overrides: list[str]):
     """The catalogue the jobs of ``overrides`` read (the last ``catalogue=``, else Table 1)."""
     paths = [o.split("=", 1)[1] for o in overrides if _key(o) == "catalogue"]
     return load_catalogue(paths[-1] if paths and paths[-1] not in ("null", "") else None)

@@ -11,7 +11,8 @@ from hydra import compose, initialize_config_dir
 
 from pipeline.model.catalogue import load_catalogue
 from pipeline.model.dynamics import load_wrenches
-from pipeline.app.config import register, typed_config
+from pipeline.app.config import register
+from pipeline.app.plan import Composition, parse, structural
 from pipeline.app.resources import CONF_DIR
 
 register()
@@ -22,16 +23,28 @@ def catalogue():
     return load_catalogue()
 
 
-@pytest.fixture(scope="session")
-def make_cfg():
-    """make_cfg(*overrides) -> the composed, typed config a job sees (serial compute for
-    in-process tests)."""
+COMPOSED: dict = {}  # the compositions of make_cfg, by their config files (one per test process)
 
-    def _make(*overrides: str):
+
+def make_cfg(*overrides: str):
+    """The composed, typed config a job sees (serial compute for in-process tests), not
+    validated. Each set of config files is composed once per test process and each config
+    derived from it by its plain overrides (``pipeline.app.plan.Composition``, checked equal to
+    typing Hydra's own composition in tests/test_plan.py); a config whose files set a value by
+    interpolation is typed from Hydra's composition, as the plan does."""
+    parsed = parse(["compute.n_jobs=1", *overrides])
+    files = tuple(o.input_line for o in parsed if structural(o))
+    if files not in COMPOSED:
         with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
-            return typed_config(compose(config_name="config", overrides=["compute.n_jobs=1", *overrides]))
+            COMPOSED[files] = Composition(compose(config_name="config", overrides=list(files),
+                                                  return_hydra_config=True))
+    return COMPOSED[files].job(parsed)[0]
 
-    return _make
+
+@pytest.fixture(name="make_cfg", scope="session")
+def make_cfg_fixture():
+    """:func:`make_cfg` as a fixture."""
+    return make_cfg
 
 
 def job_imports(cwd, *args: str, modules=("pandas", "numba", "scipy")) -> str:

@@ -70,6 +70,17 @@ def test_actuator_choice_on_the_users_catalogue(tmp_path, monkeypatch):
     assert sorted(p.name for p in pathlib.Path("choice").iterdir()) == [f"actuator={i}" for i in range(1, 7)]
 
 
+def test_actuator_choice_on_a_catalogue_without_id_1(tmp_path, monkeypatch):
+    """A user's catalogue numbers its motors as it likes: the choice checks its first id, not
+    Table 1's default actuator 1 (which refused such a catalogue)."""
+    monkeypatch.chdir(tmp_path)
+    table = pd.read_csv(pathlib.Path(api.__file__).parent / "data" / "actuators_table1.csv")
+    table.iloc[[4, 0]].assign(id=[50, 10]).to_csv("mine.csv", index=False)
+    choice = api.actuator_choice(["catalogue=mine.csv"], folder="choice")
+    assert choice.table.set_index("actuator")["accepted"].to_dict() == {10: True, 50: False}
+    assert sorted(choice.workspaces) == [10, 50]
+
+
 @pytest.mark.parametrize("call, overrides, message", [
     ("workspace", ["actuator=9"], "actuator=9: no such id in the catalogue"),
     ("workspace", ["orientation.psi=nan"], "orientation.psi=nan: must be finite"),

@@ -151,12 +151,15 @@ def listing(root: Path) -> set[str]:
     return {str(p.relative_to(root)) for p in (root / "outputs").rglob("*")}
 
 
-# Run end to end (a process, its exit status, its stderr, the files): every study and report case,
-# and one job case of each kind (a bad value, a sweep, a bad catalogue file, a grammar error).
+# Run end to end (a process, its exit status, its stderr, the files): the report case, one job
+# case of each kind (a bad value, a sweep, a bad catalogue file, a grammar error) and of each way
+# a study command fails (no study, redrawing damaged results, several studies at once).
 END_TO_END = {"actuator=9", "-m actuator=1,2,9", "catalogue=truncated.parquet", "actuator=[1,2",
-              "-m actuator=1,2 hydra.launcher.n_jobs=0", "grid.n=1000000"}
+              "-m actuator=1,2 hydra.launcher.n_jobs=0", "grid.n=1000000", "no_such_study",
+              "design_mass --figures-only", "design_mass irpm_fig13_end_ratio actuator=2"}
 IN_PROCESS = [c for c in CASES if c[0] == "pipeline" and " ".join(c[1]) not in END_TO_END]
-PROCESSES = [c for c in CASES if c not in IN_PROCESS]
+STUDIES_IN_PROCESS = [c for c in CASES if c[0] == "pipeline.study" and " ".join(c[1]) not in END_TO_END]
+PROCESSES = [c for c in CASES if c not in IN_PROCESS and c not in STUDIES_IN_PROCESS]
 
 
 @pytest.mark.parametrize("module, args, expected", IN_PROCESS, ids=[" ".join(c[1]) for c in IN_PROCESS])
@@ -167,6 +170,21 @@ def test_the_plan_names_the_bad_key_and_value(workdir, monkeypatch, module, args
     with pytest.raises(ConfigError) as raised:
         plan(args)
     assert expected in str(raised.value) and "\n" not in str(raised.value)
+    assert listing(workdir) == before
+
+
+@pytest.mark.parametrize("module, args, expected", STUDIES_IN_PROCESS, ids=[" ".join(c[1]) for c in STUDIES_IN_PROCESS])
+def test_a_study_command_names_the_bad_input(workdir, monkeypatch, capsys, module, args, expected):
+    """What `python -m pipeline.study ARGS` prints (one line, exit 2, nothing written), in-process."""
+    from pipeline.study import main
+
+    monkeypatch.chdir(workdir)
+    before = listing(workdir)
+    with pytest.raises(SystemExit) as raised:
+        main(args)
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert raised.value.code == 2
+    assert len(lines) == 1 and lines[0].startswith("error: ") and expected in lines[0], lines
     assert listing(workdir) == before
 
 

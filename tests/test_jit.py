@@ -77,7 +77,7 @@ from pipeline.model.catalogue import load_catalogue
 from pipeline.workspace import fused_loops
 from pipeline.workspace.compute import compute_workspace
 
-make, catalogue = make_cfg.__wrapped__(), load_catalogue()
+make, catalogue = make_cfg, load_catalogue()
 for overrides in (["compute.kernel=fused", "grid.n=4"], ["compute.kernel=fused", "grid.n=4", "orientation.psi=0.5"],
                   ["compute.kernel=fused", "grid.n=4", "tension.t_max=[9e3,9e3,9e3,9e3,9e3,9e3,9e3,9e3]"],
                   ["compute.kernel=fused", "grid.n=4", "model.pinv_columns=translational"],

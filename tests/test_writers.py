@@ -1,6 +1,7 @@
 """Writers that cannot collide and results verified before reuse (issue 16, items 5 and 6),
 end to end through the command line."""
 
+import shutil
 import subprocess
 import sys
 import time
@@ -67,14 +68,23 @@ def test_a_damaged_finished_job_is_recomputed_not_reused(tmp_path, damage):
     assert pd.read_parquet(job / "summary.parquet")["n_points"].tolist() == [64]
 
 
+@pytest.fixture(scope="module")
+def finished_study(tmp_path_factory):
+    """A finished run of the study design_v_max (copied by each test that damages it)."""
+    root = tmp_path_factory.mktemp("finished")
+    first = subprocess.run([sys.executable, "-m", "pipeline.study", "design_v_max", "--out", "out"],
+                           cwd=root, capture_output=True, text=True, timeout=600)
+    assert first.returncode == 0, first.stderr
+    return root / "out"
+
+
 @pytest.mark.parametrize("damage", ["flip_points", "truncate_summary"])
-def test_figures_only_refuses_a_damaged_job_and_keeps_the_old_figures(tmp_path, damage):
+def test_figures_only_refuses_a_damaged_job_and_keeps_the_old_figures(tmp_path, finished_study, damage):
     """--figures-only draws from the finished jobs as they are: a job file changed since it
     finished is named (one line, exit 2) before any old figure is removed; a full rerun then
     recomputes it."""
     study = [sys.executable, "-m", "pipeline.study", "design_v_max", "--out", "out"]
-    first = subprocess.run(study, cwd=tmp_path, capture_output=True, text=True, timeout=600)
-    assert first.returncode == 0, first.stderr
+    shutil.copytree(finished_study, tmp_path / "out")
     out = tmp_path / "out" / "design_v_max"
     figures = {p.name: p.read_bytes() for p in (out / "figures").iterdir()}
     job = out / "jobs" / "actuator=2,motion.v_max=0.8"
