@@ -29,7 +29,7 @@ from pipeline.analyses.results import StudyResults
 from pipeline.app.job import execute
 from pipeline.app.plan import Job, plan, quoted
 from pipeline.app.results import read_metadata
-from pipeline.study import OUTPUT_DIR, first_actuator_job, study_dir
+from pipeline.study import OUTPUT_DIR, available, first_actuator_job, study_dir
 from pipeline.workspace.compute import analysis_name
 
 API_DIR = Path("outputs") / "api"
@@ -104,7 +104,10 @@ def actuator_choice(overrides: Iterable[str] = (), folder: str | Path | None = N
 def load_study(name: str, out_root: str | Path | None = None,
                overrides: Iterable[str] = ()) -> StudyResults:
     """The results of a study the command line ran (``python -m pipeline.study NAME
-    OVERRIDES``): its summary, analysis tables and per-job points."""
+    OVERRIDES``): its summary, analysis tables and per-job points. ``name``: a declared study
+    (``python -m pipeline.study --list``), never a path."""
+    if name not in available():
+        raise ConfigError(f"study {name!r} not found (available: {', '.join(available())})")
     directory = study_dir(name, _listed(overrides), Path(out_root) if out_root else None)
     if not (directory / "summary.parquet").exists():
         raise ConfigError(f"study {name}: no results in {directory}; run `cdpr-study {name}` first"

@@ -32,7 +32,7 @@ from pathlib import Path
 from typing import Callable, Optional
 
 import pandas as pd
-from omegaconf import OmegaConf
+from omegaconf import DictConfig, OmegaConf
 
 from pipeline.model.catalogue import load_catalogue
 from pipeline.analyses.choice import acceptance, choose, verdict
@@ -43,7 +43,7 @@ from pipeline.analyses.results import StudyResults
 from pipeline.app.job import changed_files, execute, folder_lock
 from pipeline.analyses.optimise import (OptimiseSpec, best_drive, check_catalogue_objectives, corner_overrides, optimise,
                                trial_folder)
-from pipeline.app.plan import Job, Plan, Reuse, parse, plan, quoted
+from pipeline.app.plan import Job, Plan, Reuse, parse, plan, quoted, refuse_aliases
 from pipeline.app.run import run as run_jobs
 from pipeline.app.resources import STUDIES_DIR
 from pipeline.app.results import code_version, write_csv, write_parquet, write_text
@@ -123,8 +123,11 @@ def load_study(name: str, directory: Path = STUDIES_DIR) -> StudySpec:
     if name not in available(directory):  # a declared name, never a path to another file
         raise ConfigError(f"study {name!r} not found (available: {', '.join(available(directory))})")
     try:
+        refuse_aliases(path.read_text(encoding="utf-8"), str(path))
         spec = OmegaConf.merge(OmegaConf.structured(StudySpec), OmegaConf.load(path))
-    except Exception as exc:  # OmegaConf key and type errors
+    except ConfigError:
+        raise
+    except Exception as exc:  # YAML, OmegaConf key and type errors
         raise ConfigError(f"{path}: {one_line(exc)}") from exc
     study: StudySpec = OmegaConf.to_object(spec)
     study.name = name
@@ -194,11 +197,15 @@ def claim_study_dir(out: Path, name: str, extra: list[str], force: bool) -> str:
     that holds another configuration's results is refused unless ``force``."""
     record = out / "study.yaml"
     wanted = OmegaConf.to_yaml({"study": name, "extra_overrides": extra})
-    if record.exists() and record.read_text() != wanted and not force:
-        held = OmegaConf.load(record)
-        raise ConfigError(f"{out}: holds study {held.get('study')} with overrides "
-                          f"{list(held.get('extra_overrides') or [])}; --force replaces them, "
-                          "--out DIR writes elsewhere")
+    if record.exists() and record.read_text(errors="replace") != wanted and not force:
+        try:
+            held = OmegaConf.load(record)
+            if not isinstance(held, DictConfig) or not isinstance(held.get("study"), str):
+                raise ValueError("not a mapping with the key study")
+            what = f"study {held.study} with overrides {list(held.get('extra_overrides') or [])}"
+        except Exception as exc:  # YAML and OmegaConf errors, or not a record
+            what = f"an unreadable study record ({one_line(exc)})"
+        raise ConfigError(f"{out}: holds {what}; --force replaces them, --out DIR writes elsewhere")
     return wanted
 
 

@@ -101,6 +101,9 @@ def test_bad_input_raises_config_error_and_writes_nothing(tmp_path, monkeypatch,
 def test_load_study_reads_a_finished_study_or_says_how_to_make_it(tmp_path):
     with pytest.raises(api.ConfigError, match="study actuator_choice: no results in .*cdpr-study actuator_choice"):
         api.load_study("actuator_choice", out_root=tmp_path)
+    for name in ("../../etc", "/tmp", "actuator_choice/.."):  # a declared study, never a path
+        with pytest.raises(api.ConfigError, match="not found"):
+            api.load_study(name, out_root=tmp_path)
     from pipeline.study import main
 
     main(["actuator_choice", "--out", str(tmp_path), "--launcher", "serial"])
@@ -122,3 +125,15 @@ def test_the_docs_example_runs(tmp_path, monkeypatch, capsys):
     printed = capsys.readouterr().out
     assert "85.19 % feasible" in printed and "accept 1, 2; reject 3" in printed
     assert "orientation.psi=nan: must be finite" in printed
+
+
+def test_two_threads_may_call_the_api_at_once(tmp_path, monkeypatch):
+    """Hydra's compose API keeps one global state per process: two notebook threads checking
+    their jobs at once used to fail with "GlobalHydra is already initialized"."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    monkeypatch.chdir(tmp_path)
+    with ThreadPoolExecutor(2) as pool:
+        done = list(pool.map(lambda a: api.workspace([f"actuator={a}", "grid.n=3"], folder=f"a{a}"), [1, 2, 3, 4] * 2))
+    assert [ws.summary["n_feasible"] for ws in done[:4]] == [27, 25, 22, 22]
+    assert [ws.summary for ws in done[4:]] == [ws.summary for ws in done[:4]]

@@ -23,6 +23,7 @@ import os
 import pickle
 import re
 import shutil
+import threading
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -46,6 +47,7 @@ NO_JOB_FLAGS = {"--help", "-h", "--hydra-help", "--info", "-i", "--cfg", "-c", "
 FLAGS_WITH_VALUE = {"--config-path", "-cp", "--config-name", "-cn", "--config-dir", "-cd",
                     "--experimental-rerun"}
 MAX_JOBS = 100_000  # jobs one command may launch: a typo in a range could ask for 10^8
+HYDRA_STATE = threading.Lock()  # Hydra's compose API keeps one global state per process
 
 
 @dataclass(frozen=True)
@@ -140,7 +142,7 @@ def plan(argv: list[str], reuse: Reuse | None = None) -> Plan | None:
             reuse.compositions[files] = Composition(composed)
         return files, reuse.compositions[files]
 
-    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3", job_name="pipeline"):
+    with HYDRA_STATE, initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3", job_name="pipeline"):
         base_files, first = composition(base)
         first.job(base)  # a bad key or value named first (Hydra composes a sweep's own config from these)
         hydra = first.hydra_node(base, parsed)
@@ -511,7 +513,9 @@ def _check_user_files(folder: Path) -> None:
             raise ConfigError(f"--config-dir={folder}: {where}: {path.stat().st_size} bytes "
                               f"(a config file is at most {USER_FILE_BYTES} bytes)")
         try:
-            data = yaml.safe_load(path.read_text(encoding="utf-8"))
+            text = path.read_text(encoding="utf-8")
+            refuse_aliases(text, f"--config-dir={folder}: {where}")
+            data = yaml.safe_load(text)
         except (yaml.YAMLError, UnicodeDecodeError) as exc:
             raise ConfigError(f"--config-dir={folder}: {where}: not YAML ({one_line(exc)})") from None
         if not isinstance(data, dict):
@@ -522,6 +526,19 @@ def _check_user_files(folder: Path) -> None:
             raise ConfigError(f"--config-dir={folder}: {where} sets Hydra's own settings (callbacks, "
                               "launchers, environment: they run code); a robot, analysis or tension file "
                               "carries its own keys only")
+
+
+def refuse_aliases(text: str, where: str) -> None:
+    """ConfigError for YAML text with an alias (``*name``): a few lines of anchors and aliases
+    expand to billions of nodes (the "billion laughs"), which would hang the composition; a
+    config file a user writes or shares has no need of them. Read as a stream of events, which
+    expands nothing; a YAML error is the caller's to report."""
+    import yaml
+
+    for event in yaml.parse(text):
+        if isinstance(event, yaml.AliasEvent):
+            raise ConfigError(f"{where}: line {event.start_mark.line + 1}: a YAML alias (*{event.anchor}); "
+                              "write the values out (aliases are refused: a few can expand to billions)")
 
 
 def _missing_option(exc: MissingConfigException, parsed: list[Override]) -> str:
