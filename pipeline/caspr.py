@@ -33,6 +33,7 @@ from pathlib import Path
 import numpy as np
 
 from pipeline.errors import ConfigError
+from pipeline.app.config import MAX_FORCE
 from pipeline.app.resources import CONF_DIR
 from pipeline.app.results import code_version, write_text
 
@@ -59,20 +60,26 @@ def read_cables(path: Path, cable_set: str | None = None) -> dict:
         where = f"{path}: cable {cable.get('name') or number}"
         if cable.tag != "cable_ideal":
             raise ConfigError(f"{where}: <{cable.tag}> is not supported (only <cable_ideal>)")
-        out["names"].append(cable.get("name") or str(number))
+        name = cable.get("name") or str(number)
+        if name in out["names"]:
+            raise ConfigError(f"{where}: a second cable of this name (each cable names its own columns)")
+        out["names"].append(name)
         out["reference"].append(cable.get("attachment_reference", "joint"))
         if out["reference"][-1] not in ("joint", "com"):
             raise ConfigError(f"{where}: attachment_reference={out['reference'][-1]!r} (joint or com)")
-        out["force_min"].append(_number(cable, "properties/force_min", where))
-        out["force_max"].append(_number(cable, "properties/force_max", where))
-        links = {}
-        for attachment in cable.findall("attachments/attachment"):
-            links[_text(attachment, "link", where)] = _vector(attachment, "location", where)
-        if sorted(links) != ["0", "1"]:
+        low, high = _number(cable, "properties/force_min", where), _number(cable, "properties/force_max", where)
+        if not 0 <= low < high <= MAX_FORCE:
+            raise ConfigError(f"{where}: force_min {low:g} and force_max {high:g} N: need 0 <= force_min < "
+                              f"force_max <= {MAX_FORCE:g} (a cable only pulls)")
+        out["force_min"].append(low)
+        out["force_max"].append(high)
+        links = [(_text(attachment, "link", where), _vector(attachment, "location", where))
+                 for attachment in cable.findall("attachments/attachment")]
+        if sorted(link for link, _ in links) != ["0", "1"]:
             raise ConfigError(f"{where}: needs one attachment on link 0 and one on link 1, found "
-                              f"links {sorted(links) or 'none'} (multi-link models are not supported)")
-        out["anchors"].append(links["0"])
-        out["attachments"].append(links["1"])
+                              f"links {sorted(link for link, _ in links) or 'none'} (multi-link models are not supported)")
+        out["anchors"].append(dict(links)["0"])
+        out["attachments"].append(dict(links)["1"])
     return out
 
 

@@ -112,6 +112,14 @@ BAD = {
                     "multi-link models are not supported"),
     "wrong_root": ("<links/>", "root element <links>"),
     "nan_force": (GOOD.replace("<force_max>150</force_max>", "<force_max>nan</force_max>", 1), "is not finite"),
+    "min_above_max": (GOOD.replace("<force_max>300</force_max>", "<force_max>3</force_max>", 1),
+                      "cable 1: force_min 5 and force_max 3 N: need 0 <= force_min < force_max"),
+    "negative_min": (GOOD.replace("<force_min>5</force_min>", "<force_min>-5</force_min>", 1), "force_min -5"),
+    "huge_max": (GOOD.replace("<force_max>300</force_max>", "<force_max>1e300</force_max>", 1), "force_max 1e+300"),
+    "duplicate_name": (GOOD.replace('name="cable 2"', 'name="cable 1"', 1), "cable 1: a second cable of this name"),
+    "second_anchor": (cables_xml([cable(1, ANCHORS[0], PLATFORM[0], 300,
+                                        "<attachment><link>0</link><location>9 9 9</location></attachment>")]),
+                      "found links ['0', '0', '1']"),
 }
 
 
