@@ -25,8 +25,8 @@ import pandas as pd
 
 from pipeline.analyses.choice import choose, verdict
 from pipeline.errors import ConfigError
-from pipeline.analyses.results import StudyResults
-from pipeline.app.job import execute
+from pipeline.analyses.results import StudyResults, table
+from pipeline.app.job import changed_files, execute
 from pipeline.app.plan import Job, plan, quoted
 from pipeline.app.results import read_metadata
 from pipeline.study import OUTPUT_DIR, available, first_actuator_job, study_dir
@@ -53,7 +53,13 @@ class Workspace:
         """A finished job's folder, written by the command line or by :func:`workspace`."""
         folder = Path(folder)
         meta = read_metadata(folder / "summary.parquet")
-        summary = pd.read_parquet(folder / "summary.parquet").iloc[0].to_dict()
+        changed = changed_files(folder, meta)
+        try:
+            summary = table(folder / "summary.parquet").iloc[0].to_dict()
+        except ValueError as exc:
+            changed.append(f"summary.parquet ({exc})")
+        if changed:
+            raise ConfigError(f"{folder}: {', '.join(changed)} changed since the job finished; run it again")
         points = folder / "points.parquet"
         return cls(folder, summary, pd.read_parquet(points) if points.exists() else None,
                    meta.get("cdpr.config", ""), meta.get("cdpr.version", ""))

@@ -39,14 +39,14 @@ from pipeline.analyses.choice import acceptance, choose, verdict
 from pipeline.errors import ConfigError, one_line
 from pipeline.analyses.evidence import evidence, scores
 from pipeline.analyses.figures import SERIES_DIR, FigureSpec, render
-from pipeline.analyses.results import StudyResults
+from pipeline.analyses.results import StudyResults, table as read_table
 from pipeline.app.job import changed_files, execute, folder_lock
 from pipeline.analyses.optimise import (OptimiseSpec, best_drive, check_catalogue_objectives, corner_overrides, optimise,
                                trial_folder)
 from pipeline.app.plan import Job, Plan, Reuse, parse, plan, quoted, refuse_aliases
 from pipeline.app.run import run as run_jobs
 from pipeline.app.resources import STUDIES_DIR
-from pipeline.app.results import code_version, write_csv, write_parquet, write_text
+from pipeline.app.results import code_version, read_verified, write_csv, write_parquet, write_text
 from pipeline.analyses.search import SearchSpec, exact_drive, search
 from pipeline.workspace.compute import analysis_name
 from pipeline.analyses.survival import survival
@@ -287,12 +287,13 @@ def _run_study(name: str, extra: list[str], out: Path, figures_only: bool,
 
 
 def _check_jobs(jobs_dir: Path, jobs) -> None:
-    """Every job's data files as it finished them (their recorded digests), or ConfigError
-    naming the first that changed."""
+    """Every job's summary and data files as it finished them (their recorded digests), or
+    ConfigError naming the first that changed."""
     for job in jobs:
         try:
+            read_verified(jobs_dir / job / "summary.parquet")
             changed = changed_files(jobs_dir / job)
-        except (OSError, ValueError) as exc:  # a missing or corrupt summary.parquet
+        except (OSError, ValueError) as exc:  # a missing, corrupt or edited summary.parquet
             changed = [f"summary.parquet ({one_line(exc)})"]
         if changed:
             raise ConfigError(f"{jobs_dir / job}: {', '.join(changed)} changed since the job "
@@ -472,7 +473,7 @@ def _gather(jobs_dir: Path, cases: dict[str, list[str]], labels: dict[str, str])
     to jobs/)."""
     parts = []
     for case in cases:
-        part = pd.read_parquet((jobs_dir / case if case else jobs_dir) / "summary.parquet")
+        part = read_table((jobs_dir / case if case else jobs_dir) / "summary.parquet")
         if case:
             part["job"] = case + "/" + part["job"]
         part.insert(0, "case", case)

@@ -8,7 +8,8 @@ import pyarrow.parquet as pq
 import pytest
 
 from conftest import job_imports
-from pipeline.workspace.arrow import categories, numbers, one_row, read, sorted_by, texts
+from pipeline.app.results import read_verified, write_parquet
+from pipeline.workspace.arrow import categories, numbers, one_row, sorted_by, texts
 
 
 def _round_trip(table: pa.Table, path) -> pd.DataFrame:
@@ -53,8 +54,8 @@ def test_a_summary_row_reads_back_as_pandas_wrote_it(tmp_path):
     assert [f.name for f in ours.schema] == [f.name for f in theirs.schema]
     pd.testing.assert_frame_equal(_round_trip(ours, tmp_path / "a.parquet"),
                                   _round_trip(theirs, tmp_path / "b.parquet"))
-    pq.write_table(ours, tmp_path / "c.parquet")
-    back = read(tmp_path / "c.parquet").to_pylist()[0]
+    write_parquet(ours, tmp_path / "c.parquet", "config")
+    back = read_verified(tmp_path / "c.parquet").to_pylist()[0]
     assert back["n_points"] == 216 and back["none"] is None and np.isnan(back["nan"])
     with pytest.raises(TypeError, match="x: list is not a summary value"):
         one_row({"x": [1, 2]})

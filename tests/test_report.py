@@ -14,6 +14,7 @@ from pipeline.analyses.choice import choose
 from pipeline.analyses.results import StudyResults
 from pipeline.analyses.survival import survival
 from pipeline.analyses.views import write_view
+from pipeline.app.results import DIGESTS_KEY, digests_json, write_parquet
 from pipeline.workspace.lines import simulate_lines
 from pipeline.study import available
 from pipeline.workspace.compute import compute_workspace
@@ -24,14 +25,19 @@ STUDIES = ["actuator_choice", "actuator_choice_pulling", "line_simulation", "irp
 REPO = Path(__file__).resolve().parent.parent
 
 
+def save(frame, path, extra=None):
+    """A study's table as the study writes it (with the digest of its rows)."""
+    write_parquet(frame, path, "test", extra)
+
+
 @pytest.fixture
 def studies(tmp_path, make_cfg, catalogue):
     root = tmp_path / "studies"
     for name in STUDIES:
         (root / name / "figures").mkdir(parents=True)
     summary = pd.DataFrame([compute_workspace(make_cfg(f"actuator={a}"), catalogue)[1] for a in range(1, 6)])
-    summary.to_parquet(root / "actuator_choice" / "summary.parquet")
-    choose(summary).to_parquet(root / "actuator_choice" / "choice.parquet")
+    save(summary, root / "actuator_choice" / "summary.parquet")
+    save(choose(summary), root / "actuator_choice" / "choice.parquet")
     _png(root / "actuator_choice" / "figures" / "fig9.png")
     _png(root / "actuator_choice" / "figures" / "fig8_workspace_actuator5.png")
     points, _ = compute_workspace(make_cfg("actuator=5"), catalogue)
@@ -40,34 +46,36 @@ def studies(tmp_path, make_cfg, catalogue):
     pulling = pd.DataFrame([compute_workspace(make_cfg("tension=feasible", f"actuator={a}",
                                                        "model.pinv_columns=translational"), catalogue)[1]
                             for a in range(1, 6)])
-    pulling.to_parquet(root / "actuator_choice_pulling" / "summary.parquet")
-    choose(pulling).to_parquet(root / "actuator_choice_pulling" / "choice.parquet")
+    save(pulling, root / "actuator_choice_pulling" / "summary.parquet")
+    save(choose(pulling), root / "actuator_choice_pulling" / "choice.parquet")
     lines = pd.DataFrame([simulate_lines(make_cfg("analysis=lines", f"actuator={a}"), catalogue)[2]
                           for a in (1, 2)]).assign(case="zero", case_label="zero orientation")
-    lines.to_parquet(root / "line_simulation" / "summary.parquet")
+    save(lines, root / "line_simulation" / "summary.parquet")
     irpm = pd.DataFrame([compute_workspace(make_cfg("robot=irpm6", "tension.t_max=null", f"robot.r_end={r}",
                                                     f"robot.gamma_deg={g}"), catalogue)[1]
                          for r in (1.2, 6.0) for g in (0, 30)])
-    irpm.to_parquet(root / "irpm_fig13_end_ratio" / "summary.parquet")
+    save(irpm, root / "irpm_fig13_end_ratio" / "summary.parquet")
     rows = []
     for model in ("pinv", "feasible"):
         for a in range(1, 6):
             points, row = compute_workspace(make_cfg(f"tension.model={model}", f"actuator={a}",
                                                      "model.pinv_columns=translational"), catalogue)
             (root / "tension_comparison" / "jobs" / f"{model}{a}").mkdir(parents=True)
-            points.to_parquet(root / "tension_comparison" / "jobs" / f"{model}{a}" / "points.parquet")
+            job = root / "tension_comparison" / "jobs" / f"{model}{a}"
+            save(points, job / "points.parquet")
+            save(pd.DataFrame([row]), job / "summary.parquet", {DIGESTS_KEY: digests_json([job / "points.parquet"])})
             rows.append({**row, "job": f"{model}{a}", "case": "zero", "case_label": "zero orientation"})
-    pd.DataFrame(rows).to_parquet(root / "tension_comparison" / "summary.parquet")
+    save(pd.DataFrame(rows), root / "tension_comparison" / "summary.parquet")
     comparison = survival(StudyResults(root / "tension_comparison"))
-    comparison.to_parquet(root / "tension_comparison" / "survival.parquet")
+    save(comparison, root / "tension_comparison" / "survival.parquet")
     for name, fact, unit in (("evidence_cpr8", "Table 2", "grid points"), ("evidence_irpm", "Fig. 13", "comparisons")):
-        pd.DataFrame([{"fact": "f", "source": fact, "statement": "a | claim", "reading": reading,
+        save(pd.DataFrame([{"fact": "f", "source": fact, "statement": "a | claim", "reading": reading,
                        "value": value, "matches": matches, "distance": distance, "unit": unit,
                        "default": reading == "default"}
                       for reading, value, matches, distance in (("default", "216 of 216", True, 0.0),
                                                                 ("jdot=true", "212 of 216", False, 4.0))
-                      ]).to_parquet(root / name / "evidence.parquet")
-        pd.DataFrame({"job": ["x"]}).to_parquet(root / name / "summary.parquet")
+                      ]), root / name / "evidence.parquet")
+        save(pd.DataFrame({"job": ["x"]}), root / name / "summary.parquet")
     return root
 
 
@@ -118,8 +126,8 @@ def test_the_report_gives_each_studys_answer_and_the_figures_captions(studies, t
     (design / "figures").mkdir(parents=True)
     summary = pd.DataFrame([{**compute_workspace(make_cfg(f"actuator={a}", f"load.mass={m}"), catalogue)[1],
                              "job": f"{a}-{m}"} for a in (1, 3) for m in (0.5, 4.0)])
-    summary.to_parquet(design / "summary.parquet")
-    acceptance(summary).to_parquet(design / "acceptance.parquet")
+    save(summary, design / "summary.parquet")
+    save(acceptance(summary), design / "acceptance.parquet")
     monkeypatch.setattr(pipeline.report, "available", lambda: [*STUDIES, "design_mass"])
     text = pipeline.report.build(studies, tmp_path / "report").read_text()
     assert ("Actuator choice at x &gt;= 90 %: accept 1, 2; reject 3 85.19 % (lost to torque 32); "
@@ -186,3 +194,39 @@ def test_strings_from_result_files_cannot_break_the_report():
     assert md("x | <script>alert(1)</script> [a](http://e) `c`") == (
         "x \\| &lt;script&gt;alert(1)&lt;/script&gt; \\[a\\](http://e) \\`c\\`")
     assert md("torque 8, tension_max 3") == "torque 8, tension_max 3"
+
+
+def test_the_report_refuses_an_edited_result_and_a_full_disk_leaves_no_folder(studies, tmp_path, monkeypatch, capsys):
+    """The report reads every table through the digest written with it: an edited
+    choice.parquet (the verdict of Table 2, its metadata kept) is one line and exit 2, not a
+    report. A write that fails (a full disk) is said as such, and leaves no half-written report
+    folder behind (it left .report.tmp and blamed the results)."""
+    import errno
+
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    monkeypatch.setattr(pipeline.report, "available", lambda: STUDIES)
+    path = studies / "actuator_choice" / "choice.parquet"
+    good = path.read_bytes()
+    table = pq.read_table(path)
+    index = table.column_names.index("accepted")
+    edited = table.set_column(index, "accepted", pa.array([True] * table.num_rows))
+    pq.write_table(edited.replace_schema_metadata(table.schema.metadata), path)
+    with pytest.raises(SystemExit) as raised:
+        pipeline.report.main(["--studies", str(studies), "--out", str(tmp_path / "report")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert raised.value.code == 2 and len(err) == 1
+    assert f"{path}: its rows changed since it was written" in err[0]
+    path.write_bytes(good)
+
+    def full(*args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device", str(tmp_path / ".report.tmp" / "index.html"))
+
+    monkeypatch.setattr(pipeline.report, "write_page", full)
+    with pytest.raises(SystemExit) as raised:
+        pipeline.report.main(["--studies", str(studies), "--out", str(tmp_path / "report")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert raised.value.code == 2 and err == [
+        f"error: cannot write the report ({tmp_path / '.report.tmp' / 'index.html'}: No space left on device)"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["studies"]

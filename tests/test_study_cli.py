@@ -10,6 +10,7 @@ import yaml
 
 from pipeline.model.catalogue import load_catalogue
 from pipeline.errors import ConfigError
+from pipeline.app.results import read_metadata, write_parquet
 from pipeline.study import StudySpec, available, load_study, run_study
 
 pytestmark = pytest.mark.slow
@@ -45,7 +46,9 @@ def test_choice_command_accepts_actuators_1_and_2_and_draws_every_figure(choice_
 
 
 def test_figures_are_drawn_from_the_parquet_results(choice_run, monkeypatch):
-    """Block the kernel, redraw from Parquet: identical bytes; edit the Parquet: the figure follows."""
+    """Block the kernel, redraw from Parquet: identical bytes; the summary rewritten by the
+    project's writer: the figure follows; edited by another tool (no digest of its new rows) or
+    a job file changed: refused in one line, the figures kept."""
     import pipeline.workspace.kernel
     import pipeline.workspace.compute
 
@@ -61,10 +64,14 @@ def test_figures_are_drawn_from_the_parquet_results(choice_run, monkeypatch):
     assert {p.name: p.read_bytes() for p in figures.iterdir()} == before
 
     summary_path = choice_run / "summary.parquet"
-    summary = pd.read_parquet(summary_path)
+    summary, written = pd.read_parquet(summary_path), summary_path.read_bytes()
     edited = summary.copy()
     edited.loc[edited["actuator"] == 3, "feasible_pct"] = 42.0
-    edited.to_parquet(summary_path)
+    edited.to_parquet(summary_path)  # pandas' writer: its rows carry no digest
+    with pytest.raises(ConfigError, match="summary.parquet: .*not a readable Parquet file of this study"):
+        run_study("actuator_choice", [], out_root, figures_only=True)
+    assert {p.name: p.read_bytes() for p in figures.iterdir()} == before
+    write_parquet(edited, summary_path, read_metadata(choice_run / "choice.parquet")["cdpr.config"])
     points_path = choice_run / "jobs" / "actuator=4" / "points.parquet"
     points, finished = pd.read_parquet(points_path), points_path.read_bytes()
     try:
@@ -79,7 +86,7 @@ def test_figures_are_drawn_from_the_parquet_results(choice_run, monkeypatch):
             run_study("actuator_choice", [], out_root, figures_only=True)
         assert {p.name: p.read_bytes() for p in figures.iterdir()} == after
     finally:
-        summary.to_parquet(summary_path)
+        summary_path.write_bytes(written)
         points_path.write_bytes(finished)
 
 

@@ -5,8 +5,11 @@ import shutil
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
 import pytest
 
 from pipeline.app.results import read_metadata
@@ -46,7 +49,15 @@ def test_default_run_folders_of_the_same_second_differ(tmp_path):
     assert len(list((tmp_path / "outputs" / "runs").iterdir())) == 2
 
 
-@pytest.mark.parametrize("damage", ["truncate_summary", "flip_points", "delete_points"])
+def edit_value(path: Path, column: str, value) -> None:
+    """Change one value of a Parquet table as an editing tool would: the file's metadata kept."""
+    table = pq.read_table(path)
+    index = table.column_names.index(column)
+    edited = table.set_column(index, column, pa.array([value] * table.num_rows, table.schema.field(column).type))
+    pq.write_table(edited.replace_schema_metadata(table.schema.metadata), path)
+
+
+@pytest.mark.parametrize("damage", ["truncate_summary", "flip_points", "delete_points", "edit_summary"])
 def test_a_damaged_finished_job_is_recomputed_not_reused(tmp_path, damage):
     run = ["grid.n=4", "hydra.run.dir=job"]
     assert start(tmp_path, *run).wait(timeout=300) == 0
@@ -58,6 +69,8 @@ def test_a_damaged_finished_job_is_recomputed_not_reused(tmp_path, damage):
         data = bytearray((job / "points.parquet").read_bytes())
         data[len(data) // 2] ^= 0xFF
         (job / "points.parquet").write_bytes(bytes(data))
+    elif damage == "edit_summary":  # 64 -> 1 feasible, its digests kept: a rerun must not trust it
+        edit_value(job / "summary.parquet", "n_feasible", 1)
     else:
         (job / "points.parquet").unlink()
     proc = start(tmp_path, *run)
@@ -66,6 +79,7 @@ def test_a_damaged_finished_job_is_recomputed_not_reused(tmp_path, damage):
     assert "recomputing" in (job / "pipeline.log").read_text()
     pd.testing.assert_frame_equal(pd.read_parquet(job / "points.parquet"), good)
     assert pd.read_parquet(job / "summary.parquet")["n_points"].tolist() == [64]
+    assert pd.read_parquet(job / "summary.parquet")["n_feasible"].tolist() == [good["feasible"].sum()] != [1]
 
 
 @pytest.fixture(scope="module")
@@ -78,7 +92,7 @@ def finished_study(tmp_path_factory):
     return root / "out"
 
 
-@pytest.mark.parametrize("damage", ["flip_points", "truncate_summary"])
+@pytest.mark.parametrize("damage", ["flip_points", "truncate_summary", "edit_summary"])
 def test_figures_only_refuses_a_damaged_job_and_keeps_the_old_figures(tmp_path, finished_study, damage):
     """--figures-only draws from the finished jobs as they are: a job file changed since it
     finished is named (one line, exit 2) before any old figure is removed; a full rerun then
@@ -92,7 +106,10 @@ def test_figures_only_refuses_a_damaged_job_and_keeps_the_old_figures(tmp_path, 
     data = bytearray((job / name).read_bytes())
     if damage == "flip_points":
         data[len(data) // 2] ^= 0xFF
-    (job / name).write_bytes(bytes(data if damage == "flip_points" else data[:300]))
+    if damage == "edit_summary":
+        edit_value(job / name, "feasible_pct", 100.0)
+    else:
+        (job / name).write_bytes(bytes(data if damage == "flip_points" else data[:300]))
     redraw = subprocess.run([*study, "--figures-only"], cwd=tmp_path, capture_output=True, text=True, timeout=600)
     assert redraw.returncode == 2
     (line,) = redraw.stderr.strip().splitlines()
@@ -125,3 +142,4 @@ def test_a_summary_only_job_writes_no_points_and_is_reused(tmp_path):
         "error: output.cables=true: the cables go into points.parquet, which output.points=false "
         "does not write"]
     assert not (tmp_path / "c").exists()
+

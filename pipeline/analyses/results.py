@@ -1,11 +1,16 @@
 """Read access to one study's outputs (what the analyses, the figures, the report and the API
-read): its summary, analysis tables and each job's points and samples."""
+read): its summary, analysis tables and each job's points and samples, each checked against the
+digest written with it before it is used (``pipeline.app.results``: a table's rows, a job's data
+files); a file changed since it was written raises ValueError naming it."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
 import pandas as pd
+
+from pipeline.app.job import changed_files
+from pipeline.app.results import read_verified
 
 
 class StudyResults:
@@ -16,13 +21,31 @@ class StudyResults:
 
     @property
     def summary(self) -> pd.DataFrame:
-        return pd.read_parquet(self.directory / "summary.parquet")
+        return table(self.directory / "summary.parquet")
 
     def table(self, name: str) -> pd.DataFrame:
-        return pd.read_parquet(self.directory / f"{name}.parquet")
+        return table(self.directory / f"{name}.parquet")
 
     def points(self, job: str) -> pd.DataFrame:
-        return pd.read_parquet(self.directory / "jobs" / job / "points.parquet")
+        return self._data(job, "points.parquet")
 
     def samples(self, job: str) -> pd.DataFrame:
-        return pd.read_parquet(self.directory / "jobs" / job / "samples.parquet")
+        return self._data(job, "samples.parquet")
+
+    def _data(self, job: str, name: str) -> pd.DataFrame:
+        folder = self.directory / "jobs" / job
+        changed = changed_files(folder)
+        if changed:
+            raise ValueError(f"{folder}: {', '.join(changed)} changed since the job finished")
+        return pd.read_parquet(folder / name)
+
+
+def table(path: Path) -> pd.DataFrame:
+    """A table written whole (a summary, a study's analysis), as pandas, its rows verified;
+    ValueError naming the file otherwise."""
+    try:
+        return read_verified(path).to_pandas()
+    except FileNotFoundError:
+        raise
+    except (OSError, ValueError) as exc:  # pyarrow's read errors derive from these
+        raise ValueError(f"{path}: {exc}") from None

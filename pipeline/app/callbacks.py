@@ -14,8 +14,9 @@ import pyarrow as pa
 from hydra.experimental.callback import Callback
 from omegaconf import DictConfig, OmegaConf
 
-from pipeline.app.results import varying_settings, write_parquet
-from pipeline.workspace.arrow import read, sorted_by, texts
+from pipeline.app.results import read_verified, varying_settings, write_parquet
+from pipeline.errors import ConfigError, one_line
+from pipeline.workspace.arrow import sorted_by, texts
 
 log = logging.getLogger("pipeline")
 REPORTED = ["n_points", "n_feasible", "feasible_pct", "volume_m3"]
@@ -32,7 +33,10 @@ def gather(sweep_dir: Path, job_dirs: list[Path], overrides: list[str]) -> None:
     rows = []
     for job_dir in sorted(job_dirs or (p.parent for p in sweep_dir.glob("*/summary.parquet"))):
         if (job_dir / "summary.parquet").exists():
-            row = read(job_dir / "summary.parquet").replace_schema_metadata(None)
+            try:
+                row = read_verified(job_dir / "summary.parquet").replace_schema_metadata(None)
+            except (OSError, ValueError) as exc:  # pyarrow's read errors derive from these
+                raise ConfigError(f"{job_dir / 'summary.parquet'}: {one_line(exc)}; rerun the sweep") from None
             rows.append(row.add_column(0, "job", texts([job_dir.name])))
     if not rows:
         return

@@ -28,9 +28,9 @@ from pipeline.app.readings import describe_reading
 from pipeline.app.yamltext import to_yaml
 from pipeline.app.results import (
     CONFIG_KEY, DIGESTS_KEY, VERSION_KEY, ParquetSink, code_version, digests_json, file_digest,
-    read_metadata, write_parquet,
+    read_metadata, read_verified, write_parquet,
 )
-from pipeline.workspace.arrow import one_row, read
+from pipeline.workspace.arrow import one_row
 from pipeline.workspace.compute import analysis_name, compute_workspace
 
 log = logging.getLogger("pipeline")
@@ -142,7 +142,7 @@ def finished_summary(out: Path, config_yaml: str) -> dict | None:
         if changed:
             log.warning("recomputing %s: %s changed since the job finished", out, ", ".join(changed))
             return None
-        return read(path).to_pylist()[0]
+        return read_verified(path).to_pylist()[0]
     except (OSError, ValueError) as exc:  # pyarrow's errors derive from these
         log.warning("recomputing %s: unreadable summary.parquet (%s)", out, exc)
         return None

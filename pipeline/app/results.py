@@ -25,6 +25,7 @@ if TYPE_CHECKING:
 CONFIG_KEY = "cdpr.config"
 VERSION_KEY = "cdpr.version"
 DIGESTS_KEY = "cdpr.digests"  # in a job's summary: sha256 of every data file the job wrote
+CONTENT_KEY = "cdpr.content"  # in a table written whole: sha256 of its rows (content_digest)
 
 
 @lru_cache(maxsize=1)
@@ -56,9 +57,37 @@ def write_parquet(frame: pa.Table | pd.DataFrame, path: Path, config_yaml: str,
                   extra: dict | None = None) -> None:
     """Write ``frame`` (an Arrow table or a pandas DataFrame) to ``path`` via a temporary file
     and a rename: no half-written file ever carries the final name. ``extra``: more ``cdpr.*``
-    schema metadata (str values)."""
-    with ParquetSink(path, config_yaml, extra) as sink:
-        sink.write(frame)
+    schema metadata (str values). The digest of its rows goes with it (``cdpr.content``), which
+    :func:`read_verified` checks: a value changed in the file is found before it is used."""
+    table = _arrow(frame)
+    with ParquetSink(path, config_yaml, {**(extra or {}), CONTENT_KEY: content_digest(table)}) as sink:
+        sink.write(table)
+
+
+def content_digest(table: pa.Table) -> str:
+    """sha256 of a table's columns: names and types (its schema without metadata) and values
+    as Python reads them (floats by their exact repr, nulls as None), the same for the table
+    written and the table read back; for the tables written whole (summaries, study tables),
+    not the streamed points (whose file digest the summary records)."""
+    text = repr((table.schema.remove_metadata().to_string(), table.to_pydict()))
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def read_verified(path: Path) -> pa.Table:
+    """A table written by :func:`write_parquet`, whose rows still have the digest it recorded;
+    else ValueError naming what is wrong (pyarrow's read errors are OSError or ValueError)."""
+    with pq.ParquetFile(path) as handle:  # no pandas import
+        table = handle.read()
+    recorded = (table.schema.metadata or {}).get(CONTENT_KEY.encode())
+    if recorded is None:
+        raise ValueError("no record of its content (not written whole by this version)")
+    if content_digest(table) != recorded.decode():
+        raise ValueError("its rows changed since it was written")
+    return table
+
+
+def _arrow(frame: pa.Table | pd.DataFrame) -> pa.Table:
+    return frame if isinstance(frame, pa.Table) else pa.Table.from_pandas(frame, preserve_index=False)
 
 
 ZSTD_ROWS = 1000  # zstd for tables that stream chunks of at least this many rows (points), snappy
@@ -78,7 +107,7 @@ class ParquetSink:
         self.writer: pq.ParquetWriter | None = None
 
     def write(self, frame: pa.Table | pd.DataFrame) -> None:
-        table = frame if isinstance(frame, pa.Table) else pa.Table.from_pandas(frame, preserve_index=False)
+        table = _arrow(frame)
         if self.writer is None:
             meta = dict(table.schema.metadata or {})
             meta[CONFIG_KEY.encode()] = self.config_yaml.encode()

@@ -1,21 +1,20 @@
-"""Arrow columns built from their buffers, and Parquet files read whole, without pandas.
+"""Arrow columns built from their buffers, without pandas.
 
 pyarrow's own constructors (``pa.array``, ``pa.scalar``, ``pa.Table.from_pylist``) and
 ``pq.read_table`` import pandas, when it is installed, to check whether their input is a pandas
 object, in a job process that holds none (``docs/performance.md``, "What a process imports"). A
 job's tables are therefore built here with ``pa.Array.from_buffers``, which checks nothing
-(numbers without a copy), and read with ``pq.ParquetFile``. The columns have the types
-``pa.Table.from_pandas`` gives the same values, and a table read back with pandas is the same
-DataFrame (``tests/test_results.py``).
+(numbers without a copy), and read back with ``pq.ParquetFile``
+(``pipeline.app.results.read_verified``). The columns have the types ``pa.Table.from_pandas``
+gives the same values, and a table read back with pandas is the same DataFrame
+(``tests/test_results.py``).
 """
 
 from __future__ import annotations
 
-from pathlib import Path
 
 import numpy as np
 import pyarrow as pa
-import pyarrow.parquet as pq
 
 
 def numbers(values: np.ndarray) -> pa.Array:
@@ -67,12 +66,6 @@ def one_row(row: dict) -> pa.Table:
         else:
             raise TypeError(f"{name}: {type(value).__name__} is not a summary value")
     return pa.table(columns)
-
-
-def read(path: Path) -> pa.Table:
-    """A whole Parquet file (``pq.ParquetFile``: no pandas import)."""
-    with pq.ParquetFile(path) as handle:
-        return handle.read()
 
 
 def sorted_by(table: pa.Table, names: list[str]) -> pa.Table:
