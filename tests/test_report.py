@@ -1,6 +1,7 @@
 """The reproduction report is built from study Parquet files only; dvc.yaml covers every study."""
 
 import re
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -31,8 +32,15 @@ def save(frame, path, extra=None):
 
 
 @pytest.fixture
-def studies(tmp_path, make_cfg, catalogue):
-    root = tmp_path / "studies"
+def studies(built_studies, tmp_path):
+    """A copy of :func:`built_studies` of the test's own (tests change it)."""
+    shutil.copytree(built_studies, tmp_path / "studies")
+    return tmp_path / "studies"
+
+
+@pytest.fixture(scope="module")
+def built_studies(tmp_path_factory, make_cfg, catalogue):
+    root = tmp_path_factory.mktemp("built") / "studies"
     for name in STUDIES:
         (root / name / "figures").mkdir(parents=True)
     summary = pd.DataFrame([compute_workspace(make_cfg(f"actuator={a}"), catalogue)[1] for a in range(1, 6)])
