@@ -139,3 +139,26 @@ def test_the_compiled_loops_use_nothing_but_their_own_text(module, exports):
     assert all(node.level == 0 and node.module in ("__future__", "numpy", "numba")
                for node in ast.walk(tree) if isinstance(node, ast.ImportFrom))
     assert set(module.SIGNATURES) == exports
+
+
+SLOW = "import time\ntime.sleep(1.5)  # a long compile: the window two starting processes share\n" + MODULE
+
+MISSES = """
+import sys
+sys.path.insert(0, sys.argv[1])
+from pipeline.model.jit import compiled_loops
+twice = compiled_loops("slowloops").twice
+print(sum(twice.stats.cache_misses.values()), sum(twice.stats.cache_hits.values()))
+"""
+
+
+def test_processes_starting_at_once_compile_a_loops_module_once(tmp_path):
+    """Two processes on a fresh cache (a study's two workers on a new machine): the first
+    compiles, the second waits for its lock and loads the cache it wrote; without the lock both
+    would compile (both import while no cache exists)."""
+    (tmp_path / "slowloops.py").write_text(textwrap.dedent(SLOW))
+    procs = [subprocess.Popen([sys.executable, "-c", MISSES, str(tmp_path)], stdout=subprocess.PIPE, text=True)
+             for _ in range(2)]
+    counts = sorted(tuple(map(int, proc.communicate(timeout=120)[0].split())) for proc in procs)
+    assert counts == [(0, 1), (1, 0)]  # (cache misses, cache hits): one compiled, one loaded
+    assert (tmp_path / "__pycache__" / "slowloops.compile.lock").exists()

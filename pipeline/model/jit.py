@@ -23,12 +23,17 @@ The functions are compiled with numba's default options (no fast-math, so no fus
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import functools
+import hashlib
 import importlib
 import importlib.util
 import logging
+import os
 import pickle
 import sys
+import tempfile
 import threading
 import time
 from pathlib import Path
@@ -41,16 +46,37 @@ ANNOUNCE_AFTER_S = 1.0  # an import still running after this is numba compiling:
 @functools.cache
 def compiled_loops(name: str) -> ModuleType:
     """The loops module ``name``, compiled (or loaded from numba's cache) once a process; its
-    cache compiled again, with a warning, where it cannot be read."""
-    try:
-        return _timed_import(name)
-    except (pickle.UnpicklingError, EOFError) as exc:  # a half-written cache file
-        origin = Path(importlib.util.find_spec(name).origin)
-        log.warning("numba's cache of %s is unreadable (%s): removed, compiling again", origin.name, exc)
-        for path in (origin.parent / "__pycache__").glob(f"{origin.stem}.*.nb[ic]"):
-            path.unlink(missing_ok=True)
-        sys.modules.pop(name, None)
-        return _timed_import(name)
+    cache compiled again, with a warning, where it cannot be read. Processes that start at once
+    on a fresh machine (a study's two workers, the test suite's) compile it once: each holds a
+    lock on the module's compile while it imports it, so the others wait and then load the
+    cache the first one wrote."""
+    origin = Path(importlib.util.find_spec(name).origin)
+    with _compile_lock(origin):
+        try:
+            return _timed_import(name)
+        except (pickle.UnpicklingError, EOFError) as exc:  # a half-written cache file
+            log.warning("numba's cache of %s is unreadable (%s): removed, compiling again", origin.name, exc)
+            for path in (origin.parent / "__pycache__").glob(f"{origin.stem}.*.nb[ic]"):
+                path.unlink(missing_ok=True)
+            sys.modules.pop(name, None)
+            return _timed_import(name)
+
+
+@contextlib.contextmanager
+def _compile_lock(origin: Path):
+    """An exclusive lock on the compile of the loops module at ``origin``: a file beside numba's
+    cache, or in the temporary folder where that cannot be written."""
+    folder = origin.parent / "__pycache__"
+    if not os.access(folder if folder.is_dir() else origin.parent, os.W_OK):
+        digest = hashlib.sha256(str(origin).encode()).hexdigest()[:16]
+        folder = Path(tempfile.gettempdir()) / f"cdpr-numba-{digest}"
+    folder.mkdir(parents=True, exist_ok=True)
+    with open(folder / f"{origin.stem}.compile.lock", "a") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)
 
 
 def _timed_import(name: str) -> ModuleType:
