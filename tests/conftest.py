@@ -16,26 +16,6 @@ from pipeline.app.plan import Composition, parse, structural
 from pipeline.app.resources import CONF_DIR
 
 register()
-LOOPS = ("pipeline.workspace.fused_loops", "pipeline.model.crossings")
-
-
-def pytest_configure(config):
-    """numba's loops built once for the whole run, in a process of their own while the first
-    tests run (on a fresh clone their cache is empty): the workers that need them wait for its
-    lock (``pipeline.model.jit``) and load what it wrote, instead of each compiling them."""
-    if hasattr(config, "workerinput"):  # a pytest-xdist worker: the controller started the build
-        return
-    build = "; ".join(f"compiled_loops({name!r})" for name in LOOPS)
-    config.stash[BUILD] = subprocess.Popen(
-        [sys.executable, "-c", f"from pipeline.model.jit import compiled_loops; {build}"])
-
-
-def pytest_unconfigure(config):
-    if BUILD in config.stash:
-        config.stash[BUILD].wait()
-
-
-BUILD = pytest.StashKey[subprocess.Popen]()
 
 
 @pytest.fixture(scope="session")
