@@ -67,6 +67,10 @@ CASES = [
     ("pipeline", ["no_such_key=1"], "no_such_key"),
     ("pipeline", ["model.acceleration_set=sphere"], "sphere"),
     ("pipeline", ["robot=irpm7"], "irpm7"),
+    ("pipeline", ["-m", "actuator=1,2", "hydra/launcher=submitit_slurm"],
+     "hydra/launcher=submitit_slurm: no such option of Hydra's hydra/launcher group (options: basic, cdpr, joblib; "
+     "a Hydra plugin adds its own, e.g. pip install hydra-submitit-launcher)"),
+    ("pipeline", ["-m", "actuator=1,2", "hydra.launcher.backend=dask"], "reads hydra.launcher.n_jobs only"),
     ("pipeline", ["robot=irpm6", "robot.r_end=0"], "robot.r_end=0"),
     ("pipeline", ["-m", "robot=irpm6", "limits.s_max=55000,-1"], "limits.s_max=-1"),
     ("pipeline", ["robot=irpm6", "robot.gamma_deg=130"], "robot.gamma_deg=130"),
