@@ -124,6 +124,11 @@ def variable_domain(key: str, domain: Any, where: str) -> Any:
         values = list(domain)
         if not values:
             raise ConfigError(f"{where}: optimise.variables.{key}: an empty list of values")
+        numbers = [isinstance(v, (int, float)) and not isinstance(v, bool) for v in values]
+        bad = [v for v, number in zip(values, numbers) if not (number and math.isfinite(v) or isinstance(v, str))]
+        if bad or 0 < sum(numbers) < len(values):  # checked whole: the preflight tries the ends only
+            what = f"{bad[0]!r} is not" if bad else "values must all be"
+            raise ConfigError(f"{where}: optimise.variables.{key}: {what} finite numbers, or all names")
         return ("choices", values)
     if isinstance(domain, dict) or OmegaConf.is_dict(domain):
         extra = set(domain) - {"low", "high", "step"}
