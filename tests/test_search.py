@@ -197,7 +197,8 @@ def test_the_least_motor_torque_that_reaches_90_percent(make_cfg, catalogue):
     ("  variables: {drive.gear_ratio: {low: 5, high: 60}}", "give a step (the search is exact to a grid)"),
     ("  variables: {drive.gear_ratio: {low: 60, high: 5, step: 1}}", "an empty range [60, 5] by 1"),
     ("  variables: {drive.winch_radius: [0.05, -0.01]}", "search.variables.drive.winch_radius: -0.01: must be positive"),
-    ("  variables: {drive.winch_radius: [0.05, .nan]}", "every value must be a finite number"),
+    ("  variables: {drive.winch_radius: [0.05, .nan]}", "search.variables.drive.winch_radius: nan: the values must be finite"),
+    ("  variables: {drive.winch_radius: [0.05, x]}", "search.variables.drive.winch_radius: the values must be finite"),
     ("  variables: {drive.winch_radius: [0.05]}\n  objective: motor_power_W", "search.objective='motor_power_W': unknown"),
 ])
 def test_a_bad_search_block_is_refused_when_the_study_is_loaded(tmp_path, body, message):

@@ -114,35 +114,36 @@ class OptimiseSpec:
             raise ConfigError(f"{where}: optimise.sampler={self.sampler!r}: must be one of {', '.join(SAMPLERS)}")
 
 
-def variable_domain(key: str, domain: Any, where: str) -> Any:
-    """A variable's values as ``("choices", list)`` or ``("range", low, high, step)``."""
+def variable_domain(key: str, domain: Any, where: str, block: str = "optimise") -> Any:
+    """A variable's values as ``("choices", list)`` or ``("range", low, high, step)``; errors
+    name ``where`` and the study file's ``block`` (optimise or search)."""
     if domain == "catalogue":
         if key != "actuator":
-            raise ConfigError(f"{where}: optimise.variables.{key}=catalogue: only 'actuator' takes the catalogue's ids")
+            raise ConfigError(f"{where}: {block}.variables.{key}=catalogue: only 'actuator' takes the catalogue's ids")
         return ("catalogue",)
     if isinstance(domain, (list, tuple)) or OmegaConf.is_list(domain):
         values = list(domain)
         if not values:
-            raise ConfigError(f"{where}: optimise.variables.{key}: an empty list of values")
+            raise ConfigError(f"{where}: {block}.variables.{key}: an empty list of values")
         numbers = [isinstance(v, (int, float)) and not isinstance(v, bool) for v in values]
         bad = [v for v, number in zip(values, numbers) if not (number and math.isfinite(v) or isinstance(v, str))]
         if bad or 0 < sum(numbers) < len(values):  # checked whole: the preflight tries the ends only
-            what = f"{bad[0]!r} is not" if bad else "values must all be"
-            raise ConfigError(f"{where}: optimise.variables.{key}: {what} finite numbers, or all names")
+            what = f"{bad[0]!r}: the values" if bad else "the values"
+            raise ConfigError(f"{where}: {block}.variables.{key}: {what} must be finite numbers, or all names")
         return ("choices", values)
     if isinstance(domain, dict) or OmegaConf.is_dict(domain):
         extra = set(domain) - {"low", "high", "step"}
         if extra or not {"low", "high"} <= set(domain):
-            raise ConfigError(f"{where}: optimise.variables.{key}: give low and high (and step), not {sorted(domain)}")
+            raise ConfigError(f"{where}: {block}.variables.{key}: give low and high (and step), not {sorted(domain)}")
         low, high, step = domain["low"], domain["high"], domain.get("step")
         numbers = [v for v in (low, high, step) if v is not None]
         if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in numbers):
-            raise ConfigError(f"{where}: optimise.variables.{key}: low, high and step must be finite numbers")
+            raise ConfigError(f"{where}: {block}.variables.{key}: low, high and step must be finite numbers")
         if not low < high or (step is not None and not 0 < step <= high - low):
-            raise ConfigError(f"{where}: optimise.variables.{key}: an empty range "
+            raise ConfigError(f"{where}: {block}.variables.{key}: an empty range "
                               f"[{low}, {high}]{'' if step is None else f' by {step}'}")
         return ("range", low, high, step)
-    raise ConfigError(f"{where}: optimise.variables.{key}: catalogue, a list, or {{low, high, step}}")
+    raise ConfigError(f"{where}: {block}.variables.{key}: catalogue, a list, or {{low, high, step}}")
 
 
 def corner_overrides(variables: dict[str, Any], ids: list[int]) -> list[list[str]]:

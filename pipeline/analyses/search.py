@@ -92,7 +92,7 @@ def grid_values(key: str, domain: Any, where: str) -> list[float]:
     """A variable's sorted grid: the listed values, or low, low + step, ... <= high."""
     if key not in VARIABLES:
         raise ConfigError(f"{where}: search.variables.{key}: not a drive variable (known: {', '.join(VARIABLES)})")
-    kind, *values = variable_domain(key, domain, where)
+    kind, *values = variable_domain(key, domain, where, "search")
     if kind == "choices":
         values = values[0]
         if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in values):
