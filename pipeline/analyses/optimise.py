@@ -127,7 +127,7 @@ def variable_domain(key: str, domain: Any, where: str, block: str = "optimise") 
             raise ConfigError(f"{where}: {block}.variables.{key}: an empty list of values")
         numbers = [isinstance(v, (int, float)) and not isinstance(v, bool) for v in values]
         bad = [v for v, number in zip(values, numbers) if not (number and math.isfinite(v) or isinstance(v, str))]
-        if bad or 0 < sum(numbers) < len(values):  # checked whole: the preflight tries the ends only
+        if bad or 0 < sum(numbers) < len(values):  # checked whole: the plan tries the ends only
             what = f"{bad[0]!r}: the values" if bad else "the values"
             raise ConfigError(f"{where}: {block}.variables.{key}: {what} must be finite numbers, or all names")
         return ("choices", values)
@@ -148,7 +148,7 @@ def variable_domain(key: str, domain: Any, where: str, block: str = "optimise") 
 
 def corner_overrides(variables: dict[str, Any], ids: list[int]) -> list[list[str]]:
     """The overrides of the lowest and the highest design of ``variables`` (an optimise or
-    search block's), for the preflight (every value a trial can take lies between them);
+    search block's), for the plan (every value a trial can take lies between them);
     ConfigError for an actuator id not in the catalogue."""
     corners: list[list[str]] = [[], []]
     for key, domain in variables.items():
