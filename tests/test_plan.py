@@ -4,15 +4,15 @@ its basic sweeper's expansion."""
 import pytest
 
 from pipeline.errors import ConfigError
-from pipeline.app.plan import job_overrides, plan
+from pipeline.app.plan import parse, plan, sweep_jobs
 
 
 def test_sweep_expands_like_hydra_basic_sweeper():
-    assert job_overrides(["-m", "actuator=1,2", "load.mass=1,3"]) == [
+    assert [list(job.overrides) for job in plan(["-m", "actuator=1,2", "load.mass=1,3"]).jobs] == [
         ["actuator=1", "load.mass=1"], ["actuator=1", "load.mass=3"],
         ["actuator=2", "load.mass=1"], ["actuator=2", "load.mass=3"],
     ]
-    assert job_overrides(["--cfg", "job"]) is None
+    assert plan(["--cfg", "job"]) is None  # Hydra answers it: no job
 
 
 @pytest.mark.parametrize(
@@ -43,17 +43,15 @@ def test_expansion_matches_hydra_basic_sweeper_with_ranges_and_repeated_keys():
     used here only as the reference, never by the package)."""
     from hydra._internal.core_plugins.basic_sweeper import BasicSweeper
 
-    from pipeline.app.plan import parse
-
     argv = ["-m", "actuator=range(1,4)", "load.mass=1", "grid.n=2,3", "load.mass=4,5"]
     expected = BasicSweeper.split_arguments(parse(argv[1:]), max_batch_size=None)[0]
-    assert job_overrides(argv) == expected and len(expected) == 12
+    assert sweep_jobs(parse(argv[1:])) == expected and len(expected) == 12
 
 
 def test_sweeps_another_sweeper_chooses_are_checked_by_their_fixed_part():
     """Another sweeper (e.g. Optuna) chooses values at run time: the command is Hydra's, its
     fixed part checked; the basic sweeper cannot sample an interval: refused."""
-    assert job_overrides(["-m", "hydra/sweeper=optuna", "load.mass=1,2"]) == [["hydra/sweeper=optuna"]]
+    assert sweep_jobs(parse(["hydra/sweeper=optuna", "load.mass=1,2"])) == [["hydra/sweeper=optuna"]]
     with pytest.raises(ConfigError, match="interval sweeps need a sweeper"):
         plan(["-m", "load.mass=interval(1,3)", "actuator=2"])
 
@@ -108,8 +106,8 @@ def test_jobs_derived_from_one_composition_equal_each_job_typed_on_its_own(argv,
     argv = [a.replace("{user}", str(tmp_path)) for a in argv]
     user = [f"hydra.searchpath=[file://{tmp_path}]"] if "--config-dir" in argv else []
     planned = plan(argv).jobs
-    jobs = job_overrides(argv)
-    assert len(planned) == len(jobs) > 1
+    jobs = [list(job.overrides) for job in planned]
+    assert jobs == sweep_jobs(parse([a for a in argv if "=" in a])) and len(jobs) > 1
     with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3", job_name="reference"):
         for job, overrides in zip(planned, jobs):
             plain = compose(config_name="config", overrides=[*user, *overrides])

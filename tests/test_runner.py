@@ -11,7 +11,7 @@ from hydra import compose, initialize_config_dir
 from omegaconf import OmegaConf
 
 from pipeline.app.config import validate
-from pipeline.app.plan import job_overrides, plan
+from pipeline.app.plan import parse, plan, sweep_jobs
 from pipeline.app.resources import CONF_DIR
 
 # group choices (composed per set of files), plain values (derived), and a dict value (merged
@@ -69,7 +69,7 @@ def test_planned_configs_are_those_a_job_would_type_itself():
     task (``pipeline.app.cli.main``) would type and validate from it."""
     argv = ["-m", *SWEEP[:3], "load.mass=1.5,2", "robot=cpr8", "model.pinv_columns=full"]
     planned = plan(argv).jobs
-    jobs = job_overrides(argv)
+    jobs = sweep_jobs(parse(argv[1:]))
     assert len(jobs) == len(planned) == 8
     with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3", job_name="test"):
         for job, overrides in zip(planned, jobs):

@@ -81,14 +81,15 @@ class Plan:
 
     def record(self, job: Job) -> DictConfig:
         """The job's config with Hydra's node, as Hydra's run or launcher records it
-        (``.hydra/hydra.yaml``, and the job's logging settings)."""
-        return self.compositions[job.files].record(_parsed(job.overrides), _parsed(list(self.overrides)),
+        (``.hydra/hydra.yaml``, and the job's logging settings). Derived again when the job
+        runs rather than kept from the plan: a sweep may have 100 000 jobs."""
+        return self.compositions[job.files].record(parse(job.overrides), parse(list(self.overrides)),
                                                    job.number, job.folder, self.sweep_dir)
 
     def sweep_record(self) -> DictConfig:
         """The sweep's config with Hydra's node, as Hydra's sweeper records it (``multirun.yaml``):
         the command's overrides, its sweeps unexpanded, with the folder of the sweep."""
-        command = _parsed(list(self.overrides))
+        command = parse(list(self.overrides))
         config = self.compositions[self.files].hydra_node(command, command)
         config.hydra.sweep.dir = str(self.sweep_dir)
         return config
@@ -96,7 +97,7 @@ class Plan:
     @property
     def task_overrides(self) -> list[str]:
         """The command's overrides but Hydra's (the sweep summary's record)."""
-        return [o.input_line for o in _parsed(list(self.overrides)) if not o.is_hydra_override()]
+        return [o.input_line for o in parse(list(self.overrides)) if not o.is_hydra_override()]
 
 
 @dataclass
@@ -123,7 +124,7 @@ def plan(argv: list[str], reuse: Reuse | None = None) -> Plan | None:
         if override.key_or_group.startswith("hydra.callbacks") and not override.is_delete():
             raise ConfigError(f"{override.input_line}: a Hydra callback runs code; the command line may "
                               "remove the project's (~hydra.callbacks.sweep_summary), not add or change one")
-    jobs = _expanded(parsed) if multirun else [overrides]
+    jobs = sweep_jobs(parsed) if multirun else [overrides]
     register()
     search_path = _search_path(argv)
     mode = "hydra.mode=MULTIRUN" if multirun else "hydra.mode=RUN"
@@ -190,15 +191,7 @@ def _check_launcher(hydra: DictConfig, parsed: list[Override]) -> None:
                               "Hydra's own joblib launcher takes the others (hydra/launcher=joblib)")
 
 
-def job_overrides(argv: list[str]) -> list[list[str]] | None:
-    """The override list of every job the command would launch; None when it launches none."""
-    overrides = _overrides(argv)
-    if overrides is None or not _is_multirun(argv):
-        return None if overrides is None else [overrides]
-    return _expanded(parse(overrides))
-
-
-def _expanded(parsed: list[Override]) -> list[list[str]]:
+def sweep_jobs(parsed: list[Override]) -> list[list[str]]:
     """The jobs of a sweep. A sweep another sweeper chooses the values of (Optuna: the command
     goes to Hydra, ``pipeline.app.cli``) is checked with its other overrides only: one job, the
     sweep's fixed part."""
@@ -270,9 +263,6 @@ def quoted(value) -> str:
 def parse(overrides: list[str]) -> list[Override]:
     """Hydra's parse of each override; a grammar error names the override it is in."""
     return [override for text in overrides for override in _parse_one(text)]
-
-
-_parsed = parse
 
 
 @functools.lru_cache(maxsize=4096)
@@ -423,10 +413,10 @@ def _derivable(full: DictConfig, plain: DictConfig) -> Copies | None:
 
 
 def _not_derivable(override: Override) -> bool:
-    """A plain override whose typed value depends on more than its own text: a dict (merged
-    into the key's current value) or an interpolation (resolved against the job's config)."""
-    value = override.value()
-    return isinstance(value, dict) or "${" in str(value)
+    """A plain override whose typed value depends on more than its own text: an interpolation
+    (resolved against the job's config). A dict value is merged by Hydra's composition
+    (:func:`structural`)."""
+    return "${" in str(override.value())
 
 
 NAME_MAX = 255  # bytes in one folder name (Linux, macOS)
