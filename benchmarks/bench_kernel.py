@@ -29,12 +29,14 @@ import time  # noqa: E402
 from hydra import compose, initialize_config_dir  # noqa: E402
 
 from pipeline.model.catalogue import load_catalogue  # noqa: E402
-from pipeline.app.config import register, typed_config  # noqa: E402
+from pipeline.app.config import register  # noqa: E402
+from pipeline.app.problem import typed_config  # noqa: E402
 from pipeline.workspace.kernel import evaluate_chunk  # noqa: E402
 from pipeline.workspace.parallel import iter_chunks  # noqa: E402
 from pipeline.app.resources import CONF_DIR  # noqa: E402
 from pipeline.workspace.reference import literal_margins  # noqa: E402
-from pipeline.workspace.compute import bounded_chunk_size, build_problem  # noqa: E402
+from pipeline.workspace.compute import bounded_chunk_size  # noqa: E402
+from pipeline.app.problem import build_problem  # noqa: E402
 
 
 def problem_for(n: int, *extra: str, angle: float = 0.5):

@@ -5,9 +5,10 @@ feasible share of each actuator."""
 from hydra import compose, initialize_config_dir
 
 from pipeline.model.catalogue import load_catalogue
-from pipeline.app.config import register, typed_config
+from pipeline.app.config import register
+from pipeline.app.problem import typed_config
 from pipeline.app.resources import CONF_DIR
-from pipeline.workspace.compute import compute_workspace
+from pipeline.app.problem import compute_workspace
 
 register()
 catalogue = load_catalogue()

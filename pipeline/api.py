@@ -30,7 +30,6 @@ from pipeline.app.job import changed_files, execute
 from pipeline.app.plan import Job, plan, quoted
 from pipeline.app.results import read_metadata
 from pipeline.study import OUTPUT_DIR, available, first_actuator_job, study_dir
-from pipeline.workspace.compute import analysis_name
 
 API_DIR = Path("outputs") / "api"
 
@@ -96,7 +95,7 @@ def actuator_choice(overrides: Iterable[str] = (), folder: str | Path | None = N
     folder = Path(folder) if folder is not None else _new_folder()
     first = first_actuator_job(overrides, folder)
     if first.catalogue is None:
-        raise ConfigError(f"analysis={analysis_name(first.cfg)}: no actuators to choose from "
+        raise ConfigError(f"analysis={first.cfg.analysis}: no actuators to choose from "
                           "(the choice needs analysis=cpr_wwa)")
     ids = ",".join(str(i) for i in first.catalogue.ids)
     jobs = plan(["-m", f"actuator={ids}", *overrides, f"hydra.sweep.dir={quoted(folder)}"]).jobs

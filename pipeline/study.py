@@ -48,7 +48,6 @@ from pipeline.app.run import run as run_jobs
 from pipeline.app.resources import STUDIES_DIR
 from pipeline.app.results import code_version, read_verified, write_csv, write_parquet, write_text
 from pipeline.analyses.search import SearchSpec, exact_drive, search
-from pipeline.workspace.compute import analysis_name
 from pipeline.analyses.survival import survival
 
 OUTPUT_DIR = Path("outputs") / "studies"
@@ -358,7 +357,7 @@ def checked_commands(name: str, extra: list[str], out_root: Path | None = None,
         job = first_actuator_job([*study.overrides, *extra], out)
         cfg, catalogue = job.cfg, job.catalogue
         if catalogue is None:  # the objectives and the search read the job's catalogue actuator
-            raise ConfigError(f"analysis={analysis_name(cfg)}: study {name} designs a catalogue "
+            raise ConfigError(f"analysis={cfg.analysis}: study {name} designs a catalogue "
                               "actuator's drive train; this analysis has no actuator (use analysis=cpr_wwa)")
         if study.search is not None:
             _check_searchable(cfg, name)
@@ -407,8 +406,8 @@ def _concurrently(names: list[str], extra: list[str], out_root: Path | None, lau
 def _check_searchable(cfg, name: str) -> None:
     """The search is exact for CPR-WWA with minimum-norm tensions (``pipeline.analyses.search``) and
     reads every job's margins: ConfigError otherwise."""
-    if analysis_name(cfg) != "cpr_wwa":
-        raise ConfigError(f"analysis={analysis_name(cfg)}: study {name} searches the drive train; "
+    if cfg.analysis != "cpr_wwa":
+        raise ConfigError(f"analysis={cfg.analysis}: study {name} searches the drive train; "
                           "only analysis=cpr_wwa has one")
     if cfg.tension.model.name != "pinv":
         raise ConfigError(f"tension.model={cfg.tension.model.name}: study {name}'s search is exact for "

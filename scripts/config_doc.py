@@ -20,6 +20,7 @@ from hydra import compose, initialize_config_dir
 from omegaconf import DictConfig, ListConfig, OmegaConf
 
 from pipeline.app import config
+from pipeline.app.problem import ANALYSES, ROBOTS
 from pipeline.app.resources import CONF_DIR
 
 OUT = Path(__file__).resolve().parent.parent / "docs" / "config.md"
@@ -122,7 +123,7 @@ def _section(title: str, schema, prefix: str, found: dict, lines: list[str]) -> 
 def page() -> str:
     found = values()
     lines = [HEADER]
-    for name, schema in config.ROBOT_SCHEMAS.items():
+    for name, schema in ((name, kind.schema) for name, kind in ROBOTS.items()):
         own = composed([f"robot={name}"])  # each robot's own values
         where = "default" if name == "cpr8" else f"robot={name}"
         _section(f"robot={name}", schema, "robot.",
@@ -143,7 +144,8 @@ def page() -> str:
               "| key | type | value | from |", "| --- | --- | --- | --- |"]
     for item in top:
         value, where = found[item.name]
-        lines.append(f"| `{item.name}` | {_type(item.type)} | `{_value(value)}` | {where} |")
+        kind = " \\| ".join(ANALYSES) if item.name == "analysis" else _type(item.type)  # a registry's names
+        lines.append(f"| `{item.name}` | {kind} | `{_value(value)}` | {where} |")
     return "\n".join(lines).rstrip("\n") + "\n"
 
 

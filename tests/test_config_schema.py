@@ -9,7 +9,8 @@ import pytest
 from omegaconf import MISSING, OmegaConf
 
 from pipeline.app import config
-from pipeline.app.config import ROBOT_SCHEMAS, Config, typed_config
+from pipeline.app.config import Config
+from pipeline.app.problem import ROBOTS, typed_config
 
 
 def schemas(root):
@@ -21,7 +22,7 @@ def schemas(root):
     return found
 
 
-@pytest.mark.parametrize("root", [Config, *ROBOT_SCHEMAS.values()], ids=lambda s: s.__name__)
+@pytest.mark.parametrize("root", [Config, *(kind.schema for kind in ROBOTS.values())], ids=lambda s: s.__name__)
 def test_no_schema_field_declares_a_value(root):
     for schema in schemas(root):
         for item in dataclasses.fields(schema):

@@ -5,7 +5,7 @@ import pytest
 
 from pipeline.workspace.criteria import REGISTRY
 from pipeline.workspace.criteria.actuator import acceleration, max_abs_sum, voltage
-from pipeline.workspace.compute import build_problem
+from pipeline.app.problem import build_problem
 from pipeline.model.dynamics import PoseDynamics
 from conftest import shaft_accel_from_acceleration, shaft_torque
 

@@ -6,7 +6,7 @@ import sys
 import pandas as pd
 import pytest
 
-from pipeline.workspace.compute import compute_workspace
+from pipeline.app.problem import compute_workspace
 
 pytestmark = pytest.mark.slow
 

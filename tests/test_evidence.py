@@ -15,7 +15,7 @@ from pipeline.analyses.evidence import FACTS, MARGIN, POINTS, evidence, scores, 
 from pipeline.app.readings import reading_name
 from pipeline.workspace.lines import simulate_lines
 from pipeline.study import checked_commands, load_study, sweep_command
-from pipeline.workspace.compute import analysis_name, compute_workspace
+from pipeline.app.problem import build_problem, compute_workspace
 
 
 def study_summary(name, make_cfg, catalogue, readings=None) -> pd.DataFrame:
@@ -35,8 +35,8 @@ def study_summary(name, make_cfg, catalogue, readings=None) -> pd.DataFrame:
             cfg = copy.deepcopy(base)
             for key, value in zip(keys, values):
                 OmegaConf.update(cfg, key, float(value) if "." in value or key.startswith("robot.") else int(value))
-            if analysis_name(cfg) == "lines":
-                summary = simulate_lines(cfg, catalogue)[2]
+            if cfg.analysis == "lines":
+                summary = simulate_lines(cfg, *build_problem(cfg, catalogue))[2]
             else:
                 summary = compute_workspace(cfg, catalogue)[1]
             rows.append({"case": case, **summary})

@@ -21,9 +21,8 @@ import pytest
 
 from conftest import job_imports
 from pipeline.workspace import fused
-from pipeline.workspace.compute import (
-    build_problem, compute_workspace, fused_pays, fused_unfit, use_fused,
-)
+from pipeline.workspace.compute import fused_unfit, use_fused
+from pipeline.app.problem import build_problem, compute_workspace, fused_pays
 from pipeline.workspace.kernel import evaluate_chunk
 from pipeline.workspace.verdict import classify
 
@@ -139,22 +138,27 @@ def test_auto_uses_the_compiled_kernel_only_where_it_applies_and_pays(make_cfg, 
     large = make_cfg("grid.n=60")
     assert use_fused(large, build_problem(large, catalogue)[0], 60 ** 3)
     jdot = make_cfg("grid.n=60", "model.jdot=true")
-    assert fused_unfit(jdot) and not use_fused(jdot, build_problem(jdot, catalogue)[0], 60 ** 3)
+    jdot_problem = build_problem(jdot, catalogue)[0]
+    assert fused_unfit(jdot_problem) and not use_fused(jdot, jdot_problem, 60 ** 3)
     for overrides in (["tension=feasible"], ["robot=irpm6", "tension=feasible"], ["output.cables=true"]):
-        assert fused_unfit(make_cfg(*overrides)), overrides
+        assert fused_unfit(build_problem(make_cfg(*overrides), catalogue)[0]), overrides
     for overrides in (["analysis=lines"], ["robot=irpm6"]):
-        assert fused_unfit(make_cfg(*overrides)) is None, overrides
+        assert fused_unfit(build_problem(make_cfg(*overrides), catalogue)[0]) is None, overrides
 
 
-def test_a_sweep_of_many_small_jobs_pays_for_the_compiled_kernel_together(make_cfg):
+def test_a_sweep_of_many_small_jobs_pays_for_the_compiled_kernel_together(make_cfg, catalogue):
     """An IRPM job (24 986 poses) alone does not pay for numba's start (about 0.12 s of numpy
     kernel against 0.4 s); four of them together do, as the main job's five 216-pose jobs
     do not, nor jobs the compiled kernels cannot evaluate."""
-    irpm = make_cfg("robot=irpm6")
+    def jobs(*overrides):
+        cfg = make_cfg(*overrides)
+        return cfg, build_problem(cfg, catalogue)[0]
+
+    irpm = jobs("robot=irpm6")
     assert not fused_pays([irpm] * 3) and fused_pays([irpm] * 4)
-    assert not fused_pays([make_cfg(f"actuator={a}") for a in range(1, 6)])
-    assert not fused_pays([make_cfg("robot=irpm6", "tension=feasible")] * 10)
-    assert not fused_pays([make_cfg("robot=irpm6", "compute.kernel=numpy")] * 10)
+    assert not fused_pays([jobs(f"actuator={a}") for a in range(1, 6)])
+    assert not fused_pays([jobs("robot=irpm6", "tension=feasible")] * 10)
+    assert not fused_pays([jobs("robot=irpm6", "compute.kernel=numpy")] * 10)
 
 
 @pytest.mark.parametrize("overrides", [

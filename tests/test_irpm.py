@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 
 from pipeline.errors import ConfigError
-from pipeline.app.config import validate
+from pipeline.app.problem import validate
 from pipeline.workspace.kernel import evaluate_chunk
-from pipeline.workspace.compute import build_problem, compute_workspace
+from pipeline.app.problem import build_problem, compute_workspace
 
 
 @pytest.fixture(scope="module")
@@ -210,7 +210,7 @@ def test_short_cables_make_everything_infeasible(irpm):
 ])
 def test_bad_irpm_values_are_named(make_cfg, catalogue, override, message):
     with pytest.raises(ConfigError) as info:
-        validate(make_cfg("robot=irpm6", override), catalogue.ids)
+        validate(make_cfg("robot=irpm6", override), catalogue)
     assert message in str(info.value)
 
 

@@ -75,7 +75,7 @@ from conftest import make_cfg
 from pipeline.model import crossings
 from pipeline.model.catalogue import load_catalogue
 from pipeline.workspace import fused_loops
-from pipeline.workspace.compute import compute_workspace
+from pipeline.app.problem import compute_workspace
 
 make, catalogue = make_cfg, load_catalogue()
 for overrides in (["compute.kernel=fused", "grid.n=4"], ["compute.kernel=fused", "grid.n=4", "orientation.psi=0.5"],

@@ -4,6 +4,7 @@ profile, line O''-F'', the power balance, and the agreement with the CPR-WWA gri
 import numpy as np
 import pytest
 
+from pipeline.app.problem import build_problem
 from pipeline.workspace.lines import simulate_lines
 from pipeline.workspace.trajectory import trapezoid
 
@@ -16,7 +17,8 @@ def lines(make_cfg, catalogue):
 
     def run(*overrides):
         if overrides not in cache:
-            cache[overrides] = simulate_lines(make_cfg("analysis=lines", *overrides), catalogue)
+            cfg = make_cfg("analysis=lines", *overrides)
+            cache[overrides] = simulate_lines(cfg, *build_problem(cfg, catalogue))
         return cache[overrides]
     return run
 

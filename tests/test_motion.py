@@ -28,7 +28,7 @@ def test_acceleration_corners_and_colon():
 
 
 def test_velocity_grid_decoupled_from_position_grid(make_cfg, catalogue):
-    from pipeline.workspace.compute import build_problem
+    from pipeline.app.problem import build_problem
 
     problem, grid = build_problem(make_cfg("grid.n=12", "grid.n_vel=6"), catalogue)
     assert grid.n_points == 12**3 and len(problem.spec.velocities) == 93
@@ -39,7 +39,8 @@ def test_velocity_grid_decoupled_from_position_grid(make_cfg, catalogue):
 def test_chunk_size_bounded_by_memory_budget(make_cfg, catalogue):
     """grid.n=40 with the velocity grid tied to it tests 41^3 candidates (33 371 kept) per pose;
     chunks shrink so one chunk's largest array stays within 4e6 floats."""
-    from pipeline.workspace.compute import CHUNK_BUDGET_FLOATS, bounded_chunk_size, build_problem
+    from pipeline.workspace.compute import CHUNK_BUDGET_FLOATS, bounded_chunk_size
+    from pipeline.app.problem import build_problem
 
     dense, _ = build_problem(make_cfg("grid.n=40"), catalogue)
     size = bounded_chunk_size(dense, 20_000)

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from pipeline.model.geometry import euler_rate_axes, rotation_matrix, rotation_partials
-from pipeline.workspace.compute import build_problem, compute_workspace
+from pipeline.app.problem import build_problem, compute_workspace
 
 
 @pytest.mark.parametrize("angles", [(0.0, 0.0, 0.0), (0.5, 0.5, 0.5), (-0.3, 1.2, 2.0)])

@@ -5,7 +5,7 @@ forces-only reading of eq. (20) that fits Table 2 alone best (docs/model.md sect
 import pytest
 
 from pipeline.analyses.paper import TABLE2_FEASIBLE_PCT
-from pipeline.workspace.compute import compute_workspace
+from pipeline.app.problem import compute_workspace
 
 PAPER = TABLE2_FEASIBLE_PCT
 OURS = {1: 216, 2: 208, 3: 184, 4: 184, 5: 0}  # feasible grid points out of 216, the default

@@ -7,7 +7,7 @@ import pytest
 
 from pipeline.model.dynamics import PoseDynamics
 from conftest import shaft_accel_from_acceleration, shaft_torque, wrenches
-from pipeline.workspace.compute import build_problem, compute_workspace
+from pipeline.app.problem import build_problem, compute_workspace
 
 
 def _dyn(make_cfg, catalogue, *overrides):

@@ -91,7 +91,7 @@ def test_jobs_derived_from_one_composition_equal_each_job_typed_on_its_own(argv,
     from hydra import compose, initialize_config_dir
     from omegaconf import OmegaConf
 
-    from pipeline.app.config import typed_config
+    from pipeline.app.problem import typed_config
     from pipeline.app.resources import CONF_DIR
 
     folder = tmp_path / "robot"  # the user's own robot, every value in its file

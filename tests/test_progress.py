@@ -8,7 +8,8 @@ import pytest
 from pipeline.app.plan import plan
 from pipeline.workspace import fused, parallel
 from pipeline.workspace.progress import Progress, clock_text
-from pipeline.workspace.compute import announce_cost, build_problem, compute_workspace, estimated_seconds
+from pipeline.workspace.compute import announce_cost, estimated_seconds
+from pipeline.app.problem import build_problem, compute_workspace
 
 
 class Clock:

@@ -8,7 +8,7 @@ withholds the 0.5 rad value.
 
 import pytest
 
-from pipeline.workspace.compute import compute_workspace
+from pipeline.app.problem import compute_workspace
 
 ROTATED = ("orientation.psi=0.5", "orientation.theta=0.5", "orientation.phi=0.5")
 READINGS = {

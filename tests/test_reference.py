@@ -5,7 +5,7 @@ import pytest
 
 from pipeline.workspace.kernel import evaluate_chunk
 from pipeline.workspace.reference import literal_margins
-from pipeline.workspace.compute import build_problem
+from pipeline.app.problem import build_problem
 
 pytestmark = pytest.mark.slow  # the literal loop takes about 2 s per case
 

@@ -7,7 +7,7 @@ from omegaconf import OmegaConf
 
 from pipeline.workspace.criteria import DYNAMICS, GATES, REGISTRY, STATICS
 from pipeline.workspace.verdict import classify
-from pipeline.workspace.compute import build_problem, compute_workspace
+from pipeline.app.problem import build_problem, compute_workspace
 
 SMALL_POINTS = ["robot=points",  # six cables: the fewest a wrench with moments needs
                 "robot.anchors=[[-1,-1,2],[1,-1,2],[1,1,2],[-1,1,2],[0,-1.5,2],[0,1.5,2]]",
@@ -67,17 +67,17 @@ def test_fewer_cables_than_the_analysis_balances_are_refused(make_cfg, catalogue
     """Four cables to a point: the statics' six wrench rows would make every pose singular;
     CPR-WWA balances forces only there (its moment rows vanish at a point platform, whatever
     model.pinv_columns says). Four cables to a platform with moment arms cannot balance six."""
-    from pipeline.app.config import validate
+    from pipeline.app.problem import validate
     from pipeline.errors import ConfigError
 
     four = ["robot=points", "robot.anchors=[[-1,-1,2],[1,-1,2],[1,1,2],[-1,1,2]]",
             "robot.attachments=[[0,0,0],[0,0,0],[0,0,0],[0,0,0]]", "robot.search.lo=[-0.5,-0.5,0.5]",
             "robot.search.hi=[0.5,0.5,1.5]", "robot.search.step=0.25", f"analysis={analysis}", *extra]
     if needs == 3:
-        validate(make_cfg(*four), catalogue.ids)
+        validate(make_cfg(*four), catalogue)
         return
     with pytest.raises(ConfigError, match=f"robot: 4 cables; analysis={analysis} .* needs >= 6 cables"):
-        validate(make_cfg(*four), catalogue.ids)
+        validate(make_cfg(*four), catalogue)
 
 
 def test_a_point_platform_gets_the_same_verdicts_with_and_without_moment_rows(make_cfg, catalogue):
@@ -107,3 +107,28 @@ def test_an_unknown_tension_option_is_refused_before_anything_runs():
 
     with pytest.raises(ConfigError, match="tension=lp"):
         plan(["-m", "tension=pinv,lp"])
+
+
+def test_a_job_builds_its_robot_once_from_its_kind_and_runs_that_problem(tmp_path, monkeypatch):
+    """The plan validates each job by building its problem (``problem.validate``); the job
+    runs that problem: one robot built per job, none by the run, and an unknown analysis
+    named by a robot file is refused in one line."""
+    from dataclasses import replace
+
+    from pipeline.app import problem as kinds
+    from pipeline.app.job import execute
+    from pipeline.app.plan import plan
+    from pipeline.errors import ConfigError
+
+    built = []
+    cpr8 = kinds.ROBOTS["cpr8"]
+    monkeypatch.setitem(kinds.ROBOTS, "cpr8", replace(cpr8, build=lambda rc: built.append(1) or cpr8.build(rc)))
+    jobs = plan(["-m", "actuator=1,2", f"hydra.sweep.dir={tmp_path}"]).jobs
+    assert len(built) == 2 and [job.problem.limits.described()["actuator_name"] for job in jobs] == [
+        row["name"] for row in jobs[0].catalogue.rows[:2]]
+    summaries = [execute(job) for job in jobs]
+    assert len(built) == 2 and [s["n_feasible"] for s in summaries] == [216, 208]  # Table 2: 100, 96.30 %
+    (tmp_path / "conf" / "robot").mkdir(parents=True)
+    (tmp_path / "conf" / "robot" / "odd.yaml").write_text("# @package _global_\ndefaults: [cpr8, _self_]\nanalysis: dynamics\n")
+    with pytest.raises(ConfigError, match=r"^analysis=dynamics: unknown analysis \(cpr_wwa, statics, lines\)$"):
+        plan(["--config-dir", str(tmp_path / "conf"), "robot=odd"])

@@ -18,7 +18,7 @@ from pipeline.analyses.views import write_view
 from pipeline.app.results import DIGESTS_KEY, digests_json, write_parquet
 from pipeline.workspace.lines import simulate_lines
 from pipeline.study import available
-from pipeline.workspace.compute import compute_workspace
+from pipeline.app.problem import build_problem, compute_workspace
 
 STUDIES = ["actuator_choice", "actuator_choice_pulling", "line_simulation", "irpm_fig13_end_ratio",
            "tension_comparison", "evidence_cpr8", "evidence_irpm"]
@@ -56,8 +56,9 @@ def built_studies(tmp_path_factory, make_cfg, catalogue):
                             for a in range(1, 6)])
     save(pulling, root / "actuator_choice_pulling" / "summary.parquet")
     save(choose(pulling), root / "actuator_choice_pulling" / "choice.parquet")
-    lines = pd.DataFrame([simulate_lines(make_cfg("analysis=lines", f"actuator={a}"), catalogue)[2]
-                          for a in (1, 2)]).assign(case="zero", case_label="zero orientation")
+    configs = [make_cfg("analysis=lines", f"actuator={a}") for a in (1, 2)]
+    lines = pd.DataFrame([simulate_lines(cfg, *build_problem(cfg, catalogue))[2] for cfg in configs])
+    lines = lines.assign(case="zero", case_label="zero orientation")
     save(lines, root / "line_simulation" / "summary.parquet")
     irpm = pd.DataFrame([compute_workspace(make_cfg("robot=irpm6", "tension.t_max=null", f"robot.r_end={r}",
                                                     f"robot.gamma_deg={g}"), catalogue)[1]

@@ -10,7 +10,7 @@ import yaml
 from hydra import compose, initialize_config_dir
 from omegaconf import OmegaConf
 
-from pipeline.app.config import validate
+from pipeline.app.problem import validate
 from pipeline.app.plan import parse, plan, sweep_jobs
 from pipeline.app.resources import CONF_DIR
 
@@ -75,7 +75,7 @@ def test_planned_configs_are_those_a_job_would_type_itself():
         for job, overrides in zip(planned, jobs):
             composed = compose(config_name="config", overrides=overrides)
             assert OmegaConf.to_yaml(job.config) == OmegaConf.to_yaml(composed)
-            assert OmegaConf.to_yaml(job.cfg) == OmegaConf.to_yaml(validate(composed, job.catalogue.ids))
+            assert OmegaConf.to_yaml(job.cfg) == OmegaConf.to_yaml(validate(composed, job.catalogue)[0])
 
 
 def test_job_folder_settings_are_honoured_as_by_the_basic_launcher(tmp_path):

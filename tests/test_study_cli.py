@@ -49,14 +49,13 @@ def test_figures_are_drawn_from_the_parquet_results(choice_run, monkeypatch):
     """Block the kernel, redraw from Parquet: identical bytes; the summary rewritten by the
     project's writer: the figure follows; edited by another tool (no digest of its new rows) or
     a job file changed: refused in one line, the figures kept."""
-    import pipeline.workspace.kernel
     import pipeline.workspace.compute
 
     def blocked(*args, **kwargs):
         raise AssertionError("figures must not recompute the workspace")
 
-    monkeypatch.setattr(pipeline.workspace.kernel, "evaluate_chunk", blocked)
-    monkeypatch.setattr(pipeline.workspace.compute, "compute_workspace", blocked)
+    # the name every workspace computation calls its kernel by (grid_workspace's own binding)
+    monkeypatch.setattr(pipeline.workspace.compute, "evaluate_chunk", blocked)
     figures = choice_run / "figures"
     before = {p.name: p.read_bytes() for p in figures.iterdir()}
     out_root = choice_run.parent

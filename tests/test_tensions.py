@@ -19,7 +19,7 @@ from pipeline.model.geometry import CableRobot
 from pipeline.workspace.kernel import WorkspaceProblem, evaluate_chunk
 from pipeline.workspace.verdict import classify
 from pipeline.model.tensions import TensionSpec, feasible_tensions
-from pipeline.workspace.compute import build_problem, compute_workspace
+from pipeline.app.problem import build_problem, compute_workspace
 
 FORCES = "model.pinv_columns=translational"  # forces only: the paper's reading of eq. (20) for Table 2
 
@@ -172,8 +172,8 @@ def test_zero_orientation_with_moment_rows_is_unreachable_as_the_rank_5_jacobian
 def test_lines_use_the_lp_torques_and_agree_with_the_grid(make_cfg, catalogue):
     from pipeline.workspace.lines import simulate_lines
 
-    samples, points, summary = simulate_lines(make_cfg("analysis=lines", "tension.model=feasible", FORCES),
-                                              catalogue)
+    cfg = make_cfg("analysis=lines", "tension.model=feasible", FORCES)
+    samples, points, summary = simulate_lines(cfg, *build_problem(cfg, catalogue))
     assert summary["n_feasible_grid"] == 144 and summary["agreement_pct"] == pytest.approx(100.0)
     ok = samples[samples["margin_slack"] >= 0]
     torques = ok[[f"torque_{i}" for i in range(1, 9)]].to_numpy()

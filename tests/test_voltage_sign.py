@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from pipeline.model.geometry import rotation_matrix
-from pipeline.workspace.compute import build_problem
+from pipeline.app.problem import build_problem
 from pipeline.model.actuators import actuator_families
 from pipeline.workspace.kernel import evaluate_chunk
 from pipeline.workspace.trajectory import inverse_dynamics

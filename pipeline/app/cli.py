@@ -32,7 +32,7 @@ def main(cfg: DictConfig) -> dict:
     from hydra.core.hydra_config import HydraConfig
     from hydra.types import RunMode
 
-    from pipeline.app.config import validate
+    from pipeline.app.problem import validate
     from pipeline.app.job import execute, log
     from pipeline.app.plan import Job
     from pipeline.model.catalogue import load_catalogue
@@ -40,9 +40,9 @@ def main(cfg: DictConfig) -> dict:
     hydra_cfg = HydraConfig.get()
     try:
         catalogue = load_catalogue(cfg.catalogue) if "catalogue" in cfg else None
-        typed = validate(cfg, None if catalogue is None else catalogue.ids)
+        typed, problem = validate(cfg, catalogue)
         summary = execute(Job(None, tuple(hydra_cfg.overrides.task), Path(hydra_cfg.runtime.output_dir),
-                              typed, catalogue, cfg, ()))
+                              typed, catalogue, problem, cfg, ()))
     except ConfigError as exc:
         print(f"error: {exc}", file=sys.stderr)
         raise SystemExit(2) from None

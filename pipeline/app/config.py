@@ -1,19 +1,19 @@
-"""Structured configuration (Hydra + OmegaConf dataclasses) and its semantic validation.
+"""Structured configuration: the keys of every config group, their types and value rules.
 
 The dataclasses give every key a type and its value rules, and no value: every default lives
 once, in the YAML files of ``conf/`` (``conf/config.yaml`` and its groups), which are what a
 user reads, overrides and DVC tracks as parameters (``tests/test_config_schema.py`` checks that
 no field declares a default and that every declared key of each robot x analysis x tension
-combination gets one). A wrong key or a non-numeric value fails while the config is typed;
-:func:`validate` then checks values against the physics (positive masses, a carrier that fits
-in its frame, a catalogue id that exists) and raises :class:`ConfigError` naming the offending
-key and value.
+combination gets one). A wrong key or a non-numeric value fails while the config is typed
+(:func:`pipeline.app.problem.typed_config`); :func:`check_values` then applies the declared
+rules (positive masses, a carrier that fits in its frame) and raises :class:`ConfigError`
+naming the offending key and value. ``pipeline.app.problem`` names the robot and analysis
+kinds and builds the problem.
 """
 
 from __future__ import annotations
 
 import functools
-import importlib.util
 from dataclasses import dataclass, field, fields, is_dataclass
 from enum import Enum
 from typing import Any, Optional
@@ -143,15 +143,6 @@ class TensionModel(Enum):
 
     pinv = "pinv"
     feasible = "feasible"
-
-
-class Analysis(Enum):
-    """Which workspace: CPR-WWA (dynamics, actuator limits), statics (wrench, tensions), or the
-    straight-line simulation experiments compared with CPR-WWA (``pipeline.workspace.lines``)."""
-
-    cpr_wwa = "cpr_wwa"
-    statics = "statics"
-    lines = "lines"
 
 
 class Spacing(Enum):
@@ -454,11 +445,11 @@ class Config:
     null = Table 1 of the CPR-8 paper, shipped in pipeline/data), ``poses`` (a list of [x, y, z]
     positions in m checked instead of the robot's grid, e.g. ``poses=[[0,0,5]]``; null = the
     grid; the summary's volume_m3 is then NaN). A job has the keys of conf/config.yaml plus
-    those of its tension, analysis and robot files, and only those (:func:`typed_config` checks
-    them against this schema)."""
+    those of its tension, analysis and robot files, and only those (checked against this schema
+    by ``pipeline.app.problem.typed_config``; the robot and analysis kinds are named there)."""
 
     robot: Any = MISSING
-    analysis: Analysis = MISSING
+    analysis: str = MISSING
     actuator: int = MISSING
     catalogue: Optional[str] = MISSING
     orientation: OrientationConfig = field(default_factory=OrientationConfig)
@@ -479,7 +470,7 @@ class Config:
 
 def register() -> None:
     """The resolver of sweep job folder names. The YAML files in conf/ are composed untyped; the
-    schemas here type and check the result (:func:`typed_config`)."""
+    schemas here type and check the result (:func:`pipeline.app.problem.typed_config`)."""
     OmegaConf.register_new_resolver("cdpr.jobdir", job_dir_name, replace=True)
 
 
@@ -503,31 +494,7 @@ def unknown_keys(node: DictConfig, schema, prefix: str = "") -> None:
             unknown_keys(node[key], type(default), f"{prefix}{key}.")
 
 
-def typed_config(cfg: DictConfig) -> DictConfig:
-    """The composed config with every value of its declared type (numbers, enums, lists), keeping
-    only the keys it has: a statics job has no ``actuator``, so its summary has none either.
-    An undeclared key (also one added with ``+``) or a value of the wrong type: ConfigError."""
-    return masked(typed_schema(cfg), cfg)
-
-
-def typed_schema(cfg: DictConfig) -> DictConfig:
-    """``cfg`` merged into the typed schema (every declared key, typed nodes that check any
-    later assignment); :func:`masked` keeps the keys ``cfg`` has."""
-    unknown_keys(cfg, Config)
-    robot = cfg.get("robot")
-    if not isinstance(robot, DictConfig) or "name" not in robot:
-        raise ConfigError("robot: the robot file gives no robot keys (an empty file, or not a mapping of "
-                          "keys): start your own with 'defaults: [points, _self_]'")
-    name = robot.get("name")
-    if name not in ROBOT_SCHEMAS:
-        raise ConfigError(f"robot.name={name}: unknown robot ({', '.join(ROBOT_SCHEMAS)})")
-    unknown_keys(cfg.robot, ROBOT_SCHEMAS[name], "robot.")
-    full = _merged(Config, cfg, "")
-    full.robot = _merged(ROBOT_SCHEMAS[name], cfg.robot, "robot.")
-    return full
-
-
-def _merged(schema, node: DictConfig, prefix: str) -> DictConfig:
+def merged(schema, node: DictConfig, prefix: str) -> DictConfig:
     """``node`` merged into ``schema``'s typed defaults; a value of the wrong type is a
     ConfigError naming the key and the value."""
     try:
@@ -560,44 +527,6 @@ def _masked(full: DictConfig, present: DictConfig) -> dict:
     return OmegaConf.create(kept)
 
 
-def validate(cfg: DictConfig, catalogue_ids=None, typed: bool = False) -> DictConfig:
-    """The typed config (:func:`typed_config`; ``typed``: ``cfg`` already is), or ConfigError on
-    the first value the model cannot use: '<key>=<value>: <rule>'. First every field's declared
-    rule (:func:`check_values`), then the rules that join several groups. ``catalogue_ids``:
-    the ids an ``actuator`` may take."""
-    from pipeline.workspace.compute import build_robot
-
-    cfg = cfg if typed else typed_config(cfg)
-    check_values(cfg, Config)
-    check_values(cfg.robot, ROBOT_SCHEMAS[cfg.robot.name], "robot.")
-    robot = build_robot(cfg)  # a points robot checks its points as it is built
-    if "moment_arm" in cfg.model and cfg.model.moment_arm.name == "base" and cfg.load.mass > 0:
-        raise ConfigError(f"model.moment_arm=base: moments about the base are only read for a "
-                          f"massless platform (load.mass={cfg.load.mass}); set load.mass=0 and put "
-                          "the weight in wrench.*")
-    if cfg.output.cables and not cfg.output.points:
-        raise ConfigError("output.cables=true: the cables go into points.parquet, which "
-                          "output.points=false does not write")
-    if cfg.compute.kernel is Kernel.fused:
-        from pipeline.workspace.compute import fused_unfit
-
-        unfit = fused_unfit(cfg)
-        if unfit:
-            raise ConfigError(f"compute.kernel=fused: {unfit}; use compute.kernel=auto or numpy")
-    if cfg.compute.backend == "dask" and importlib.util.find_spec("distributed") is None:
-        raise ConfigError("compute.backend=dask: needs Dask, pip install 'cdpr-studies[dask]'")
-    if "actuator" in cfg and cfg.actuator not in set(catalogue_ids):
-        ids = ", ".join(str(i) for i in sorted(catalogue_ids))
-        raise ConfigError(f"actuator={cfg.actuator}: no such id in the catalogue (ids: {ids})")
-    _validate_tension(cfg, robot)
-    if cfg.poses is not None:
-        from pipeline.model.robots import point_list
-
-        point_list("poses", cfg.poses)
-    _validate_size(cfg)
-    return cfg
-
-
 def check_values(node: DictConfig, schema, prefix: str = "") -> None:
     """Apply the rules ``schema`` declares (``rule`` fields, ``check_fields``) to the keys
     ``node`` has, nested schemas first: ConfigError '<key>=<value>: <rule>' on the first
@@ -613,90 +542,12 @@ def check_values(node: DictConfig, schema, prefix: str = "") -> None:
         elif value is not None and "check" in declared.metadata:
             broken = declared.metadata["check"](value)
             if broken:
-                raise ConfigError(f"{prefix}{declared.name}={_shown(value)}: {broken}")
+                raise ConfigError(f"{prefix}{declared.name}={shown(value)}: {broken}")
     if hasattr(schema, "check_fields"):
         schema.check_fields(node)
 
 
-MAX_VELOCITY_CANDIDATES = 10_000_000  # (n_vel + 1)^3 grid velocities of eq. (23), built in memory
-
-
-def _validate_size(cfg: DictConfig) -> None:
-    """Refuse, before any work, a job larger than ``compute.max_poses`` pose x orientation
-    evaluations or a velocity grid that would not fit in memory, naming the key to change."""
-    from pipeline.workspace.compute import grid_size, orientation_count
-
-    n_vel = cfg.get("grid", {}).get("n_vel")
-    if n_vel is not None and (n_vel + 1) ** 3 > MAX_VELOCITY_CANDIDATES:
-        limit = round(MAX_VELOCITY_CANDIDATES ** (1 / 3)) - 1
-        raise ConfigError(f"grid.n_vel={n_vel}: the velocity grid would have {(n_vel + 1) ** 3:.3g} "
-                          f"candidates; at most grid.n_vel={limit}")
-    poses = grid_size(cfg)
-    if poses == 0:  # a cell of side step larger than the box: no centre inside it
-        search = cfg.robot.search
-        raise ConfigError(f"robot.search.step={search.step}: no grid point in the search box (cells of that side "
-                          f"do not fit between lo={list(search.lo)} and hi={list(search.hi)}); use a smaller "
-                          "step or spacing: faces")
-    orientations = orientation_count(cfg.orientation)
-    if poses * orientations > cfg.compute.max_poses:
-        raise ConfigError(
-            f"compute.max_poses={cfg.compute.max_poses}: this job has {poses:.3g} poses x "
-            f"{orientations:.3g} orientations = {poses * orientations:.3g} evaluations; use a "
-            "coarser grid (grid.n, robot.search.step), fewer orientation.total.n, or raise "
-            "compute.max_poses knowingly")
-
-
-def _validate_tension(cfg: DictConfig, robot) -> None:
-    """Enough cables for the wrench rows the analysis balances: CPR-WWA's moment rows
-    (``pinv_columns=full``) vanish for a point platform (every attachment at its reference
-    point), the statics' do not (its gram ratio would make every pose singular)."""
-    from pipeline.workspace.compute import analysis_name, cable_rating
-
-    tension, n_cables = cfg.tension, robot.n_cables
-    forces_only = "pinv_columns" in cfg.model and (
-        cfg.model.pinv_columns.name == "translational" or not robot.attachments.any())
-    rows = 3 if forces_only else 6
-    if n_cables < rows:
-        what = "forces" if rows == 3 else "forces and moments"
-        hint = "; model.pinv_columns=translational balances forces only" if "pinv_columns" in cfg.model else ""
-        raise ConfigError(f"robot: {n_cables} cables; analysis={analysis_name(cfg)} balances {what} "
-                          f"({rows} rows of the structure matrix) and needs >= {rows} cables{hint}")
-    t_min = _limit_values("tension.t_min", tension.t_min, n_cables)
-    if not (t_min >= 0).all():
-        raise ConfigError(f"tension.t_min={_shown(tension.t_min)}: must be >= 0 (a cable cannot push)")
-    rating = cable_rating(cfg)
-    key = "limits.s_max" if cfg.limits.s_max is not None else "tension.t_max"
-    if rating is not None and not (t_min < _limit_values(key, rating, n_cables)).all():
-        raise ConfigError(f"{key}={_shown(rating)}: must be > tension.t_min={_shown(tension.t_min)}")
-    if tension.model.name == "pinv" and (t_min != 0).any() and analysis_name(cfg) != "statics":
-        raise ConfigError(f"tension.t_min={_shown(tension.t_min)}: the pinv model checks the papers' "
-                          "minimum-norm torques, which may push; set tension.model=feasible")
-
-
-def _limit_values(key: str, value, n_cables: int):
-    """A tension limit as an (m,) array: one finite number for every cable, or one per cable."""
-    import numpy as np
-
-    items = [value] if isinstance(value, (int, float)) and not isinstance(value, bool) else value
-    try:
-        items = list(items)
-    except TypeError:
-        items = None
-    if items is None or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in items):
-        raise ConfigError(f"{key}={_shown(value)}: must be a number (N) or a list of one per cable")
-    if len(items) not in (1, n_cables):
-        raise ConfigError(f"{key}={_shown(value)}: {len(items)} values for {n_cables} cables")
-    values = np.broadcast_to(np.asarray(items, dtype=float), (n_cables,))
-    if not np.isfinite(values).all():
-        raise ConfigError(f"{key}={_shown(value)}: must be finite (null: no limit)")
-    if (np.abs(values) > MAX_FORCE).any():
-        raise ConfigError(f"{key}={_shown(value)}: must be at most {MAX_FORCE:g} N")
-    return values
-
-
-def _shown(value):
+def shown(value):
     return OmegaConf.to_container(value) if isinstance(value, ListConfig) else value
 
 
-# The robots a config can name: keys, types and value rules (pipeline.workspace.compute.ROBOTS builds them).
-ROBOT_SCHEMAS = {"cpr8": Cpr8Config, "irpm6": Irpm6Config, "points": PointsConfig}

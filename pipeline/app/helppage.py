@@ -12,7 +12,8 @@ from dataclasses import fields, is_dataclass
 
 from omegaconf import DictConfig, OmegaConf
 
-from pipeline.app.config import ROBOT_SCHEMAS, Config
+from pipeline.app.config import Config
+from pipeline.app.problem import ROBOTS
 from pipeline.app.resources import CONF_DIR
 
 GROUPS = ("robot", "analysis", "tension")
@@ -42,7 +43,7 @@ def page(overrides: list[str], typed: DictConfig, version: str) -> str:
     lines += _section("job", OmegaConf.create({k: typed[k] for k in plain}), Config, prefix="")
     for name in typed:
         if name not in plain:
-            schema = ROBOT_SCHEMAS[typed.robot.name] if name == "robot" else _field_schema(Config, name)
+            schema = ROBOTS[typed.robot.name].schema if name == "robot" else _field_schema(Config, name)
             lines += _section(name, typed[name], schema)
     lines += ["", "docs: docs/config.md (every key with its type and value), docs/model.md (the readings), "
               "docs/api.md (Python)."]

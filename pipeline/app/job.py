@@ -31,7 +31,9 @@ from pipeline.app.results import (
     read_metadata, read_verified, write_parquet,
 )
 from pipeline.workspace.arrow import one_row
-from pipeline.workspace.compute import analysis_name, compute_workspace
+from pipeline.app.problem import build_grid
+from pipeline.workspace.compute import grid_workspace
+from pipeline.workspace.kernel import WorkspaceProblem
 
 log = logging.getLogger("pipeline")
 TENSION_MODELS = {  # what each tension model checks, for the job's log
@@ -48,7 +50,7 @@ def execute(job: Job) -> dict:
     try:
         out.mkdir(parents=True, exist_ok=True)
         with folder_lock(out):
-            return _run_locked(job.cfg, job.catalogue, out, job.fused)
+            return _run_locked(job.cfg, job.problem, out, job.fused)
     except OSError as exc:
         raise ConfigError(f"cannot write {exc.filename or out}: {exc.strerror or exc}") from None
 
@@ -69,7 +71,7 @@ def folder_lock(out: Path, busy: str = "another run is writing this folder; wait
             fcntl.flock(handle, fcntl.LOCK_UN)
 
 
-def _run_locked(cfg: DictConfig, catalogue, out: Path, sweep_pays: bool) -> dict:
+def _run_locked(cfg: DictConfig, problem: WorkspaceProblem, out: Path, sweep_pays: bool) -> dict:
     config_yaml = to_yaml(cfg, resolve=True)
     done = finished_summary(out, config_yaml)
     if done is not None:
@@ -77,10 +79,11 @@ def _run_locked(cfg: DictConfig, catalogue, out: Path, sweep_pays: bool) -> dict
         return done
     log.info("reading: %s (docs/model.md, sections 4-5)", describe_reading(cfg.model))
     log.info("tension model: %s (%s)", cfg.tension.model.value, TENSION_MODELS[cfg.tension.model.value])
-    if analysis_name(cfg) == "lines":
+    grid = build_grid(cfg, problem.robot)
+    if cfg.analysis == "lines":
         from pipeline.workspace.lines import simulate_lines  # pandas: only this analysis needs it
 
-        samples, points, summary = simulate_lines(cfg, catalogue)
+        samples, points, summary = simulate_lines(cfg, problem, grid)
         if cfg.lines.samples.name == "first":  # the verdicts of every line are in points.parquet
             samples = samples[samples["line"] == 0].reset_index(drop=True)
         write_parquet(samples, out / "samples.parquet", config_yaml)
@@ -93,10 +96,10 @@ def _run_locked(cfg: DictConfig, catalogue, out: Path, sweep_pays: bool) -> dict
             written.append(out / "points.parquet")
     elif cfg.output.points:  # streamed chunk by chunk: memory bounded by a chunk, not by the grid
         with ParquetSink(out / "points.parquet", config_yaml) as sink:
-            _, summary = compute_workspace(cfg, catalogue, sink.write, sweep_pays)
+            _, summary = grid_workspace(cfg, problem, grid, sink.write, sweep_pays)
         written = [out / "points.parquet"]
     else:  # the summary only: each chunk's rows are counted, then dropped
-        _, summary = compute_workspace(cfg, catalogue, lambda chunk: None, sweep_pays)
+        _, summary = grid_workspace(cfg, problem, grid, lambda chunk: None, sweep_pays)
         written = []
     write_parquet(one_row(summary), out / "summary.parquet", config_yaml,
                   {DIGESTS_KEY: digests_json(written)})

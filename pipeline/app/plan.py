@@ -7,7 +7,7 @@ overrides, ``--config-dir``) is composed once through Hydra's compose API
 with Hydra's override parser: the cartesian product of every override's values, in command
 order. Each job's plain ``key=value`` overrides are applied to a copy of its composition with
 the typed merge Hydra's config loader uses (the dataclass schema rejects a bad key or type), the
-job is validated (:func:`pipeline.app.config.validate`) and its folder named by Hydra's rules
+job is validated and its problem built (:func:`pipeline.app.problem.validate`) and its folder named by Hydra's rules
 (``hydra.run.dir``, or ``hydra.sweep.dir``/``hydra.sweep.subdir`` with Hydra's
 ``override_dirname``). The first problem is a ConfigError with one line naming the key and
 value: nothing is written.
@@ -35,11 +35,13 @@ from hydra.errors import MissingConfigException
 from omegaconf import DictConfig, ListConfig, OmegaConf, open_dict, read_write
 from omegaconf.errors import ConfigAttributeError, ConfigKeyError, MissingMandatoryValue
 
-from pipeline.app.config import masked, register, typed_schema, validate
+from pipeline.app.config import masked, register
+from pipeline.app.problem import fused_pays, grid_size, typed_schema, validate
 from pipeline.app.resources import CONF_DIR
 from pipeline.app.yamltext import to_yaml
 from pipeline.errors import ConfigError, one_line
 from pipeline.model.catalogue import Catalogue, load_catalogue
+from pipeline.workspace.kernel import WorkspaceProblem
 
 # Hydra's flags that launch no job (Hydra answers them), and those that take a value
 NO_JOB_FLAGS = {"--help", "-h", "--hydra-help", "--info", "-i", "--cfg", "-c", "--version",
@@ -59,9 +61,10 @@ class Job:
     folder: Path
     cfg: DictConfig  # typed and validated
     catalogue: Catalogue | None  # None for an analysis without actuators
+    problem: WorkspaceProblem  # built from cfg by its robot and analysis kinds, once
     config: DictConfig  # as Hydra composes it, without Hydra's node (.hydra/config.yaml)
     files: tuple[str, ...]  # the key of its composition in the plan
-    fused: bool = False  # its sweep pays, as a whole, for the compiled kernels (compute.fused_pays)
+    fused: bool = False  # its sweep pays, as a whole, for the compiled kernels (problem.fused_pays)
 
 
 @dataclass
@@ -162,15 +165,14 @@ def plan(argv: list[str], reuse: Reuse | None = None) -> Plan | None:
                 if cfg.catalogue not in reuse.catalogues:
                     reuse.catalogues[cfg.catalogue] = load_catalogue(cfg.catalogue)
                 catalogue = reuse.catalogues[cfg.catalogue]
-            validate(cfg, None if catalogue is None else catalogue.ids, typed=True)
+            _, problem = validate(cfg, catalogue, typed=True)
             folder = composed.folder(job_parsed, parsed, number if multirun else None, sweep_dir)
             folders.append(folder)
-            planned.append(Job(number if multirun else None, tuple(job), folder, cfg, catalogue, config, files))
+            planned.append(Job(number if multirun else None, tuple(job), folder, cfg, catalogue, problem,
+                               config, files))
     _check_output_folders(folders, planned[0].cfg, len(planned))
     if len(planned) > 1:
-        from pipeline.workspace.compute import fused_pays
-
-        if fused_pays(job.cfg for job in planned):
+        if fused_pays((job.cfg, job.problem) for job in planned):
             planned = [Job(**{**job.__dict__, "fused": True}) for job in planned]
     gather = "sweep_summary" in (OmegaConf.select(hydra, "hydra.callbacks") or {})
     return Plan(planned, multirun, sweep_dir, 1 if by_hydra else hydra.hydra.launcher.n_jobs, tuple(overrides),
@@ -293,7 +295,7 @@ class Copies:
 
 class Composition:
     """One set of config files, composed once by Hydra: the config with Hydra's node, the job
-    config without it, and its typed version (:func:`pipeline.app.config.typed_schema`, every
+    config without it, and its typed version (:func:`pipeline.app.problem.typed_schema`, every
     declared key), from which each job is made by its plain overrides (:meth:`job`)."""
 
     def __init__(self, composed: DictConfig) -> None:
@@ -428,8 +430,6 @@ def _check_output_folders(folders: list[Path], first: DictConfig, n_jobs: int) -
     """The jobs' folders can be made and written and their disk has room: a path through a
     file, a folder name over 255 bytes, a read-only place or a full disk is one line naming the
     path, before anything is written. ``first``: the first job's valid config."""
-    from pipeline.workspace.compute import grid_size
-
     for folder in folders:
         _writable(folder)
     needed = n_jobs * (BYTES_PER_JOB + BYTES_PER_POSE * grid_size(first))  # a sweep varies values, not grids

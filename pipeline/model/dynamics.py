@@ -75,6 +75,14 @@ class MotionSpec:
         """Largest per-pose, per-cable set a criterion holds in memory."""
         return max(len(self.velocities), len(self.accelerations))
 
+    def fused_unfit(self) -> str | None:
+        """Why the compiled CPR-WWA kernel (``pipeline.workspace.fused``) cannot evaluate this
+        spec, None when it can: the minimum-norm model without J-dot (the extreme velocities, a
+        product acceleration set, both readings of eqs. 27-29)."""
+        if self.tension.model != "pinv":
+            return "it evaluates tension.model=pinv only"
+        return "it evaluates model.jdot=false only" if self.jdot else None
+
 
 class PoseDynamics(PoseGeometry):
     """Lazily evaluated CPR-WWA quantities (eqs. 18-22) for a chunk of poses."""

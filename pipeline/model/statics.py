@@ -51,6 +51,10 @@ class StaticsSpec:
     def set_size(self) -> int:
         return 1
 
+    def fused_unfit(self) -> str | None:
+        """Why the compiled statics kernel cannot evaluate this spec, None when it can."""
+        return None if self.tension.model == "pinv" else "it evaluates tension.model=pinv only"
+
 
 @dataclass(frozen=True)
 class StaticLimits:

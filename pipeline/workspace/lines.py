@@ -16,20 +16,21 @@ import numpy as np
 import pandas as pd
 from omegaconf import DictConfig
 
-from pipeline.model.catalogue import Catalogue
+from pipeline.workspace.grid import Grid
+from pipeline.workspace.kernel import WorkspaceProblem
 from pipeline.workspace.trajectory import inverse_dynamics, sample_margins, trapezoid
 from pipeline.workspace.verdict import classify
-from pipeline.workspace.compute import build_problem, grid_workspace
+from pipeline.workspace.compute import grid_workspace
 
 QUANTITIES = ("theta_dot", "torque", "voltage")
 DT = 0.01  # s, time step of the simulated lines
 
 
-def simulate_lines(cfg: DictConfig, catalogue: Catalogue) -> tuple[pd.DataFrame, pd.DataFrame, dict]:
+def simulate_lines(cfg: DictConfig, problem: WorkspaceProblem, grid: Grid) -> tuple[pd.DataFrame, pd.DataFrame, dict]:
     """(samples, points, summary): every line sample, the grid points with both verdicts, and
     the CPR-WWA summary extended with the simulated count, the agreement and, per criterion,
-    the smallest margin along line O''-F'' (``line0_margin_*``: Fig. 6's verdict per limit)."""
-    problem, grid = build_problem(cfg, catalogue)
+    the smallest margin along line O''-F'' (``line0_margin_*``: Fig. 6's verdict per limit);
+    ``problem`` and ``grid``: CPR-WWA's (``pipeline.app.problem.build_problem``)."""
     points, summary = grid_workspace(cfg, problem, grid)
     lines = _lines(grid.positions)
     parts = []

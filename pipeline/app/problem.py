@@ -1,0 +1,371 @@
+"""The config builds the problem: one registry per kind, and the one place where a typed config
+becomes domain objects.
+
+A robot kind (:data:`ROBOTS`, named by ``robot.name``) is its keys (a schema of
+:mod:`pipeline.app.config`), the robot they place (``pipeline.model.robots``), its position grid
+and that grid's size counted without building it. An analysis kind (:data:`ANALYSES`, named by
+``analysis``) builds the per-chunk spec, the limits and the criteria of its workspace, and
+refuses what it cannot mean:
+
+- ``cpr_wwa``: CPR-WWA of Filipovic & Kevac (2018), dynamics over the velocity and acceleration
+  sets against the limits of a catalogue actuator (eqs. 19-34);
+- ``statics``: static equilibrium under the applied wrench and the load's weight, tensions in
+  [t_min, t_max] and lengths <= l_max (eqs. 7-10 of Hamed & Zohoor);
+- ``lines``: CPR-WWA's problem, whose grid the straight-line simulations are compared with.
+
+``tension.model=feasible`` replaces the minimum-norm cable forces of both by pulling cables only
+(``pipeline.model.tensions``) and adds the criteria ``unreachable`` and ``slack``.
+:func:`validate` types a composed config, checks every declared rule, and returns it with its
+built problem, so a job builds its robot once.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+from omegaconf import DictConfig
+
+from pipeline.app.config import (
+    MAX_FORCE, Config, Cpr8Config, Irpm6Config, PointsConfig, check_values, masked, merged, shown,
+    unknown_keys,
+)
+from pipeline.errors import ConfigError
+from pipeline.model.actuators import actuator_model
+from pipeline.model.catalogue import Catalogue
+from pipeline.model.dynamics import Load, MotionSpec
+from pipeline.model.geometry import CableRobot
+from pipeline.model.motion import acceleration_set, cartesian_cube, extreme_points, velocity_set
+from pipeline.model.robots import PointsRobot, cpr8, irpm6, point_list
+from pipeline.model.statics import StaticLimits, StaticsSpec
+from pipeline.model.tensions import TensionSpec
+from pipeline.workspace.compute import (
+    POSES_PER_SECOND, FUSED_START_S, fused_unfit, grid_workspace, name_of,
+)
+from pipeline.workspace.grid import Grid, box_grid, step_grid
+from pipeline.workspace.kernel import WorkspaceProblem
+
+CPR_WWA_CRITERIA = ("speed", "torque", "acceleration", "voltage")  # eqs. (30), (32), (33), (34)
+FEASIBLE_GATES = ("unreachable", "slack")  # tension=feasible (pipeline.model.tensions)
+DEFAULT_N_VEL = 6  # velocity grid of robots without an N x N x N position grid (section 3.1's N)
+MAX_VELOCITY_CANDIDATES = 10_000_000  # (n_vel + 1)^3 grid velocities of eq. (23), built in memory
+
+
+@dataclass(frozen=True)
+class RobotKind:
+    """A robot a config can name: its keys (``schema``), the robot its config node places
+    (``build``), its position grid from the job's config and the robot (``grid``), and the
+    grid's size from the config alone (``size``: the plan bounds a job before building it)."""
+
+    schema: type
+    build: Callable[[DictConfig], CableRobot]
+    grid: Callable[[DictConfig, CableRobot], Grid]
+    size: Callable[[DictConfig], int]
+
+
+def _box_grid(cfg: DictConfig, robot: CableRobot) -> Grid:
+    return box_grid(robot.box_lo, robot.box_hi, cfg.grid.n, name_of(cfg.grid.spacing))
+
+
+def _box_size(cfg: DictConfig) -> int:
+    return int(cfg.grid.n) ** 3
+
+
+def _step_grid(spacing: Callable[[DictConfig], str]):
+    """The grid of a robot with a search box and step (IRPM section III), and its size."""
+    def grid(cfg: DictConfig, robot: CableRobot) -> Grid:
+        return step_grid(robot.box_lo, robot.box_hi, cfg.robot.search.step, spacing(cfg.robot.search))
+
+    def size(cfg: DictConfig) -> int:
+        search = cfg.robot.search
+        spans = np.asarray(search.hi, dtype=float) - np.asarray(search.lo, dtype=float)
+        counts = np.floor(spans / search.step + 1e-9) + (spacing(search) == "faces")
+        return int(np.prod(np.maximum(counts, 0)))
+    return grid, size
+
+
+ROBOTS = {
+    "cpr8": RobotKind(
+        Cpr8Config,
+        lambda rc: cpr8(rc.frame.d, rc.frame.s, rc.frame.v, rc.carrier.l, rc.carrier.w, rc.carrier.h,
+                        lower_anchor_drop=rc.lower_anchor_drop),
+        _box_grid, _box_size),
+    "irpm6": RobotKind(
+        Irpm6Config,
+        lambda rc: irpm6(rc.r_base, rc.r_end, rc.gamma_deg, rc.search.lo, rc.search.hi, rc.l_max),
+        *_step_grid(lambda search: "faces")),
+    "points": RobotKind(
+        PointsConfig, lambda rc: PointsRobot.from_config(rc).build(),  # checks its points as it builds
+        *_step_grid(lambda search: search.spacing)),
+}
+
+
+def _cpr_wwa(cfg: DictConfig, catalogue: Catalogue, robot: CableRobot):
+    """CPR-WWA's spec (velocity and acceleration sets, load, readings), the actuator's limits
+    and the criteria; refuses an actuator id the catalogue lacks, a velocity grid that would not
+    fit in memory, too few cables for the rows eq. (20) balances, and pushing cables under the
+    minimum-norm model."""
+    if cfg.actuator not in set(catalogue.ids):
+        ids = ", ".join(str(i) for i in sorted(catalogue.ids))
+        raise ConfigError(f"actuator={cfg.actuator}: no such id in the catalogue (ids: {ids})")
+    model = cfg.model
+    n_vel = cfg.grid.n_vel or cfg.grid.get("n") or DEFAULT_N_VEL
+    if (n_vel + 1) ** 3 > MAX_VELOCITY_CANDIDATES:
+        limit = round(MAX_VELOCITY_CANDIDATES ** (1 / 3)) - 1
+        raise ConfigError(f"grid.n_vel={n_vel}: the velocity grid would have {(n_vel + 1) ** 3:.3g} "
+                          f"candidates; at most grid.n_vel={limit}")
+    # a point platform (every attachment at its reference point) has no moment rows to balance
+    forces_only = name_of(model.pinv_columns) == "translational" or not robot.attachments.any()
+    _enough_cables(cfg, robot, 3 if forces_only else 6,
+                   "; model.pinv_columns=translational balances forces only")
+    tension = tension_spec(cfg, robot)
+    if tension.model == "pinv" and np.any(tension.t_min != 0):
+        raise ConfigError(f"tension.t_min={shown(cfg.tension.t_min)}: the pinv model checks the papers' "
+                          "minimum-norm torques, which may push; set tension.model=feasible")
+    actuator = actuator_model(catalogue.row(cfg.actuator), cfg.drive.winch_radius, cfg.drive.gear_ratio,
+                              model.xi_in_torque_limit)
+    velocities = velocity_set(cfg.motion.v_max, n_vel, name_of(model.velocity_boundary))
+    motion = MotionSpec(
+        velocities=velocities,
+        velocity_extremes=extreme_points(velocities, 2 * cfg.motion.v_max / n_vel),
+        accelerations=acceleration_set(
+            cfg.motion.v_max, cfg.motion.t_acc, cfg.motion.t_dec, name_of(model.acceleration_set)
+        ),
+        load=load_spec(cfg),
+        winch_radius=np.full(robot.n_cables, actuator.winch_radius),
+        pinv_columns=name_of(model.pinv_columns),
+        rank_rtol=model.rank_rtol,
+        jdot=model.jdot,
+        tension=tension,
+        inertia=name_of(model.inertia),
+    )
+    gates = FEASIBLE_GATES if tension.model == "feasible" else ()
+    return motion, actuator, (*gates, *cable_limits(tension, robot), *CPR_WWA_CRITERIA)
+
+
+def _statics(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
+    """The statics' spec (eqs. 7-10), limits and criteria; refuses moments about the base for a
+    platform with mass and fewer than six cables (its gram ratio would make every pose singular)."""
+    if name_of(cfg.model.moment_arm) == "base" and cfg.load.mass > 0:
+        raise ConfigError(f"model.moment_arm=base: moments about the base are only read for a "
+                          f"massless platform (load.mass={cfg.load.mass}); set load.mass=0 and put "
+                          "the weight in wrench.*")
+    _enough_cables(cfg, robot, 6, "")
+    spec = StaticsSpec(
+        moment_arm=name_of(cfg.model.moment_arm),
+        cable_direction=name_of(cfg.model.cable_direction),
+        rank_rtol=cfg.model.rank_rtol,
+        tension=tension_spec(cfg, robot),
+        load=load_spec(cfg),
+    )
+    rating = spec.tension.t_max
+    force = spec.load.external[:3] - spec.load.mass * spec.load.gravity * robot.up
+    scale = float(np.max(rating)) if rating is not None else max(float(np.linalg.norm(force)), 1.0)
+    limits = StaticLimits(np.inf if rating is None else rating, cfg.model.rank_rtol, scale)
+    gates = ("singular", "slack") if spec.tension.model == "pinv" else FEASIBLE_GATES
+    return spec, limits, (*gates, *cable_limits(spec.tension, robot))
+
+
+# analysis -> (the typed config, its catalogue or None, the robot) -> (spec, limits, criteria)
+ANALYSES = {"cpr_wwa": _cpr_wwa, "statics": _statics, "lines": _cpr_wwa}
+
+
+def _enough_cables(cfg: DictConfig, robot: CableRobot, rows: int, hint: str) -> None:
+    if robot.n_cables < rows:
+        what = "forces" if rows == 3 else "forces and moments"
+        raise ConfigError(f"robot: {robot.n_cables} cables; analysis={cfg.analysis} balances {what} "
+                          f"({rows} rows of the structure matrix) and needs >= {rows} cables{hint}")
+
+
+def typed_config(cfg: DictConfig) -> DictConfig:
+    """The composed config with every value of its declared type (numbers, enums, lists), keeping
+    only the keys it has: a statics job has no ``actuator``, so its summary has none either.
+    An undeclared key (also one added with ``+``) or a value of the wrong type: ConfigError."""
+    return masked(typed_schema(cfg), cfg)
+
+
+def typed_schema(cfg: DictConfig) -> DictConfig:
+    """``cfg`` merged into the typed schema of its robot kind (every declared key, typed nodes
+    that check any later assignment); :func:`pipeline.app.config.masked` keeps the keys ``cfg``
+    has."""
+    unknown_keys(cfg, Config)
+    robot = cfg.get("robot")
+    if not isinstance(robot, DictConfig) or "name" not in robot:
+        raise ConfigError("robot: the robot file gives no robot keys (an empty file, or not a mapping of "
+                          "keys): start your own with 'defaults: [points, _self_]'")
+    name = robot.get("name")
+    if name not in ROBOTS:
+        raise ConfigError(f"robot.name={name}: unknown robot ({', '.join(ROBOTS)})")
+    if cfg.get("analysis") not in ANALYSES:
+        raise ConfigError(f"analysis={cfg.get('analysis')}: unknown analysis ({', '.join(ANALYSES)})")
+    unknown_keys(cfg.robot, ROBOTS[name].schema, "robot.")
+    full = merged(Config, cfg, "")
+    full.robot = merged(ROBOTS[name].schema, cfg.robot, "robot.")
+    return full
+
+
+def validate(cfg: DictConfig, catalogue: Catalogue | None,
+             typed: bool = False) -> tuple[DictConfig, WorkspaceProblem]:
+    """The typed config (:func:`typed_config`; ``typed``: ``cfg`` already is) and its built
+    problem, or ConfigError on the first value the model cannot use: '<key>=<value>: <rule>'.
+    First every field's declared rule (:func:`pipeline.app.config.check_values`), then the
+    robot and analysis kinds' own rules as they build, then the rules that join several groups.
+    ``catalogue``: the actuators an analysis with an actuator chooses from."""
+    cfg = cfg if typed else typed_config(cfg)
+    check_values(cfg, Config)
+    check_values(cfg.robot, ROBOTS[cfg.robot.name].schema, "robot.")
+    if cfg.output.cables and not cfg.output.points:
+        raise ConfigError("output.cables=true: the cables go into points.parquet, which "
+                          "output.points=false does not write")
+    if cfg.compute.backend == "dask" and importlib.util.find_spec("distributed") is None:
+        raise ConfigError("compute.backend=dask: needs Dask, pip install 'cdpr-studies[dask]'")
+    if cfg.poses is not None:
+        point_list("poses", cfg.poses)
+    _validate_size(cfg)  # before anything the size would make large is built
+    problem = build(cfg, catalogue)
+    if name_of(cfg.compute.kernel) == "fused":
+        unfit = fused_unfit(problem)
+        if unfit:
+            raise ConfigError(f"compute.kernel=fused: {unfit}; use compute.kernel=auto or numpy")
+    return cfg, problem
+
+
+def build(cfg: DictConfig, catalogue: Catalogue | None) -> WorkspaceProblem:
+    """The workspace problem of a typed config: its robot kind's robot, its analysis kind's
+    spec, limits and criteria, the orientation set."""
+    robot = ROBOTS[cfg.robot.name].build(cfg.robot)
+    spec, limits, criteria = ANALYSES[cfg.analysis](cfg, catalogue, robot)
+    return WorkspaceProblem(robot, orientation_set(cfg.orientation), spec, limits, criteria,
+                            cfg.model.margin_atol, cfg.output.cables)
+
+
+def build_grid(cfg: DictConfig, robot: CableRobot) -> Grid:
+    """The positions a job checks: the robot kind's grid, or the user's own ``poses`` (no grid
+    cell, no volume)."""
+    if cfg.poses is None:
+        return ROBOTS[cfg.robot.name].grid(cfg, robot)
+    return Grid(point_list("poses", cfg.poses), cell_volume=float("nan"))
+
+
+def build_problem(cfg: DictConfig, catalogue: Catalogue | None) -> tuple[WorkspaceProblem, Grid]:
+    """The workspace problem of the configured robot and analysis, and its position grid."""
+    problem = build(cfg, catalogue)
+    return problem, build_grid(cfg, problem.robot)
+
+
+def compute_workspace(cfg: DictConfig, catalogue: Catalogue | None, sink=None, sweep_pays: bool = False):
+    """The points and the summary of a typed config's workspace
+    (:func:`pipeline.workspace.compute.grid_workspace` of :func:`build_problem`)."""
+    return grid_workspace(cfg, *build_problem(cfg, catalogue), sink, sweep_pays)
+
+
+def grid_size(cfg: DictConfig) -> int:
+    """Poses a job checks, counted without building the grid (``compute.max_poses`` bounds it)."""
+    return len(cfg.poses) if cfg.poses is not None else ROBOTS[cfg.robot.name].size(cfg)
+
+
+def orientation_count(orientation: DictConfig) -> int:
+    """k of :func:`orientation_set`, counted without building it."""
+    total = orientation.total
+    return 1 if total.n == 1 or total.bound == 0 else int(total.n) ** 3
+
+
+def orientation_set(orientation: DictConfig) -> np.ndarray:
+    """(k, 3) Euler angles: the constant orientation, or the total-orientation grid around it."""
+    nominal = np.array([orientation.psi, orientation.theta, orientation.phi], dtype=float)
+    total = orientation.total
+    if orientation_count(orientation) == 1:
+        return nominal[None, :]
+    offsets = np.linspace(-total.bound, total.bound, total.n)
+    grid = cartesian_cube(offsets)
+    order = np.argsort(np.abs(grid).sum(axis=1), kind="stable")  # nominal orientation first
+    return nominal + grid[order]
+
+
+def cable_limits(tension: TensionSpec, robot: CableRobot) -> tuple[str, ...]:
+    """The cable criteria every analysis checks when their limit is given: the rating
+    (``tension.t_max``) and the longest cable (the robot's ``l_max``)."""
+    return (("tension_max",) if tension.t_max is not None else ()) + (
+        ("length",) if robot.l_max is not None else ())
+
+
+def load_spec(cfg: DictConfig) -> Load:
+    """The load of every analysis: mass, gravity, centre of mass, and as its external wrench
+    ``load.external`` plus the applied wrench ``wrench.*`` (IRPM eq. 11)."""
+    load, w = cfg.load, cfg.wrench
+    applied = np.array([w.fx, w.fy, w.fz, w.mx, w.my, w.mz], dtype=float)
+    return Load(float(load.mass), float(load.gravity), np.asarray(load.com, dtype=float),
+                np.asarray(load.external, dtype=float) + applied)
+
+
+def tension_spec(cfg: DictConfig, robot: CableRobot) -> TensionSpec:
+    """The cable tension model and limits, each limit one number or one per cable of ``robot``:
+    ``tension.t_max`` is replaced by its alias ``limits.s_max`` (the IRPM paper's name) when
+    that is given; null = no rating. Refuses a negative ``t_min`` and a rating not above it."""
+    t = cfg.tension
+    t_min = _limit_values("tension.t_min", t.t_min, robot.n_cables)
+    if not (t_min >= 0).all():
+        raise ConfigError(f"tension.t_min={shown(t.t_min)}: must be >= 0 (a cable cannot push)")
+    key, rating = ("limits.s_max", cfg.limits.s_max) if cfg.limits.s_max is not None else ("tension.t_max", t.t_max)
+    if rating is not None and not (t_min < _limit_values(key, rating, robot.n_cables)).all():
+        raise ConfigError(f"{key}={shown(rating)}: must be > tension.t_min={shown(t.t_min)}")
+    return TensionSpec(name_of(t.model), _per_cable(t.t_min), _per_cable(rating), t.residual_rtol)
+
+
+def _per_cable(value):
+    """A tension limit as the kernels take it: a float, an (m,) array for a list, or None."""
+    if value is None:
+        return None
+    if isinstance(value, (int, float)):
+        return float(value)
+    return np.asarray(list(value), dtype=float)
+
+
+def _limit_values(key: str, value, n_cables: int) -> np.ndarray:
+    """A tension limit as an (m,) array: one finite number for every cable, or one per cable."""
+    items = [value] if isinstance(value, (int, float)) and not isinstance(value, bool) else value
+    try:
+        items = list(items)
+    except TypeError:
+        items = None
+    if items is None or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in items):
+        raise ConfigError(f"{key}={shown(value)}: must be a number (N) or a list of one per cable")
+    if len(items) not in (1, n_cables):
+        raise ConfigError(f"{key}={shown(value)}: {len(items)} values for {n_cables} cables")
+    values = np.broadcast_to(np.asarray(items, dtype=float), (n_cables,))
+    if not np.isfinite(values).all():
+        raise ConfigError(f"{key}={shown(value)}: must be finite (null: no limit)")
+    if (np.abs(values) > MAX_FORCE).any():
+        raise ConfigError(f"{key}={shown(value)}: must be at most {MAX_FORCE:g} N")
+    return values
+
+
+def _validate_size(cfg: DictConfig) -> None:
+    """Refuse, before any work, a job larger than ``compute.max_poses`` pose x orientation
+    evaluations, naming the key to change."""
+    poses = grid_size(cfg)
+    if poses == 0:  # a cell of side step larger than the box: no centre inside it
+        search = cfg.robot.search
+        raise ConfigError(f"robot.search.step={search.step}: no grid point in the search box (cells of that side "
+                          f"do not fit between lo={list(search.lo)} and hi={list(search.hi)}); use a smaller "
+                          "step or spacing: faces")
+    orientations = orientation_count(cfg.orientation)
+    if poses * orientations > cfg.compute.max_poses:
+        raise ConfigError(
+            f"compute.max_poses={cfg.compute.max_poses}: this job has {poses:.3g} poses x "
+            f"{orientations:.3g} orientations = {poses * orientations:.3g} evaluations; use a "
+            "coarser grid (grid.n, robot.search.step), fewer orientation.total.n, or raise "
+            "compute.max_poses knowingly")
+
+
+def fused_pays(jobs) -> bool:
+    """Whether the compiled kernels pay for their start over these jobs together (pairs of a
+    typed config and its problem, a sweep: the IRPM wrench studies are 180 jobs of 25 000
+    poses, each too small alone; each process that runs its jobs loads them once)."""
+    seconds = 0.0
+    for cfg, problem in jobs:
+        if name_of(cfg.compute.kernel) == "auto" and fused_unfit(problem) is None:
+            seconds += grid_size(cfg) * len(problem.orientations) / POSES_PER_SECOND["pinv"]
+    return seconds > FUSED_START_S
