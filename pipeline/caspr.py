@@ -1,25 +1,39 @@
 """Import a CASPR model (``<name>_cables.xml`` and ``<name>_bodies.xml``) as a robot file.
 
 ``python -m pipeline.caspr NAME_cables.xml [--bodies NAME_bodies.xml] [--cable-set ID]
-[--step 0.1] [--out conf/robot/NAME.yaml]`` writes a robot YAML file for ``robot=points``
-(run it with ``python -m pipeline --config-dir conf robot=NAME``). CASPR's spatial models
-(IPAnema, CoGiRo, ...) describe each cable by its attachment on link 0 (the frame: our anchor)
-and on link 1 (the platform: our attachment point, in the platform frame) with ``force_min`` and
-``force_max`` (N); the bodies file gives the platform's ``mass`` (kg) and ``com_location`` (m).
-The file written sets ``tension.t_min``/``t_max`` (one value, or one per cable where they differ)
-and ``load.mass``/``load.com``, so it is a global-package robot file like ``irpm6.yaml``. The
-search box is ``--lo``/``--hi`` when given, else the bodies file's ``display_range``, else the
-anchors' bounding box; it is sampled at the cell centres of side ``--step``.
+[--lo x y z --hi x y z] [--step 0.1] [--out DIR/robot/NAME.yaml]`` writes a robot YAML file for
+``robot=points`` (run it with ``python -m pipeline --config-dir DIR robot=NAME``). CASPR's files
+as its model library has them: an XML declaration, a ``<!DOCTYPE ... SYSTEM ...>`` reference
+(never fetched) and comments before the root; the cables file's ``<cable_set>``s (the
+``default_cable_set`` unless ``--cable-set`` names another), each ``<cable_ideal>`` attached on
+link 0 (the frame: our anchor) and link 1 (the platform: our attachment point, platform frame),
+relative to the joint (``attachment_reference="joint"``) or to the centre of mass (``"com"``,
+which needs the bodies file), with ``force_min``/``force_max`` (N); the bodies file's
+``<bodies_system>`` (or, in older files, a bare ``<links>``) with one ``<link_rigid>``: its
+``<joint type q_min q_max>``, ``<physical>`` ``mass`` (kg) and ``com_location`` (m), and its
+``<parent>`` ``location`` (the joint's origin in the frame: the anchors are written relative to
+it, so the searched positions are CASPR's joint coordinates q).
 
-Only single-body models with straight cables are imported (one rigid link, two attachments per
-cable); anything else, or a file that is not such XML, stops with one line and exit status 2.
+The file written sets the robot's points, ``robot.platform`` (mass and centre of mass; 0 kg
+without ``--bodies``, said so), ``tension.t_min``/``t_max`` (one value, or one per cable where
+they differ) and the search box: ``--lo``/``--hi`` when given, else the joint's position limits
+(the first three values of ``q_min``/``q_max``), else the anchors' bounding box when it has a
+volume; never the display range (a plot extent). The box used is printed.
+
+Refused, in one line and exit status 2, with the reason: a joint other than a free spatial body
+(``SPATIAL_EULER_XYZ``, ``SPATIAL_QUATERNION``: planar, point, spherical and revolute platforms
+have fewer freedoms than the 6 rows this version balances), a multi-link (MCDM) model, a cable
+that is not ``<cable_ideal>`` (springs, variable stiffness), a cable routed through more than two
+points or a pulley (``<attachment_base_pulley>``), two cables of one name (both named), and a
+file that is not such XML. CASPR's ``SPATIAL_EULER_XYZ`` orientation is R = Rx Ry Rz of its
+angles, eq. (9)'s is R = Rz(phi) Ry(theta) Rx(psi): the file and the output say so.
 
 The importer writes only a new file of the user's: an existing file is replaced only with
 ``--force``, a target inside the package's own ``conf/`` (where it would replace or hide a
 shipped file: run from a checkout, ``conf/robot/`` is that folder) is refused, and so is a
 shipped robot's name (``cpr8``, ``irpm6``, ``points``), which the file would hide under
-``--config-dir``. Names from the files (the source's, the cables') are written as quoted YAML
-scalars or with control characters replaced, so no name can become a key.
+``--config-dir``. Names from the files (the sources', the cables', the link's) are written as
+quoted YAML scalars or with control characters replaced, so no name can become a key.
 """
 
 from __future__ import annotations
@@ -33,11 +47,26 @@ from pathlib import Path
 import numpy as np
 
 from pipeline.errors import ConfigError
-from pipeline.app.config import MAX_FORCE
+from pipeline.app.config import MAX_FORCE, MAX_MASS
 from pipeline.app.resources import CONF_DIR
 from pipeline.app.results import code_version, write_text
 
 SHIPPED_ROBOTS = tuple(sorted(p.stem for p in (CONF_DIR / "robot").glob("*.yaml")))
+
+
+# CASPR's joint types (src/Model/Bodies/Joints/JointType.m) and the platform freedoms they give
+SPATIAL_JOINTS = ("SPATIAL_EULER_XYZ", "SPATIAL_QUATERNION")
+FREEDOMS = {
+    "T_XYZ": "x, y, z (a platform that only translates)",
+    "PLANAR_XY": "x, y, rz (a planar platform)", "PLANAR_XZ": "x, z, ry (a planar platform)",
+    "PLANAR_YZ": "y, z, rx (a planar platform)",
+    "P_X": "x", "P_XY": "x, y (a planar point)", "P_XZ": "x, z (a planar point)", "P_AXIS": "one translation",
+    "S_EULER_XYZ": "rx, ry, rz (a spherical joint)", "S_FIXED_XYZ": "rx, ry, rz (a spherical joint)",
+    "S_QUATERNION": "rx, ry, rz (a spherical joint)",
+    "R_X": "rx (a revolute joint)", "R_Y": "ry (a revolute joint)", "R_Z": "rz (a revolute joint)",
+    "R_AXIS": "one rotation (a revolute joint)", "U_XY": "rx, ry (a universal joint)",
+    "U_XZ": "rx, rz (a universal joint)", "U_YZ": "ry, rz (a universal joint)",
+}
 
 
 def read_cables(path: Path, cable_set: str | None = None) -> dict:
@@ -52,17 +81,20 @@ def read_cables(path: Path, cable_set: str | None = None) -> dict:
     if not chosen:
         ids = ", ".join(str(s.get("id")) for s in sets) or "none"
         raise ConfigError(f"{path}: no cable_set {wanted!r} (cable sets: {ids})")
-    cables = list(chosen[0])
+    cables = [c for c in chosen[0] if isinstance(c.tag, str)]  # comments are not cables
     if not cables:
         raise ConfigError(f"{path}: cable_set {wanted!r} has no cables")
-    out = {"names": [], "anchors": [], "attachments": [], "force_min": [], "force_max": [], "reference": []}
+    out = {"set": chosen[0].get("id"), "names": [], "anchors": [], "attachments": [], "force_min": [],
+           "force_max": [], "reference": []}
     for number, cable in enumerate(cables, start=1):
         where = f"{path}: cable {cable.get('name') or number}"
         if cable.tag != "cable_ideal":
-            raise ConfigError(f"{where}: <{cable.tag}> is not supported (only <cable_ideal>)")
+            raise ConfigError(f"{where}: <{cable.tag}> is not an ideal cable (springs and variable-stiffness "
+                              "cables are not supported, only <cable_ideal>)")
         name = cable.get("name") or str(number)
         if name in out["names"]:
-            raise ConfigError(f"{where}: a second cable of this name (each cable names its own columns)")
+            raise ConfigError(f"{path}: cables {out['names'].index(name) + 1} and {number} are both named "
+                              f"{name!r} (each cable names its own columns)")
         out["names"].append(name)
         out["reference"].append(cable.get("attachment_reference", "joint"))
         if out["reference"][-1] not in ("joint", "com"):
@@ -73,52 +105,97 @@ def read_cables(path: Path, cable_set: str | None = None) -> dict:
                               f"force_max <= {MAX_FORCE:g} (a cable only pulls)")
         out["force_min"].append(low)
         out["force_max"].append(high)
-        links = [(_text(attachment, "link", where), _vector(attachment, "location", where))
-                 for attachment in cable.findall("attachments/attachment")]
-        if sorted(link for link, _ in links) != ["0", "1"]:
-            raise ConfigError(f"{where}: needs one attachment on link 0 and one on link 1, found "
-                              f"links {sorted(link for link, _ in links) or 'none'} (multi-link models are not supported)")
+        points = [a for a in cable.findall("attachments/*")]
+        pulleys = [a.tag for a in points if a.tag != "attachment"]
+        if pulleys:
+            raise ConfigError(f"{where}: <{pulleys[0]}> (a pulley): only straight cables from a frame point to "
+                              "a platform point are supported")
+        links = [(_text(attachment, "link", where), _vector(attachment, "location", where)) for attachment in points]
+        found = sorted(link for link, _ in links)
+        if any(link not in ("0", "1") for link in found):
+            raise ConfigError(f"{where}: attached to links {found}: multi-link models are not supported "
+                              "(link 0, the frame, and link 1, the platform)")
+        if found != ["0", "1"]:
+            raise ConfigError(f"{where}: {len(found)} attachments on links {found or 'none'}: only straight cables "
+                              "from one frame point (link 0) to one platform point (link 1) are supported "
+                              "(a cable routed through several points is not)")
         out["anchors"].append(dict(links)["0"])
         out["attachments"].append(dict(links)["1"])
     return out
 
 
 def read_body(path: Path) -> dict:
-    """Mass (kg) and centre of mass (m, joint frame) of the single rigid link of a bodies file."""
+    """The single rigid link of a bodies file: name, joint type, position limits (first three
+    values of ``q_min``/``q_max``, or None), mass (kg), centre of mass and the joint's origin in
+    the frame (m)."""
     root = _parse(path)
-    links = root.findall("link_rigid")
-    if root.tag != "links" or len(links) != 1:
-        raise ConfigError(f"{path}: needs <links> with exactly one <link_rigid> (found {len(links)})")
-    where = f"{path}: link {links[0].get('num', '1')}"
-    mass = _number(links[0], "physical/mass", where)
-    if not mass >= 0:
-        raise ConfigError(f"{where}: mass {mass:g} must be >= 0")
+    links = root.find("links") if root.tag == "bodies_system" else root if root.tag == "links" else None
+    if links is None:
+        raise ConfigError(f"{path}: root element <{root.tag}>, a CASPR bodies file has <bodies_system> "
+                          "with <links> (or, in older files, <links>)")
+    rigid = links.findall("link_rigid")
+    if len(rigid) != 1:
+        raise ConfigError(f"{path}: {len(rigid)} <link_rigid> links: only single-body models (SCDM, one "
+                          "platform) are imported, not multi-link ones (MCDM)")
+    link = rigid[0]
+    where = f"{path}: link {link.get('num', '1')}"
+    joint = link.find("joint")
+    kind = "" if joint is None else joint.get("type", "")
+    if kind not in SPATIAL_JOINTS:
+        freedoms = FREEDOMS.get(kind)
+        what = f"joint {kind or '(none)'}" + (f" moves the platform in {freedoms}" if freedoms else ", not a CASPR joint type")
+        raise ConfigError(f"{where}: {what}; only free spatial platforms ({' or '.join(SPATIAL_JOINTS)}, 6 "
+                          "freedoms) are imported so far")
+    mass = _number(link, "physical/mass", where)
+    if not 0 <= mass <= MAX_MASS:
+        raise ConfigError(f"{where}: mass {mass:g} must be in [0, {MAX_MASS:g}] kg")
     box = None
-    if root.get("display_range"):
-        try:
-            box = np.array([float(v) for v in root.get("display_range").split()]).reshape(3, 2)
-        except ValueError:
-            raise ConfigError(f"{path}: display_range {root.get('display_range')!r} is not 6 numbers") from None
-        if not np.isfinite(box).all() or not (box[:, 0] < box[:, 1]).all():
-            raise ConfigError(f"{path}: display_range {root.get('display_range')!r} is not lo < hi per axis")
-    return {"mass": mass, "com": _vector(links[0], "physical/com_location", where), "box": box}
+    if joint.get("q_min") is not None or joint.get("q_max") is not None:
+        box = tuple(_numbers(joint.get(key) or "", f"{where}: joint {key}", 3) for key in ("q_min", "q_max"))
+        if not (box[0] < box[1]).all():
+            raise ConfigError(f"{where}: joint q_min {joint.get('q_min')!r} and q_max {joint.get('q_max')!r}: "
+                              "need q_min < q_max in x, y and z")
+    origin = link.find("parent/location")
+    return {"name": link.get("name") or "", "joint": kind, "mass": mass, "box": box,
+            "com": _vector(link, "physical/com_location", where),
+            "origin": np.zeros(3) if origin is None else np.asarray(_vector(link, "parent/location", where))}
 
 
-def robot_yaml(cables: dict, body: dict | None, step: float, source: str, box=None) -> str:
-    """The robot file's text (YAML flow style, one cable per line); ``box`` (lo, hi) or None."""
+def search_box(cables: dict, body: dict | None, box=None) -> tuple[np.ndarray, np.ndarray, str]:
+    """(lo, hi, where it came from): ``box`` (``--lo``/``--hi``), the joint's position limits,
+    or the anchors' bounding box (in joint coordinates) when it has a volume; else ConfigError."""
+    if box is not None:
+        return np.asarray(box[0], float), np.asarray(box[1], float), "--lo/--hi"
+    if body is not None and body["box"] is not None:
+        return body["box"][0], body["box"][1], "the joint's q_min/q_max"
+    anchors = np.asarray(cables["anchors"]) - (0.0 if body is None else body["origin"])
+    lo, hi = anchors.min(axis=0), anchors.max(axis=0)
+    if not (hi - lo > 1e-9 * max(1.0, float(np.abs(anchors).max()))).all():
+        flat = ", ".join(axis for axis, span in zip("xyz", hi - lo) if not span > 0)
+        raise ConfigError(f"no search box: {'the bodies file gives no joint q_min/q_max' if body else 'no --bodies'}, "
+                          f"and the anchors span nothing along {flat} (a suspended robot); give --lo x y z --hi x y z")
+    return lo, hi, "the anchors' bounding box"
+
+
+def robot_yaml(cables: dict, body: dict | None, step: float, sources: tuple[str, str | None], box) -> str:
+    """The robot file's text (YAML flow style, one cable per line); ``box``: (lo, hi, origin)
+    of :func:`search_box`."""
     com = np.zeros(3) if body is None else np.asarray(body["com"])
+    origin = np.zeros(3) if body is None else body["origin"]
     attachments = [np.asarray(a) + (com if ref == "com" else 0.0)
                    for a, ref in zip(cables["attachments"], cables["reference"])]
-    anchors = np.asarray(cables["anchors"])
-    if box is not None:
-        lo, hi = box
-    elif body is not None and body["box"] is not None:
-        lo, hi = body["box"][:, 0], body["box"][:, 1]
-    else:
-        lo, hi = anchors.min(axis=0), anchors.max(axis=0)
+    anchors = np.asarray(cables["anchors"]) - origin  # relative to the joint's origin: positions are q
+    lo, hi, _ = box
+    bodies = f" with {_one_line(sources[1])} (link {_one_line(body['name'])!r}, joint {body['joint']})" if body else ""
     lines = [
         "# @package _global_",
-        f"# Imported from CASPR: {_one_line(source)}. Anchors: link 0; attachments: link 1 (platform frame).",
+        f"# Imported from CASPR: {_one_line(sources[0])} (cable set {_one_line(str(cables['set']))!r}){bodies}.",
+        "# Anchors: link 0, relative to the joint's origin; attachments: link 1 (platform frame, joint origin).",
+    ]
+    if body is not None and body["joint"] == "SPATIAL_EULER_XYZ":
+        lines.append("# CASPR's orientation angles (a, b, c) give R = Rx(a) Ry(b) Rz(c); orientation.psi/theta/phi "
+                     "give eq. (9)'s R = Rz(phi) Ry(theta) Rx(psi).")
+    lines += [
         "defaults:",
         "  - /robot/points",
         "  - _self_",
@@ -128,11 +205,10 @@ def robot_yaml(cables: dict, body: dict | None, step: float, source: str, box=No
         "  attachments:",
         *[f"    - {_flow(a)}" for a in attachments],
         f"  cable_names: [{', '.join(_quoted(n) for n in cables['names'])}]",
+        f"  platform: {{mass: {0.0 if body is None else body['mass']!r}, com: {_flow(com)}}}",
         f"  search: {{lo: {_flow(lo)}, hi: {_flow(hi)}, step: {step!r}, spacing: centres}}",
         f"tension: {{t_min: {_limit(cables['force_min'])}, t_max: {_limit(cables['force_max'])}}}",
     ]
-    if body is not None:
-        lines.append(f"load: {{mass: {body['mass']!r}, com: {_flow(com)}}}")
     return "\n".join(lines) + "\n"
 
 
@@ -175,6 +251,17 @@ def _vector(element, tag: str, where: str) -> list[float]:
     return values
 
 
+def _numbers(text: str, where: str, first: int) -> np.ndarray:
+    """The first ``first`` of the whitespace-separated finite numbers in ``text``."""
+    try:
+        values = np.array([float(p) for p in text.split()])
+    except ValueError:
+        values = np.array([])
+    if len(values) < first or not np.isfinite(values[:first]).all():
+        raise ConfigError(f"{where} {text!r}: needs {first} finite numbers first (x y z, m)")
+    return values[:first]
+
+
 def _flow(values) -> str:
     return "[" + ", ".join(repr(float(v)) for v in values) + "]"
 
@@ -211,7 +298,7 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="python -m pipeline.caspr", description=__doc__.split("\n\n")[0])
     parser.add_argument("--version", action="version", version=f"cdpr-studies {code_version()}")
     parser.add_argument("cables", type=Path, help="CASPR <name>_cables.xml")
-    parser.add_argument("--bodies", type=Path, help="CASPR <name>_bodies.xml (mass, centre of mass)")
+    parser.add_argument("--bodies", type=Path, help="CASPR <name>_bodies.xml (joint, limits, mass, centre of mass)")
     parser.add_argument("--cable-set", help="cable_set id (default: the file's default_cable_set)")
     parser.add_argument("--step", type=float, default=0.1, help="search grid step, m (default 0.1)")
     parser.add_argument("--out", type=Path, help="file to write (default conf/robot/<name>.yaml)")
@@ -235,7 +322,8 @@ def main(argv: list[str] | None = None) -> None:
             raise ConfigError(f"{args.cables}: attachments relative to the centre of mass need --bodies")
         name = re.sub(r"_cables$", "", args.cables.stem).lower()
         out = checked_target(args.out or Path("conf") / "robot" / f"{name}.yaml", args.force)
-        text = robot_yaml(cables, body, args.step, args.cables.name, box)
+        box = search_box(cables, body, box)
+        text = robot_yaml(cables, body, args.step, (args.cables.name, args.bodies and args.bodies.name), box)
         try:
             out.parent.mkdir(parents=True, exist_ok=True)
             write_text(out, text)
@@ -244,8 +332,16 @@ def main(argv: list[str] | None = None) -> None:
     except ConfigError as exc:
         print(f"error: {exc}", file=sys.stderr)
         raise SystemExit(2) from None
-    print(f"wrote {out}: {len(cables['names'])} cables; run python -m pipeline --config-dir "
-          f"{out.parent.parent} robot={out.stem}")
+    lo, hi, origin = box
+    mass = (f"platform {body['mass']:g} kg (bodies file)" if body is not None else
+            "platform 0 kg (no --bodies: give the model's bodies file for its mass)")
+    extent = ", ".join(f"{axis} [{a:g}, {b:g}]" for axis, a, b in zip("xyz", lo, hi))
+    print(f"wrote {out}: {len(cables['names'])} cables, {mass}; search box {extent} m from {origin}, "
+          f"step {args.step:g} m")
+    if body is not None and body["joint"] == "SPATIAL_EULER_XYZ":
+        print("orientation: CASPR's XYZ Euler angles are not eq. (9)'s (R = Rz(phi) Ry(theta) Rx(psi)); "
+              "equal at zero orientation")
+    print(f"run: python -m pipeline --config-dir {out.parent.parent} robot={out.stem}")
 
 
 if __name__ == "__main__":

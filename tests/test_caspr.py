@@ -3,6 +3,7 @@ becomes a robot file, whose static workspace is computed with the body's mass (i
 
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -10,41 +11,46 @@ import pytest
 import yaml
 from scipy.optimize import linprog
 
-from pipeline.model.geometry import structure_matrix
-
 pytestmark = pytest.mark.slow
 
-ANCHORS = [(-1.5, 1.5, 3.0), (1.5, 1.5, 3.0), (1.5, -1.5, 3.0), (-1.5, -1.5, 3.0),
-           (-1.5, 1.5, 2.5), (1.5, 1.5, 2.5), (1.5, -1.5, 2.5), (-1.5, -1.5, 2.5)]
-PLATFORM = [(0.1, -0.1, 0.1), (-0.1, -0.1, 0.1), (-0.1, 0.1, 0.1), (0.1, 0.1, 0.1),  # upper cables cross
-            (-0.1, 0.1, -0.1), (0.1, 0.1, -0.1), (0.1, -0.1, -0.1), (-0.1, -0.1, -0.1)]
+DATA = Path(__file__).parent / "data" / "caspr"
+CABLES = (DATA / "Octo_cables.xml").read_text()  # written in CASPR's format: DOCTYPE, comments, two sets
+BODIES = (DATA / "Octo_bodies.xml").read_text()  # <bodies_system>, a SPATIAL_EULER_XYZ joint with limits
+ANCHORS = [(-3.0, 2.0, 3.0), (3.0, 2.0, 3.0), (3.0, -2.0, 3.0), (-3.0, -2.0, 3.0),
+           (-3.0, 2.0, 0.0), (3.0, 2.0, 0.0), (3.0, -2.0, 0.0), (-3.0, -2.0, 0.0)]
+PLATFORM = [(-0.1, 0.08, 0.05), (0.1, 0.08, 0.05), (0.1, -0.08, 0.05), (-0.1, -0.08, 0.05),
+            (-0.1, 0.08, -0.05), (0.1, 0.08, -0.05), (0.1, -0.08, -0.05), (-0.1, -0.08, -0.05)]
+COM = [0.01, -0.02, 0.03]
 
 
 def cable(i, anchor, point, force_max, extra=""):
+    """One <cable_ideal> as CASPR's files write it (for the bad-file cases)."""
     return f"""
     <cable_ideal name="cable {i}" attachment_reference="joint">
-      <properties><force_min>5</force_min><force_max>{force_max}</force_max></properties>
+      <properties>
+        <force_min>5</force_min>
+        <force_max>{force_max}</force_max>
+      </properties>
       <attachments>
-        <attachment><link>0</link><location>{' '.join(map(str, anchor))}</location></attachment>
-        <attachment><link>1</link><location>{' '.join(map(str, point))}</location></attachment>{extra}
+        <attachment>
+          <link>0</link>
+          <location>{' '.join(map(str, anchor))}</location>
+        </attachment>
+        <attachment>
+          <link>1</link>
+          <location>{' '.join(map(str, point))}</location>
+        </attachment>{extra}
       </attachments>
     </cable_ideal>"""
 
 
 def cables_xml(cables):
-    return ('<?xml version="1.0" encoding="utf-8"?>\n<cables default_cable_set="original">\n'
-            f'  <cable_set id="original">{"".join(cables)}\n  </cable_set>\n</cables>\n')
+    return ('<?xml version="1.0" encoding="utf-8"?>\n<!DOCTYPE cables SYSTEM "../../../../templates/cables.dtd">\n\n'
+            f'<cables default_cable_set="original">\n  <cable_set id="original">{"".join(cables)}\n  </cable_set>\n'
+            '</cables>\n')
 
 
-GOOD = cables_xml([cable(i + 1, a, p, 300 if i < 4 else 150) for i, (a, p) in enumerate(zip(ANCHORS, PLATFORM))])
-BODIES = """<?xml version="1.0" encoding="utf-8"?>
-<links display_range="-1.5 1.5 -1.5 1.5 0 3">
-  <link_rigid num="1" name="demo">
-    <joint type="SPATIAL_EULER_XYZ" />
-    <physical><mass>10.0</mass><com_location>0.0 0.0 -0.05</com_location></physical>
-  </link_rigid>
-</links>
-"""
+GOOD = CABLES
 
 
 def run(cwd, module, *args):
@@ -55,71 +61,161 @@ def run(cwd, module, *args):
 @pytest.fixture(scope="module")
 def imported(tmp_path_factory):
     root = tmp_path_factory.mktemp("caspr")
-    (root / "demo_cables.xml").write_text(GOOD)
-    (root / "demo_bodies.xml").write_text(BODIES)
-    done = run(root, "pipeline.caspr", "demo_cables.xml", "--bodies", "demo_bodies.xml", "--step", "0.2")
+    (root / "Octo_cables.xml").write_text(CABLES)
+    (root / "Octo_bodies.xml").write_text(BODIES)
+    done = run(root, "pipeline.caspr", "Octo_cables.xml", "--bodies", "Octo_bodies.xml", "--step", "0.5",
+               "--out", "mine/robot/octo.yaml")
     assert done.returncode == 0, done.stderr
-    assert "conf/robot/demo.yaml" in done.stdout
+    assert "mine/robot/octo.yaml: 8 cables, platform 12.5 kg (bodies file)" in done.stdout
+    assert "search box x [-2.5, 2.5], y [-1.5, 1.5], z [0.2, 2.8] m from the joint's q_min/q_max" in done.stdout
+    assert "XYZ Euler angles" in done.stdout and "robot=octo" in done.stdout
     return root
 
 
-def test_the_robot_file_keeps_points_limits_mass_and_display_range(imported):
-    text = (imported / "conf" / "robot" / "demo.yaml").read_text()
+def test_a_file_of_casprs_library_format_keeps_points_limits_mass_and_the_joint_limits(imported):
+    """The <bodies_system> wrapper, DOCTYPE references and comments before the root are read;
+    the search box is the joint's position limits, not the display range (a plot extent)."""
+    text = (imported / "mine" / "robot" / "octo.yaml").read_text()
     data = yaml.safe_load(text)
     assert text.startswith("# @package _global_")
+    assert "(cable set 'original') with Octo_bodies.xml (link 'Octo platform', joint SPATIAL_EULER_XYZ)" in text
     assert data["robot"]["anchors"] == [list(a) for a in ANCHORS]
     assert data["robot"]["attachments"] == [list(p) for p in PLATFORM]
     assert data["robot"]["cable_names"] == [f"cable {i}" for i in range(1, 9)]
-    assert data["robot"]["search"] == {"lo": [-1.5, -1.5, 0.0], "hi": [1.5, 1.5, 3.0], "step": 0.2,
+    assert data["robot"]["platform"] == {"mass": 12.5, "com": COM}
+    assert data["robot"]["search"] == {"lo": [-2.5, -1.5, 0.2], "hi": [2.5, 1.5, 2.8], "step": 0.5,
                                        "spacing": "centres"}
-    assert data["tension"] == {"t_min": 5.0, "t_max": [300.0] * 4 + [150.0] * 4}
-    assert data["load"] == {"mass": 10.0, "com": [0.0, 0.0, -0.05]}
+    assert data["tension"] == {"t_min": 10.0, "t_max": [600.0] * 4 + [400.0] * 4}
+    assert set(data) == {"defaults", "robot", "tension"}  # no payload, no other robot's numbers
 
 
-@pytest.mark.parametrize("overrides, feasible", [([], 1986), (["load.mass=0"], 169)])
-def test_static_workspace_of_the_imported_robot_with_its_mass(imported, overrides, feasible):
-    """Pulling tensions in [5, 300/150] N: the body's 10 kg (from the bodies file) hold the
-    crossing cables taut over far more of the box than the massless platform can be braced.
-    With the mass, a plain LP per pose on the weight and its moment, worked out here by hand,
-    gives the same verdict at every pose."""
+def test_attachments_given_relative_to_the_centre_of_mass_are_the_same_points(imported):
+    """CASPR's attachment_reference="com": link-1 locations relative to com_location; the set
+    written so gives the joint-referenced set's points (to the file's 4 decimals)."""
+    done = run(imported, "pipeline.caspr", "Octo_cables.xml", "--bodies", "Octo_bodies.xml", "--cable-set",
+               "com_reference", "--out", "mine/robot/octo_com.yaml")
+    assert done.returncode == 0, done.stderr
+    data = yaml.safe_load((imported / "mine" / "robot" / "octo_com.yaml").read_text())
+    np.testing.assert_allclose(data["robot"]["attachments"], PLATFORM, atol=1e-12)
+    without = run(imported, "pipeline.caspr", "Octo_cables.xml", "--cable-set", "com_reference",
+                  "--out", "mine/robot/octo_nobody.yaml")
+    assert without.returncode == 2 and "relative to the centre of mass need --bodies" in without.stderr
+
+
+@pytest.mark.parametrize("overrides", [[], ["load.mass=20", "load.com=[0.05,0,-0.1]"]])
+def test_the_imported_robot_runs_with_the_files_mass_and_agrees_with_an_independent_lp(imported, overrides):
+    """No other override than the tension model: the platform's 12.5 kg and centre of mass come
+    from the bodies file, the tension limits from the cables file, the box from the joint; on a
+    tilted platform (and with a payload off centre), a plain LP per pose on the weight and its
+    moment about the reference point, worked out here, gives the same verdict at every pose."""
     out = f"out_{len(overrides)}"
-    done = run(imported, "pipeline", "--config-dir", "conf", "robot=demo", "tension.model=feasible",
+    tilt = ["orientation.psi=0.1", "orientation.theta=-0.15"]
+    done = run(imported, "pipeline", "--config-dir", "mine", "robot=octo", "tension.model=feasible", *tilt,
                *overrides, f"hydra.run.dir={out}")
     assert done.returncode == 0, done.stderr
     summary = pd.read_parquet(imported / out / "summary.parquet").iloc[0]
-    assert summary["n_points"] == 15 ** 3 and summary["load.mass"] == (0.0 if overrides else 10.0)
-    assert summary["n_feasible"] == feasible
-    if not overrides:
-        points = pd.read_parquet(imported / out / "points.parquet")
-        weight = np.array([0.0, 0.0, -10.0 * 9.81])
-        wrench = np.concatenate([weight, np.cross([0.0, 0.0, -0.05], weight)])
-        anchors, platform = np.array(ANCHORS), np.array(PLATFORM)
-        vectors = points[["x", "y", "z"]].to_numpy()[:, None, :] + platform - anchors
-        unit = vectors / np.linalg.norm(vectors, axis=2, keepdims=True)
-        bounds = [(5, 300)] * 4 + [(5, 150)] * 4
-        found = [linprog(np.zeros(8), A_eq=a, b_eq=wrench, bounds=bounds, method="highs").status == 0
-                 for a in structure_matrix(unit, np.broadcast_to(platform, unit.shape))]
-        assert found == points["feasible"].tolist()
+    assert summary["n_points"] == 10 * 6 * 5 and summary["robot.platform.mass"] == 12.5
+    assert 0 < summary["n_feasible"] < summary["n_points"]
+    points = pd.read_parquet(imported / out / "points.parquet")
+    payload, at = (20.0, np.array([0.05, 0.0, -0.1])) if overrides else (0.0, np.zeros(3))
+    mass = 12.5 + payload
+    com = (12.5 * np.array(COM) + payload * at) / mass
+    psi, theta = 0.1, -0.15  # eq. (9): R = Rz(phi) Ry(theta) Rx(psi), phi = 0
+    rx = np.array([[1, 0, 0], [0, np.cos(psi), -np.sin(psi)], [0, np.sin(psi), np.cos(psi)]])
+    ry = np.array([[np.cos(theta), 0, np.sin(theta)], [0, 1, 0], [-np.sin(theta), 0, np.cos(theta)]])
+    rotation = ry @ rx
+    weight = np.array([0.0, 0.0, -mass * 9.81])
+    wrench = -np.concatenate([weight, np.cross(rotation @ com, weight)])  # what the cables must supply
+    arms = np.array(PLATFORM) @ rotation.T
+    vectors = points[["x", "y", "z"]].to_numpy()[:, None, :] + arms - np.array(ANCHORS)
+    pulls = -vectors / np.linalg.norm(vectors, axis=2, keepdims=True)  # a cable pulls towards its anchor
+    bounds = [(10, 600)] * 4 + [(10, 400)] * 4
+    found = [linprog(np.zeros(8), A_eq=np.vstack([u.T, np.cross(arms, u).T]), b_eq=wrench, bounds=bounds,
+                     method="highs").status == 0 for u in pulls]
+    assert found == points["feasible"].tolist()
+
+
+def _write(tmp_path, cables=CABLES, bodies=BODIES):
+    (tmp_path / "x_cables.xml").write_text(cables)
+    (tmp_path / "x_bodies.xml").write_text(bodies)
+    return run(tmp_path, "pipeline.caspr", "x_cables.xml", "--bodies", "x_bodies.xml", "--out", "mine/robot/x.yaml")
+
+
+JOINT = 'type="SPATIAL_EULER_XYZ"'
+LIMITS = ' q_min="-2.5 -1.5 0.2 -3.1416 -3.1416 -3.1416" q_max="2.5 1.5 2.8 3.1416 3.1416 3.1416"'
+BAD_BODIES = {
+    "planar": (BODIES.replace(JOINT, 'type="PLANAR_XY"').replace(LIMITS, ' q_min="-1 -1 -3.1416" q_max="1 1 3.1416"'),
+               "joint PLANAR_XY moves the platform in x, y, rz (a planar platform); only free spatial platforms"),
+    "point": (BODIES.replace(JOINT, 'type="T_XYZ"'), "joint T_XYZ moves the platform in x, y, z"),
+    "spherical": (BODIES.replace(JOINT, 'type="S_EULER_XYZ"'), "joint S_EULER_XYZ moves the platform in rx, ry, rz"),
+    "unknown_joint": (BODIES.replace(JOINT, 'type="HINGE"'), "joint HINGE, not a CASPR joint type"),
+    "two_links": (BODIES.replace("    </links>", '      <link_rigid num="2" name="arm">\n      </link_rigid>\n'
+                                                  "    </links>"), "2 <link_rigid> links: only single-body models"),
+    "limits_reversed": (BODIES.replace('q_min="-2.5', 'q_min="2.6'), "need q_min < q_max in x, y and z"),
+    "limits_short": (BODIES.replace(LIMITS, ' q_min="0 0" q_max="1 1 1"'), "joint q_min '0 0': needs 3 finite numbers"),
+    "negative_mass": (BODIES.replace("<mass>12.5</mass>", "<mass>-1</mass>"), "mass -1 must be in [0, 1e+08] kg"),
+    "wrong_root": (BODIES.replace("bodies_system>", "robot>"), "root element <robot>, a CASPR bodies file"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD_BODIES))
+def test_a_body_this_version_cannot_model_is_refused_with_the_reason(tmp_path, case):
+    text, message = BAD_BODIES[case]
+    done = _write(tmp_path, bodies=text)
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 2 and len(lines) == 1 and message in lines[0], done.stderr
+    assert not (tmp_path / "mine").exists()
+
+
+def test_without_joint_limits_the_box_is_the_anchors_or_must_be_given(tmp_path):
+    """Older library files give only q_initial (CoGiRo's); the anchors' bounding box is the
+    box when it has a volume, and a suspended robot's flat one is refused, naming --lo/--hi."""
+    legacy = BODIES.replace(LIMITS, "").replace("<bodies_system>\n", "").replace("</bodies_system>\n", "")
+    done = _write(tmp_path, bodies=legacy)
+    assert done.returncode == 0, done.stderr
+    assert "search box x [-3, 3], y [-2, 2], z [0, 3] m from the anchors' bounding box" in done.stdout
+    suspended = CABLES.replace(" 0</location>", " 3</location>")  # every anchor at the top
+    (tmp_path / "flat").mkdir()
+    done = _write(tmp_path / "flat", cables=suspended, bodies=legacy)
+    assert done.returncode == 2 and "anchors span nothing along z (a suspended robot); give --lo x y z --hi x y z" \
+        in done.stderr
+    given = run(tmp_path / "flat", "pipeline.caspr", "x_cables.xml", "--bodies", "x_bodies.xml", "--lo", "-2", "-1",
+                "0.5", "--hi", "2", "1", "2.5", "--out", "mine/robot/x.yaml")
+    assert given.returncode == 0 and "z [0.5, 2.5] m from --lo/--hi" in given.stdout
+
+
+def test_a_joint_away_from_the_frame_origin_keeps_casprs_joint_coordinates(tmp_path):
+    """<parent><location>: the joint's origin in the frame; the anchors are written relative to
+    it, so the searched positions are CASPR's q (a cable's length at q is the same)."""
+    moved = BODIES.replace("<location>0.0 0.0 0.0</location>", "<location>0.5 -0.25 1.0</location>")
+    assert _write(tmp_path, bodies=moved).returncode == 0
+    data = yaml.safe_load((tmp_path / "mine" / "robot" / "x.yaml").read_text())
+    np.testing.assert_allclose(data["robot"]["anchors"], np.array(ANCHORS) - [0.5, -0.25, 1.0])
 
 
 BAD = {
     "garbage": ("not xml at all", "not well-formed XML"),
     "truncated": (GOOD[: len(GOOD) // 2], "not well-formed XML"),
-    "no_force_max": (GOOD.replace("<force_max>300</force_max>", "", 1), "cable 1: missing <properties/force_max>"),
-    "short_location": (GOOD.replace("-1.5 1.5 3.0", "-1.5 1.5", 1), "is not 3 finite numbers"),
+    "no_force_max": (GOOD.replace("<force_max>600</force_max>", "", 1), "cable 1: missing <properties/force_max>"),
+    "short_location": (GOOD.replace("-3 2 3<", "-3 2<", 1), "is not 3 finite numbers"),
     "three_links": (cables_xml([cable(1, ANCHORS[0], PLATFORM[0], 300,
                                       "<attachment><link>2</link><location>0 0 0</location></attachment>")]),
-                    "multi-link models are not supported"),
+                    "attached to links ['0', '1', '2']: multi-link models are not supported"),
     "wrong_root": ("<links/>", "root element <links>"),
-    "nan_force": (GOOD.replace("<force_max>150</force_max>", "<force_max>nan</force_max>", 1), "is not finite"),
-    "min_above_max": (GOOD.replace("<force_max>300</force_max>", "<force_max>3</force_max>", 1),
-                      "cable 1: force_min 5 and force_max 3 N: need 0 <= force_min < force_max"),
-    "negative_min": (GOOD.replace("<force_min>5</force_min>", "<force_min>-5</force_min>", 1), "force_min -5"),
-    "huge_max": (GOOD.replace("<force_max>300</force_max>", "<force_max>1e300</force_max>", 1), "force_max 1e+300"),
-    "duplicate_name": (GOOD.replace('name="cable 2"', 'name="cable 1"', 1), "cable 1: a second cable of this name"),
-    "second_anchor": (cables_xml([cable(1, ANCHORS[0], PLATFORM[0], 300,
-                                        "<attachment><link>0</link><location>9 9 9</location></attachment>")]),
-                      "found links ['0', '0', '1']"),
+    "nan_force": (GOOD.replace("<force_max>400</force_max>", "<force_max>nan</force_max>", 1), "is not finite"),
+    "min_above_max": (GOOD.replace("<force_max>600</force_max>", "<force_max>3</force_max>", 1),
+                      "cable 1: force_min 10 and force_max 3 N: need 0 <= force_min < force_max"),
+    "negative_min": (GOOD.replace("<force_min>10.0</force_min>", "<force_min>-5</force_min>", 1), "force_min -5"),
+    "huge_max": (GOOD.replace("<force_max>600</force_max>", "<force_max>1e300</force_max>", 1), "force_max 1e+300"),
+    "duplicate_name": (GOOD.replace('name="cable 3"', 'name="cable 1"', 1),
+                       "cables 1 and 3 are both named 'cable 1'"),
+    "routed": (cables_xml([cable(1, ANCHORS[0], PLATFORM[0], 300,
+                                 "<attachment><link>0</link><location>9 9 9</location></attachment>")]),
+               "3 attachments on links ['0', '0', '1']: only straight cables"),
+    "pulley": (GOOD.replace("<attachment>", "<attachment_base_pulley>", 1).replace(
+        "</attachment>", "</attachment_base_pulley>", 1), "<attachment_base_pulley> (a pulley)"),
+    "spring_cable": (GOOD.replace("cable_ideal", "cable_linear_spring", 2),
+                     "<cable_linear_spring> is not an ideal cable"),
 }
 
 
@@ -133,13 +229,10 @@ def test_bad_caspr_file_is_one_line_exit_2_and_writes_nothing(tmp_path, case):
     assert not (tmp_path / "conf").exists()
 
 
-def test_unknown_cable_set_and_a_second_body_are_named(tmp_path):
+def test_an_unknown_cable_set_is_named_with_the_files_sets(tmp_path):
     (tmp_path / "a_cables.xml").write_text(GOOD)
-    (tmp_path / "two_bodies.xml").write_text(BODIES.replace("</links>", '<link_rigid num="2"/></links>'))
     done = run(tmp_path, "pipeline.caspr", "a_cables.xml", "--cable-set", "IROS")
-    assert done.returncode == 2 and "no cable_set 'IROS' (cable sets: original)" in done.stderr
-    done = run(tmp_path, "pipeline.caspr", "a_cables.xml", "--bodies", "two_bodies.xml")
-    assert done.returncode == 2 and "exactly one <link_rigid> (found 2)" in done.stderr
+    assert done.returncode == 2 and "no cable_set 'IROS' (cable sets: original, com_reference)" in done.stderr
     assert not (tmp_path / "conf").exists()
 
 

@@ -44,9 +44,9 @@ def test_one_result_per_actuator_is_required(summary):
 
 
 def test_acceptance_over_a_design_variable(make_cfg, catalogue):
-    rows = [compute_workspace(make_cfg(f"actuator={a}", f"load.mass={m}"), catalogue)[1]
+    rows = [compute_workspace(make_cfg(f"actuator={a}", f"robot.platform.mass={m}"), catalogue)[1]
             for a in (3, 4) for m in (0.5, 2.0)]
     table = acceptance(pd.DataFrame(rows))
-    assert (table["parameter"] == "load.mass").all()
+    assert (table["parameter"] == "robot.platform.mass").all()
     verdict = table.set_index(["actuator", "value"])["accepted"].to_dict()
     assert verdict == {(3, 0.5): True, (3, 2.0): False, (4, 0.5): True, (4, 2.0): False}

@@ -63,8 +63,8 @@ def test_both_chunk_states_offer_the_criteria_one_interface(make_cfg, catalogue,
     wrench set (enumerated here for the CPR-8, off-centre load and tilted platform: M / R of
     eq. 20 at every acceleration), the forces of the feasible model's variables, its families,
     and the per-pose diagnostics."""
-    cpr8 = make_cfg("actuator=3", "orientation.psi=0.3", "orientation.theta=-0.2", "load.com=[0.03,-0.02,0.01]",
-                    f"tension={tension}", "grid.n=3")
+    cpr8 = make_cfg("actuator=3", "orientation.psi=0.3", "orientation.theta=-0.2",
+                    "robot.platform.com=[0.03,-0.02,0.01]", f"tension={tension}", "grid.n=3")
     irpm = make_cfg("robot=irpm6", "robot.search.step=2", "wrench.fx=300", "tension.t_max=50000", f"tension={tension}")
     for cfg, kind in ((cpr8, "cpr_wwa"), (irpm, "statics")):
         problem, grid = build_problem(cfg, catalogue)

@@ -60,9 +60,10 @@ def test_repro_writes_the_study_metrics_and_a_lock(project):
 
 def test_exp_run_with_changed_parameters_shows_in_metrics_diff(project):
     """conf/config.yaml is a params file DVC can change (Hydra's own settings live in
-    conf/hydra_settings.yaml): a lighter load and a lower x accept every actuator."""
+    conf/hydra_settings.yaml), and so are the robot files: a lighter carrier and a lower x accept
+    every actuator."""
     root, run = project
-    run("dvc", "exp", "run", "-S", "conf/config.yaml:load.mass=0.5",
+    run("dvc", "exp", "run", "-S", "conf/robot/cpr8.yaml:robot.platform.mass=0.5",
         "-S", "conf/analysis/cpr_wwa.yaml:choice.required_pct=80", STAGE)
     diff = json.loads(run("dvc", "metrics", "diff", "--json").stdout)
     changed = diff[METRICS]
@@ -70,7 +71,7 @@ def test_exp_run_with_changed_parameters_shows_in_metrics_diff(project):
     assert changed["feasible_pct.actuator=5"]["old"] == pytest.approx(0.0)
     assert changed["feasible_pct.actuator=5"]["new"] == pytest.approx(85.185185)
     params = json.loads(run("dvc", "params", "diff", "--json").stdout)
-    mass = params["conf/config.yaml"]["load.mass"]
+    mass = params["conf/robot/cpr8.yaml"]["robot.platform.mass"]
     assert (mass["old"], mass["new"]) == (2.0, 0.5)
     shown = run("dvc", "exp", "show", "--json").stdout
     assert "n_accepted" in shown

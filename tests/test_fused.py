@@ -72,7 +72,7 @@ def test_paper_grid_every_actuator_gives_the_numpy_margins(columns, angle, make_
 def test_loads_ratings_lengths_and_total_orientation_give_the_numpy_margins(make_cfg, catalogue):
     """Every term of F in eq. (31) (centre of mass, external wrench, Newton's sign), a rating per
     cable, a cable length limit and a total-orientation set (the worst over 27 orientations)."""
-    cfg = make_cfg("actuator=4", "grid.n=10", "load.com=[0.01,-0.02,0.03]",
+    cfg = make_cfg("actuator=4", "grid.n=10", "robot.platform.com=[0.01,-0.02,0.03]",
                    "load.external=[3,-2,5,0.2,-0.1,0.3]", "model.inertia=newton",
                    "tension.t_max=[3000,2500,3000,2800,3000,3000,2600,3000]", "orientation.total.n=3",
                    "orientation.total.bound=0.2")

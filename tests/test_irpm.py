@@ -215,10 +215,10 @@ def test_bad_irpm_values_are_named(make_cfg, catalogue, override, message):
 
 
 def test_cpr8_goes_through_the_same_statics(make_cfg, catalogue):
-    """The generic statics on the 8-cable CPR-8 (weight of load.mass = 2 kg, z up): rank 5 at zero
+    """The generic statics on the 8-cable CPR-8 (weight of the carrier, robot.platform.mass = 2 kg, z up): rank 5 at zero
     orientation (the singular gate); at 0.5 rad the minimum-norm tensions balance the weight,
     and every grid pose needs at least one pushing cable (the finding behind issue 8)."""
-    overrides = ["analysis=statics", "tension.t_max=1000"]  # the weight comes from load.mass
+    overrides = ["analysis=statics", "tension.t_max=1000"]  # the weight comes from robot.platform.mass
     _, flat = compute_workspace(make_cfg(*overrides), catalogue)
     assert flat["lost_singular"] == 216
     problem, grid = build_problem(make_cfg(*overrides, "orientation.psi=0.5",
@@ -226,7 +226,7 @@ def test_cpr8_goes_through_the_same_statics(make_cfg, catalogue):
     margins = evaluate_chunk(problem, grid.positions)
     assert (margins["margin_singular"] > 0).all()
     state = problem.spec.state(problem.robot, grid.positions, problem.orientation)
-    assert state.wrench == pytest.approx([0, 0, -2.0 * 9.81, 0, 0, 0])  # load.mass, z up
+    assert state.wrench == pytest.approx([0, 0, -2.0 * 9.81, 0, 0, 0])  # the carrier's 2 kg, z up
     residual = np.einsum("nkm,nm->nk", state.structure_matrix, state.tensions) - state.wrench
     assert np.abs(residual).max() < 1e-9
     assert (margins["margin_slack"] < 0).all()

@@ -6,6 +6,7 @@ import pytest
 
 from pipeline.model.geometry import euler_rate_axes, rotation_matrix, rotation_partials
 from pipeline.app.problem import build_problem, compute_workspace
+from pipeline.workspace.kernel import evaluate_chunk
 
 
 @pytest.mark.parametrize("angles", [(0.0, 0.0, 0.0), (0.5, 0.5, 0.5), (-0.3, 1.2, 2.0)])
@@ -92,3 +93,31 @@ def test_wirex_structure_matrix_is_ours_with_the_opposite_sign(make_cfg, catalog
             u = (a - r - p) / np.linalg.norm(a - r - p)
             columns.append(np.concatenate([u, np.cross(p, u)]))
         np.testing.assert_allclose(np.stack(columns, axis=1), -state.structure_matrix[n], atol=1e-14)
+
+
+@pytest.mark.parametrize("robot", [[], ["analysis=statics", "tension.t_max=1000"],
+                                   ["robot=irpm6", "robot.search.step=2", "wrench.fz=0", "tension.t_max=2000"]])
+def test_the_payload_adds_to_the_robot_s_own_platform_mass_at_its_centre_of_mass(make_cfg, catalogue, robot):
+    """The platform's mass and centre of mass belong to the robot (``robot.platform``), the
+    payload is the load (``load.mass`` at ``load.com``, platform frame): a 1 kg payload 0.1 m off
+    centre on the CPR-8's 2 kg carrier is a 3 kg platform with its centre of mass at the
+    mass-weighted point, and the wrench on a tilted platform is that weight and its moment
+    about the reference point (worked out here from the rotation, not from the model)."""
+    combined = make_cfg(*robot, "robot.platform.mass=2", "robot.platform.com=[0,0.05,0]",
+                        "load.mass=1", "load.com=[0.1,0,-0.03]", "orientation.psi=0.2", "orientation.theta=-0.3")
+    single = make_cfg(*robot, "robot.platform.mass=3", f"robot.platform.com=[{0.1 / 3!r},{0.1 / 3!r},-0.01]",
+                      "orientation.psi=0.2", "orientation.theta=-0.3")
+    (problem, grid), (reference, _) = build_problem(combined, catalogue), build_problem(single, catalogue)
+    assert problem.spec.load.mass == 3.0
+    assert problem.spec.load.com == pytest.approx(reference.spec.load.com, abs=1e-15)
+    state = problem.spec.state(problem.robot, grid.positions[:5], problem.orientation)
+    psi, theta = 0.2, -0.3  # eq. (9): R = Rz(phi) Ry(theta) Rx(psi), phi = 0
+    rx = np.array([[1, 0, 0], [0, np.cos(psi), -np.sin(psi)], [0, np.sin(psi), np.cos(psi)]])
+    ry = np.array([[np.cos(theta), 0, np.sin(theta)], [0, 1, 0], [-np.sin(theta), 0, np.cos(theta)]])
+    weight = -3.0 * 9.81 * problem.robot.up
+    arm = ry @ rx @ np.array([0.1 / 3, 0.1 / 3, -0.01])
+    if problem.spec.kind == "statics":
+        assert state.wrench == pytest.approx(np.concatenate([weight, np.cross(arm, weight)]), abs=1e-9)
+    for key in ("margin_" + name for name in problem.criteria):
+        np.testing.assert_allclose(evaluate_chunk(problem, grid.positions)[key],
+                                   evaluate_chunk(reference, grid.positions)[key], rtol=0, atol=1e-12, err_msg=key)

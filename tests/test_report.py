@@ -133,7 +133,7 @@ def test_the_report_gives_each_studys_answer_and_the_figures_captions(studies, t
     _png(studies / "actuator_choice" / "figures" / "fig9.png", "Feasible share | per actuator")
     design = studies / "design_mass"
     (design / "figures").mkdir(parents=True)
-    summary = pd.DataFrame([{**compute_workspace(make_cfg(f"actuator={a}", f"load.mass={m}"), catalogue)[1],
+    summary = pd.DataFrame([{**compute_workspace(make_cfg(f"actuator={a}", f"robot.platform.mass={m}"), catalogue)[1],
                              "job": f"{a}-{m}"} for a in (1, 3) for m in (0.5, 4.0)])
     save(summary, design / "summary.parquet")
     save(acceptance(summary), design / "acceptance.parquet")
@@ -141,7 +141,7 @@ def test_the_report_gives_each_studys_answer_and_the_figures_captions(studies, t
     text = pipeline.report.build(studies, tmp_path / "report").read_text()
     assert ("Actuator choice at x &gt;= 90 %: accept 1, 2; reject 3 85.19 % (lost to torque 32); "
             "4 85.19 % (lost to voltage 32); 5 0.00 % (lost to torque 216).") in text
-    assert "Accepted (x ≥ 90 %) by load mass (kg): actuator 1 at 0.5; actuator 3 at 0.5." in text
+    assert "Accepted (x ≥ 90 %) by carried mass m (kg): actuator 1 at 0.5; actuator 3 at 0.5." in text
     assert "![Feasible share \\| per actuator](figures/actuator_choice/fig9.png)" in text
     assert "*Feasible share \\| per actuator*" in text
 

@@ -357,7 +357,7 @@ KINDS: dict[str, Callable[[FigureSpec, pd.DataFrame, StudyResults, Path], list[P
 
 # Config keys as a reader names them (legend titles, panel titles).
 LABELS = {"robot.gamma_deg": "γ (deg)", "robot.r_end": "r_end (m)", "robot.r_base": "r_base (m)",
-          "load.mass": "load mass (kg)", "motion.v_max": "V_cmax (m/s)",
+          "load.mass": "payload (kg)", "robot.platform.mass": "carried mass m (kg)", "motion.v_max": "V_cmax (m/s)",
           "drive.winch_radius": "winch radius R_i (m)", "drive.gear_ratio": "gear ratio N_V",
           "tension.model": "tension model"}
 

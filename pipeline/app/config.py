@@ -179,6 +179,17 @@ class CarrierConfig:
 
 
 @dataclass
+class PlatformConfig:
+    """The robot's own moving platform: its mass (kg) and centre of mass (m, platform frame).
+    With the payload (``load.*``) it is the mass m of eq. (31) and the weight every analysis
+    balances (CPR-8: the paper's carrier with its load, 2 kg; IRPM: 0, as its paper puts the
+    weight in f_ext; a robot of points: 0 unless its file gives one)."""
+
+    mass: float = rule(mass_kg)
+    com: list[float] = rule(vector(3, "x y z, m, platform frame"))
+
+
+@dataclass
 class Cpr8Config:
     """CPR-8 robot (Fig. 1). ``lower_anchor_drop``: depth of O', F', G', H' below O, F, G, H
     (null = h_o as eqs. 14-17)."""
@@ -187,6 +198,7 @@ class Cpr8Config:
     frame: FrameConfig = field(default_factory=FrameConfig)
     carrier: CarrierConfig = field(default_factory=CarrierConfig)
     lower_anchor_drop: Optional[float] = rule(non_negative)
+    platform: PlatformConfig = field(default_factory=PlatformConfig)
 
     @staticmethod
     def check_fields(robot: DictConfig) -> None:
@@ -229,6 +241,7 @@ class Irpm6Config:
     gamma_deg: float = rule(lambda v: None if 0 <= v < 120 else "must be in [0, 120) (pairs would overlap)")
     l_max: float = rule(positive)
     search: SearchConfig = field(default_factory=SearchConfig)
+    platform: PlatformConfig = field(default_factory=PlatformConfig)
 
 
 @dataclass
@@ -253,6 +266,7 @@ class PointsConfig:
     up: list[float] = MISSING
     l_max: Optional[float] = rule(positive)
     search: PointsSearchConfig = field(default_factory=PointsSearchConfig)
+    platform: PlatformConfig = field(default_factory=PlatformConfig)
 
 
 @dataclass
@@ -338,11 +352,12 @@ class MotionConfig:
 
 @dataclass
 class LoadConfig:
-    """Load mass m (kg) of eq. (31) (0: a massless platform), gravitational acceleration g
-    (m/s^2, along -up of the robot), centre of mass (m, platform frame) and a constant external
-    wrench [f_x f_y f_z M_x M_y M_z] (N, N m) the cables must also balance: the weight, its moment
-    and the external wrench enter every analysis. Masses are bounded at 1e8 kg and forces at
-    1e9 N (N m): far past any cable robot, where a mistyped exponent would reach the LP solver."""
+    """The payload on the robot's platform: its mass (kg, added to ``robot.platform.mass`` in
+    eq. (31)) and centre of mass (m, platform frame); the gravitational acceleration g (m/s^2,
+    along -up of the robot) and a constant external wrench [f_x f_y f_z M_x M_y M_z] (N, N m)
+    the cables must also balance: the weight of platform and payload, its moment and the
+    external wrench enter every analysis. Masses are bounded at 1e8 kg and forces at 1e9 N
+    (N m): far past any cable robot, where a mistyped exponent would reach the LP solver."""
 
     mass: float = rule(mass_kg)
     gravity: float = rule(non_negative)

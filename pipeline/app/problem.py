@@ -148,17 +148,18 @@ def _cpr_wwa(cfg: DictConfig, catalogue: Catalogue, robot: CableRobot):
 def _statics(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
     """The statics' spec (eqs. 7-10), limits and criteria; refuses moments about the base for a
     platform with mass and fewer than six cables (its gram ratio would make every pose singular)."""
-    if name_of(cfg.model.moment_arm) == "base" and cfg.load.mass > 0:
+    load = load_spec(cfg)
+    if name_of(cfg.model.moment_arm) == "base" and load.mass > 0:
         raise ConfigError(f"model.moment_arm=base: moments about the base are only read for a "
-                          f"massless platform (load.mass={cfg.load.mass}); set load.mass=0 and put "
-                          "the weight in wrench.*")
+                          f"massless platform (robot.platform.mass={cfg.robot.platform.mass}, "
+                          f"load.mass={cfg.load.mass}); set both to 0 and put the weight in wrench.*")
     _enough_cables(cfg, robot, 6, "")
     spec = StaticsSpec(
         moment_arm=name_of(cfg.model.moment_arm),
         cable_direction=name_of(cfg.model.cable_direction),
         rank_rtol=cfg.model.rank_rtol,
         tension=tension_spec(cfg, robot),
-        load=load_spec(cfg),
+        load=load,
     )
     rating = spec.tension.t_max
     force = spec.load.external[:3] - spec.load.mass * spec.load.gravity * robot.up
@@ -292,12 +293,16 @@ def cable_limits(tension: TensionSpec, robot: CableRobot) -> tuple[str, ...]:
 
 
 def load_spec(cfg: DictConfig) -> Load:
-    """The load of every analysis: mass, gravity, centre of mass, and as its external wrench
-    ``load.external`` plus the applied wrench ``wrench.*`` (IRPM eq. 11)."""
-    load, w = cfg.load, cfg.wrench
+    """The load of every analysis: the robot's platform and the payload on it as one body (their
+    masses added, the centre of mass their mass-weighted mean, platform frame), gravity, and as
+    its external wrench ``load.external`` plus the applied wrench ``wrench.*`` (IRPM eq. 11)."""
+    platform, load, w = cfg.robot.platform, cfg.load, cfg.wrench
+    mass = float(platform.mass) + float(load.mass)
+    moments = float(platform.mass) * np.asarray(platform.com, dtype=float) + float(load.mass) * np.asarray(
+        load.com, dtype=float)
+    com = moments / mass if mass > 0 else np.zeros(3)
     applied = np.array([w.fx, w.fy, w.fz, w.mx, w.my, w.mz], dtype=float)
-    return Load(float(load.mass), float(load.gravity), np.asarray(load.com, dtype=float),
-                np.asarray(load.external, dtype=float) + applied)
+    return Load(mass, float(load.gravity), com, np.asarray(load.external, dtype=float) + applied)
 
 
 def tension_spec(cfg: DictConfig, robot: CableRobot) -> TensionSpec:
