@@ -17,15 +17,17 @@ it, so the searched positions are CASPR's joint coordinates q).
 The file written sets the robot's points, ``robot.platform`` (mass and centre of mass; 0 kg
 without ``--bodies``, said so), ``tension.t_min``/``t_max`` (one value, or one per cable where
 they differ) and the search box: ``--lo``/``--hi`` when given, else the joint's position limits
-(the first three values of ``q_min``/``q_max``), else the anchors' bounding box when it has a
-volume; never the display range (a plot extent). The box used is printed.
+(their position values of ``q_min``/``q_max``), else the anchors' bounding box when it spans
+the joint's axes; never the display range (a plot extent). The box used is printed.
 
-Refused, in one line and exit status 2, with the reason: a joint other than a free spatial body
-(``SPATIAL_EULER_XYZ``, ``SPATIAL_QUATERNION``: planar, point, spherical and revolute platforms
-have fewer freedoms than the 6 rows this version balances), a multi-link (MCDM) model, a cable
-that is not ``<cable_ideal>`` (springs, variable stiffness), a cable routed through more than two
-points or a pulley (``<attachment_base_pulley>``), two cables of one name (both named), and a
-file that is not such XML. CASPR's ``SPATIAL_EULER_XYZ`` orientation is R = Rx Ry Rz of its
+The joint gives the platform's freedoms (``robot.dofs``): ``SPATIAL_EULER_XYZ`` and
+``SPATIAL_QUATERNION`` all six, ``T_XYZ`` x, y, z, ``PLANAR_XY`` x, y, rz (and ``PLANAR_XZ``,
+``PLANAR_YZ``), ``P_XY`` and ``P_XZ`` a point in a plane; a planar joint's box is its plane
+through the joint's origin. Refused, in one line and exit status 2, with the reason: a joint whose
+workspace is a set of orientations or one axis (spherical, revolute, universal, prismatic), a
+multi-link (MCDM) model, a cable that is not ``<cable_ideal>`` (springs, variable stiffness), a
+cable routed through more than two points or a pulley (``<attachment_base_pulley>``), two
+cables of one name (both named), and a file that is not such XML. CASPR's ``SPATIAL_EULER_XYZ`` orientation is R = Rx Ry Rz of its
 angles, eq. (9)'s is R = Rz(phi) Ry(theta) Rx(psi): the file and the output say so.
 
 The importer writes only a new file of the user's: an existing file is replaced only with
@@ -54,18 +56,24 @@ from pipeline.app.results import code_version, write_text
 SHIPPED_ROBOTS = tuple(sorted(p.stem for p in (CONF_DIR / "robot").glob("*.yaml")))
 
 
-# CASPR's joint types (src/Model/Bodies/Joints/JointType.m) and the platform freedoms they give
-SPATIAL_JOINTS = ("SPATIAL_EULER_XYZ", "SPATIAL_QUATERNION")
-FREEDOMS = {
-    "T_XYZ": "x, y, z (a platform that only translates)",
-    "PLANAR_XY": "x, y, rz (a planar platform)", "PLANAR_XZ": "x, z, ry (a planar platform)",
-    "PLANAR_YZ": "y, z, rx (a planar platform)",
-    "P_X": "x", "P_XY": "x, y (a planar point)", "P_XZ": "x, z (a planar point)", "P_AXIS": "one translation",
+# CASPR's joint types (src/Model/Bodies/Joints/) that move a platform through positions: its
+# freedoms (robot.dofs) and which of x, y, z the first values of q_min/q_max are (the others 0)
+JOINTS = {
+    "SPATIAL_EULER_XYZ": (["x", "y", "z", "rx", "ry", "rz"], "xyz"),
+    "SPATIAL_QUATERNION": (["x", "y", "z", "rx", "ry", "rz"], "xyz"),
+    "T_XYZ": (["x", "y", "z"], "xyz"),  # a platform that only translates
+    "PLANAR_XY": (["x", "y", "rz"], "xy"), "PLANAR_XZ": (["x", "z", "ry"], "xz"),
+    "PLANAR_YZ": (["y", "z", "rx"], "yz"),
+    "P_XY": (["x", "y"], "xy"), "P_XZ": (["x", "z"], "xz"),  # a point in a plane
+}
+# joints whose workspace is a set of orientations, or one axis: not a grid of positions
+ORIENTING = {
     "S_EULER_XYZ": "rx, ry, rz (a spherical joint)", "S_FIXED_XYZ": "rx, ry, rz (a spherical joint)",
     "S_QUATERNION": "rx, ry, rz (a spherical joint)",
     "R_X": "rx (a revolute joint)", "R_Y": "ry (a revolute joint)", "R_Z": "rz (a revolute joint)",
     "R_AXIS": "one rotation (a revolute joint)", "U_XY": "rx, ry (a universal joint)",
     "U_XZ": "rx, rz (a universal joint)", "U_YZ": "ry, rz (a universal joint)",
+    "P_X": "x (a prismatic joint)", "P_AXIS": "one translation (a prismatic joint)",
 }
 
 
@@ -141,22 +149,27 @@ def read_body(path: Path) -> dict:
     where = f"{path}: link {link.get('num', '1')}"
     joint = link.find("joint")
     kind = "" if joint is None else joint.get("type", "")
-    if kind not in SPATIAL_JOINTS:
-        freedoms = FREEDOMS.get(kind)
+    if kind not in JOINTS:
+        freedoms = ORIENTING.get(kind)
         what = f"joint {kind or '(none)'}" + (f" moves the platform in {freedoms}" if freedoms else ", not a CASPR joint type")
-        raise ConfigError(f"{where}: {what}; only free spatial platforms ({' or '.join(SPATIAL_JOINTS)}, 6 "
-                          "freedoms) are imported so far")
+        raise ConfigError(f"{where}: {what}; imported are platforms that move through positions: "
+                          f"{', '.join(JOINTS)}")
+    dofs, axes = JOINTS[kind]
     mass = _number(link, "physical/mass", where)
     if not 0 <= mass <= MAX_MASS:
         raise ConfigError(f"{where}: mass {mass:g} must be in [0, {MAX_MASS:g}] kg")
     box = None
     if joint.get("q_min") is not None or joint.get("q_max") is not None:
-        box = tuple(_numbers(joint.get(key) or "", f"{where}: joint {key}", 3) for key in ("q_min", "q_max"))
-        if not (box[0] < box[1]).all():
+        limits = [_numbers(joint.get(key) or "", f"{where}: joint {key}", len(axes)) for key in ("q_min", "q_max")]
+        if not (limits[0] < limits[1]).all():
             raise ConfigError(f"{where}: joint q_min {joint.get('q_min')!r} and q_max {joint.get('q_max')!r}: "
-                              "need q_min < q_max in x, y and z")
+                              f"need q_min < q_max in {', '.join(axes)}")
+        box = tuple(np.zeros(3) for _ in limits)  # the plane of a planar joint through the joint's origin
+        for corner, values in zip(box, limits):
+            for axis, value in zip(axes, values):
+                corner["xyz".index(axis)] = value
     origin = link.find("parent/location")
-    return {"name": link.get("name") or "", "joint": kind, "mass": mass, "box": box,
+    return {"name": link.get("name") or "", "joint": kind, "dofs": dofs, "mass": mass, "box": box,
             "com": _vector(link, "physical/com_location", where),
             "origin": np.zeros(3) if origin is None else np.asarray(_vector(link, "parent/location", where))}
 
@@ -170,8 +183,10 @@ def search_box(cables: dict, body: dict | None, box=None) -> tuple[np.ndarray, n
         return body["box"][0], body["box"][1], "the joint's q_min/q_max"
     anchors = np.asarray(cables["anchors"]) - (0.0 if body is None else body["origin"])
     lo, hi = anchors.min(axis=0), anchors.max(axis=0)
-    if not (hi - lo > 1e-9 * max(1.0, float(np.abs(anchors).max()))).all():
-        flat = ", ".join(axis for axis, span in zip("xyz", hi - lo) if not span > 0)
+    moving = np.array([axis in (JOINTS[body["joint"]][1] if body else "xyz") for axis in "xyz"])
+    lo, hi = np.where(moving, lo, 0.0), np.where(moving, hi, 0.0)  # a planar joint's plane through its origin
+    if not (hi - lo > 1e-9 * max(1.0, float(np.abs(anchors).max())))[moving].all():
+        flat = ", ".join(axis for axis, span, free in zip("xyz", hi - lo, moving) if free and not span > 0)
         raise ConfigError(f"no search box: {'the bodies file gives no joint q_min/q_max' if body else 'no --bodies'}, "
                           f"and the anchors span nothing along {flat} (a suspended robot); give --lo x y z --hi x y z")
     return lo, hi, "the anchors' bounding box"
@@ -186,6 +201,7 @@ def robot_yaml(cables: dict, body: dict | None, step: float, sources: tuple[str,
                    for a, ref in zip(cables["attachments"], cables["reference"])]
     anchors = np.asarray(cables["anchors"]) - origin  # relative to the joint's origin: positions are q
     lo, hi, _ = box
+    spacing = "centres" if (np.asarray(hi) > np.asarray(lo)).all() else "faces"  # a plane: its one layer
     bodies = f" with {_one_line(sources[1])} (link {_one_line(body['name'])!r}, joint {body['joint']})" if body else ""
     lines = [
         "# @package _global_",
@@ -206,7 +222,8 @@ def robot_yaml(cables: dict, body: dict | None, step: float, sources: tuple[str,
         *[f"    - {_flow(a)}" for a in attachments],
         f"  cable_names: [{', '.join(_quoted(n) for n in cables['names'])}]",
         f"  platform: {{mass: {0.0 if body is None else body['mass']!r}, com: {_flow(com)}}}",
-        f"  search: {{lo: {_flow(lo)}, hi: {_flow(hi)}, step: {step!r}, spacing: centres}}",
+        *([f"  dofs: [{', '.join(body['dofs'])}]"] if body is not None and len(body["dofs"]) < 6 else []),
+        f"  search: {{lo: {_flow(lo)}, hi: {_flow(hi)}, step: {step!r}, spacing: {spacing}}}",
         f"tension: {{t_min: {_limit(cables['force_min'])}, t_max: {_limit(cables['force_max'])}}}",
     ]
     return "\n".join(lines) + "\n"
@@ -258,7 +275,7 @@ def _numbers(text: str, where: str, first: int) -> np.ndarray:
     except ValueError:
         values = np.array([])
     if len(values) < first or not np.isfinite(values[:first]).all():
-        raise ConfigError(f"{where} {text!r}: needs {first} finite numbers first (x y z, m)")
+        raise ConfigError(f"{where} {text!r}: needs {first} finite numbers first (the joint's positions, m)")
     return values[:first]
 
 

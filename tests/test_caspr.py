@@ -144,14 +144,14 @@ def _write(tmp_path, cables=CABLES, bodies=BODIES):
 JOINT = 'type="SPATIAL_EULER_XYZ"'
 LIMITS = ' q_min="-2.5 -1.5 0.2 -3.1416 -3.1416 -3.1416" q_max="2.5 1.5 2.8 3.1416 3.1416 3.1416"'
 BAD_BODIES = {
-    "planar": (BODIES.replace(JOINT, 'type="PLANAR_XY"').replace(LIMITS, ' q_min="-1 -1 -3.1416" q_max="1 1 3.1416"'),
-               "joint PLANAR_XY moves the platform in x, y, rz (a planar platform); only free spatial platforms"),
-    "point": (BODIES.replace(JOINT, 'type="T_XYZ"'), "joint T_XYZ moves the platform in x, y, z"),
-    "spherical": (BODIES.replace(JOINT, 'type="S_EULER_XYZ"'), "joint S_EULER_XYZ moves the platform in rx, ry, rz"),
+    "spherical": (BODIES.replace(JOINT, 'type="S_EULER_XYZ"'),
+                  "joint S_EULER_XYZ moves the platform in rx, ry, rz (a spherical joint); imported are platforms "
+                  "that move through positions: SPATIAL_EULER_XYZ, SPATIAL_QUATERNION, T_XYZ, PLANAR_XY"),
+    "revolute": (BODIES.replace(JOINT, 'type="R_Z"'), "joint R_Z moves the platform in rz (a revolute joint)"),
     "unknown_joint": (BODIES.replace(JOINT, 'type="HINGE"'), "joint HINGE, not a CASPR joint type"),
     "two_links": (BODIES.replace("    </links>", '      <link_rigid num="2" name="arm">\n      </link_rigid>\n'
                                                   "    </links>"), "2 <link_rigid> links: only single-body models"),
-    "limits_reversed": (BODIES.replace('q_min="-2.5', 'q_min="2.6'), "need q_min < q_max in x, y and z"),
+    "limits_reversed": (BODIES.replace('q_min="-2.5', 'q_min="2.6'), "need q_min < q_max in x, y, z"),
     "limits_short": (BODIES.replace(LIMITS, ' q_min="0 0" q_max="1 1 1"'), "joint q_min '0 0': needs 3 finite numbers"),
     "negative_mass": (BODIES.replace("<mass>12.5</mass>", "<mass>-1</mass>"), "mass -1 must be in [0, 1e+08] kg"),
     "wrong_root": (BODIES.replace("bodies_system>", "robot>"), "root element <robot>, a CASPR bodies file"),
@@ -165,6 +165,14 @@ def test_a_body_this_version_cannot_model_is_refused_with_the_reason(tmp_path, c
     lines = done.stderr.strip().splitlines()
     assert done.returncode == 2 and len(lines) == 1 and message in lines[0], done.stderr
     assert not (tmp_path / "mine").exists()
+
+
+def test_a_platform_that_only_translates_keeps_its_three_freedoms(tmp_path):
+    """CASPR's T_XYZ: the joint holds the orientation, the cables balance forces only."""
+    assert _write(tmp_path, bodies=BODIES.replace(JOINT, 'type="T_XYZ"')).returncode == 0
+    data = yaml.safe_load((tmp_path / "mine" / "robot" / "x.yaml").read_text())
+    assert data["robot"]["dofs"] == ["x", "y", "z"] and data["robot"]["search"]["spacing"] == "centres"
+    assert "XYZ Euler" not in (tmp_path / "mine" / "robot" / "x.yaml").read_text()
 
 
 def test_without_joint_limits_the_box_is_the_anchors_or_must_be_given(tmp_path):

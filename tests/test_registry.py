@@ -61,10 +61,12 @@ def test_a_job_has_only_the_keys_of_its_robot_and_analysis(make_cfg, catalogue):
 
 
 @pytest.mark.parametrize("analysis, extra, needs", [
-    ("statics", [], 6), ("cpr_wwa", [], 3), ("cpr_wwa", ["model.pinv_columns=translational"], 3),
+    ("statics", ["tension=pinv"], 6), ("statics", [], 3), ("cpr_wwa", [], 3),
+    ("cpr_wwa", ["model.pinv_columns=translational"], 3),
     ("cpr_wwa", ["robot.attachments=[[0.1,0,0],[0,0,0],[0,0,0],[0,0,0]]"], 6)])
 def test_fewer_cables_than_the_analysis_balances_are_refused(make_cfg, catalogue, analysis, extra, needs):
-    """Four cables to a point: the statics' six wrench rows would make every pose singular;
+    """Four cables to a point: under the minimum-norm model the statics' six wrench rows would
+    make every pose singular (pulling cables, ``tension=feasible``, find where four hold it);
     CPR-WWA balances forces only there (its moment rows vanish at a point platform, whatever
     model.pinv_columns says). Four cables to a platform with moment arms cannot balance six."""
     from pipeline.app.problem import validate

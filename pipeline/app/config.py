@@ -255,15 +255,19 @@ class PointsSearchConfig(SearchConfig):
 @dataclass
 class PointsConfig:
     """A robot given by its points (``pipeline.model.robots.PointsRobot.from_config`` checks them
-    where it builds the robot): anchors
-    (fixed frame) and attachments (platform frame), lists of [x, y, z] in m; optional cable
-    names; the up direction; the longest cable l_max (m, null = none); the search box."""
+    where it builds the robot): anchors (fixed frame) and attachments (platform frame), lists of
+    [x, y, z] in m; optional cable names; the up direction; the longest cable l_max (m, null =
+    none); the search box; ``dofs``, the platform's freedoms among x, y, z, rx, ry, rz (the
+    wrench rows the cables balance; a joint or a plane takes the others): all six for a free
+    body, [x, y, z] for a point platform in space, [x, y] for a planar point, [x, y, rz] for a
+    body in the x-y plane."""
 
     name: str = MISSING
     anchors: Any = MISSING
     attachments: Any = MISSING
     cable_names: Optional[list[str]] = MISSING
     up: list[float] = MISSING
+    dofs: list[str] = MISSING
     l_max: Optional[float] = rule(positive)
     search: PointsSearchConfig = field(default_factory=PointsSearchConfig)
     platform: PlatformConfig = field(default_factory=PlatformConfig)

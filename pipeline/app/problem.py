@@ -36,7 +36,7 @@ from pipeline.errors import ConfigError
 from pipeline.model.actuators import actuator_model
 from pipeline.model.catalogue import Catalogue
 from pipeline.model.dynamics import Load, MotionSpec
-from pipeline.model.geometry import CableRobot
+from pipeline.model.geometry import FREEDOMS, CableRobot
 from pipeline.model.motion import acceleration_set, cartesian_cube, extreme_points, velocity_set
 from pipeline.model.robots import PointsRobot, cpr8, irpm6, point_list
 from pipeline.model.statics import StaticLimits, StaticsSpec
@@ -116,6 +116,11 @@ def _cpr_wwa(cfg: DictConfig, catalogue: Catalogue, robot: CableRobot):
         limit = round(MAX_VELOCITY_CANDIDATES ** (1 / 3)) - 1
         raise ConfigError(f"grid.n_vel={n_vel}: the velocity grid would have {(n_vel + 1) ** 3:.3g} "
                           f"candidates; at most grid.n_vel={limit}")
+    if robot.dofs != (0, 1, 2, 3, 4, 5) and not (robot.dofs == (0, 1, 2) and name_of(model.pinv_columns) == "translational"):
+        freedoms = ", ".join(FREEDOMS[i] for i in robot.dofs)
+        hint = "; with model.pinv_columns=translational" if robot.dofs == (0, 1, 2) else ""
+        raise ConfigError(f"robot.dofs=[{freedoms}]: the dynamics of eqs. (19)-(31) move a spatial platform (all six "
+                          f"freedoms, or x, y, z with model.pinv_columns=translational){hint}; use analysis=statics")
     # a point platform (every attachment at its reference point) has no moment rows to balance
     forces_only = name_of(model.pinv_columns) == "translational" or not robot.attachments.any()
     _enough_cables(cfg, robot, 3 if forces_only else 6,
@@ -146,14 +151,17 @@ def _cpr_wwa(cfg: DictConfig, catalogue: Catalogue, robot: CableRobot):
 
 
 def _statics(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
-    """The statics' spec (eqs. 7-10), limits and criteria; refuses moments about the base for a
-    platform with mass and fewer than six cables (its gram ratio would make every pose singular)."""
+    """The statics' spec (eqs. 7-10), limits and criteria, balancing the rows of the robot's
+    freedoms; refuses moments about the base for a platform with mass, and, under the
+    minimum-norm model, fewer cables than freedoms (its gram ratio would make every pose
+    singular; ``tension=feasible`` finds the poses where fewer cables hold the load, as a crane's)."""
     load = load_spec(cfg)
     if name_of(cfg.model.moment_arm) == "base" and load.mass > 0:
         raise ConfigError(f"model.moment_arm=base: moments about the base are only read for a "
                           f"massless platform (robot.platform.mass={cfg.robot.platform.mass}, "
                           f"load.mass={cfg.load.mass}); set both to 0 and put the weight in wrench.*")
-    _enough_cables(cfg, robot, 6, "")
+    if name_of(cfg.tension.model) == "pinv":
+        _enough_cables(cfg, robot, len(robot.dofs), "; tension=feasible finds where fewer cables hold the load")
     spec = StaticsSpec(
         moment_arm=name_of(cfg.model.moment_arm),
         cable_direction=name_of(cfg.model.cable_direction),
@@ -175,7 +183,7 @@ ANALYSES = {"cpr_wwa": _cpr_wwa, "statics": _statics, "lines": _cpr_wwa}
 
 def _enough_cables(cfg: DictConfig, robot: CableRobot, rows: int, hint: str) -> None:
     if robot.n_cables < rows:
-        what = "forces" if rows == 3 else "forces and moments"
+        what = {3: "forces", 6: "forces and moments"}.get(rows, f"{rows} freedoms")
         raise ConfigError(f"robot: {robot.n_cables} cables; analysis={cfg.analysis} balances {what} "
                           f"({rows} rows of the structure matrix) and needs >= {rows} cables{hint}")
 

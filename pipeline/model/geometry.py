@@ -37,6 +37,9 @@ class CableRobot:
     up: (3,) unit vector of the fixed frame pointing up; gravity acts along -up (CPR-8: +z,
     IRPM: -Z, its Z axis points down from the base).
     l_max: the longest cable, m (None: no length limit); checked in every analysis.
+    dofs: the platform's freedoms, indices into (x, y, z, rx, ry, rz) in that order: the rows of
+    the structure matrix the cables balance (:data:`FREEDOMS`; a joint or a plane holds the others:
+    a point platform in space (0, 1, 2), a planar point (0, 1), a planar body (0, 1, 5)).
     """
 
     name: str
@@ -47,10 +50,14 @@ class CableRobot:
     cable_names: tuple[str, ...]
     up: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, 1.0]))
     l_max: float | None = None
+    dofs: tuple[int, ...] = (0, 1, 2, 3, 4, 5)
 
     @property
     def n_cables(self) -> int:
         return self.anchors.shape[0]
+
+
+FREEDOMS = ("x", "y", "z", "rx", "ry", "rz")  # the rows of the structure matrix, in order
 
 
 def rotation_matrix(psi: float, theta: float, phi: float) -> np.ndarray:

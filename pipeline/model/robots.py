@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pipeline.errors import ConfigError
-from pipeline.model.geometry import CableRobot
+from pipeline.model.geometry import FREEDOMS, CableRobot
 
 
 def carrier_half_diagonal(l: float, w: float, h: float) -> float:
@@ -94,7 +94,8 @@ class PointsRobot:
     anchors (m, 3) fixed-frame points and attachments (m, 3) platform-frame points, m >= 2 in
     the same order; cable_names (m labels, default "1".."m"); up, the frame's up direction
     (normalised, gravity acts along -up); l_max, the longest cable (m, None = none); the search
-    box lo, hi (3,) with step (m) and spacing ``faces`` or ``centres``."""
+    box lo, hi (3,) with step (m) and spacing ``faces`` or ``centres``; dofs, the platform's
+    freedoms (indices into ``geometry.FREEDOMS``, in that order)."""
 
     anchors: np.ndarray
     attachments: np.ndarray
@@ -105,6 +106,7 @@ class PointsRobot:
     hi: np.ndarray
     step: float
     spacing: str
+    dofs: tuple[int, ...]
 
     @classmethod
     def from_config(cls, robot) -> "PointsRobot":
@@ -134,14 +136,17 @@ class PointsRobot:
             raise ConfigError(f"robot.search.step={search.step}: must be > 0 and finite")
         if search.spacing not in ("faces", "centres"):
             raise ConfigError(f"robot.search.spacing={search.spacing}: must be faces or centres")
+        dofs = [str(d) for d in robot.dofs]
+        if not dofs or not set(dofs) <= set(FREEDOMS) or len(set(dofs)) != len(dofs):
+            raise ConfigError(f"robot.dofs={dofs}: must be distinct freedoms among {', '.join(FREEDOMS)}")
         return cls(anchors, attachments, tuple(str(n) for n in names), up / np.linalg.norm(up),
                    None if robot.l_max is None else float(robot.l_max), lo, hi,
-                   float(search.step), str(search.spacing))
+                   float(search.step), str(search.spacing), tuple(sorted(FREEDOMS.index(d) for d in dofs)))
 
     def build(self) -> CableRobot:
         return CableRobot(name="points", anchors=self.anchors, attachments=self.attachments,
                           box_lo=self.lo, box_hi=self.hi, cable_names=self.cable_names, up=self.up,
-                          l_max=self.l_max)
+                          l_max=self.l_max, dofs=self.dofs)
 
 
 def point_list(key: str, value) -> np.ndarray:

@@ -113,16 +113,18 @@ class PoseStatics(PoseGeometry):
 
     @cached_property
     def structure_matrix(self) -> np.ndarray:
-        """(n, 6, m) A of eq. (8): columns [u_i; a_i x u_i], a_i = R d_i (``platform``) or
-        r + R d_i (``base``)."""
+        """(n, k, m) A of eq. (8): columns [u_i; a_i x u_i], a_i = R d_i (``platform``) or
+        r + R d_i (``base``), its rows those of the robot's k freedoms (all six for a free
+        body: ``CableRobot.dofs``)."""
         arms = self.arms if self.spec.moment_arm == "platform" else self.arms + self.positions[:, None, :]
-        return structure_matrix(self.unit, arms)
+        return structure_matrix(self.unit, arms)[:, list(self.robot.dofs), :]
 
     @cached_property
     def wrench(self) -> np.ndarray:
-        """(6,) the wrench the cables balance: the load's weight, its moment about the reference
-        point and the load's external wrench (which holds f_ext of eq. 11)."""
-        return load_wrench_terms(self.spec.load, 0.0, self.robot.up, self.rotation)[1]
+        """(k,) the wrench the cables balance along the robot's freedoms: the load's weight, its
+        moment about the reference point and the load's external wrench (which holds f_ext of
+        eq. 11); a joint or a plane takes the other rows."""
+        return load_wrench_terms(self.spec.load, 0.0, self.robot.up, self.rotation)[1][list(self.robot.dofs)]
 
     @property
     def structure(self) -> np.ndarray:
@@ -131,17 +133,17 @@ class PoseStatics(PoseGeometry):
 
     @cached_property
     def wrench_pinv(self) -> tuple[np.ndarray, np.ndarray]:
-        """A^+ (n, m, 6) and the rank of A (n,)."""
+        """A^+ (n, m, k) and the rank of A (n,)."""
         return batched_pinv(self.structure_matrix, self.spec.rank_rtol)
 
     @property
     def required_wrenches(self) -> np.ndarray:
-        """(1, 6) the wrench of :attr:`wrench`."""
+        """(1, k) the wrench of :attr:`wrench`."""
         return self.wrench[None, :]
 
     @cached_property
     def gram_ratio(self) -> np.ndarray:
-        """(n,) det(A A^T) / prod(diag(A A^T)) in [0, 1] (Hadamard's inequality): 1 when the six
+        """(n,) det(A A^T) / prod(diag(A A^T)) in [0, 1] (Hadamard's inequality): 1 when the k
         rows of A are orthogonal, 0 when A loses rank. Cheaper than an SVD per pose."""
         return gram_ratio(self._gram)
 
@@ -159,7 +161,7 @@ class PoseStatics(PoseGeometry):
         out = np.empty((a.shape[0], a.shape[2]))
         ok = ~self.singular
         if ok.any():
-            rhs = np.broadcast_to(wrench, (int(ok.sum()), 6))[..., None]
+            rhs = np.broadcast_to(wrench, (int(ok.sum()), len(wrench)))[..., None]
             y = np.linalg.solve(self._gram[ok], rhs)[..., 0]
             out[ok] = np.einsum("nkm,nk->nm", a[ok], y)
         if (~ok).any():

@@ -139,6 +139,8 @@ def fused_unfit(problem: WorkspaceProblem) -> str | None:
     (:meth:`pipeline.model.dynamics.MotionSpec.fused_unfit`) and no per-pose cable quantities."""
     if problem.cables:
         return "it does not write the per-pose cable quantities of output.cables=true"
+    if len(problem.robot.dofs) != 6 and problem.spec.kind == "statics":
+        return "it balances all six rows of a free platform only (robot.dofs)"
     return problem.spec.fused_unfit()
 
 

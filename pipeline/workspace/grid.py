@@ -43,7 +43,8 @@ def step_grid(lo: np.ndarray, hi: np.ndarray, step: float, spacing: str = "faces
     """Points lo + k * step on every axis up to hi inclusive (``faces``; IRPM paper, section
     III: the box [-6, 6]^2 x [0, 10] m with step 0.4 m gives 31 x 31 x 26 points), or the
     centres lo + (k + 1/2) step of the cells of side ``step`` that fit in the box
-    (``centres``). Each point stands for a cube of side ``step``: volume = n_feasible * step^3."""
+    (``centres``). Each point stands for a cube of side ``step``: volume = n_feasible * step^3;
+    a box flat along an axis (a planar robot's plane) has no volume (NaN)."""
     lo, hi = np.asarray(lo, float), np.asarray(hi, float)
     if spacing == "faces":
         counts, offset = np.floor((hi - lo) / step + 1e-9).astype(int) + 1, 0.0
@@ -54,4 +55,4 @@ def step_grid(lo: np.ndarray, hi: np.ndarray, step: float, spacing: str = "faces
     axes = [a + offset + step * np.arange(k) for a, k in zip(lo, counts)]
     mesh = np.meshgrid(*axes, indexing="ij")
     positions = np.column_stack([m.ravel() for m in mesh])
-    return Grid(positions=positions, cell_volume=float(step) ** 3)
+    return Grid(positions=positions, cell_volume=float(step) ** 3 if (hi > lo).all() else float("nan"))
