@@ -156,6 +156,9 @@ def load_study(name: str, directory: Path = STUDIES_DIR) -> StudySpec:
     for figure in study.figures:
         if figure.kind not in KINDS:
             raise ConfigError(f"{path}: figures: unknown kind {figure.kind!r} (known: {', '.join(KINDS)})")
+        if figure.kind == "map" and not figure.value:
+            raise ConfigError(f"{path}: figures: {figure.file}: a map colours the poses by a points column: "
+                              "give value (e.g. value: max_payload_kg)")
     return study
 
 
@@ -299,7 +302,7 @@ def _check_jobs(jobs_dir: Path, jobs) -> None:
                               "finished; rerun the study without --figures-only to recompute it")
 
 
-NEEDS_POINTS = {"cloud", "survival"}  # figure kinds and analyses that read jobs/*/points.parquet
+NEEDS_POINTS = {"cloud", "map", "survival"}  # figure kinds and analyses that read jobs/*/points.parquet
 MAX_JOBS_LISTED = 24  # metrics per job up to this many jobs, else their range
 
 

@@ -195,6 +195,19 @@ def test_dvc_yaml_has_one_stage_per_study_and_a_report_on_all_of_them():
         assert (REPO / dep.replace("${item}", available()[0])).exists()
 
 
+def test_every_dvc_plot_names_columns_its_series_has_and_every_study_is_a_metric():
+    """A study's x key renamed (design_mass: load.mass -> robot.platform.mass) must not leave a
+    DVC plot pointing at a column its CSV no longer has (the committed series of dvc repro)."""
+    dvc = yaml.safe_load((REPO / "dvc.yaml").read_text())
+    curves = [next(iter(p.values())) for p in dvc["plots"] if isinstance(p, dict)]
+    assert len(curves) >= 7
+    for curve in curves:
+        for path, columns in curve["y"].items():
+            header = (REPO / path).read_text().splitlines()[0].split(",")
+            assert curve["x"] in header and set(columns) <= set(header), (path, curve["x"], header)
+    assert dvc["metrics"] == [f"outputs/studies/{n}/metrics.json" for n in available()]
+
+
 def test_strings_from_result_files_cannot_break_the_report():
     """A criterion, case or catalogue string in a Parquet file is inert text in the Markdown:
     no table cell break, no link, no code span, no HTML tag."""

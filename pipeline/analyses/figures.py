@@ -185,6 +185,43 @@ def _cloud_panel(ax, points: pd.DataFrame, column: str, invert_z: bool) -> None:
     ax.legend(loc="upper left", fontsize=7, bbox_to_anchor=(0.0, 1.0))
 
 
+def value_map(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
+    """One 3D picture per selected job, the poses with a positive ``value`` (a points column,
+    e.g. ``max_payload_kg`` of ``analysis=payload``) coloured on one scale with its bar, unbounded
+    ones (inf) at its top; poses at 0 and without a value (NaN: not even the platform held) as
+    small grey crosses, counted in the legend and drawn only on grids of at most 5 000 of them
+    (on dense grids they would hide the coloured set); the searched box outlined."""
+    written = []
+    for _, job in table.iterrows():
+        points = results.points(job["job"])
+        values = points[spec.value].to_numpy(dtype=float)
+        positive, unbounded = values > 0, np.isinf(values)  # NaN compares False
+        fig = Figure(figsize=(6.4, 4.8))
+        ax = fig.add_subplot(1, 1, 1, projection="3d")
+        finite = positive & ~unbounded
+        top = float(values[finite].max()) if finite.any() else 1.0
+        drawn = ax.scatter(*(points.loc[positive, c] for c in "xyz"), c=np.minimum(values[positive], top), s=8,
+                           cmap="viridis", vmin=0.0, vmax=top, depthshade=False,
+                           label=f"{label(spec.value)} > 0 ({positive.sum()}" + (
+                               f", {unbounded.sum()} unbounded)" if unbounded.any() else ")"))
+        for name, rows in (("0", values == 0), ("none", np.isnan(values))):
+            if rows.any():
+                shown = points.loc[rows] if (~positive).sum() <= 5000 else points.iloc[:0]
+                ax.scatter(*(shown[c] for c in "xyz"), s=4, marker="x", linewidths=0.5, c="0.6",
+                           depthshade=False, label=f"{name} ({rows.sum()})")
+        fig.colorbar(drawn, ax=ax, shrink=0.7, pad=0.12, label=label(spec.value))
+        _box(ax, job)
+        if spec.invert_z:
+            ax.invert_zaxis()
+        ax.set_xlabel("x (m)")
+        ax.set_ylabel("y (m)")
+        ax.set_zlabel("z (m)")
+        ax.legend(loc="upper left", fontsize=7, bbox_to_anchor=(0.0, 1.0))
+        fig.suptitle(_fill(spec.title or "", job), fontsize=10)
+        written.append(_save(fig, spec, out_dir, job))
+    return written
+
+
 def timeseries(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
     """Fig. 6: shaft speed, load torque and control voltage of every cable along simulated line
     ``line`` (line 0 is O''-F''), with the actuator limits of eqs. (30), (32), (34) dashed."""
@@ -348,6 +385,7 @@ KINDS: dict[str, Callable[[FigureSpec, pd.DataFrame, StudyResults, Path], list[P
     "choice_bar": choice_bar,
     "limiting_bar": limiting_bar,
     "cloud": cloud,
+    "map": value_map,
     "survival_bar": survival_bar,
     "timeseries": timeseries,
     "curve": curve,
@@ -359,7 +397,7 @@ KINDS: dict[str, Callable[[FigureSpec, pd.DataFrame, StudyResults, Path], list[P
 LABELS = {"robot.gamma_deg": "γ (deg)", "robot.r_end": "r_end (m)", "robot.r_base": "r_base (m)",
           "load.mass": "payload (kg)", "robot.platform.mass": "carried mass m (kg)", "motion.v_max": "V_cmax (m/s)",
           "drive.winch_radius": "winch radius R_i (m)", "drive.gear_ratio": "gear ratio N_V",
-          "tension.model": "tension model"}
+          "tension.model": "tension model", "max_payload_kg": "largest payload (kg)"}
 
 
 def label(key: str) -> str:

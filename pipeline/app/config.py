@@ -459,13 +459,14 @@ class OutputConfig:
 @dataclass
 class Config:
     """The job: ``analysis``, a config group (cpr_wwa: dynamics and actuator limits; statics:
-    wrench and tensions; lines: the paper's straight lines; ``robot=irpm6`` and ``points`` pick
-    statics), ``actuator`` (the id of a catalogue row), ``catalogue`` (a CSV or Parquet path;
-    null = Table 1 of the CPR-8 paper, shipped in pipeline/data), ``poses`` (a list of [x, y, z]
-    positions in m checked instead of the robot's grid, e.g. ``poses=[[0,0,5]]``; null = the
-    grid; the summary's volume_m3 is then NaN). A job has the keys of conf/config.yaml plus
-    those of its tension, analysis and robot files, and only those (checked against this schema
-    by ``pipeline.app.problem.typed_config``; the robot and analysis kinds are named there)."""
+    wrench and tensions; lines: the paper's straight lines; payload: the largest payload per
+    pose; ``robot=irpm6`` and ``points`` pick statics), ``actuator`` (the id of a catalogue
+    row), ``catalogue`` (a CSV or Parquet path; null = Table 1 of the CPR-8 paper, shipped in
+    pipeline/data), ``poses`` (a list of [x, y, z] positions in m checked instead of the robot's
+    grid, e.g. ``poses=[[0,0,5]]``; null = the grid; the summary's volume_m3 is then NaN). A
+    job has the keys of conf/config.yaml plus those of its tension, analysis and robot files,
+    and only those (checked against this schema by ``pipeline.app.problem.typed_config``; the
+    robot and analysis kinds are named there)."""
 
     robot: Any = MISSING
     analysis: str = MISSING

@@ -11,7 +11,8 @@ refuses what it cannot mean:
   sets against the limits of a catalogue actuator (eqs. 19-34);
 - ``statics``: static equilibrium under the applied wrench and the load's weight, tensions in
   [t_min, t_max] and lengths <= l_max (eqs. 7-10 of Hamed & Zohoor);
-- ``lines``: CPR-WWA's problem, whose grid the straight-line simulations are compared with.
+- ``lines``: CPR-WWA's problem, whose grid the straight-line simulations are compared with;
+- ``payload``: the statics' problem and, per pose, the largest payload held (``max_payload_kg``).
 
 ``tension.model=feasible`` replaces the minimum-norm cable forces of both by pulling cables only
 (``pipeline.model.tensions``) and adds the criteria ``unreachable`` and ``slack``.
@@ -39,7 +40,7 @@ from pipeline.model.dynamics import Load, MotionSpec
 from pipeline.model.geometry import FREEDOMS, CableRobot
 from pipeline.model.motion import acceleration_set, cartesian_cube, extreme_points, velocity_set
 from pipeline.model.robots import PointsRobot, cpr8, irpm6, point_list
-from pipeline.model.statics import StaticLimits, StaticsSpec
+from pipeline.model.statics import PayloadSpec, StaticLimits, StaticsSpec
 from pipeline.model.tensions import TensionSpec
 from pipeline.workspace.compute import (
     POSES_PER_SECOND, FUSED_START_S, fused_unfit, grid_workspace, name_of,
@@ -177,8 +178,24 @@ def _statics(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
     return spec, limits, (*gates, *cable_limits(spec.tension, robot))
 
 
+def _payload(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
+    """The largest payload at ``load.com`` each pose holds on top of the robot's platform, within
+    the tension limits (the statics of eqs. 7-10 with the payload's weight linear in its mass);
+    ``load.mass`` is the payload required. Refuses a weightless payload."""
+    if not cfg.load.gravity > 0:
+        raise ConfigError(f"load.gravity={cfg.load.gravity}: analysis=payload weighs the payload; needs gravity > 0")
+    spec, limits, _ = _statics(cfg, catalogue, robot)
+    platform = cfg.robot.platform
+    applied = spec.load.external  # load.external + wrench.*, as the statics has it
+    load = Load(float(platform.mass), float(cfg.load.gravity), np.asarray(platform.com, dtype=float), applied)
+    spec = PayloadSpec(spec.moment_arm, spec.cable_direction, spec.rank_rtol, spec.tension, load,
+                       payload=float(cfg.load.mass), payload_com=np.asarray(cfg.load.com, dtype=float))
+    gates = ("singular",) if spec.tension.model == "pinv" else ()
+    return spec, limits, (*gates, "payload", *(("length",) if robot.l_max is not None else ()))
+
+
 # analysis -> (the typed config, its catalogue or None, the robot) -> (spec, limits, criteria)
-ANALYSES = {"cpr_wwa": _cpr_wwa, "statics": _statics, "lines": _cpr_wwa}
+ANALYSES = {"cpr_wwa": _cpr_wwa, "statics": _statics, "lines": _cpr_wwa, "payload": _payload}
 
 
 def _enough_cables(cfg: DictConfig, robot: CableRobot, rows: int, hint: str) -> None:

@@ -67,6 +67,7 @@ class MotionSpec:
     tension: TensionSpec = field(default_factory=TensionSpec)
     inertia: str = "paper"
     kind: ClassVar[str] = "cpr_wwa"  # which compiled kernel evaluates it (pipeline.workspace.fused)
+    summarised: ClassVar[tuple[str, ...]] = ()  # per-pose columns the summary gives min, median, max of
 
     def state(self, robot: CableRobot, positions: np.ndarray, orientation) -> "PoseDynamics":
         return PoseDynamics(robot, positions, orientation, self)

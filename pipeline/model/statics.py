@@ -17,7 +17,7 @@ import numpy as np
 from pipeline.model.dynamics import Load, load_wrench_terms
 from pipeline.model.linalg import batched_pinv, gram, gram_ratio
 from pipeline.model.geometry import CableRobot, PoseGeometry, structure_matrix
-from pipeline.model.tensions import Family, TensionSpec
+from pipeline.model.tensions import Family, TensionSpec, max_payloads
 
 
 @dataclass(frozen=True)
@@ -44,6 +44,7 @@ class StaticsSpec:
     tension: TensionSpec = field(default_factory=TensionSpec)
     load: Load = field(default_factory=Load)
     kind: ClassVar[str] = "statics"  # which compiled kernel evaluates it (pipeline.workspace.fused)
+    summarised: ClassVar[tuple[str, ...]] = ()  # per-pose columns the summary gives min, median, max of
 
     def state(self, robot: CableRobot, positions: np.ndarray, orientation) -> "PoseStatics":
         return PoseStatics(robot, positions, orientation, self)
@@ -172,3 +173,55 @@ class PoseStatics(PoseGeometry):
     @cached_property
     def _gram(self) -> np.ndarray:
         return gram(self.structure_matrix)
+
+
+@dataclass(frozen=True)
+class PayloadSpec(StaticsSpec):
+    """``analysis=payload``: the statics of the platform (``load``: its own mass and centre of
+    mass, the external and applied wrench) and, per pose, the largest payload at ``payload_com``
+    (m, platform frame) the tensions can hold on top of it (:class:`PosePayload`); ``payload`` is
+    the payload required (kg, ``load.mass``), the criterion ``payload`` its margin."""
+
+    payload: float = 0.0
+    payload_com: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    kind: ClassVar[str] = "payload"
+    summarised: ClassVar[tuple[str, ...]] = ("max_payload_kg",)
+
+    def state(self, robot: CableRobot, positions: np.ndarray, orientation) -> "PosePayload":
+        return PosePayload(robot, positions, orientation, self)
+
+    def fused_unfit(self) -> str | None:
+        return "it does not compute payloads (analysis=payload)"
+
+
+class PosePayload(PoseStatics):
+    """The statics of a chunk with, per pose, the largest payload it holds (kg): the weight is
+    linear in the mass, w + mu d with d the load wrench of 1 kg at the payload's centre of mass,
+    so the answer is exact: one LP per pose (pulling cables, ``tensions.max_payloads``) or, for
+    the minimum-norm tensions t0 + mu A^+ d (eq. 10), the first bound a cable meets."""
+
+    @cached_property
+    def per_kg(self) -> np.ndarray:
+        """(k,) the load wrench of 1 kg of payload at ``payload_com``, along the freedoms."""
+        unit = Load(1.0, self.spec.load.gravity, np.asarray(self.spec.payload_com, float), np.zeros(6))
+        return load_wrench_terms(unit, 0.0, self.robot.up, self.rotation)[1][list(self.robot.dofs)]
+
+    @cached_property
+    def max_payload(self) -> np.ndarray:
+        """(n,) the largest payload (kg) each pose holds within [t_min, t_max]; inf when the
+        cables never carry it, NaN when not even the platform alone is held (or, under the
+        minimum-norm model, the pose is singular)."""
+        t_min, t_max = self.tension.t_min, self.tension.t_max
+        if self.tension.model != "pinv":
+            return max_payloads(self.structure_matrix, self.wrench, self.per_kg, t_min, t_max)
+        upper = np.inf if t_max is None else t_max
+        start = self.tensions
+        slope = np.einsum("nmk,k->nm", self.wrench_pinv[0], self.per_kg)
+        room = np.where(slope > 0, (upper - start) / np.where(slope > 0, slope, 1.0),
+                        np.where(slope < 0, (t_min - start) / np.where(slope < 0, slope, 1.0), np.inf))
+        held = ((start >= t_min) & (start <= upper)).all(axis=1) & ~self.singular
+        return np.where(held, np.maximum(room.min(axis=1), 0.0), np.nan)
+
+    def diagnostics(self) -> dict[str, np.ndarray]:
+        return {**super().diagnostics(), "max_payload_kg": self.max_payload}
+

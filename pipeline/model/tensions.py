@@ -244,3 +244,81 @@ def _shrink_rows(lower, upper, scale, width):
         shape=(start, lower.shape[0] * width),
     )
     return matrix, np.concatenate(rhs)
+
+
+MAX_PAYLOAD_KG = 1e8  # a payload the LPs reach is "unlimited" (inf): the cables never carry it
+
+
+def max_payloads(structure: np.ndarray, wrench: np.ndarray, per_kg: np.ndarray, t_min, t_max) -> np.ndarray:
+    """(n,) the largest mu >= 0 (kg) with S t = w + mu d for some t in [t_min, t_max]: the payload
+    of ``analysis=payload`` (``S`` (n, r, m), ``w`` and ``d`` (r,): the platform's load wrench
+    and that of 1 kg of payload). The weight is linear in the mass, so this is one LP per pose;
+    inf where no tension bound is met below MAX_PAYLOAD_KG (the rows that carry the weight are
+    not the cables': a table), NaN where not even mu = 0 is held (the platform alone). Solved as
+    two block-diagonal LPs per group of poses: the least violation of the equality over any mu
+    (every block feasible), then, for the poses held exactly, the largest mu; a group HiGHS
+    cannot solve whole is solved pose by pose."""
+    n = structure.shape[0]
+    out = np.full(n, np.nan)
+    upper = np.inf if t_max is None else t_max
+    unit = float(np.max(upper)) if np.isfinite(upper).all() else max(1.0, float(np.abs(wrench).max()))
+    for start in range(0, n, LP_BLOCKS):
+        group = slice(start, min(n, start + LP_BLOCKS))
+        out[group] = _payload_group(structure[group], wrench, per_kg, t_min, upper, unit)
+    return out
+
+
+def _payload_group(structure, wrench, per_kg, t_min, t_max, unit) -> np.ndarray:
+    from scipy.optimize import linprog
+
+    count, r, m = structure.shape
+    bounds_t = np.column_stack([np.broadcast_to(t_min, (m,)), np.broadcast_to(t_max, (m,))]) / unit
+    size = 1.0 + float(np.abs(wrench).max())
+    # phase 1: the least |S t - mu d - w| over t in its bounds and any mu
+    width = m + 1 + 2 * r
+    blocks = np.concatenate([structure * unit, np.broadcast_to(-per_kg[:, None], (count, r, 1)),
+                             np.broadcast_to(np.eye(r), (count, r, r)), np.broadcast_to(-np.eye(r), (count, r, r))],
+                            axis=2)
+    bounds = np.empty((count, width, 2))
+    bounds[:, :m], bounds[:, m] = bounds_t, (-MAX_PAYLOAD_KG, MAX_PAYLOAD_KG)
+    bounds[:, m + 1:] = (0.0, np.inf)
+    cost = np.zeros((count, width))
+    cost[:, m + 1:] = 1.0
+    first = linprog(cost.ravel(), A_eq=_block_matrix(blocks, width), b_eq=np.tile(wrench, count),
+                    bounds=bounds.reshape(-1, 2), method="highs")
+    if first.status != 0:
+        raise RuntimeError(f"payload LP (least violation) failed: {first.message}")
+    held = first.x.reshape(count, width)[:, m + 1:].sum(axis=1) <= 1e-9 * size
+    out = np.full(count, np.nan)
+    poses = np.flatnonzero(held)
+    if len(poses):
+        out[poses] = _largest_mu(structure[poses], wrench, per_kg, bounds_t, unit)
+    out[out < -1e-9] = np.nan  # held only by a negative payload: not the platform alone
+    out = np.maximum(out, 0.0)  # keeps NaN
+    out[out >= MAX_PAYLOAD_KG * (1 - 1e-12)] = np.inf
+    return out
+
+
+def _largest_mu(structure, wrench, per_kg, bounds_t, unit) -> np.ndarray:
+    """max mu with S t - mu d = w, t in bounds (phase 2), for poses that hold some mu; the
+    block LP first, pose by pose if HiGHS's tolerance makes it declare the whole infeasible."""
+    from scipy.optimize import linprog
+
+    count, r, m = structure.shape
+    width = m + 1
+    blocks = np.concatenate([structure * unit, np.broadcast_to(-per_kg[:, None], (count, r, 1))], axis=2)
+    bounds = np.empty((count, width, 2))
+    bounds[:, :m], bounds[:, m] = bounds_t, (-MAX_PAYLOAD_KG, MAX_PAYLOAD_KG)
+    cost = np.zeros((count, width))
+    cost[:, m] = -1.0
+    done = linprog(cost.ravel(), A_eq=_block_matrix(blocks, width), b_eq=np.tile(wrench, count),
+                   bounds=bounds.reshape(-1, 2), method="highs")
+    if done.status == 0:
+        return done.x.reshape(count, width)[:, m]
+    found = np.full(count, np.nan)
+    for pose in range(count):
+        single = linprog(cost[pose], A_eq=blocks[pose], b_eq=wrench, bounds=bounds[pose], method="highs")
+        if single.status == 0:
+            found[pose] = single.x[m]
+    return found
+

@@ -59,7 +59,10 @@ def grid_workspace(
     parts, n_feasible, by_lp = [], 0, 0
     lost = np.zeros(len(problem.criteria), dtype=np.int64)  # infeasible poses by limiting criterion
     least = dict.fromkeys(problem.criteria, np.inf)
+    summarised = {key: [] for key in problem.spec.summarised}  # per-pose columns, 8 bytes a pose
     for span, raw in chunks:
+        for key, values in summarised.items():
+            values.append(raw[key])
         margins, feasible, limiting = classify(
             {name: raw[f"margin_{name}"] for name in problem.criteria}, problem.margin_atol)
         n_feasible += int(np.count_nonzero(feasible))
@@ -73,7 +76,8 @@ def grid_workspace(
         else:
             sink(points)
     counts = {"n_points": grid.n_points, "n_feasible": n_feasible,
-              "lost": dict(zip(problem.criteria, lost.tolist())), "least": least}
+              "lost": dict(zip(problem.criteria, lost.tolist())), "least": least,
+              "summarised": {key: np.concatenate(values) for key, values in summarised.items()}}
     if problem.spec.tension.model == "feasible":
         log.info("feasible tension model: %d of %d poses by LP (poor conditioning or fallback), "
                  "the rest by hyperplane shifting", by_lp, grid.n_points)
@@ -93,8 +97,9 @@ def tabulate(problem: WorkspaceProblem, positions: np.ndarray, raw: dict,
     columns["limiting"] = categories(limiting, list(problem.criteria))
     for name, margin in margins.items():
         columns[f"margin_{name}"] = margin
-    if "jacobian_rank" in raw:
-        columns["jacobian_rank"] = raw["jacobian_rank"]
+    for key in ("jacobian_rank", "max_payload_kg"):
+        if key in raw:
+            columns[key] = raw[key]
     for key, values in raw.items():  # output.cables: lengths and tensions (pipeline.workspace.quantities)
         if key.startswith(("length_", "tension_")):
             columns[key] = values
@@ -220,6 +225,10 @@ def summarize(cfg: DictConfig, counts: dict, cell_volume: float, problem) -> dic
     for name in problem.criteria:
         least = counts["least"][name]
         row[f"least_margin_{name}"] = float(least) if np.isfinite(least) else np.nan
+    for key, values in counts.get("summarised", {}).items():  # over the poses that have one
+        known = values[~np.isnan(values)]
+        for stat, value in (("min", np.min), ("median", np.median), ("max", np.max)):
+            row[f"{key}_{stat}"] = float(value(known)) if len(known) else np.nan
     return row
 
 

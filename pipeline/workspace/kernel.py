@@ -41,9 +41,10 @@ class WorkspaceProblem:
 
 
 def evaluate_chunk(problem: WorkspaceProblem, positions: np.ndarray) -> dict[str, np.ndarray]:
-    """Margins ``margin_<criterion>`` (n,), the worst over the orientation set, for positions
-    (n, 3); with ``problem.cables`` also the cable quantities at the nominal orientation; under
-    the feasible tension model ``lp_poses`` (n,): poses whose margins came from the LPs."""
+    """Margins ``margin_<criterion>`` (n,), the worst over the orientation set (also the
+    largest payload under ``analysis=payload``), for positions (n, 3); with ``problem.cables``
+    also the cable quantities at the nominal orientation; under the feasible tension model
+    ``lp_poses`` (n,): poses whose margins came from the LPs."""
     result = {}
     for number, orientation in enumerate(problem.orientations):
         if problem.fused:
@@ -53,7 +54,7 @@ def evaluate_chunk(problem: WorkspaceProblem, positions: np.ndarray) -> dict[str
         for key, value in part.items():
             if key not in result:
                 result[key] = value
-            elif key.startswith("margin_") or key == "jacobian_rank":
+            elif key.startswith("margin_") or key in ("jacobian_rank", "max_payload_kg"):
                 result[key] = np.minimum(result[key], value)
             elif key == "lp_poses":
                 result[key] = result[key] | value

@@ -5,8 +5,8 @@ A :class:`Criterion` says what it reads (``reads``: the CPR-WWA dynamics, the st
 chunk state), whether it is a gate (a violated gate decides the verdict whatever the other
 margins say; gates in priority order) and its colour in every figure. One module per family:
 ``actuator`` (eqs. 30, 32-34 of the CPR-8 paper), ``tension`` (unreachable, slack, tension
-rating), ``geometry`` (singular, cable length); ``forces`` holds the ``feasible`` tension model
-they share. A new criterion is one function in its family's module and one entry here.
+rating), ``geometry`` (singular, cable length), ``payload`` (the largest payload); ``forces``
+holds the ``feasible`` tension model they share. A new criterion is one function in its family's module and one entry here.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from pipeline.workspace.criteria import actuator, geometry, tension
+from pipeline.workspace.criteria import actuator, geometry, payload, tension
 
 ANY, DYNAMICS, STATICS = "any", "dynamics", "statics"
 
@@ -40,6 +40,7 @@ REGISTRY: dict[str, Criterion] = {c.name: c for c in (
     Criterion("slack", tension.slack, ANY, 2, "#882255"),
     Criterion("tension_max", tension.tension_max, ANY, None, "#0072B2"),
     Criterion("length", geometry.length, ANY, None, "#CC79A7"),
+    Criterion("payload", payload.payload, STATICS, None, "#56B4E9"),
     Criterion("speed", actuator.speed, DYNAMICS, None, "#0072B2"),
     Criterion("torque", actuator.torque, DYNAMICS, None, "#D55E00"),
     Criterion("acceleration", actuator.acceleration, DYNAMICS, None, "#CC79A7"),
