@@ -298,7 +298,11 @@ class OrientationConfig:
 class WrenchConfig:
     """Applied wrench f_ext of eq. (11) of the IRPM paper, N and N m (the paper gives kN), added to
     the load's weight and ``load.external`` in every analysis (``robot=irpm6`` sets the paper's
-    f_z = 100 kN: the platform's weight, Z down)."""
+    f_z = 100 kN: the platform's weight, Z down). ``set``: a required wrench set (statics), each of
+    its wrenches added to that one and every one to be balanced (Gouttefarde's wrench-feasible
+    workspace; the set is convex, so its vertices decide): a box ``{min: [6], max: [6]}``
+    (fx fy fz mx my mz, its vertices those coordinates that differ) or a list of vertices
+    ``[[fx, fy, fz, mx, my, mz], ...]``; null = the one wrench."""
 
     fx: float = rule(force)
     fy: float = rule(force)
@@ -306,6 +310,7 @@ class WrenchConfig:
     mx: float = rule(force)
     my: float = rule(force)
     mz: float = rule(force)
+    set: Any = MISSING
 
 
 @dataclass

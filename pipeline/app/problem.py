@@ -23,11 +23,12 @@ built problem, so a job builds its robot once.
 from __future__ import annotations
 
 import importlib.util
+import itertools
 from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
-from omegaconf import DictConfig
+from omegaconf import DictConfig, ListConfig, OmegaConf
 
 from pipeline.app.config import (
     MAX_FORCE, Config, Cpr8Config, Irpm6Config, PointsConfig, check_values, masked, merged, shown,
@@ -126,6 +127,9 @@ def _cpr_wwa(cfg: DictConfig, catalogue: Catalogue, robot: CableRobot):
     forces_only = name_of(model.pinv_columns) == "translational" or not robot.attachments.any()
     _enough_cables(cfg, robot, 3 if forces_only else 6,
                    "; model.pinv_columns=translational balances forces only")
+    if cfg.wrench.set is not None:
+        raise ConfigError(f"wrench.set: analysis={cfg.analysis} balances its acceleration set (eq. 31); a required "
+                          "wrench set is for analysis=statics")
     tension = tension_spec(cfg, robot)
     if tension.model == "pinv" and np.any(tension.t_min != 0):
         raise ConfigError(f"tension.t_min={shown(cfg.tension.t_min)}: the pinv model checks the papers' "
@@ -169,11 +173,12 @@ def _statics(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
         rank_rtol=cfg.model.rank_rtol,
         tension=tension_spec(cfg, robot),
         load=load,
+        wrench_set=wrench_set(cfg.wrench.set),
     )
     rating = spec.tension.t_max
     force = spec.load.external[:3] - spec.load.mass * spec.load.gravity * robot.up
     scale = float(np.max(rating)) if rating is not None else max(float(np.linalg.norm(force)), 1.0)
-    limits = StaticLimits(np.inf if rating is None else rating, cfg.model.rank_rtol, scale)
+    limits = StaticLimits(np.inf if rating is None else rating, cfg.model.rank_rtol, scale, len(spec.wrench_set))
     gates = ("singular", "slack") if spec.tension.model == "pinv" else FEASIBLE_GATES
     return spec, limits, (*gates, *cable_limits(spec.tension, robot))
 
@@ -184,6 +189,9 @@ def _payload(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
     ``load.mass`` is the payload required. Refuses a weightless payload."""
     if not cfg.load.gravity > 0:
         raise ConfigError(f"load.gravity={cfg.load.gravity}: analysis=payload weighs the payload; needs gravity > 0")
+    if cfg.wrench.set is not None:
+        raise ConfigError("wrench.set: analysis=payload finds the largest payload under one wrench; a required "
+                          "wrench set is for analysis=statics")
     spec, limits, _ = _statics(cfg, catalogue, robot)
     platform = cfg.robot.platform
     applied = spec.load.external  # load.external + wrench.*, as the statics has it
@@ -196,6 +204,46 @@ def _payload(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
 
 # analysis -> (the typed config, its catalogue or None, the robot) -> (spec, limits, criteria)
 ANALYSES = {"cpr_wwa": _cpr_wwa, "statics": _statics, "lines": _cpr_wwa, "payload": _payload}
+
+
+MAX_SET_VERTICES = 4096  # wrenches of a wrench.set: each is an LP block or a solve per pose
+
+
+def wrench_set(value) -> np.ndarray:
+    """(K, 6) the vertices of ``wrench.set``: a box's (every combination of each coordinate's min
+    and max, once where they are equal) or the listed ones; (0, 6) for null."""
+    if value is None:
+        return np.zeros((0, 6))
+    shown_value = OmegaConf.to_container(value) if isinstance(value, (DictConfig, ListConfig)) else value
+    if isinstance(value, DictConfig):
+        if set(value) != {"min", "max"}:
+            raise ConfigError(f"wrench.set={shown_value}: a box needs min and max, 6 numbers each")
+        low, high = (_wrench(value[key], f"wrench.set.{key}") for key in ("min", "max"))
+        if not (low <= high).all():
+            raise ConfigError(f"wrench.set.min={low.tolist()}: must be <= wrench.set.max={high.tolist()}")
+        return np.array(list(itertools.product(*(sorted({a, b}) for a, b in zip(low, high)))), dtype=float)
+    if not isinstance(value, ListConfig):
+        raise ConfigError(f"wrench.set={shown_value}: a box {{min: [6], max: [6]}} or a list of "
+                          "[fx, fy, fz, mx, my, mz] (N, N m)")
+    if not len(value):
+        raise ConfigError("wrench.set=[]: no vertices (null: the one wrench)")
+    if len(value) > MAX_SET_VERTICES:
+        raise ConfigError(f"wrench.set: {len(value)} vertices; at most {MAX_SET_VERTICES}")
+    return np.array([_wrench(v, f"wrench.set: vertex {i}") for i, v in enumerate(value, start=1)])
+
+
+def _wrench(value, key: str) -> np.ndarray:
+    items = list(value) if isinstance(value, (ListConfig, list)) else None
+    if items is None or len(items) != 6:
+        count = "not a list" if items is None else f"{len(items)} values"
+        raise ConfigError(f"{key} has {count}; a wrench has 6 (fx fy fz mx my mz)")
+    try:
+        numbers = np.array([float(v) for v in items])
+    except (TypeError, ValueError):
+        raise ConfigError(f"{key}={items}: must be numbers (N, N m)") from None
+    if not (np.abs(numbers) <= MAX_FORCE).all():  # NaN fails too
+        raise ConfigError(f"{key}={items}: must be finite and at most {MAX_FORCE:g} in magnitude (N, N m)")
+    return numbers
 
 
 def _enough_cables(cfg: DictConfig, robot: CableRobot, rows: int, hint: str) -> None:

@@ -34,8 +34,10 @@ class StaticsSpec:
     A s = f_ext are then r_end times rows that do not depend on r_end, so the tensions and the
     volume do not either (the IRPM paper's conclusions 1, 4 and 5; docs/model.md section 5).
     ``rank_rtol``: a pose is singular when the gram ratio of A (``PoseStatics.gram_ratio``)
-    falls below it. ``tension``: minimum-norm tensions (``pinv``, eq. 10) or pulling cables
-    only (``feasible``, ``pipeline.model.tensions``; for six cables the same verdict).
+    falls below it. ``wrench_set`` (K, 6): wrenches each added to the load's and every one
+    required (``wrench.set``'s vertices; none: the load's wrench alone). ``tension``:
+    minimum-norm tensions (``pinv``, eq. 10) or pulling cables only (``feasible``,
+    ``pipeline.model.tensions``; for six cables the same verdict).
     """
 
     moment_arm: str = "platform"
@@ -43,6 +45,7 @@ class StaticsSpec:
     rank_rtol: float = 1e-9
     tension: TensionSpec = field(default_factory=TensionSpec)
     load: Load = field(default_factory=Load)
+    wrench_set: np.ndarray = field(default_factory=lambda: np.zeros((0, 6)))
     kind: ClassVar[str] = "statics"  # which compiled kernel evaluates it (pipeline.workspace.fused)
     summarised: ClassVar[tuple[str, ...]] = ()  # per-pose columns the summary gives min, median, max of
 
@@ -54,6 +57,8 @@ class StaticsSpec:
 
     def fused_unfit(self) -> str | None:
         """Why the compiled statics kernel cannot evaluate this spec, None when it can."""
+        if len(self.wrench_set):
+            return "it balances one wrench (no wrench.set)"
         return None if self.tension.model == "pinv" else "it evaluates tension.model=pinv only"
 
 
@@ -63,21 +68,22 @@ class StaticLimits:
     inf = no rating, a scalar or one per cable); a pose is singular when the gram ratio of the
     structure matrix is below ``rank_rtol``. ``scale`` (N) is the unit of the slack margin:
     the largest rating, or without one the magnitude of the force the cables balance (at least
-    1 N). Cable lengths are limited by the robot's own ``l_max``."""
+    1 N). Cable lengths are limited by the robot's own ``l_max``. ``n_wrenches``: the vertices of
+    a required wrench set (0: none)."""
 
     s_max: float | np.ndarray
     rank_rtol: float
     scale: float
+    n_wrenches: int = 0
 
     def described(self) -> dict:
-        """What a job's summary says of its limits besides the config: nothing."""
-        return {}
+        """What a job's summary says of its limits besides the config: the number of wrenches
+        a wrench set requires (``n_wrenches``), when there is one."""
+        return {"n_wrenches": self.n_wrenches} if self.n_wrenches else {}
 
 
 class PoseStatics(PoseGeometry):
     """Lazily evaluated structure matrix, conditioning and cable tensions of a chunk of poses."""
-
-    ranges_over_a_set = False  # one wrench: one tension per cable
 
     def __init__(self, robot: CableRobot, positions: np.ndarray, orientation, spec: StaticsSpec):
         super().__init__(robot, positions, orientation)
@@ -88,9 +94,18 @@ class PoseStatics(PoseGeometry):
         return self.spec.tension
 
     @property
+    def ranges_over_a_set(self) -> bool:
+        """Whether the cables balance a wrench set (``wrench.set``), else one wrench."""
+        return len(self.spec.wrench_set) > 0
+
+    @property
     def force_range(self) -> tuple[np.ndarray, np.ndarray]:
-        """(n, m) the tensions of eq. (10), the largest and the smallest: one wrench."""
-        return self.tensions, self.tensions
+        """(n, m) the tensions of eq. (10), the largest and the smallest over the required
+        wrenches (one wrench: the same)."""
+        if not self.ranges_over_a_set:
+            return self.tensions, self.tensions
+        over_set = self.tensions_over_set
+        return over_set.max(axis=1), over_set.min(axis=1)
 
     def forces_of(self, tensions: np.ndarray) -> np.ndarray:
         """The ``feasible`` model's variables are the tensions s themselves (N)."""
@@ -139,8 +154,11 @@ class PoseStatics(PoseGeometry):
 
     @property
     def required_wrenches(self) -> np.ndarray:
-        """(1, k) the wrench of :attr:`wrench`."""
-        return self.wrench[None, :]
+        """(K, k) the wrenches the cables must balance: :attr:`wrench`, plus each wrench of the
+        set (``wrench.set``) when there is one."""
+        if not self.ranges_over_a_set:
+            return self.wrench[None, :]
+        return self.wrench + self.spec.wrench_set[:, list(self.robot.dofs)]
 
     @cached_property
     def gram_ratio(self) -> np.ndarray:
@@ -158,16 +176,25 @@ class PoseStatics(PoseGeometry):
         """(n, m) minimum-norm tensions with A s = f_ext (eq. 7), N: s = A^T (A A^T)^-1 f, which
         is A^-1 f for six cables (eq. 10). Singular poses get the least-squares s = A^+ f from an
         SVD, so every value is finite."""
-        a, wrench = self.structure_matrix, self.wrench
-        out = np.empty((a.shape[0], a.shape[2]))
+        return self._minimum_norm(self.wrench[None, :])[:, 0]
+
+    @cached_property
+    def tensions_over_set(self) -> np.ndarray:
+        """(n, K, m) the minimum-norm tensions of each required wrench (``wrench.set``)."""
+        return self._minimum_norm(self.required_wrenches)
+
+    def _minimum_norm(self, wrenches: np.ndarray) -> np.ndarray:
+        """(n, K, m) s = A^T (A A^T)^-1 w for each of the wrenches (K, k); A^+ w where singular."""
+        a = self.structure_matrix
+        out = np.empty((a.shape[0], len(wrenches), a.shape[2]))
         ok = ~self.singular
         if ok.any():
-            rhs = np.broadcast_to(wrench, (int(ok.sum()), len(wrench)))[..., None]
-            y = np.linalg.solve(self._gram[ok], rhs)[..., 0]
-            out[ok] = np.einsum("nkm,nk->nm", a[ok], y)
+            rhs = np.broadcast_to(wrenches.T, (int(ok.sum()), *wrenches.T.shape))
+            y = np.linalg.solve(self._gram[ok], rhs)  # (n, k, K)
+            out[ok] = np.einsum("nkm,nkj->njm", a[ok], y)
         if (~ok).any():
             pinv, _ = batched_pinv(a[~ok], self.spec.rank_rtol)
-            out[~ok] = pinv @ wrench
+            out[~ok] = np.einsum("nmk,jk->njm", pinv, wrenches)
         return out
 
     @cached_property
