@@ -85,3 +85,16 @@ def test_bad_robot_input_is_one_line_exit_2_and_writes_nothing(ipanema, args, me
     lines = done.stderr.strip().splitlines()
     assert done.returncode == 2 and len(lines) == 1 and message in lines[0], done.stderr
     assert not (root / "bad").exists()
+
+
+@pytest.mark.parametrize("study, bound, feasible", [("wrench_closure", None, 21280), ("total_orientation", 0.1, 672)])
+def test_the_points_robot_studies_give_the_numbers_their_docs_state(make_cfg, catalogue, study, bound, feasible):
+    """docs/studies.md and the README quote these: IPAnema 1's wrench-closure workspace (88.67 %)
+    and its total-orientation workspace at +-0.1 rad (2.80 %), from the studies' own overrides."""
+    from pipeline.app.problem import compute_workspace
+    from pipeline.study import load_study
+
+    overrides = [o.strip('"') for o in load_study(study).overrides]
+    extra = [] if bound is None else [f"orientation.total.bound={bound}"]
+    summary = compute_workspace(make_cfg(*overrides, *extra), catalogue)[1]
+    assert (summary["n_feasible"], summary["n_points"]) == (feasible, 24000)
