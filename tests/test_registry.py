@@ -100,7 +100,7 @@ def test_tension_is_a_config_group_that_sets_its_own_keys_only(make_cfg):
         by_key = make_cfg(f"robot={robot}", "tension.model=feasible")
         assert OmegaConf.to_container(by_group) == OmegaConf.to_container(by_key)
     assert make_cfg("robot=irpm6", "tension=feasible").tension.t_max == 55_000
-    assert set(make_cfg("tension=feasible").tension) == {"model", "t_min", "t_max", "residual_rtol"}
+    assert set(make_cfg("tension=feasible").tension) == {"model", "t_min", "t_max", "residual_rtol", "distribution"}
 
 
 def test_an_unknown_tension_option_is_refused_before_anything_runs():

@@ -137,6 +137,14 @@ class CableDirection(Enum):
     centre = "centre"
 
 
+class Distribution(Enum):
+    """Which tensions the ``feasible`` model writes with ``output.cables=true``: the least 2-norm
+    within the limits (as CASPR and WireX give them) or the vertex its LPs end on."""
+
+    min_norm = "min_norm"
+    lp = "lp"
+
+
 class TensionModel(Enum):
     """Cable forces the criteria check: minimum-norm (the papers' eq. 20 / eq. 10, any sign) or
     pulling cables only, chosen by linear programming (``pipeline.model.tensions``)."""
@@ -329,12 +337,15 @@ class TensionConfig:
     ``t_max``: cable rating (N) in every analysis; each a number or one per cable, null = none
     (CPR-WWA: the motor torque limit / R_i only; ``robot=irpm6`` sets the paper's 55 kN);
     ``limits.s_max`` is an alias. ``residual_rtol``: a required wrench is unreachable when the
-    equilibrium residual exceeds this fraction of it."""
+    equilibrium residual exceeds this fraction of it. ``distribution`` (read by the feasible
+    model): the tensions written with ``output.cables=true``, ``min_norm`` (the least 2-norm within the
+    limits, a QP per pose) or ``lp`` (the vertex the LPs end on); the verdicts do not depend on it."""
 
     model: TensionModel = MISSING
     t_min: Any = MISSING
     t_max: Any = MISSING
     residual_rtol: float = rule(positive)
+    distribution: Distribution = MISSING
 
 
 @dataclass

@@ -389,7 +389,8 @@ def tension_spec(cfg: DictConfig, robot: CableRobot) -> TensionSpec:
     key, rating = ("limits.s_max", cfg.limits.s_max) if cfg.limits.s_max is not None else ("tension.t_max", t.t_max)
     if rating is not None and not (t_min < _limit_values(key, rating, robot.n_cables)).all():
         raise ConfigError(f"{key}={shown(rating)}: must be > tension.t_min={shown(t.t_min)}")
-    return TensionSpec(name_of(t.model), _per_cable(t.t_min), _per_cable(rating), t.residual_rtol)
+    return TensionSpec(name_of(t.model), _per_cable(t.t_min), _per_cable(rating), t.residual_rtol,
+                       name_of(t.distribution))
 
 
 def _per_cable(value):
