@@ -28,7 +28,8 @@ workspace is a set of orientations or one axis (spherical, revolute, universal, 
 multi-link (MCDM) model, a cable that is not ``<cable_ideal>`` (springs, variable stiffness), a
 cable routed through more than two points or a pulley (``<attachment_base_pulley>``), two
 cables of one name (both named), and a file that is not such XML. CASPR's ``SPATIAL_EULER_XYZ`` orientation is R = Rx Ry Rz of its
-angles, eq. (9)'s is R = Rz(phi) Ry(theta) Rx(psi): the file and the output say so.
+angles (eq. (9)'s is R = Rz(phi) Ry(theta) Rx(psi)): the file sets
+``orientation.convention: xyz`` so that CASPR's angles mean the same pose, and says so.
 
 The importer writes only a new file of the user's: an existing file is replaced only with
 ``--force``, a target inside the package's own ``conf/`` (where it would replace or hide a
@@ -208,9 +209,10 @@ def robot_yaml(cables: dict, body: dict | None, step: float, sources: tuple[str,
         f"# Imported from CASPR: {_one_line(sources[0])} (cable set {_one_line(str(cables['set']))!r}){bodies}.",
         "# Anchors: link 0, relative to the joint's origin; attachments: link 1 (platform frame, joint origin).",
     ]
-    if body is not None and body["joint"] == "SPATIAL_EULER_XYZ":
-        lines.append("# CASPR's orientation angles (a, b, c) give R = Rx(a) Ry(b) Rz(c); orientation.psi/theta/phi "
-                     "give eq. (9)'s R = Rz(phi) Ry(theta) Rx(psi).")
+    xyz = body is not None and body["joint"] == "SPATIAL_EULER_XYZ"
+    if xyz:
+        lines.append("# Orientation: CASPR's angles (a, b, c), R = Rx(a) Ry(b) Rz(c): orientation.convention=xyz "
+                     "(psi, theta, phi = a, b, c).")
     lines += [
         "defaults:",
         "  - /robot/points",
@@ -225,6 +227,7 @@ def robot_yaml(cables: dict, body: dict | None, step: float, sources: tuple[str,
         *([f"  dofs: [{', '.join(body['dofs'])}]"] if body is not None and len(body["dofs"]) < 6 else []),
         f"  search: {{lo: {_flow(lo)}, hi: {_flow(hi)}, step: {step!r}, spacing: {spacing}}}",
         f"tension: {{t_min: {_limit(cables['force_min'])}, t_max: {_limit(cables['force_max'])}}}",
+        *(["orientation: {convention: xyz}"] if xyz else []),
     ]
     return "\n".join(lines) + "\n"
 
@@ -356,8 +359,8 @@ def main(argv: list[str] | None = None) -> None:
     print(f"wrote {out}: {len(cables['names'])} cables, {mass}; search box {extent} m from {origin}, "
           f"step {args.step:g} m")
     if body is not None and body["joint"] == "SPATIAL_EULER_XYZ":
-        print("orientation: CASPR's XYZ Euler angles are not eq. (9)'s (R = Rz(phi) Ry(theta) Rx(psi)); "
-              "equal at zero orientation")
+        print("orientation: the file sets orientation.convention=xyz, CASPR's XYZ Euler angles "
+              "(orientation.psi, theta, phi are its a, b, c)")
     print(f"run: python -m pipeline --config-dir {out.parent.parent} robot={out.stem}")
 
 

@@ -68,7 +68,7 @@ def imported(tmp_path_factory):
     assert done.returncode == 0, done.stderr
     assert "mine/robot/octo.yaml: 8 cables, platform 12.5 kg (bodies file)" in done.stdout
     assert "search box x [-2.5, 2.5], y [-1.5, 1.5], z [0.2, 2.8] m from the joint's q_min/q_max" in done.stdout
-    assert "XYZ Euler angles" in done.stdout and "robot=octo" in done.stdout
+    assert "orientation.convention=xyz" in done.stdout and "robot=octo" in done.stdout
     return root
 
 
@@ -86,7 +86,8 @@ def test_a_file_of_casprs_library_format_keeps_points_limits_mass_and_the_joint_
     assert data["robot"]["search"] == {"lo": [-2.5, -1.5, 0.2], "hi": [2.5, 1.5, 2.8], "step": 0.5,
                                        "spacing": "centres"}
     assert data["tension"] == {"t_min": 10.0, "t_max": [600.0] * 4 + [400.0] * 4}
-    assert set(data) == {"defaults", "robot", "tension"}  # no payload, no other robot's numbers
+    assert set(data) == {"defaults", "robot", "tension", "orientation"}  # no payload, no other robot's numbers
+    assert data["orientation"] == {"convention": "xyz"}  # CASPR's angles mean CASPR's pose
 
 
 def test_attachments_given_relative_to_the_centre_of_mass_are_the_same_points(imported):
@@ -120,10 +121,10 @@ def test_the_imported_robot_runs_with_the_files_mass_and_agrees_with_an_independ
     payload, at = (20.0, np.array([0.05, 0.0, -0.1])) if overrides else (0.0, np.zeros(3))
     mass = 12.5 + payload
     com = (12.5 * np.array(COM) + payload * at) / mass
-    psi, theta = 0.1, -0.15  # eq. (9): R = Rz(phi) Ry(theta) Rx(psi), phi = 0
+    psi, theta = 0.1, -0.15  # the file's convention, CASPR's: R = Rx(a) Ry(b) Rz(c), c = 0
     rx = np.array([[1, 0, 0], [0, np.cos(psi), -np.sin(psi)], [0, np.sin(psi), np.cos(psi)]])
     ry = np.array([[np.cos(theta), 0, np.sin(theta)], [0, 1, 0], [-np.sin(theta), 0, np.cos(theta)]])
-    rotation = ry @ rx
+    rotation = rx @ ry
     weight = np.array([0.0, 0.0, -mass * 9.81])
     wrench = -np.concatenate([weight, np.cross(rotation @ com, weight)])  # what the cables must supply
     arms = np.array(PLATFORM) @ rotation.T
@@ -172,7 +173,7 @@ def test_a_platform_that_only_translates_keeps_its_three_freedoms(tmp_path):
     assert _write(tmp_path, bodies=BODIES.replace(JOINT, 'type="T_XYZ"')).returncode == 0
     data = yaml.safe_load((tmp_path / "mine" / "robot" / "x.yaml").read_text())
     assert data["robot"]["dofs"] == ["x", "y", "z"] and data["robot"]["search"]["spacing"] == "centres"
-    assert "XYZ Euler" not in (tmp_path / "mine" / "robot" / "x.yaml").read_text()
+    assert "convention" not in (tmp_path / "mine" / "robot" / "x.yaml").read_text()
 
 
 def test_without_joint_limits_the_box_is_the_anchors_or_must_be_given(tmp_path):
@@ -280,6 +281,6 @@ def test_names_from_the_files_cannot_become_yaml_keys(tmp_path):
     done = run(tmp_path, "pipeline.caspr", str(source), "--out", str(target))
     assert done.returncode == 0, done.stderr
     text = target.read_text()
-    assert set(yaml.safe_load(text)) == {"defaults", "robot", "tension"}
+    assert set(yaml.safe_load(text)) == {"defaults", "robot", "tension"}  # no bodies file: no orientation convention
     assert yaml.safe_load(text)["robot"]["cable_names"][0] == "one?hydra: 1"
     assert text.splitlines()[1].startswith("# Imported from CASPR: x?hydra:?  callbacks:")

@@ -145,6 +145,14 @@ class Distribution(Enum):
     lp = "lp"
 
 
+class Convention(Enum):
+    """How the three orientation angles make a rotation: eq. (9)'s R = Rz(phi) Ry(theta) Rx(psi)
+    (zyx) or R = Rx(psi) Ry(theta) Rz(phi) (xyz, CASPR's SPATIAL_EULER_XYZ)."""
+
+    zyx = "zyx"
+    xyz = "xyz"
+
+
 class TensionModel(Enum):
     """Cable forces the criteria check: minimum-norm (the papers' eq. 20 / eq. 10, any sign) or
     pulling cables only, chosen by linear programming (``pipeline.model.tensions``)."""
@@ -293,12 +301,15 @@ class TotalOrientationConfig:
 
 @dataclass
 class OrientationConfig:
-    """Carrier orientation, Euler angles of eq. (9) in rad; ``total`` widens it to the
-    total-orientation workspace around it."""
+    """Carrier orientation, three Euler angles in rad; ``convention``: zyx, eq. (9)'s R =
+    Rz(phi) Ry(theta) Rx(psi), or xyz, R = Rx(psi) Ry(theta) Rz(phi) (CASPR's SPATIAL_EULER_XYZ:
+    its angles unchanged); ``total`` widens it to the total-orientation workspace around it
+    (offsets to the angles of the convention)."""
 
     psi: float = rule(finite)
     theta: float = rule(finite)
     phi: float = rule(finite)
+    convention: Convention = MISSING
     total: TotalOrientationConfig = field(default_factory=TotalOrientationConfig)
 
 

@@ -38,7 +38,7 @@ from pipeline.errors import ConfigError
 from pipeline.model.actuators import actuator_model
 from pipeline.model.catalogue import Catalogue
 from pipeline.model.dynamics import Load, MotionSpec
-from pipeline.model.geometry import FREEDOMS, CableRobot
+from pipeline.model.geometry import FREEDOMS, CableRobot, eq9_angles
 from pipeline.model.motion import acceleration_set, cartesian_cube, extreme_points, velocity_set
 from pipeline.model.robots import PointsRobot, cpr8, irpm6, point_list
 from pipeline.model.statics import PayloadSpec, StaticLimits, StaticsSpec
@@ -311,8 +311,9 @@ def build(cfg: DictConfig, catalogue: Catalogue | None) -> WorkspaceProblem:
     spec, limits and criteria, the orientation set."""
     robot = ROBOTS[cfg.robot.name].build(cfg.robot)
     spec, limits, criteria = ANALYSES[cfg.analysis](cfg, catalogue, robot)
-    return WorkspaceProblem(robot, orientation_set(cfg.orientation), spec, limits, criteria,
-                            cfg.model.margin_atol, cfg.output.cables)
+    given = cfg.orientation
+    return WorkspaceProblem(robot, orientation_set(given), spec, limits, criteria, cfg.model.margin_atol,
+                            cfg.output.cables, nominal=(float(given.psi), float(given.theta), float(given.phi)))
 
 
 def build_grid(cfg: DictConfig, robot: CableRobot) -> Grid:
@@ -347,15 +348,19 @@ def orientation_count(orientation: DictConfig) -> int:
 
 
 def orientation_set(orientation: DictConfig) -> np.ndarray:
-    """(k, 3) Euler angles: the constant orientation, or the total-orientation grid around it."""
+    """(k, 3) eq. (9) angles: the constant orientation, or the total-orientation grid around it,
+    each converted from ``orientation.convention`` (xyz: the same rotations, eq. 9's angles)."""
     nominal = np.array([orientation.psi, orientation.theta, orientation.phi], dtype=float)
     total = orientation.total
-    if orientation_count(orientation) == 1:
-        return nominal[None, :]
-    offsets = np.linspace(-total.bound, total.bound, total.n)
-    grid = cartesian_cube(offsets)
-    order = np.argsort(np.abs(grid).sum(axis=1), kind="stable")  # nominal orientation first
-    return nominal + grid[order]
+    angles = nominal[None, :]
+    if orientation_count(orientation) > 1:
+        offsets = np.linspace(-total.bound, total.bound, total.n)
+        grid = cartesian_cube(offsets)
+        order = np.argsort(np.abs(grid).sum(axis=1), kind="stable")  # nominal orientation first
+        angles = nominal + grid[order]
+    if name_of(orientation.convention) == "xyz":
+        return np.array([eq9_angles(*row) for row in angles])
+    return angles
 
 
 def cable_limits(tension: TensionSpec, robot: CableRobot) -> tuple[str, ...]:

@@ -65,6 +65,17 @@ def rotation_matrix(psi: float, theta: float, phi: float) -> np.ndarray:
     return _rz(phi) @ _ry(theta) @ _rx(psi)
 
 
+def eq9_angles(a: float, b: float, c: float) -> tuple[float, float, float]:
+    """The angles (psi, theta, phi) of eq. (9) of the rotation R = Rx(a) Ry(b) Rz(c) (XYZ Euler
+    angles, CASPR's ``SPATIAL_EULER_XYZ``): the same rotation, so every model of this project
+    applies (at theta = +-pi/2 the split between psi and phi is one of many, the rotation is not)."""
+    r = _rx(a) @ _ry(b) @ _rz(c)
+    theta = float(np.arcsin(np.clip(-r[2, 0], -1.0, 1.0)))
+    if abs(r[2, 0]) < 1.0 - 1e-12:
+        return float(np.arctan2(r[2, 1], r[2, 2])), theta, float(np.arctan2(r[1, 0], r[0, 0]))
+    return float(np.arctan2(-r[1, 2], r[1, 1])), theta, 0.0  # gimbal lock: phi = 0
+
+
 def rotation_partials(psi: float, theta: float, phi: float) -> np.ndarray:
     """(3, 3, 3) array: dR/dpsi, dR/dtheta, dR/dphi of eq. (9)."""
     rx, ry, rz = _rx(psi), _ry(theta), _rz(phi)

@@ -91,7 +91,7 @@ def tabulate(problem: WorkspaceProblem, positions: np.ndarray, raw: dict,
     column: int8 codes into the criteria's names), margins; ``margins``, ``feasible`` and
     ``limiting`` as :func:`pipeline.workspace.verdict.classify` returns them."""
     columns = {"x": positions[:, 0], "y": positions[:, 1], "z": positions[:, 2]}
-    for name, value in zip(("psi", "theta", "phi"), problem.orientation):
+    for name, value in zip(("psi", "theta", "phi"), problem.nominal):
         columns[name] = np.full(len(positions), value)
     columns["feasible"] = feasible
     columns["limiting"] = categories(limiting, list(problem.criteria))

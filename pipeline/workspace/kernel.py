@@ -23,6 +23,8 @@ class WorkspaceProblem:
     ``cables``: also return the per-pose cable lengths and tensions (``pipeline.workspace.quantities``).
     ``fused``: evaluate with the compiled kernel of ``pipeline.workspace.fused`` (numpy for the
     poses it leaves unsettled); the job decides (``pipeline.workspace.compute.use_fused``).
+    ``nominal``: the orientation as the config gives it, in its convention (``orientation.*``),
+    reported with every pose; ``orientations`` are always eq. (9)'s angles.
     """
 
     robot: CableRobot
@@ -33,6 +35,7 @@ class WorkspaceProblem:
     margin_atol: float = 1e-9
     cables: bool = False
     fused: bool = False
+    nominal: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
     @property
     def orientation(self) -> tuple[float, float, float]:
