@@ -98,3 +98,20 @@ def test_the_points_robot_studies_give_the_numbers_their_docs_state(make_cfg, ca
     extra = [] if bound is None else [f"orientation.total.bound={bound}"]
     summary = compute_workspace(make_cfg(*overrides, *extra), catalogue)[1]
     assert (summary["n_feasible"], summary["n_points"]) == (feasible, 24000)
+
+
+def test_the_readme_s_payload_and_wrench_set_numbers(ipanema):
+    """The README's own-robot commands with cables in [1, 100] N: the payload map (median 4.6 kg,
+    at most 25.3 kg, 85.83 % of the box holds the platform) and the box of wrenches +-10 N in x
+    and y (53.13 %)."""
+    root, _, _ = ipanema
+    limits = ["tension.t_min=1", "tension.t_max=100"]
+    payload = run(root, "robot=ipanema1", *limits, "analysis=payload", "load.com=[0,0,-0.2]", "hydra.run.dir=pay")
+    boxed = run(root, "robot=ipanema1", *limits, "wrench.set={min:[-10,-10,0,0,0,0],max:[10,10,0,0,0,0]}",
+                "hydra.run.dir=set")
+    assert payload.returncode == 0 and boxed.returncode == 0, payload.stderr + boxed.stderr
+    row = pd.read_parquet(root / "pay" / "summary.parquet").iloc[0]
+    assert row["n_feasible"] == 20600 and row["max_payload_kg_median"] == pytest.approx(4.633, abs=1e-3)
+    assert row["max_payload_kg_max"] == pytest.approx(25.324, abs=1e-3)
+    row = pd.read_parquet(root / "set" / "summary.parquet").iloc[0]
+    assert (row["n_feasible"], row["n_wrenches"]) == (12752, 4)
