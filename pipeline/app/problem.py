@@ -374,13 +374,14 @@ def load_spec(cfg: DictConfig) -> Load:
     """The load of every analysis: the robot's platform and the payload on it as one body (their
     masses added, the centre of mass their mass-weighted mean, platform frame), gravity, and as
     its external wrench ``load.external`` plus the applied wrench ``wrench.*`` (IRPM eq. 11)."""
-    platform, load, w = cfg.robot.platform, cfg.load, cfg.wrench
-    mass = float(platform.mass) + float(load.mass)
-    moments = float(platform.mass) * np.asarray(platform.com, dtype=float) + float(load.mass) * np.asarray(
-        load.com, dtype=float)
+    # plain containers: numpy reads an OmegaConf list node item by item, 1 ms a job
+    platform, load, w = (OmegaConf.to_container(node) for node in (cfg.robot.platform, cfg.load, cfg.wrench))
+    mass = float(platform["mass"]) + float(load["mass"])
+    moments = float(platform["mass"]) * np.asarray(platform["com"], dtype=float) + float(load["mass"]) * np.asarray(
+        load["com"], dtype=float)
     com = moments / mass if mass > 0 else np.zeros(3)
-    applied = np.array([w.fx, w.fy, w.fz, w.mx, w.my, w.mz], dtype=float)
-    return Load(mass, float(load.gravity), com, np.asarray(load.external, dtype=float) + applied)
+    applied = np.array([w[key] for key in ("fx", "fy", "fz", "mx", "my", "mz")], dtype=float)
+    return Load(mass, float(load["gravity"]), com, np.asarray(load["external"], dtype=float) + applied)
 
 
 def tension_spec(cfg: DictConfig, robot: CableRobot) -> TensionSpec:
