@@ -40,7 +40,9 @@ def balance(position):
 
 
 def vertices_of(box):
-    return [np.array(v, float) for v in itertools.product(*({a, b} for a, b in zip(box["min"], box["max"])))]
+    """The box's vertices in the documented order: itertools' product of each coordinate's
+    sorted distinct min and max."""
+    return [np.array(v, float) for v in itertools.product(*(sorted({a, b}) for a, b in zip(box["min"], box["max"])))]
 
 
 def lp_holds(position, wrench):
@@ -91,3 +93,23 @@ def test_a_wrench_set_that_means_nothing_is_refused_in_one_line(make_cfg, catalo
     with pytest.raises(ConfigError) as error:
         validate(make_cfg(*ROBOT, *overrides), catalogue)
     assert message in str(error.value) and "\n" not in str(error.value)
+
+
+@pytest.mark.parametrize("model, holds", [("feasible", lp_holds), ("pinv", pinv_holds)])
+def test_each_failing_pose_names_a_vertex_it_cannot_hold(make_cfg, catalogue, model, holds):
+    """``limiting_wrench``: 0 where the whole set holds, else the 1-based vertex (the box's in
+    itertools order of each coordinate's sorted min and max) with the lowest margin of its own,
+    which the pose cannot hold alone (unless a singular structure matrix, the same for every
+    vertex, is what limits it); the vertices are not all named alike."""
+    points, _ = compute_workspace(make_cfg(*ROBOT, f"tension={model}", BOX_OVERRIDE), catalogue)
+    vertices = vertices_of(BOX)
+    named = points["limiting_wrench"].to_numpy()
+    assert (named[points["feasible"].to_numpy()] == 0).all()
+    failing = points.loc[~points["feasible"]]
+    for (_, row), vertex in zip(failing.iterrows(), named[~points["feasible"].to_numpy()]):
+        assert 1 <= vertex <= 8
+        if row["limiting"] != "singular":
+            assert not holds(row[["x", "y", "z"]].to_numpy(dtype=float), vertices[vertex - 1])
+    alone = compute_workspace(make_cfg(*ROBOT, f"tension={model}"), catalogue)[0]
+    by_set = named[alone["feasible"].to_numpy() & ~points["feasible"].to_numpy()]  # lost to the set itself
+    assert len(set(by_set)) > 1

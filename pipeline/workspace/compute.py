@@ -97,7 +97,7 @@ def tabulate(problem: WorkspaceProblem, positions: np.ndarray, raw: dict,
     columns["limiting"] = categories(limiting, list(problem.criteria))
     for name, margin in margins.items():
         columns[f"margin_{name}"] = margin
-    for key in ("jacobian_rank", "max_payload_kg"):
+    for key in ("jacobian_rank", "max_payload_kg", "limiting_wrench"):
         if key in raw:
             columns[key] = raw[key]
     for key, values in raw.items():  # output.cables: lengths and tensions (pipeline.workspace.quantities)

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -47,7 +47,8 @@ def evaluate_chunk(problem: WorkspaceProblem, positions: np.ndarray) -> dict[str
     """Margins ``margin_<criterion>`` (n,), the worst over the orientation set (also the
     largest payload under ``analysis=payload``), for positions (n, 3); with ``problem.cables``
     also the cable quantities at the nominal orientation; under the feasible tension model
-    ``lp_poses`` (n,): poses whose margins came from the LPs."""
+    ``lp_poses`` (n,): poses whose margins came from the LPs; with a wrench set, the vertex that
+    limits each pose at its worst orientation (:func:`_limiting_vertex`)."""
     result = {}
     for number, orientation in enumerate(problem.orientations):
         if problem.fused:
@@ -57,7 +58,10 @@ def evaluate_chunk(problem: WorkspaceProblem, positions: np.ndarray) -> dict[str
         for key, value in part.items():
             if key not in result:
                 result[key] = value
-            elif key.startswith("margin_") or key in ("jacobian_rank", "max_payload_kg"):
+            elif key == "limiting_wrench":  # before its margin is merged below
+                worse = part["limiting_wrench_margin"] < result["limiting_wrench_margin"]
+                result[key] = np.where(worse, value, result[key])
+            elif key.startswith("margin_") or key in ("jacobian_rank", "max_payload_kg", "limiting_wrench_margin"):
                 result[key] = np.minimum(result[key], value)
             elif key == "lp_poses":
                 result[key] = result[key] | value
@@ -71,7 +75,29 @@ def _criteria(problem: WorkspaceProblem, positions: np.ndarray, orientation, cab
     for name in problem.criteria:
         result[f"margin_{name}"] = REGISTRY[name].function(state, problem.limits)
     result.update(state.diagnostics())  # the Jacobian's rank, the poses the feasible model's LPs solved
+    if problem.spec.kind == "statics" and len(problem.spec.wrench_set) > 1:
+        result.update(_limiting_vertex(problem, positions, orientation, result))
     return result
+
+
+def _limiting_vertex(problem: WorkspaceProblem, positions: np.ndarray, orientation, margins: dict) -> dict:
+    """``limiting_wrench`` (n,): for each pose a required wrench set (``wrench.set``) fails,
+    the vertex (1 = the first of the set) whose own least margin is the lowest, each vertex
+    evaluated alone by the same criteria on those poses only; 0 where the pose holds the whole
+    set. ``limiting_wrench_margin`` (n,): that margin (0 where it holds), to pick the worst
+    orientation."""
+    least = np.min([margins[f"margin_{name}"] for name in problem.criteria], axis=0)
+    failing = np.flatnonzero(least < -problem.margin_atol)
+    vertex, worst = np.zeros(len(positions), dtype=np.int64), np.zeros(len(positions))
+    if len(failing):
+        worst[failing] = np.inf
+        for number, wrench in enumerate(problem.spec.wrench_set, start=1):
+            alone = replace(problem.spec, wrench_set=wrench[None, :])
+            state = alone.state(problem.robot, positions[failing], orientation)
+            own = np.min([REGISTRY[name].function(state, problem.limits) for name in problem.criteria], axis=0)
+            lower = own < worst[failing]
+            vertex[failing[lower]], worst[failing[lower]] = number, own[lower]
+    return {"limiting_wrench": vertex, "limiting_wrench_margin": worst}
 
 
 def _fused(problem: WorkspaceProblem, positions: np.ndarray, orientation) -> dict:
