@@ -83,3 +83,25 @@ def shaft_accel_from_acceleration(dyn) -> np.ndarray:
 def wrenches(dyn) -> np.ndarray:
     """(k_a, 6) F of eq. (31) at every acceleration of the set."""
     return load_wrenches(dyn.motion, dyn.motion.accelerations, dyn.robot.up, dyn.rotation)
+
+
+# An 8-cable frame of IPAnema 1's size with a platform 0.2 x 0.2 x 0.1 m (attachments apart in
+# height, so moments are balanced for real): the robot of the payload, wrench-set and tension
+# distribution tests, each adding its own load, orientation and limits.
+SPREAD_ANCHORS = [[-2, 1.5, 2], [2, 1.5, 2], [2, -1.5, 2], [-2, -1.5, 2],
+                  [-2, 1.5, 0], [2, 1.5, 0], [2, -1.5, 0], [-2, -1.5, 0]]
+SPREAD_PLATFORM = [[-0.1, 0.1, 0.05], [0.1, 0.1, 0.05], [0.1, -0.1, 0.05], [-0.1, -0.1, 0.05],
+                   [-0.1, 0.1, -0.05], [0.1, 0.1, -0.05], [0.1, -0.1, -0.05], [-0.1, -0.1, -0.05]]
+SPREAD_ROBOT = ["robot=points", f"robot.anchors={SPREAD_ANCHORS}", f"robot.attachments={SPREAD_PLATFORM}",
+                "robot.search.lo=[-1.5,-1,0.25]", "robot.search.hi=[1.5,1,1.75]"]
+
+
+def eq9_rotation(psi: float, theta: float, phi: float) -> np.ndarray:
+    """Eq. (9), R = Rz(phi) Ry(theta) Rx(psi), written out for the independent references (no
+    code of the model)."""
+    cx, sx, cy, sy, cz, sz = np.cos(psi), np.sin(psi), np.cos(theta), np.sin(theta), np.cos(phi), np.sin(phi)
+    rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
+    ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
+    rz = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
+    return rz @ ry @ rx
+

@@ -8,13 +8,10 @@ import numpy as np
 import pytest
 from scipy.optimize import linprog
 
+from conftest import SPREAD_ROBOT
 from pipeline.app.problem import build_problem, compute_workspace
 
-ANCHORS = [[-2, 1.5, 2], [2, 1.5, 2], [2, -1.5, 2], [-2, -1.5, 2], [-2, 1.5, 0], [2, 1.5, 0], [2, -1.5, 0], [-2, -1.5, 0]]
-PLATFORM = [[-0.1, 0.1, 0.05], [0.1, 0.1, 0.05], [0.1, -0.1, 0.05], [-0.1, -0.1, 0.05],
-            [-0.1, 0.1, -0.05], [0.1, 0.1, -0.05], [0.1, -0.1, -0.05], [-0.1, -0.1, -0.05]]
-ROBOT = ["robot=points", f"robot.anchors={ANCHORS}", f"robot.attachments={PLATFORM}",
-         "robot.search.lo=[-1.5,-1,0.25]", "robot.search.hi=[1.5,1,1.75]", "robot.search.step=0.25",
+ROBOT = [*SPREAD_ROBOT, "robot.search.step=0.25",
          "robot.platform.mass=4", "robot.platform.com=[0.02,-0.01,-0.04]", "orientation.psi=0.05",
          "orientation.phi=-0.1", "tension=feasible", "tension.t_min=1", "tension.t_max=250", "output.cables=true"]
 NAMES = [f"tension_{i}" for i in range(1, 9)]

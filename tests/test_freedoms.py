@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from scipy.optimize import linprog
 
+from conftest import eq9_rotation
 from pipeline.app.problem import build_problem, compute_workspace
 from pipeline.errors import ConfigError
 
@@ -23,21 +24,12 @@ def points_robot(anchors, attachments, dofs, lo, hi, step, *extra):
             f"robot.search.step={step}", *extra]
 
 
-def rotation(psi, theta, phi):
-    """Eq. (9), R = Rz(phi) Ry(theta) Rx(psi), written out here."""
-    cx, sx, cy, sy, cz, sz = np.cos(psi), np.sin(psi), np.cos(theta), np.sin(theta), np.cos(phi), np.sin(phi)
-    rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
-    ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
-    rz = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
-    return rz @ ry @ rx
-
-
 def lp_verdicts(positions, anchors, attachments, dofs, bounds, mass=0.0, com=(0, 0, 0), up=(0, 0, 1),
                 angles=(0.0, 0.0, 0.0), external=(0, 0, 0, 0, 0, 0)):
     """Whether tensions within ``bounds`` pull the platform into balance with its weight (and
     the weight's moment about the reference point) and an external wrench along the rows
     ``dofs``, pose by pose."""
-    r = rotation(*angles)
+    r = eq9_rotation(*angles)
     arms = np.asarray(attachments, float) @ r.T
     weight = -mass * 9.81 * np.asarray(up, float)
     load = np.concatenate([weight, np.cross(r @ np.asarray(com, float), weight)]) + np.asarray(external, float)

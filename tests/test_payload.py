@@ -7,31 +7,22 @@ import numpy as np
 import pytest
 from scipy.optimize import linprog
 
+from conftest import SPREAD_ANCHORS, SPREAD_PLATFORM, SPREAD_ROBOT, eq9_rotation
 from pipeline.app.problem import compute_workspace
 from pipeline.errors import ConfigError
 
-ANCHORS = [[-2, 1.5, 2], [2, 1.5, 2], [2, -1.5, 2], [-2, -1.5, 2], [-2, 1.5, 0], [2, 1.5, 0], [2, -1.5, 0], [-2, -1.5, 0]]
-PLATFORM = [[-0.1, 0.1, 0.05], [0.1, 0.1, 0.05], [0.1, -0.1, 0.05], [-0.1, -0.1, 0.05],
-            [-0.1, 0.1, -0.05], [0.1, 0.1, -0.05], [0.1, -0.1, -0.05], [-0.1, -0.1, -0.05]]
-ROBOT = ["robot=points", f"robot.anchors={ANCHORS}", f"robot.attachments={PLATFORM}",
-         "robot.search.lo=[-1.5,-1,0.25]", "robot.search.hi=[1.5,1,1.75]", "robot.search.step=0.5",
+ROBOT = [*SPREAD_ROBOT, "robot.search.step=0.5",
          "robot.platform.mass=5", "robot.platform.com=[0,0,0.02]", "load.com=[0.03,-0.02,-0.15]",
          "orientation.psi=0.1", "orientation.theta=-0.05", "tension.t_min=5", "tension.t_max=400",
          "analysis=payload"]
 
 
-def rotation(psi, theta, phi):
-    cx, sx, cy, sy, cz, sz = np.cos(psi), np.sin(psi), np.cos(theta), np.sin(theta), np.cos(phi), np.sin(phi)
-    return (np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]]) @ np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
-            @ np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]]))
-
-
 def pulls_and_loads(position):
     """The pose's matrix M (6, m) with M t = the wrench the cables exert, the platform's load
     wrench and the load wrench of 1 kg of payload at load.com (eq. 9 rotation, g 9.81 along -z)."""
-    r = rotation(0.1, -0.05, 0.0)
-    arms = np.array(PLATFORM, float) @ r.T
-    pull = np.array(ANCHORS, float) - (position + arms)
+    r = eq9_rotation(0.1, -0.05, 0.0)
+    arms = np.array(SPREAD_PLATFORM, float) @ r.T
+    pull = np.array(SPREAD_ANCHORS, float) - (position + arms)
     pull /= np.linalg.norm(pull, axis=1, keepdims=True)
     matrix = np.vstack([pull.T, np.cross(arms, pull).T])
     weight = np.array([0.0, 0.0, -9.81])

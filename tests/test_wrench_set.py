@@ -9,31 +9,22 @@ import numpy as np
 import pytest
 from scipy.optimize import linprog
 
+from conftest import SPREAD_ANCHORS, SPREAD_PLATFORM, SPREAD_ROBOT, eq9_rotation
 from pipeline.app.problem import compute_workspace, validate
 from pipeline.errors import ConfigError
 
-ANCHORS = [[-2, 1.5, 2], [2, 1.5, 2], [2, -1.5, 2], [-2, -1.5, 2], [-2, 1.5, 0], [2, 1.5, 0], [2, -1.5, 0], [-2, -1.5, 0]]
-PLATFORM = [[-0.1, 0.1, 0.05], [0.1, 0.1, 0.05], [0.1, -0.1, 0.05], [-0.1, -0.1, 0.05],
-            [-0.1, 0.1, -0.05], [0.1, 0.1, -0.05], [0.1, -0.1, -0.05], [-0.1, -0.1, -0.05]]
-ROBOT = ["robot=points", f"robot.anchors={ANCHORS}", f"robot.attachments={PLATFORM}",
-         "robot.search.lo=[-1.5,-1,0.25]", "robot.search.hi=[1.5,1,1.75]", "robot.search.step=0.5",
+ROBOT = [*SPREAD_ROBOT, "robot.search.step=0.5",
          "robot.platform.mass=3", "robot.platform.com=[0.02,0,-0.03]", "orientation.theta=0.12",
          "tension.t_min=2", "tension.t_max=300"]
 BOX = {"min": [-10, 0, -5, 0, -1, 0], "max": [10, 0, 5, 0, 1, 0]}  # f_x, f_z, m_y: 8 vertices
 BOX_OVERRIDE = "wrench.set={min:[-10,0,-5,0,-1,0],max:[10,0,5,0,1,0]}"
 
 
-def rotation(psi, theta, phi):
-    cx, sx, cy, sy, cz, sz = np.cos(psi), np.sin(psi), np.cos(theta), np.sin(theta), np.cos(phi), np.sin(phi)
-    return (np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]]) @ np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
-            @ np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]]))
-
-
 def balance(position):
     """M (6, m) with M t the wrench the cables exert, and the platform's load wrench."""
-    r = rotation(0.0, 0.12, 0.0)
-    arms = np.array(PLATFORM, float) @ r.T
-    pull = np.array(ANCHORS, float) - (position + arms)
+    r = eq9_rotation(0.0, 0.12, 0.0)
+    arms = np.array(SPREAD_PLATFORM, float) @ r.T
+    pull = np.array(SPREAD_ANCHORS, float) - (position + arms)
     pull /= np.linalg.norm(pull, axis=1, keepdims=True)
     weight = np.array([0.0, 0.0, -3 * 9.81])
     return np.vstack([pull.T, np.cross(arms, pull).T]), np.concatenate([weight, np.cross(r @ [0.02, 0, -0.03], weight)])
@@ -82,10 +73,10 @@ def test_a_list_of_vertices_is_the_same_set_as_the_box(make_cfg, catalogue):
     (["wrench.set={min:[1,0,0,0,0,0],max:[0,0,0,0,0,0]}"],
      "wrench.set.min=[1.0, 0.0, 0.0, 0.0, 0.0, 0.0]: must be <= wrench.set.max"),
     (["wrench.set={min:[0,0,0,0,0,.nan],max:[0,0,0,0,0,1]}"], "wrench.set.min"),
-    (["wrench.set=[[1,2,3]]"], "wrench.set: vertex 1 has 3 values; a wrench has 6 (fx fy fz mx my mz)"),
+    (["wrench.set=[[1,2,3]]"], "wrench.set: vertex 1=[1, 2, 3]: needs 6 values (fx fy fz mx my mz, N and N m)"),
     (["wrench.set=[]"], "wrench.set=[]: no vertices"),
     (["wrench.set=[[1e12,0,0,0,0,0]]"],
-     "wrench.set: vertex 1=[1000000000000.0, 0, 0, 0, 0, 0]: must be finite and at most 1e+09"),
+     "wrench.set: vertex 1=[1000000000000.0, 0, 0, 0, 0, 0]: every value must be at most 1e+09 in magnitude"),
     (["wrench.set=3"], "wrench.set=3: a box {min: [6], max: [6]} or a list of [fx, fy, fz, mx, my, mz]"),
     (["analysis=cpr_wwa", "wrench.set=[[1,0,0,0,0,0]]"], "wrench.set: analysis=cpr_wwa balances its acceleration set"),
 ])

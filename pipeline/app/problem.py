@@ -32,7 +32,7 @@ from omegaconf import DictConfig, ListConfig, OmegaConf
 
 from pipeline.app.config import (
     MAX_FORCE, Config, Cpr8Config, Irpm6Config, PointsConfig, check_values, masked, merged, shown,
-    unknown_keys,
+    unknown_keys, vector,
 )
 from pipeline.errors import ConfigError
 from pipeline.model.actuators import actuator_model
@@ -232,18 +232,15 @@ def wrench_set(value) -> np.ndarray:
     return np.array([_wrench(v, f"wrench.set: vertex {i}") for i, v in enumerate(value, start=1)])
 
 
+WRENCH_RULE = vector(6, "fx fy fz mx my mz, N and N m", MAX_FORCE)  # the rule of load.external
+
+
 def _wrench(value, key: str) -> np.ndarray:
-    items = list(value) if isinstance(value, (ListConfig, list)) else None
-    if items is None or len(items) != 6:
-        count = "not a list" if items is None else f"{len(items)} values"
-        raise ConfigError(f"{key} has {count}; a wrench has 6 (fx fy fz mx my mz)")
-    try:
-        numbers = np.array([float(v) for v in items])
-    except (TypeError, ValueError):
-        raise ConfigError(f"{key}={items}: must be numbers (N, N m)") from None
-    if not (np.abs(numbers) <= MAX_FORCE).all():  # NaN fails too
-        raise ConfigError(f"{key}={items}: must be finite and at most {MAX_FORCE:g} in magnitude (N, N m)")
-    return numbers
+    items = OmegaConf.to_container(value) if isinstance(value, ListConfig) else value
+    broken = WRENCH_RULE(items) if isinstance(items, list) else "must be a list of 6 numbers (fx fy fz mx my mz)"
+    if broken:
+        raise ConfigError(f"{key}={items}: {broken}")
+    return np.asarray(items, dtype=float)
 
 
 def _enough_cables(cfg: DictConfig, robot: CableRobot, rows: int, hint: str) -> None:
