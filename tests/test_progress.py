@@ -96,6 +96,6 @@ def test_the_build_of_the_compiled_loops_is_not_counted_in_the_first_chunk(make_
     cfg = make_cfg("compute.kernel=fused", "grid.n=10", "compute.chunk_size=100")
     with caplog.at_level(logging.INFO, logger="pipeline.workspace.parallel"):
         compute_workspace(cfg, catalogue)
-    lines = [r.getMessage() for r in caplog.records]
+    lines = [r.getMessage() for r in caplog.records if r.name == "pipeline.workspace.parallel"]
     assert lines == ["chunks 10/10 (100%), 0:00 elapsed"]
     assert len(built) == 11  # one pose first, then each of the 10 chunks

@@ -31,7 +31,7 @@ def test_every_robot_runs_every_analysis_with_criteria_it_can_read(make_cfg, cat
 
 
 def test_gates_come_from_the_registry_in_priority_order():
-    assert GATES == ("singular", "unreachable", "slack")
+    assert GATES == ("zero_length", "singular", "unreachable", "slack")
     margins = {"voltage": np.array([-5.0]), "slack": np.array([-0.1]), "unreachable": np.array([-0.2])}
     assert [list(margins)[code] for code in classify(margins, 1e-9)[2]] == ["unreachable"]  # a gate wins
 
@@ -100,7 +100,8 @@ def test_tension_is_a_config_group_that_sets_its_own_keys_only(make_cfg):
         by_key = make_cfg(f"robot={robot}", "tension.model=feasible")
         assert OmegaConf.to_container(by_group) == OmegaConf.to_container(by_key)
     assert make_cfg("robot=irpm6", "tension=feasible").tension.t_max == 55_000
-    assert set(make_cfg("tension=feasible").tension) == {"model", "t_min", "t_max", "residual_rtol", "distribution"}
+    keys = {"model", "t_min", "t_max", "residual_rtol", "distribution", "pinv_residual"}
+    assert set(make_cfg("tension=feasible").tension) == keys
 
 
 def test_an_unknown_tension_option_is_refused_before_anything_runs():

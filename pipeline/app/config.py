@@ -348,7 +348,10 @@ class TensionConfig:
     ``t_max``: cable rating (N) in every analysis; each a number or one per cable, null = none
     (CPR-WWA: the motor torque limit / R_i only; ``robot=irpm6`` sets the paper's 55 kN);
     ``limits.s_max`` is an alias. ``residual_rtol``: a required wrench is unreachable when the
-    equilibrium residual exceeds this fraction of it. ``distribution`` (read by the feasible
+    equilibrium residual exceeds this fraction of it (feasible model). ``pinv_residual``: the
+    same for the minimum-norm forces of CPR-WWA, which balance only the part of F in the range
+    of J^T (the CPR-8 at the zero orientation has rank 5 and misses up to 1.4 % of F; a robot
+    that cannot hold its load misses most of it; docs/model.md section 1). ``distribution`` (read by the feasible
     model): the tensions written with ``output.cables=true``, ``min_norm`` (the least 2-norm within the
     limits, a QP per pose) or ``lp`` (the vertex the LPs end on); the verdicts do not depend on it."""
 
@@ -357,6 +360,7 @@ class TensionConfig:
     t_max: Any = MISSING
     residual_rtol: float = rule(positive)
     distribution: Distribution = MISSING
+    pinv_residual: float = rule(positive)
 
 
 @dataclass

@@ -51,6 +51,7 @@ from pipeline.workspace.kernel import WorkspaceProblem
 
 CPR_WWA_CRITERIA = ("speed", "torque", "acceleration", "voltage")  # eqs. (30), (32), (33), (34)
 FEASIBLE_GATES = ("unreachable", "slack")  # tension=feasible (pipeline.model.tensions)
+GEOMETRY_GATES = ("zero_length",)  # every analysis: a collapsed cable has no direction
 DEFAULT_N_VEL = 6  # velocity grid of robots without an N x N x N position grid (section 3.1's N)
 MAX_VELOCITY_CANDIDATES = 10_000_000  # (n_vel + 1)^3 grid velocities of eq. (23), built in memory
 
@@ -151,8 +152,8 @@ def _cpr_wwa(cfg: DictConfig, catalogue: Catalogue, robot: CableRobot):
         tension=tension,
         inertia=name_of(model.inertia),
     )
-    gates = FEASIBLE_GATES if tension.model == "feasible" else ()
-    return motion, actuator, (*gates, *cable_limits(tension, robot), *CPR_WWA_CRITERIA)
+    gates = FEASIBLE_GATES if tension.model == "feasible" else ("unreachable",)  # pinv: the wrench (J^T)^+ misses
+    return motion, actuator, (*GEOMETRY_GATES, *gates, *cable_limits(tension, robot), *CPR_WWA_CRITERIA)
 
 
 def _statics(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
@@ -180,7 +181,7 @@ def _statics(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
     scale = float(np.max(rating)) if rating is not None else max(float(np.linalg.norm(force)), 1.0)
     limits = StaticLimits(np.inf if rating is None else rating, cfg.model.rank_rtol, scale, len(spec.wrench_set))
     gates = ("singular", "slack") if spec.tension.model == "pinv" else FEASIBLE_GATES
-    return spec, limits, (*gates, *cable_limits(spec.tension, robot))
+    return spec, limits, (*GEOMETRY_GATES, *gates, *cable_limits(spec.tension, robot))
 
 
 def _payload(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
@@ -199,7 +200,7 @@ def _payload(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
     spec = PayloadSpec(spec.moment_arm, spec.cable_direction, spec.rank_rtol, spec.tension, load,
                        payload=float(cfg.load.mass), payload_com=np.asarray(cfg.load.com, dtype=float))
     gates = ("singular",) if spec.tension.model == "pinv" else ()
-    return spec, limits, (*gates, "payload", *(("length",) if robot.l_max is not None else ()))
+    return spec, limits, (*GEOMETRY_GATES, *gates, "payload", *(("length",) if robot.l_max is not None else ()))
 
 
 # analysis -> (the typed config, its catalogue or None, the robot) -> (spec, limits, criteria)
@@ -393,7 +394,7 @@ def tension_spec(cfg: DictConfig, robot: CableRobot) -> TensionSpec:
     if rating is not None and not (t_min < _limit_values(key, rating, robot.n_cables)).all():
         raise ConfigError(f"{key}={shown(rating)}: must be > tension.t_min={shown(t.t_min)}")
     return TensionSpec(name_of(t.model), _per_cable(t.t_min), _per_cable(rating), t.residual_rtol,
-                       name_of(t.distribution))
+                       name_of(t.distribution), t.pinv_residual)
 
 
 def _per_cable(value):

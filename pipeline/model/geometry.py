@@ -56,8 +56,17 @@ class CableRobot:
     def n_cables(self) -> int:
         return self.anchors.shape[0]
 
+    @property
+    def shortest_cable(self) -> float:
+        """A cable shorter than this (m) has collapsed: its attachment point sits on its anchor
+        and eq. (1) gives it no direction. ``ZERO_LENGTH_RTOL`` times the robot's extent (at
+        least 1 m): far below any grid step, far above the round-off of a grid's positions."""
+        extent = max(1.0, float(np.abs(self.anchors).max(initial=0.0)), float(np.abs(self.attachments).max(initial=0.0)))
+        return ZERO_LENGTH_RTOL * extent
+
 
 FREEDOMS = ("x", "y", "z", "rx", "ry", "rz")  # the rows of the structure matrix, in order
+ZERO_LENGTH_RTOL = 1e-9  # a collapsed cable, relative to the robot's extent (CableRobot.shortest_cable)
 
 
 def rotation_matrix(psi: float, theta: float, phi: float) -> np.ndarray:

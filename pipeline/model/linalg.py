@@ -4,8 +4,9 @@ Both need, for a stack of n short-and-wide matrices A (r x c, r <= c), the minim
 solution of A x = b. Where A has full row rank this is A^T (A A^T)^-1 b: one r x r solve per
 pose, several times cheaper than an SVD. Rank is judged by the gram ratio
 det(A A^T) / prod(diag(A A^T)) in [0, 1] (Hadamard's inequality: 1 for orthogonal rows, 0 for
-dependent ones); poses below ``rtol`` go through the SVD pseudo-inverse, which drops singular
-values at or below ``rtol * sigma_max``.
+dependent ones) and by the rows' lengths (a row shorter than ``rtol`` times the longest is
+dropped by the SVD whatever the ratio); poses below ``rtol`` go through the SVD pseudo-inverse,
+which drops singular values at or below ``rtol * sigma_max``.
 """
 
 from __future__ import annotations
@@ -33,7 +34,11 @@ def batched_pinv(matrices: np.ndarray, rtol: float) -> tuple[np.ndarray, np.ndar
     numerical rank (n,) of each matrix. Never inf or NaN, also for rank-deficient matrices."""
     n, rows, _ = matrices.shape
     grams = gram(matrices)
-    full = gram_ratio(grams) >= rtol
+    diagonal = np.einsum("nii->ni", grams)
+    # a row far shorter than the others (|row| <= rtol |longest|) is one the SVD drops, though
+    # the gram ratio, blind to row scales, can pass it (the CPR-8's moment row about z at the
+    # centre of its frame: 1e-17 against 25)
+    full = (gram_ratio(grams) >= rtol) & (diagonal.min(axis=1) > rtol**2 * diagonal.max(axis=1))
     pinv = np.empty((n, matrices.shape[2], rows))
     rank = np.full(n, rows)
     if full.any():

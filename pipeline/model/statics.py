@@ -237,16 +237,19 @@ class PosePayload(PoseStatics):
     def max_payload(self) -> np.ndarray:
         """(n,) the largest payload (kg) each pose holds within [t_min, t_max]; inf when the
         cables never carry it, NaN when not even the platform alone is held (or, under the
-        minimum-norm model, the pose is singular)."""
+        minimum-norm model, the pose is singular) and where a cable has collapsed (no direction:
+        the ``zero_length`` gate)."""
         t_min, t_max = self.tension.t_min, self.tension.t_max
+        collapsed = self.lengths.min(axis=1) < self.robot.shortest_cable
         if self.tension.model != "pinv":
-            return max_payloads(self.structure_matrix, self.wrench, self.per_kg, t_min, t_max)
+            payloads = max_payloads(self.structure_matrix, self.wrench, self.per_kg, t_min, t_max)
+            return np.where(collapsed, np.nan, payloads)
         upper = np.inf if t_max is None else t_max
         start = self.tensions
         slope = np.einsum("nmk,k->nm", self.wrench_pinv[0], self.per_kg)
         room = np.where(slope > 0, (upper - start) / np.where(slope > 0, slope, 1.0),
                         np.where(slope < 0, (t_min - start) / np.where(slope < 0, slope, 1.0), np.inf))
-        held = ((start >= t_min) & (start <= upper)).all(axis=1) & ~self.singular
+        held = ((start >= t_min) & (start <= upper)).all(axis=1) & ~self.singular & ~collapsed
         return np.where(held, np.maximum(room.min(axis=1), 0.0), np.nan)
 
     def diagnostics(self) -> dict[str, np.ndarray]:

@@ -54,8 +54,10 @@ class TensionSpec:
     CPR-8 paper / eq. 10 of the IRPM paper, any sign) or ``"feasible"`` (pulling cables only,
     solved as above). ``t_min``: smallest cable tension (N). ``t_max``: cable rating (N), None =
     the motor's torque limit / R_i only. Both a float or one value per cable (m,).
-    ``residual_rtol``: a wrench is unreachable when |S S^+ w - w| > residual_rtol |w|.
-    ``distribution``: which tensions the ``feasible`` model writes (``output.cables``):
+    ``residual_rtol``: a wrench is unreachable when |S S^+ w - w| > residual_rtol |w|
+    (``feasible``); ``pinv_residual`` the same share for the minimum-norm forces (``pinv``:
+    CPR-WWA's (J^T)^+ F, which on the paper's CPR-8 misses up to 1.4 % of F); ``residual_limit``
+    is the one of the model. ``distribution``: which tensions the ``feasible`` model writes (``output.cables``):
     ``min_norm``, the least 2-norm within the limits (:func:`min_norm_distribution`, as CASPR
     and WireX give them), or ``lp``, the vertex its LPs end on."""
 
@@ -64,6 +66,12 @@ class TensionSpec:
     t_max: float | np.ndarray | None = None
     residual_rtol: float = 1e-6
     distribution: str = "lp"
+    pinv_residual: float = 0.05
+
+    @property
+    def residual_limit(self) -> float:
+        """The share of a required wrench the model's forces may miss (``unreachable``)."""
+        return self.pinv_residual if self.model == "pinv" else self.residual_rtol
 
 
 @dataclass(frozen=True)

@@ -57,6 +57,7 @@ def grid_workspace(
         scheduler=cfg.compute.scheduler,
     )
     parts, n_feasible, by_lp = [], 0, 0
+    degenerate = Degeneracy(problem)
     lost = np.zeros(len(problem.criteria), dtype=np.int64)  # infeasible poses by limiting criterion
     least = dict.fromkeys(problem.criteria, np.inf)
     summarised = {key: [] for key in problem.spec.summarised}  # per-pose columns, 8 bytes a pose
@@ -70,6 +71,7 @@ def grid_workspace(
             least[name] = np.min(margins[name], initial=least[name], where=feasible)
         by_lp += int(np.count_nonzero(raw.get("lp_poses", False)))
         lost += np.bincount(limiting[~feasible], minlength=len(problem.criteria))
+        degenerate.add(grid.positions[span], raw, margins)
         points = tabulate(problem, grid.positions[span], raw, margins, feasible, limiting)
         if sink is None:
             parts.append(points)
@@ -81,8 +83,49 @@ def grid_workspace(
     if problem.spec.tension.model == "feasible":
         log.info("feasible tension model: %d of %d poses by LP (poor conditioning or fallback), "
                  "the rest by hyperplane shifting", by_lp, grid.n_points)
+    degenerate.explain(grid.n_points)
     table = pa.concat_tables(parts).to_pandas() if sink is None else None
     return table, summarize(cfg, counts, grid.cell_volume, problem)
+
+
+class Degeneracy:
+    """What a job says of its degenerate poses once the grid is done: the rank of J^T where it
+    is short (CPR-WWA, column ``jacobian_rank``) with the largest share of the required wrench
+    the forces miss (column ``wrench_residual``), and the cables that collapse (the
+    ``zero_length`` gate) by name."""
+
+    def __init__(self, problem: WorkspaceProblem):
+        self.problem = problem
+        self.ranks = np.zeros(7, dtype=np.int64)
+        self.missed = 0.0
+        self.collapsed: set[int] = set()
+
+    def add(self, positions: np.ndarray, raw: dict, margins: dict) -> None:
+        if "jacobian_rank" in raw:
+            self.ranks += np.bincount(raw["jacobian_rank"], minlength=7)
+        if "unreachable" in margins and len(positions):
+            self.missed = max(self.missed, float((1.0 - margins["unreachable"]).max()) * self.problem.spec.tension.residual_limit)
+        if "zero_length" in margins and (margins["zero_length"] < 0).any():
+            robot, tol = self.problem.robot, self.problem.robot.shortest_cable
+            for orientation in self.problem.orientations:
+                state = self.problem.spec.state(robot, positions[margins["zero_length"] < 0], orientation)
+                self.collapsed.update(np.flatnonzero((state.lengths < tol).any(axis=0)).tolist())
+
+    def explain(self, n_points: int) -> None:
+        problem, tension = self.problem, self.problem.spec.tension
+        point = not problem.robot.attachments.any()  # no moment arms: the moment rows are zero
+        full = 3 if point or getattr(problem.spec, "pinv_columns", "full") == "translational" else 6
+        short = {rank: int(count) for rank, count in enumerate(self.ranks) if count and rank < full}
+        if short:
+            ranks = ", ".join(f"rank {rank} at {count}" for rank, count in short.items())
+            log.info("J^T is short of rank %d at %d of %d poses (%s; column jacobian_rank): the cables cannot act "
+                     "along every direction of the wrench space there, and the forces miss up to %.2f%% of the "
+                     "required wrench (unreachable past tension.%s=%g)", full, sum(short.values()), n_points, ranks,
+                     100 * self.missed, "pinv_residual" if tension.model == "pinv" else "residual_rtol", tension.residual_limit)
+        if self.collapsed:
+            names = ", ".join(problem.robot.cable_names[i] for i in sorted(self.collapsed))
+            log.warning("cables %s have zero length at some poses (the attachment on its anchor: no "
+                        "direction); those poses are infeasible (zero_length)", names)
 
 
 def tabulate(problem: WorkspaceProblem, positions: np.ndarray, raw: dict,
@@ -104,7 +147,7 @@ def tabulate(problem: WorkspaceProblem, positions: np.ndarray, raw: dict,
         if key.startswith(("length_", "tension_")):
             columns[key] = values
     if "unreachable" in margins:  # |S S^+ w - w| / |w|, worst over the required wrenches
-        columns["wrench_residual"] = (1.0 - margins["unreachable"]) * problem.spec.tension.residual_rtol
+        columns["wrench_residual"] = (1.0 - margins["unreachable"]) * problem.spec.tension.residual_limit
     return pa.table({name: numbers(values) if isinstance(values, np.ndarray) else values
                      for name, values in columns.items()})
 

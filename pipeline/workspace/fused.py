@@ -3,10 +3,12 @@
 
 - CPR-WWA (Filipovic & Kevac 2018): per pose, the cable vectors and lengths (eqs. 1-17), the
   shaft Jacobian J (eqs. 18-19), M = (J^T)^+ F affine in the acceleration (eqs. 20, 31) and the
-  margins of eqs. (30), (32)-(34), the cable rating and the longest cable;
+  margins of eqs. (30), (32)-(34), the cable rating, the longest and the shortest cable, and the
+  share of F the minimum-norm torques miss (the ``unreachable`` gate: zero at full rank, |w . F|
+  / |F| on the one-short route below);
 - statics (Hamed & Zohoor): the structure matrix A of eq. (8) (either moment arm, either cable
   direction), its gram ratio (the singular gate), the tensions s = A^T (A A^T)^-1 f of eqs.
-  (7), (10) and the slack, rating and length margins;
+  (7), (10) and the slack, rating, length and zero-length margins;
 
 in registers: no (poses x cables x set) arrays, no LAPACK call per pose. They compute what the
 criteria of ``pipeline.workspace.criteria`` compute from ``PoseDynamics`` and ``PoseStatics``, in
@@ -16,10 +18,11 @@ The pseudo-inverse of J^T (c x m, c = 3 or 6 rows; A for the statics) takes one 
 each used only where numpy's route (``pipeline.model.linalg.batched_pinv``) is beyond doubt the
 same:
 
-- full row rank, gram ratio >= ``BAND`` x rtol: (J^T)^+ F = J G^-1 F with G = J^T J, from the
+- full row rank, gram ratio >= ``BAND`` x rtol and no row shorter than sqrt(``BAND``) x rtol times
+  the longest (the row test of ``batched_pinv``): (J^T)^+ F = J G^-1 F with G = J^T J, from the
   Cholesky factor of G scaled to unit diagonal (whose squared diagonal product is the gram
   ratio);
-- one short, gram ratio < rtol / ``BAND`` (CPR-WWA only): the CPR-8 with all six columns at the
+- one short, gram ratio < rtol / ``BAND`` or a row that short (CPR-WWA only): the CPR-8 with all six columns at the
   zero orientation (a turn about a vertical axis, a different one per pose, changes no cable
   length). Two steps of inverse iteration on G + mu I give the unit w with w^T J^T ~ 0; with
   J'^T = (I - w w^T) J^T, the matrix whose pseudo-inverse the SVD returns when it drops that
@@ -27,8 +30,8 @@ same:
   ``DROPPED`` x rtol x sigma_max / ``BAND`` (the SVD surely drops it) and the completed matrix
   passes the full-rank test (the SVD surely keeps the rest).
 
-Every other pose (rank two short, a singular statics pose, or a ratio within a factor ``BAND``
-of rtol) is returned as unsettled, and ``pipeline.workspace.kernel`` evaluates it with numpy.
+Every other pose (rank two short, a singular statics pose, or a ratio or row within a factor
+``BAND`` of its bound) is returned as unsettled, and ``pipeline.workspace.kernel`` evaluates it with numpy.
 
 They apply to the ``pinv`` tension model (CPR-WWA: without J-dot, on the extreme velocities and
 a product acceleration set, both readings of eqs. 27-29), without per-pose cable quantities
@@ -45,9 +48,11 @@ import numpy as np
 from pipeline.model.dynamics import acceleration_box, inertia_sign, load_wrench_terms
 from pipeline.model.geometry import euler_rate_axes, rotation_matrix
 from pipeline.model.jit import compiled_loops
+from pipeline.workspace.criteria.geometry import zero_length_margin
 
-CRITERIA = ("speed", "torque", "acceleration", "voltage", "tension_max", "length")  # columns of cpr_wwa
-STATICS_CRITERIA = ("singular", "slack", "tension_max", "length")  # columns of statics
+CRITERIA = ("speed", "torque", "acceleration", "voltage", "tension_max", "length", "zero_length",
+            "unreachable")  # columns of cpr_wwa (the last two: the quantities their margins come from)
+STATICS_CRITERIA = ("singular", "slack", "tension_max", "length", "zero_length")  # columns of statics
 LOOPS = "pipeline.workspace.fused_loops"  # the compiled loops, and the constants named above
 
 
@@ -72,6 +77,7 @@ def _statics_margins(problem, positions: np.ndarray, orientation):
         float(lim.rank_rtol), np.array(np.broadcast_to(spec.tension.t_min, (m,)), dtype=float),  # writable copies
         np.array(np.broadcast_to(lim.s_max, (m,)), dtype=float), float(lim.scale),
         np.inf if robot.l_max is None else float(robot.l_max), out, unsettled)
+    out[:, 4] = zero_length_margin(out[:, 4], robot.shortest_cable)
     return {f"margin_{name}": out[:, STATICS_CRITERIA.index(name)] for name in problem.criteria}, unsettled
 
 
@@ -97,6 +103,8 @@ def _cpr_wwa_margins(problem, positions: np.ndarray, orientation):
         np.ascontiguousarray(spec.velocity_extremes, dtype=float), centre, half, loads, float(spec.rank_rtol),
         np.array([act.speed_limit, act.torque_limit, act.accel_limit, act.voltage_limit], dtype=float),
         np.array([act.G_v, act.L_v, act.load_gain], dtype=float), t_max, l_max, out, rank, unsettled)
+    out[:, 6] = zero_length_margin(out[:, 6], robot.shortest_cable)
+    out[:, 7] = 1.0 - out[:, 7] / spec.tension.pinv_residual
     result = {f"margin_{name}": out[:, CRITERIA.index(name)] for name in problem.criteria}
     result["jacobian_rank"] = rank
     return result, unsettled

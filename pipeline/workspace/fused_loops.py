@@ -67,14 +67,18 @@ def _cpr_wwa(positions, anchors, arms, rate_axes, radius, rows, extremes, centre
         _gram(jac, rows, m, gram)
         ratio = _scaled_cholesky(gram, rows, factor, scale)
         source = jac
-        if ratio >= BAND * rtol:
+        residual = 0.0  # |w . F| / |F|, the worst over the acceleration box's vertices
+        lean = _row_spread(gram, rows)
+        if ratio >= BAND * rtol and lean >= BAND * rtol * rtol:
             _scaled_solve(factor, scale, loads, rows, solved)
             rank[p] = rows
-        elif ratio < rtol / BAND and _drop_one(jac, gram, rows, m, rtol, factor, scale, w, warm, along,
-                                              deflated, solved, loads, scratch, iterate, step, projected):
+        elif (ratio < rtol / BAND or lean < rtol * rtol / BAND) and _drop_one(
+                jac, gram, rows, m, rtol, factor, scale, w, warm, along, deflated, solved, loads, scratch, iterate,
+                step, projected):
             source = deflated
             rank[p] = rows - 1
             warm = True
+            residual = _missed(w, loads, rows, centre, half)
         else:
             warm = False
             unsettled[p] = True
@@ -118,6 +122,8 @@ def _cpr_wwa(positions, anchors, arms, rate_axes, radius, rows, extremes, centre
         out[p, 3] = 1.0 - worst_voltage / voltage_limit
         out[p, 4] = 1.0 - worst_rating
         out[p, 5] = 1.0 - worst_length
+        out[p, 6] = _shortest(lengths, m)
+        out[p, 7] = residual
 
 
 @njit(cache=True, inline="always")
@@ -132,6 +138,46 @@ def _cable(positions, p, anchors, arms, i, to_attachment):
     length = np.sqrt(vx * vx + vy * vy + vz * vz)
     inverse = 1.0 / length if length > 0 else 0.0
     return length, vx * inverse, vy * inverse, vz * inverse
+
+
+@njit(cache=True, inline="always")
+def _row_spread(gram, rows):
+    """min / max of the diagonal of G: the squared length of the shortest row of J^T against
+    the longest; below rtol^2 the SVD drops the short row whatever the gram ratio says
+    (``pipeline.model.linalg.batched_pinv``)."""
+    low, high = np.inf, 0.0
+    for r in range(rows):
+        low, high = min(low, gram[r, r]), max(high, gram[r, r])
+    return low / high if high > 0.0 else 0.0
+
+
+@njit(cache=True, inline="always")
+def _shortest(lengths, m):
+    """The shortest of the m cable lengths (the ``zero_length`` gate's quantity)."""
+    shortest = np.inf
+    for i in range(m):
+        shortest = min(shortest, lengths[i])
+    return shortest
+
+
+@njit(cache=True, inline="always")
+def _missed(w, loads, rows, centre, half):
+    """The share of F = C a + d (``loads``: C and d) that J^T cannot reach when its range lacks
+    only the unit direction w, |w . F| / |F|, the worst over the 8 vertices of the acceleration
+    box (0 for a zero F): the ``unreachable`` margin's residual under the minimum-norm model."""
+    worst = 0.0
+    for vertex in range(8):
+        along, size = 0.0, 0.0
+        for r in range(rows):
+            force = loads[r, 3]
+            for k in range(3):
+                sign = 1.0 if (vertex >> (2 - k)) & 1 else -1.0
+                force += loads[r, k] * (centre[k] + sign * half[k])
+            along += w[r] * force
+            size += force * force
+        if size > 0.0:
+            worst = max(worst, abs(along) / np.sqrt(size))
+    return worst
 
 
 @njit(cache=True, inline="always")
@@ -253,7 +299,8 @@ def _drop_one(jac, gram, rows, m, rtol, factor, scale, w, warm, along, deflated,
 @njit(SIGNATURES["cpr_wwa"], cache=True)
 def cpr_wwa(positions, anchors, arms, rate_axes, radius, rows, extremes, centre, half, loads, rtol,
             limits, gains, t_max, l_max, out, rank, unsettled):
-    """Fill ``out`` (n, 6) with the margins of ``fused.CRITERIA``, ``rank`` and ``unsettled``:
+    """Fill ``out`` (n, 8) with the margins of ``fused.CRITERIA`` (the last two columns: the
+    shortest cable and the residual the margins come from), ``rank`` and ``unsettled``:
     :func:`_cpr_wwa` with its number of rows (3 or 6) as a constant."""
     if rows == 6:
         _cpr_wwa(positions, anchors, arms, rate_axes, radius, 6, extremes, centre, half, loads, rtol,
@@ -268,7 +315,8 @@ def cpr_wwa(positions, anchors, arms, rate_axes, radius, rows, extremes, centre,
 @njit(SIGNATURES["statics"], cache=True)
 def statics(positions, anchors, arms, centre, base, wrench, rtol, singular_rtol, t_min, s_max, scale,
              l_max, out, unsettled):
-    """Fill ``out`` (n, 4) with the margins of ``fused.STATICS_CRITERIA`` and ``unsettled``."""
+    """Fill ``out`` (n, 5) with the margins of ``fused.STATICS_CRITERIA`` (the last column: the
+    shortest cable, which its margin comes from) and ``unsettled``."""
     n, m = positions.shape[0], anchors.shape[0]
     six = np.int64(6)  # not the literal 6, which numba would compile its callees for once more
     columns = np.empty((m, 6))  # A^T: row i = [u_i; a_i x u_i] (eq. 8)
@@ -289,7 +337,7 @@ def statics(positions, anchors, arms, centre, base, wrench, rtol, singular_rtol,
             columns[i, 5] = ax * uy - ay * ux
         _gram(columns, six, m, gram)
         ratio = _scaled_cholesky(gram, six, factor, scale_rows)
-        if ratio < BAND * rtol:  # singular or in doubt: numpy's SVD
+        if ratio < BAND * rtol or _row_spread(gram, six) < BAND * rtol * rtol:  # singular or in doubt: numpy's SVD
             unsettled[p] = True
             for k in range(out.shape[1]):
                 out[p, k] = np.nan
@@ -310,3 +358,4 @@ def statics(positions, anchors, arms, centre, base, wrench, rtol, singular_rtol,
         out[p, 1] = lowest / scale
         out[p, 2] = 1.0 - worst_rating
         out[p, 3] = 1.0 - worst_length
+        out[p, 4] = _shortest(lengths, m)

@@ -17,6 +17,7 @@ from pipeline.model.dynamics import MotionSpec, PoseDynamics, centripetal, load_
 from pipeline.model.geometry import CableRobot
 from pipeline.model.linalg import remembered_pinv
 from pipeline.model.tensions import feasible_tensions
+from pipeline.workspace.criteria.geometry import zero_length
 
 
 @dataclass(frozen=True)
@@ -67,7 +68,9 @@ def inverse_dynamics(
     F = m (p_ddot - g e_z) (eqs. 20, 31), voltage u = G_v theta_ddot + L_v theta_dot - S_v M (eq. 21). Also the wrench residual
     |J^T M - F| and both sides of the power balance, sum_i M_i theta_dot_i and F . p_dot (n,).
     Under ``tension.model=feasible`` M is the LP's choice (``pipeline.model.tensions``) for each
-    sample's own wrench, speed and acceleration, and ``margins`` holds that model's margins."""
+    sample's own wrench, speed and acceleration, and ``margins`` holds that model's margins;
+    under ``pinv`` ``margins`` has the share of the wrench M misses (``unreachable``), and
+    always the ``zero_length`` gate's margin."""
     state = PoseDynamics(robot, positions, orientation, motion)
     jt = state.jacobian[:, :, :3]
     theta_dot = np.einsum("nmj,nj->nm", jt, velocities)
@@ -91,7 +94,12 @@ def inverse_dynamics(
         margins["tension_max"] = 1.0 - (torque / motion.winch_radius / motion.tension.t_max).max(axis=1)
     if robot.l_max is not None:
         margins["length"] = 1.0 - (state.lengths / robot.l_max).max(axis=1)
+    margins["zero_length"] = zero_length(state, None)
     reached = np.einsum("ncm,nm->nc", state.structure, torque)
+    if "unreachable" not in margins:  # pinv: the share of each sample's wrench M misses
+        size = np.linalg.norm(wrench, axis=1)
+        missed = np.linalg.norm(reached - wrench, axis=1) / np.where(size > 0, size, 1.0)
+        margins["unreachable"] = 1.0 - missed / motion.tension.pinv_residual
     return {
         "theta_dot": theta_dot,
         "theta_ddot": theta_ddot,

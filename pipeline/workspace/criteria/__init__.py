@@ -5,7 +5,7 @@ A :class:`Criterion` says what it reads (``reads``: the CPR-WWA dynamics, the st
 chunk state), whether it is a gate (a violated gate decides the verdict whatever the other
 margins say; gates in priority order) and its colour in every figure. One module per family:
 ``actuator`` (eqs. 30, 32-34 of the CPR-8 paper), ``tension`` (unreachable, slack, tension
-rating), ``geometry`` (singular, cable length), ``payload`` (the largest payload); ``forces``
+rating), ``geometry`` (zero_length, singular, cable length), ``payload`` (the largest payload); ``forces``
 holds the ``feasible`` tension model they share. A new criterion is one function in its family's module and one entry here.
 """
 
@@ -35,9 +35,10 @@ class Criterion:
 
 
 REGISTRY: dict[str, Criterion] = {c.name: c for c in (
-    Criterion("singular", geometry.singular, STATICS, 0, "#000000"),
-    Criterion("unreachable", tension.unreachable, ANY, 1, "#777777"),
-    Criterion("slack", tension.slack, ANY, 2, "#882255"),
+    Criterion("zero_length", geometry.zero_length, ANY, 0, "#999933"),
+    Criterion("singular", geometry.singular, STATICS, 1, "#000000"),
+    Criterion("unreachable", tension.unreachable, ANY, 2, "#777777"),
+    Criterion("slack", tension.slack, ANY, 3, "#882255"),
     Criterion("tension_max", tension.tension_max, ANY, None, "#0072B2"),
     Criterion("length", geometry.length, ANY, None, "#CC79A7"),
     Criterion("payload", payload.payload, STATICS, None, "#56B4E9"),

@@ -1,11 +1,26 @@
-"""Geometric criteria: a structure matrix of full rank (the singular gate) and cables no longer
-than the robot's ``l_max`` (eq. 10 of the IRPM paper), for every analysis."""
+"""Geometric criteria: no collapsed cable (the zero_length gate, every analysis), a structure
+matrix of full rank (the singular gate) and cables no longer than the robot's ``l_max`` (eq. 10
+of the IRPM paper), for every analysis."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from pipeline.model.statics import PoseStatics, StaticLimits
+
+
+def zero_length(state, limits) -> np.ndarray:
+    """Every cable must have a length: at a pose where a platform attachment sits on its cable's
+    anchor (length below ``CableRobot.shortest_cable``) the cable has no direction (eq. 1), the
+    structure matrix no column for it, and no tension there means anything. Margin
+    min(1, l_min / tol - 1): 1 at every pose a grid normally holds, -1 for an exactly collapsed
+    cable, so such a pose is infeasible whatever the other margins say (a gate)."""
+    return zero_length_margin(state.lengths.min(axis=1), state.robot.shortest_cable)
+
+
+def zero_length_margin(shortest: np.ndarray, tol: float) -> np.ndarray:
+    """The margin of :func:`zero_length` from each pose's shortest cable (m)."""
+    return np.minimum(1.0, shortest / tol - 1.0)
 
 
 def singular(st: PoseStatics, lim: StaticLimits) -> np.ndarray:

@@ -6,13 +6,22 @@ from __future__ import annotations
 
 import numpy as np
 
+from pipeline.model.tensions import reachability
 from pipeline.workspace.criteria.forces import feasible_margins, feasible_model
 
 
 def unreachable(state, limits) -> np.ndarray:
-    """``feasible`` model: every required wrench must be in the range of S (J^T or A), within
-    |S S^+ w - w| <= residual_rtol |w|. Margin 1 - residual / (residual_rtol |w|)."""
-    return feasible_margins(state, limits)["unreachable"]
+    """Every required wrench must be in the range of S (J^T or A), within
+    |S S^+ w - w| <= rtol |w|, rtol the model's ``residual_limit`` (``tension.residual_rtol``
+    or ``tension.pinv_residual``). Margin 1 - residual / (rtol |w|), the worst over the required
+    wrenches. Under ``feasible`` from that model's margins; under ``pinv``
+    (CPR-WWA, eq. 20) the wrench the minimum-norm forces M = (J^T)^+ F fail to balance: J^T of
+    a rank-deficient robot reaches F only in its range (the CPR-8 at the zero orientation,
+    rank 5, misses up to 1.4 % of F; a robot with every anchor on one line most of it)."""
+    if feasible_model(state):
+        return feasible_margins(state, limits)["unreachable"]
+    residual, _ = reachability(state.structure, state.wrench_pinv[0], state.required_wrenches)
+    return 1.0 - residual.max(axis=1) / state.tension.pinv_residual
 
 
 def slack(state, limits) -> np.ndarray:
