@@ -351,6 +351,10 @@ def checked_commands(name: str, extra: list[str], out_root: Path | None = None,
     bad input fails here, before anything is written or removed. A design study: its lowest
     and highest designs, planned the same way."""
     study = load_study(name)
+    for override in extra:
+        if re.split(r"[./]", _key(override))[0] == "hydra":
+            raise ConfigError(f"{override}: a study places and launches its own jobs (--out, --launcher); "
+                              "Hydra's settings are not study overrides")
     changed = [o for o in extra if _key(o) not in ALWAYS_EXCLUDED]
     if changed and not study.extra_overrides:
         raise ConfigError(f"{changed[0]}: study {name} checks the papers' published facts on "

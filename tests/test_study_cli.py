@@ -11,7 +11,7 @@ import yaml
 from pipeline.model.catalogue import load_catalogue
 from pipeline.errors import ConfigError
 from pipeline.app.results import read_metadata, write_parquet
-from pipeline.study import StudySpec, available, load_study, run_study
+from pipeline.study import StudySpec, available, checked_commands, load_study, run_study
 
 pytestmark = pytest.mark.slow
 
@@ -189,8 +189,6 @@ def test_a_study_is_a_declared_name_and_cannot_set_hydra_callbacks(tmp_path):
 
 
 def test_a_study_that_reads_points_refuses_a_summary_only_run():
-    from pipeline.study import checked_commands
-
     with pytest.raises(ConfigError, match=r"^output.points=false: study tension_comparison reads every "
                                           r"job's points.parquet \(cloud, survival\)$"):
         checked_commands("tension_comparison", ["output.points=false"])
@@ -246,3 +244,32 @@ def test_a_bad_study_among_several_stops_them_all_before_any_runs(tmp_path):
         "error: load.mass=3: study evidence_cpr8 checks the papers' published facts on their own "
         "settings; it takes compute.* overrides only"]
     assert not (tmp_path / "outputs").exists()
+
+
+@pytest.mark.parametrize("override", ["hydra.sweep.dir=/tmp/elsewhere", "hydra.run.dir=/tmp/elsewhere",
+                                      "hydra/launcher=basic", "+hydra.job.env_set.X=1", "~hydra.callbacks.sweep_summary"])
+def test_a_study_places_and_launches_its_own_jobs(tmp_path, override):
+    """Hydra's settings on a study's command line were ignored (hydra.run.dir: the study wrote to
+    a folder named after the override) or failed after its files (hydra.sweep.dir: a traceback
+    from the sweep summary it then could not find). One line, exit 2, nothing written."""
+    with pytest.raises(ConfigError, match=r"a study places and launches its own jobs \(--out, --launcher\)"):
+        checked_commands("actuator_choice", [override])
+    proc = study(tmp_path, "actuator_choice", override)
+    assert proc.returncode == 2 and proc.stderr.count("\n") == 1 and "Traceback" not in proc.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("value", ["None", "cpr9", "points"])
+def test_a_robot_name_set_on_the_command_line_is_checked_like_a_robot_file(tmp_path, value):
+    """robot.name=None gave a KeyError traceback (the override is applied after the robot file
+    chose the schema); another kind's name keeps the file's keys, which that kind does not have."""
+    from pipeline.app.plan import plan
+
+    with pytest.raises(ConfigError, match=rf"^robot.name={value}: "):
+        plan([f"robot.name={value}"])
+    with pytest.raises(ConfigError, match=rf"^robot.name={value}: "):
+        checked_commands("actuator_choice", [f"robot.name={value}"])
+    done = subprocess.run([sys.executable, "-m", "pipeline", f"robot.name={value}"], cwd=tmp_path,
+                          capture_output=True, text=True)
+    assert done.returncode == 2 and done.stderr.startswith(f"error: robot.name={value}: ")
+    assert list(tmp_path.iterdir()) == []

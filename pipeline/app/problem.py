@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import importlib.util
 import itertools
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import Callable
 
 import numpy as np
@@ -267,15 +267,22 @@ def typed_schema(cfg: DictConfig) -> DictConfig:
     if not isinstance(robot, DictConfig) or "name" not in robot:
         raise ConfigError("robot: the robot file gives no robot keys (an empty file, or not a mapping of "
                           "keys): start your own with 'defaults: [points, _self_]'")
-    name = robot.get("name")
-    if name not in ROBOTS:
-        raise ConfigError(f"robot.name={name}: unknown robot ({', '.join(ROBOTS)})")
-    if cfg.get("analysis") not in ANALYSES:
-        raise ConfigError(f"analysis={cfg.get('analysis')}: unknown analysis ({', '.join(ANALYSES)})")
+    name = known_kinds(cfg)
     unknown_keys(cfg.robot, ROBOTS[name].schema, "robot.")
     full = merged(Config, cfg, "")
     full.robot = merged(ROBOTS[name].schema, cfg.robot, "robot.")
     return full
+
+
+def known_kinds(cfg: DictConfig) -> str:
+    """The robot kind ``cfg`` names, once its robot and analysis kinds are known to be ones the
+    registries hold (ConfigError otherwise)."""
+    name = cfg.robot.get("name")
+    if name not in ROBOTS:
+        raise ConfigError(f"robot.name={name}: unknown robot ({', '.join(ROBOTS)})")
+    if cfg.get("analysis") not in ANALYSES:
+        raise ConfigError(f"analysis={cfg.get('analysis')}: unknown analysis ({', '.join(ANALYSES)})")
+    return name
 
 
 def validate(cfg: DictConfig, catalogue: Catalogue | None,
@@ -287,7 +294,12 @@ def validate(cfg: DictConfig, catalogue: Catalogue | None,
     ``catalogue``: the actuators an analysis with an actuator chooses from."""
     cfg = cfg if typed else typed_config(cfg)
     check_values(cfg, Config)
-    check_values(cfg.robot, ROBOTS[cfg.robot.name].schema, "robot.")
+    schema = ROBOTS[known_kinds(cfg)].schema
+    foreign = [key for key in cfg.robot if key not in {f.name for f in fields(schema)}]
+    if foreign:  # robot.name set on the command line to another kind than the robot's file
+        raise ConfigError(f"robot.name={cfg.robot.name}: the robot's file has keys the robot kind {cfg.robot.name} "
+                          f"does not ({', '.join(foreign)}); choose a robot with robot=NAME, not robot.name")
+    check_values(cfg.robot, schema, "robot.")
     if cfg.output.cables and not cfg.output.points:
         raise ConfigError("output.cables=true: the cables go into points.parquet, which "
                           "output.points=false does not write")
