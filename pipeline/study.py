@@ -38,7 +38,7 @@ from pipeline.model.catalogue import load_catalogue
 from pipeline.analyses.choice import acceptance, choose, verdict
 from pipeline.errors import ConfigError, one_line
 from pipeline.analyses.evidence import evidence, scores
-from pipeline.analyses.figures import SERIES_DIR, FigureSpec, render
+from pipeline.analyses.figures import SERIES_DIR, FigureSpec, expression_error, render
 from pipeline.analyses.results import StudyResults, table as read_table
 from pipeline.app.job import changed_files, execute, folder_lock
 from pipeline.analyses.optimise import (OptimiseSpec, best_drive, check_catalogue_objectives, corner_overrides, optimise,
@@ -156,6 +156,11 @@ def load_study(name: str, directory: Path = STUDIES_DIR) -> StudySpec:
     for figure in study.figures:
         if figure.kind not in KINDS:
             raise ConfigError(f"{path}: figures: unknown kind {figure.kind!r} (known: {', '.join(KINDS)})")
+        for key in ("x", "y", "value"):
+            problem = getattr(figure, key) and expression_error(getattr(figure, key))
+            if problem:
+                raise ConfigError(f"{path}: figures: {figure.file}: {key}={getattr(figure, key)!r}: pandas cannot "
+                                  f"evaluate it ({problem})")
         if figure.kind == "map" and not figure.value:
             raise ConfigError(f"{path}: figures: {figure.file}: a map colours the poses by a points column: "
                               "give value (e.g. value: max_payload_kg)")

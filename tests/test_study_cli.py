@@ -1,5 +1,6 @@
 """Declared studies through their command line: `python -m pipeline.study NAME`."""
 
+import re
 import subprocess
 import sys
 
@@ -273,3 +274,22 @@ def test_a_robot_name_set_on_the_command_line_is_checked_like_a_robot_file(tmp_p
                           capture_output=True, text=True)
     assert done.returncode == 2 and done.stderr.startswith(f"error: robot.name={value}: ")
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("expression, why", [
+    ("volume_m3 **", "invalid syntax"),
+    ("round(volume_m3)", '"round" is not a supported function'),
+    ("np.log(volume_m3)", "has no attribute 'log'"),
+])
+def test_a_figure_expression_pandas_refuses_stops_the_study_before_its_jobs(tmp_path, expression, why):
+    """It failed after every job had run and written its files."""
+    (tmp_path / "mine.yaml").write_text(
+        "title: t\nsource: s\nsweep: {load.mass: '1,2'}\n"
+        f"figures:\n  - {{kind: curve, file: f.png, x: load.mass, y: '{expression}'}}\n")
+    with pytest.raises(ConfigError, match=rf"mine.yaml: figures: f.png: y='{re.escape(expression)}': pandas cannot "
+                                          rf"evaluate it \(.*{re.escape(why)}"):
+        load_study("mine", tmp_path)
+    (tmp_path / "fine.yaml").write_text(
+        "title: t\nsource: s\nsweep: {load.mass: '1,2'}\n"
+        "figures:\n  - {kind: curve, file: f.png, x: load.mass, y: 'volume_m3 / `load.mass` ** 2'}\n")
+    assert load_study("fine", tmp_path).figures[0].y == "volume_m3 / `load.mass` ** 2"

@@ -21,7 +21,7 @@ import seaborn as sns
 from matplotlib.figure import Figure
 
 from pipeline.workspace.criteria import COLOURS, FEASIBLE_COLOUR
-from pipeline.errors import ConfigError
+from pipeline.errors import ConfigError, one_line
 from pipeline.app.results import write_csv
 from pipeline.analyses.views import write_view
 from pipeline.analyses.results import StudyResults
@@ -402,6 +402,24 @@ LABELS = {"robot.gamma_deg": "γ (deg)", "robot.r_end": "r_end (m)", "robot.r_ba
 
 def label(key: str) -> str:
     return LABELS.get(key, key)
+
+
+def expression_error(expression: str) -> str | None:
+    """Why pandas would refuse ``expression`` (a column or an expression over columns, ``x``,
+    ``y``, ``value`` of a figure) whatever the columns hold, None when it evaluates: tried on one
+    row whose every name is a number (then a flag), before any job runs. A plain (dotted) name
+    is a summary column, taken as it is."""
+    if re.fullmatch(r"[\w.]+", expression):
+        return None
+    names = {name.strip("`") for name in re.findall(r"`[^`]+`|\b[A-Za-z_]\w*\b(?!\s*\()", expression)}
+    problem = None
+    for value in (1.0, True):
+        try:
+            pd.DataFrame({name: [value] for name in names}).eval(expression)
+            return None
+        except Exception as exc:  # pandas' parser and evaluator: syntax, functions, operands
+            problem = problem or one_line(exc)
+    return problem
 
 
 def _column(table: pd.DataFrame, expression: str) -> pd.Series:
