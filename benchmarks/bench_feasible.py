@@ -70,12 +70,12 @@ def margins_rates(problem, grid) -> tuple[float, float, float]:
         return (state.structure, *state.wrench_pinv, state.required_wrenches,
                 state.force_families(problem.limits), state.tension.residual_rtol)
 
-    arguments = inputs(grid.positions)
+    arguments = inputs(grid[:])
     feasible_tensions(*arguments)  # warm-up: load the compiled search, import the LP solver
     start = time.perf_counter()
     _, _, by_lp = feasible_tensions(*arguments)
     fast = grid.n_points / (time.perf_counter() - start)
-    sampled = inputs(grid.positions[::LP_SAMPLE])
+    sampled = inputs(grid[:][::LP_SAMPLE])
     start = time.perf_counter()
     feasible_tensions(*sampled, distribution=True)
     lp = len(sampled[0]) / (time.perf_counter() - start)
@@ -84,10 +84,10 @@ def margins_rates(problem, grid) -> tuple[float, float, float]:
 
 def kernel_rate(problem, grid) -> float:
     size = bounded_chunk_size(problem, 20_000)
-    evaluate_chunk(problem, grid.positions[:size])  # warm-up
+    evaluate_chunk(problem, grid[:][:size])  # warm-up
     start = time.perf_counter()
     for begin in range(0, grid.n_points, size):
-        evaluate_chunk(problem, grid.positions[begin:begin + size])
+        evaluate_chunk(problem, grid[:][begin:begin + size])
     return grid.n_points / (time.perf_counter() - start)
 
 

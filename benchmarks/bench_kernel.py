@@ -53,11 +53,11 @@ def composed(*overrides: str):
 def serial_rate(problem, grid) -> float:
     """Seconds for the whole grid in chunks, one process, after one warm-up chunk."""
     size = bounded_chunk_size(problem, 20_000)
-    evaluate_chunk(problem, grid.positions[:size])  # warm-up (imports, caches)
+    evaluate_chunk(problem, grid[:][:size])  # warm-up (imports, caches)
 
     def serial():
         for start in range(0, grid.n_points, size):
-            evaluate_chunk(problem, grid.positions[start:start + size])
+            evaluate_chunk(problem, grid[:][start:start + size])
 
     return timed(serial)
 
@@ -76,7 +76,7 @@ def main() -> None:
     rows = []
 
     problem, grid = problem_for(6)
-    seconds = timed(lambda: literal_margins(problem.robot, grid.positions, problem.orientation,
+    seconds = timed(lambda: literal_margins(problem.robot, grid[:], problem.orientation,
                                             problem.spec, problem.limits))
     reference = grid.n_points / seconds
     rows.append(("literal reference, 1 core", grid.n_points, seconds))
@@ -104,7 +104,7 @@ def main() -> None:
         size = bounded_chunk_size(problem, 20_000)
 
         def parallel():
-            for _ in iter_chunks(evaluate_chunk, problem, grid.positions, n_jobs=2, chunk_size=size):
+            for _ in iter_chunks(evaluate_chunk, problem, grid[:], n_jobs=2, chunk_size=size):
                 pass
 
         if i == 0:

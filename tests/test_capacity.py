@@ -47,7 +47,7 @@ def test_paper_grid_every_actuator_gives_the_lp_margins(columns, angle, make_cfg
         cfg = make_cfg("tension=feasible", f"actuator={actuator}", f"model.pinv_columns={columns}",
                        *(f"orientation.{a}={angle}" for a in ("psi", "theta", "phi")))
         problem, grid = build_problem(cfg, catalogue)
-        state = problem.spec.state(problem.robot, grid.positions, problem.orientation)
+        state = problem.spec.state(problem.robot, grid[:], problem.orientation)
         fast, exact, by_lp = both_ways(state.structure, state.required_wrenches,
                                        state.force_families(problem.limits))
         assert_same(fast, exact)
@@ -61,7 +61,7 @@ def test_irpm_six_normals_per_pose_give_its_closed_form(gamma, make_cfg, catalog
     The general method on the same poses (q = 6: 12 normals from 5 x 5 cofactors) agrees."""
     problem, grid = build_problem(make_cfg("robot=irpm6", f"robot.gamma_deg={gamma}",
                                            "tension=feasible", "tension.t_min=100"), catalogue)
-    state = problem.spec.state(problem.robot, grid.positions[::7], problem.orientation)
+    state = problem.spec.state(problem.robot, grid[:][::7], problem.orientation)
     families = state.force_families(problem.limits)
     pinv, rank = batched_pinv(state.structure, 1e-9)
     full = rank == 6

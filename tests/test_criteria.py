@@ -24,7 +24,7 @@ def test_voltage_and_acceleration_margins_equal_literal_enumeration(make_cfg, ca
     cfg = make_cfg(f"actuator={actuator}", "model.jdot=true", f"orientation.psi={psi}",
                    f"orientation.theta={theta}", f"orientation.phi={phi}")
     problem, grid = build_problem(cfg, catalogue)
-    dyn = PoseDynamics(problem.robot, grid.positions, problem.orientation, problem.spec)
+    dyn = PoseDynamics(problem.robot, grid[:], problem.orientation, problem.spec)
     act = problem.limits
     # every (velocity k_v, acceleration k_a) combination, eq. (21)
     thdd = dyn.shaft_accel_from_velocity[:, :, :, None] + shaft_accel_from_acceleration(dyn)[:, :, None, :]
@@ -47,7 +47,7 @@ def test_acceleration_range_closed_form_equals_enumeration(make_cfg, catalogue, 
     motion = problem.spec
     if reading == "scattered":
         motion = replace(motion, accelerations=np.random.default_rng(3).uniform(-1, 1, (11, 3)))
-    dyn = PoseDynamics(problem.robot, grid.positions, problem.orientation, motion)
+    dyn = PoseDynamics(problem.robot, grid[:], problem.orientation, motion)
     assert (dyn._acceleration_box is None) == (reading == "scattered")
     high, low = dyn.acceleration_range(*dyn.torque_affine)
     np.testing.assert_allclose(high, shaft_torque(dyn).max(axis=2), rtol=0, atol=1e-12)
@@ -68,7 +68,7 @@ def test_both_chunk_states_offer_the_criteria_one_interface(make_cfg, catalogue,
     irpm = make_cfg("robot=irpm6", "robot.search.step=2", "wrench.fx=300", "tension.t_max=50000", f"tension={tension}")
     for cfg, kind in ((cpr8, "cpr_wwa"), (irpm, "statics")):
         problem, grid = build_problem(cfg, catalogue)
-        state = problem.spec.state(problem.robot, grid.positions, problem.orientation)
+        state = problem.spec.state(problem.robot, grid[:], problem.orientation)
         assert problem.spec.kind == kind and state.tension is problem.spec.tension
         high, low = state.force_range
         if kind == "cpr_wwa":
@@ -83,6 +83,6 @@ def test_both_chunk_states_offer_the_criteria_one_interface(make_cfg, catalogue,
         names = [family.name for family in state.force_families(problem.limits)]
         assert names == (["slack", "torque", "voltage"] if kind == "cpr_wwa" else ["slack", "tension_max"])
         for name in problem.criteria:  # every registered criterion evaluates on either state
-            assert REGISTRY[name].function(state, problem.limits).shape == (len(grid.positions),)
+            assert REGISTRY[name].function(state, problem.limits).shape == (len(grid[:]),)
         if tension == "feasible":
             assert "lp_poses" in state.diagnostics()

@@ -61,7 +61,7 @@ def test_paper_grid_every_actuator_gives_the_numpy_margins(columns, angle, make_
         cfg = make_cfg(f"actuator={actuator}", f"model.pinv_columns={columns}", "grid.n=12",
                        *(f"orientation.{a}={angle}" for a in ("psi", "theta", "phi")))
         problem, grid = build_problem(cfg, catalogue)
-        numpy_result, fused_result = both_kernels(problem, grid.positions)
+        numpy_result, fused_result = both_kernels(problem, grid[:])
         assert_same(problem, numpy_result, fused_result)
         verdicts.append(classify({n: numpy_result[f"margin_{n}"] for n in problem.criteria}, 1e-9)[1])
         if columns == "full" and angle == 0.0:
@@ -80,7 +80,7 @@ def test_loads_ratings_lengths_and_total_orientation_give_the_numpy_margins(make
     assert {"tension_max", "speed", "torque", "acceleration", "voltage"} <= set(problem.criteria)
     problem = dataclasses.replace(problem, robot=dataclasses.replace(problem.robot, l_max=2.3),
                                   criteria=(*problem.criteria, "length"))
-    numpy_result, fused_result = both_kernels(problem, grid.positions)
+    numpy_result, fused_result = both_kernels(problem, grid[:])
     assert_same(problem, numpy_result, fused_result)
     for name in ("tension_max", "length"):  # both limits bind somewhere, so both are compared
         assert (numpy_result[f"margin_{name}"] < 0).any() and (numpy_result[f"margin_{name}"] > 0).any()
@@ -171,10 +171,10 @@ def test_irpm_statics_give_the_numpy_margins(overrides, make_cfg, catalogue):
     orientation: the same singular, slack, rating and length margins; singular poses (about 4 %
     of the box) are left to numpy."""
     problem, grid = build_problem(make_cfg("robot=irpm6", *overrides), catalogue)
-    numpy_result, fused_result = both_kernels(problem, grid.positions)
+    numpy_result, fused_result = both_kernels(problem, grid[:])
     assert_same(problem, numpy_result, fused_result)
     assert (numpy_result["margin_singular"] < 0).any() and (numpy_result["margin_slack"] > 0).any()
-    assert fused.margins(problem, grid.positions, problem.orientation)[1].any()
+    assert fused.margins(problem, grid[:], problem.orientation)[1].any()
 
 
 def test_a_points_robot_with_eight_cables_gives_the_numpy_statics_margins(make_cfg, catalogue):
@@ -186,7 +186,7 @@ def test_a_points_robot_with_eight_cables_gives_the_numpy_statics_margins(make_c
                    "robot.search.lo=[0.3,0.3,0.3]", "robot.search.hi=[3.7,3.7,2.7]", "robot.search.step=0.2",
                    "robot.l_max=4.5", "tension.t_min=1", "load.mass=30")
     problem, grid = build_problem(cfg, catalogue)
-    numpy_result, fused_result = both_kernels(problem, grid.positions)
+    numpy_result, fused_result = both_kernels(problem, grid[:])
     assert_same(problem, numpy_result, fused_result)
     assert (numpy_result["margin_length"] < 0).any() and (numpy_result["margin_length"] > 0).any()
     assert np.ptp(numpy_result["margin_slack"]) > 0.1  # tensions vary over the box

@@ -40,7 +40,7 @@ def test_paper_search_box_is_31_by_31_by_26_points_of_0_4_m(irpm):
 def test_tensions_balance_the_wrench_at_every_regular_pose(make_cfg, catalogue):
     problem, grid = build_problem(make_cfg("robot=irpm6", "robot.gamma_deg=30",
                                            "orientation.psi=0.2", "wrench.mx=20000"), catalogue)
-    state = problem.spec.state(problem.robot, grid.positions, problem.orientation)
+    state = problem.spec.state(problem.robot, grid[:], problem.orientation)
     regular = ~state.singular
     assert state.wrench == pytest.approx([0, 0, 100_000, 20_000, 0, 0])  # massless platform, f_ext
     residual = np.einsum("nkm,nm->nk", state.structure_matrix, state.tensions) - state.wrench
@@ -60,7 +60,7 @@ def test_cables_towards_the_centre_make_the_tensions_independent_of_r_end(make_c
             problem, grid = build_problem(make_cfg("robot=irpm6", f"robot.r_end={r_end}", "robot.gamma_deg=15",
                                                    f"model.cable_direction={direction}",
                                                    "wrench.fx=30000"), catalogue)
-            states[direction, r_end] = problem.spec.state(problem.robot, grid.positions[1000:3000],
+            states[direction, r_end] = problem.spec.state(problem.robot, grid[:][1000:3000],
                                                           problem.orientation)
     small, large = states["centre", 1.2], states["centre", 6.0]
     np.testing.assert_allclose(small.tensions, large.tensions, rtol=1e-9, atol=1e-6)
@@ -223,9 +223,9 @@ def test_cpr8_goes_through_the_same_statics(make_cfg, catalogue):
     assert flat["lost_singular"] == 216
     problem, grid = build_problem(make_cfg(*overrides, "orientation.psi=0.5",
                                            "orientation.theta=0.5", "orientation.phi=0.5"), catalogue)
-    margins = evaluate_chunk(problem, grid.positions)
+    margins = evaluate_chunk(problem, grid[:])
     assert (margins["margin_singular"] > 0).all()
-    state = problem.spec.state(problem.robot, grid.positions, problem.orientation)
+    state = problem.spec.state(problem.robot, grid[:], problem.orientation)
     assert state.wrench == pytest.approx([0, 0, -2.0 * 9.81, 0, 0, 0])  # the carrier's 2 kg, z up
     residual = np.einsum("nkm,nm->nk", state.structure_matrix, state.tensions) - state.wrench
     assert np.abs(residual).max() < 1e-9

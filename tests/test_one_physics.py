@@ -23,7 +23,7 @@ def test_cpr8_jacobian_is_the_structure_matrix_through_euler_rates_and_winches(m
     """J^T = blockdiag(I, E^T) A diag(1 / R_i) (docs/model.md, conventions)."""
     problem, grid = build_problem(make_cfg("orientation.psi=0.4", "orientation.phi=-0.7",
                                            "model.pinv_columns=full"), catalogue)
-    state = problem.spec.state(problem.robot, grid.positions, problem.orientation)
+    state = problem.spec.state(problem.robot, grid[:], problem.orientation)
     blocks = np.eye(6)
     blocks[3:, 3:] = euler_rate_axes(*problem.orientation).T
     expected = np.einsum("ij,njm->nim", blocks, state.structure_matrix) / problem.spec.winch_radius
@@ -83,7 +83,7 @@ def test_wirex_structure_matrix_is_ours_with_the_opposite_sign(make_cfg, catalog
     anchor. Written here from WireX's description, pose by pose, on a tilted IRPM."""
     problem, grid = build_problem(make_cfg("robot=irpm6", "robot.gamma_deg=30",
                                            "orientation.theta=0.2"), catalogue)
-    positions = grid.positions[::97]
+    positions = grid[:][::97]
     state = problem.spec.state(problem.robot, positions, problem.orientation)
     rotation = rotation_matrix(*problem.orientation)
     for n, r in enumerate(positions):
@@ -110,7 +110,7 @@ def test_the_payload_adds_to_the_robot_s_own_platform_mass_at_its_centre_of_mass
     (problem, grid), (reference, _) = build_problem(combined, catalogue), build_problem(single, catalogue)
     assert problem.spec.load.mass == 3.0
     assert problem.spec.load.com == pytest.approx(reference.spec.load.com, abs=1e-15)
-    state = problem.spec.state(problem.robot, grid.positions[:5], problem.orientation)
+    state = problem.spec.state(problem.robot, grid[:][:5], problem.orientation)
     psi, theta = 0.2, -0.3  # eq. (9): R = Rz(phi) Ry(theta) Rx(psi), phi = 0
     rx = np.array([[1, 0, 0], [0, np.cos(psi), -np.sin(psi)], [0, np.sin(psi), np.cos(psi)]])
     ry = np.array([[np.cos(theta), 0, np.sin(theta)], [0, 1, 0], [-np.sin(theta), 0, np.cos(theta)]])
@@ -119,5 +119,5 @@ def test_the_payload_adds_to_the_robot_s_own_platform_mass_at_its_centre_of_mass
     if problem.spec.kind == "statics":
         assert state.wrench == pytest.approx(np.concatenate([weight, np.cross(arm, weight)]), abs=1e-9)
     for key in ("margin_" + name for name in problem.criteria):
-        np.testing.assert_allclose(evaluate_chunk(problem, grid.positions)[key],
-                                   evaluate_chunk(reference, grid.positions)[key], rtol=0, atol=1e-12, err_msg=key)
+        np.testing.assert_allclose(evaluate_chunk(problem, grid[:])[key],
+                                   evaluate_chunk(reference, grid[:])[key], rtol=0, atol=1e-12, err_msg=key)

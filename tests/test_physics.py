@@ -12,7 +12,7 @@ from pipeline.app.problem import build_problem, compute_workspace
 
 def _dyn(make_cfg, catalogue, *overrides):
     problem, grid = build_problem(make_cfg(*overrides), catalogue)
-    return PoseDynamics(problem.robot, grid.positions, problem.orientation, problem.spec)
+    return PoseDynamics(problem.robot, grid[:], problem.orientation, problem.spec)
 
 
 def _residual(dyn, columns):

@@ -1,7 +1,9 @@
 """Progress lines (pipeline.workspace.progress) and the warning before a long job (the cost model)."""
 
 import functools
+from dataclasses import replace
 import logging
+import tracemalloc
 
 import pytest
 
@@ -99,3 +101,32 @@ def test_the_build_of_the_compiled_loops_is_not_counted_in_the_first_chunk(make_
     lines = [r.getMessage() for r in caplog.records if r.name == "pipeline.workspace.parallel"]
     assert lines == ["chunks 10/10 (100%), 0:00 elapsed"]
     assert len(built) == 11  # one pose first, then each of the 10 chunks
+
+
+def test_a_job_holds_its_chunks_not_its_grid(make_cfg, catalogue):
+    """2 x 10^6 poses: their positions alone are 48 MB, and were held (and built through as much
+    again) for the whole job. The grid is its axes now, each chunk's positions made when it is
+    evaluated: what the job allocates at its peak stays far below one copy of the positions."""
+    cfg = make_cfg("grid.n=126", "grid.n_vel=6", "compute.kernel=fused")
+    compute_workspace(make_cfg("grid.n=2", "compute.kernel=fused"), catalogue)  # the compiled loops, loaded
+    tracemalloc.start()
+    try:
+        _, summary = compute_workspace(cfg, catalogue, sink=lambda chunk: None)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert summary["n_points"] == 126**3 == 2_000_376
+    assert peak < 16 * 2**20, peak  # 6 MiB here; the positions: 48 MB
+
+
+def test_a_large_table_kept_whole_is_announced_with_its_memory(make_cfg, catalogue, caplog):
+    (job,) = plan(["grid.n=300", "grid.n_vel=6"]).jobs
+    problem, grid = build_problem(job.cfg, job.catalogue)
+    problem = replace(problem, fused=True)  # about 14 s on 2 cores: only its memory is large
+    with caplog.at_level(logging.WARNING, logger="pipeline"):
+        announce_cost(job.cfg, problem, grid.n_points, 2)  # streamed to points.parquet: quiet
+        assert not caplog.records
+        announce_cost(job.cfg, problem, grid.n_points, 2, keeps_points=True)  # the API's one table
+    (record,) = caplog.records
+    assert record.getMessage().startswith("this job evaluates 27000000 poses x 1 orientations: about ")
+    assert "cores and 3.1 GiB of memory by the cost model" in record.getMessage()  # 14 columns a point

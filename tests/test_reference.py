@@ -18,8 +18,8 @@ CASES += [(1, ROTATED, FULL_JDOT), (5, (), FULL_JDOT)]
 @pytest.mark.parametrize("actuator, orientation, reading", CASES)
 def test_kernel_equals_literal_reference(make_cfg, catalogue, actuator, orientation, reading):
     problem, grid = build_problem(make_cfg(f"actuator={actuator}", *orientation, *reading), catalogue)
-    fast = evaluate_chunk(problem, grid.positions)
-    slow = literal_margins(problem.robot, grid.positions, problem.orientation, problem.spec,
+    fast = evaluate_chunk(problem, grid[:])
+    slow = literal_margins(problem.robot, grid[:], problem.orientation, problem.spec,
                            problem.limits)
     for name, margin in slow.items():
         np.testing.assert_allclose(fast[f"margin_{name}"], margin, rtol=0, atol=1e-9)

@@ -43,7 +43,7 @@ def test_the_cable_length_limit_is_checked_in_cpr_wwa_too(make_cfg, catalogue):
     problem, grid = build_problem(cfg, catalogue)
     assert "length" in problem.criteria
     points, summary = compute_workspace(cfg, catalogue)
-    state = problem.spec.state(problem.robot, grid.positions, problem.orientation)
+    state = problem.spec.state(problem.robot, grid[:], problem.orientation)
     np.testing.assert_allclose(points["margin_length"], 1 - state.lengths.max(axis=1) / 5.0, atol=1e-12)
     too_long = state.lengths.max(axis=1) > 5.0 + 1e-9
     assert too_long.any() and not points.loc[too_long, "feasible"].any()

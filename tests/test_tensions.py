@@ -112,7 +112,7 @@ def test_cpr8_lp_never_loses_a_pose_whose_minimum_norm_torques_are_valid(make_cf
         for actuator in (1, 5):
             cfg = [f"actuator={actuator}", *angles, FORCES]
             problem, grid = build_problem(make_cfg(*cfg), catalogue)
-            state = problem.spec.state(problem.robot, grid.positions, problem.orientations[0])
+            state = problem.spec.state(problem.robot, grid[:], problem.orientations[0])
             pulling = (shaft_torque(state) >= 0).all(axis=(1, 2))
             paper, _ = compute_workspace(make_cfg(*cfg), catalogue)
             ours, _ = compute_workspace(make_cfg(*cfg, "tension.model=feasible"), catalogue)
@@ -132,7 +132,7 @@ def test_slack_agrees_with_an_independent_nonnegative_least_squares(columns, ori
     angles = [f"orientation.{a}={orientation}" for a in ("psi", "theta", "phi")]
     problem, grid = build_problem(make_cfg(f"model.pinv_columns={columns}", "tension.model=feasible",
                                            *angles), catalogue)
-    state = problem.spec.state(problem.robot, grid.positions, problem.orientations[0])
+    state = problem.spec.state(problem.robot, grid[:], problem.orientations[0])
     margins, *_ = feasible_tensions(state.structure, *state.wrench_pinv, state.required_wrenches,
                                    state.force_families(problem.limits), 1e-6)
     wrenches = state.required_wrenches
@@ -147,7 +147,7 @@ def test_the_box_vertices_decide_every_acceleration_inside_it(make_cfg, catalogu
     """The capacity margin is concave in the wrench: at random accelerations inside the box it
     is never below its minimum over the eight vertices (tested for slack, the first family)."""
     problem, grid = build_problem(make_cfg("tension.model=feasible", FORCES), catalogue)
-    state = problem.spec.state(problem.robot, grid.positions, problem.orientations[0])
+    state = problem.spec.state(problem.robot, grid[:], problem.orientations[0])
     families = state.force_families(problem.limits)
     vertices, *_ = feasible_tensions(state.structure, *state.wrench_pinv, state.required_wrenches,
                                     families[:1], 1e-6)
@@ -236,7 +236,7 @@ def test_with_moment_balance_few_or_no_poses_can_even_hang_still(orientation, ha
     moment) with pulling cables, at zero orientation and at 0.5 rad about every axis."""
     angles = [f"orientation.{a}={orientation}" for a in ("psi", "theta", "phi")]
     problem, grid = build_problem(make_cfg("model.pinv_columns=full", *angles), catalogue)
-    state = problem.spec.state(problem.robot, grid.positions, problem.orientations[0])
+    state = problem.spec.state(problem.robot, grid[:], problem.orientations[0])
     weight = load_wrenches(problem.spec, np.zeros((1, 3)), problem.robot.up, state.rotation)[0]
     residual = np.array([nnls(s, weight)[1] for s in state.structure]) / np.linalg.norm(weight)
     assert (residual < 1e-9).sum() == hanging

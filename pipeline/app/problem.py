@@ -46,7 +46,7 @@ from pipeline.model.tensions import TensionSpec
 from pipeline.workspace.compute import (
     POSES_PER_SECOND, FUSED_START_S, fused_unfit, grid_workspace, name_of,
 )
-from pipeline.workspace.grid import Grid, box_grid, step_grid
+from pipeline.workspace.grid import Grid, box_grid, listed_grid, step_grid
 from pipeline.workspace.kernel import WorkspaceProblem
 
 CPR_WWA_CRITERIA = ("speed", "torque", "acceleration", "voltage")  # eqs. (30), (32), (33), (34)
@@ -331,7 +331,7 @@ def build_grid(cfg: DictConfig, robot: CableRobot) -> Grid:
     cell, no volume)."""
     if cfg.poses is None:
         return ROBOTS[cfg.robot.name].grid(cfg, robot)
-    return Grid(point_list("poses", cfg.poses), cell_volume=float("nan"))
+    return listed_grid(point_list("poses", cfg.poses))
 
 
 def build_problem(cfg: DictConfig, catalogue: Catalogue | None) -> tuple[WorkspaceProblem, Grid]:

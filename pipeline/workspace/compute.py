@@ -44,13 +44,13 @@ def grid_workspace(
     sweep pays, as a whole, for the compiled kernels (``pipeline.app.problem.fused_pays``)."""
     problem = replace(problem, fused=use_fused(cfg, problem, grid.n_points, sweep_pays))
     workers = worth_workers(problem, grid.n_points, cfg.compute.n_jobs, cfg.compute.backend)
-    announce_cost(cfg, problem, grid.n_points, workers)
+    announce_cost(cfg, problem, grid.n_points, workers, keeps_points=sink is None)
     if problem.fused or problem.spec.tension.model == "feasible":
         # one pose first: the compiled loops are loaded, or built once, before the
         # progress clock starts, which would count that in the first chunk's time
-        evaluate_chunk(problem, grid.positions[:1])
+        evaluate_chunk(problem, grid[:1])
     chunks = iter_chunks(
-        evaluate_chunk, problem, grid.positions,
+        evaluate_chunk, problem, grid,
         n_jobs=workers,
         backend=cfg.compute.backend,
         chunk_size=bounded_chunk_size(problem, cfg.compute.chunk_size),
@@ -71,8 +71,9 @@ def grid_workspace(
             least[name] = np.min(margins[name], initial=least[name], where=feasible)
         by_lp += int(np.count_nonzero(raw.get("lp_poses", False)))
         lost += np.bincount(limiting[~feasible], minlength=len(problem.criteria))
-        degenerate.add(grid.positions[span], raw, margins)
-        points = tabulate(problem, grid.positions[span], raw, margins, feasible, limiting)
+        positions = grid[span]  # computed again from the axes: no chunk's positions are kept
+        degenerate.add(positions, raw, margins)
+        points = tabulate(problem, positions, raw, margins, feasible, limiting)
         if sink is None:
             parts.append(points)
         else:
@@ -171,6 +172,13 @@ FUSED_WORKERS_FROM_S = 1.5  # the fused kernel's time (cost model) from which wo
 POSES_PER_SECOND = {"pinv": 200_000, "feasible": 20_000, "fused": 1_000_000}
 REFERENCE_SET = 93
 LONG_JOB_S = 30.0
+# Memory: a job holds the chunks in flight (each array within CHUNK_BUDGET_FLOATS), never the
+# grid (pipeline.workspace.grid), so its peak is about PROCESS_BYTES whatever the grid's size
+# (benchmarks/LOG.md, 2026-11-26: 226 MiB at 10^6 and at 10^7 poses in one process, 302-309 MiB
+# from 4 x 10^6 to 2 x 10^7 poses with two workers, 330 MiB writing 10^7 points), plus 8 bytes
+# per pose for each column it keeps whole. A job expected above LARGE_JOB_BYTES is announced.
+PROCESS_BYTES = 320 * 2**20
+LARGE_JOB_BYTES = 2 * 2**30
 
 
 def estimated_seconds(problem: WorkspaceProblem, n_points: int) -> float:
@@ -219,19 +227,31 @@ def worth_workers(problem: WorkspaceProblem, n_points: int, n_jobs: int, backend
     return 1
 
 
-def announce_cost(cfg: DictConfig, problem: WorkspaceProblem, n_points: int, workers: int) -> None:
-    """A warning before a job the cost model expects to take long, with the key that matters."""
+def estimated_bytes(problem: WorkspaceProblem, n_points: int, keeps_points: bool) -> int:
+    """The job's peak memory by the cost model: PROCESS_BYTES and 8 bytes per pose for each
+    column kept whole: those the summary takes the median of (``spec.summarised``) and, for a
+    caller that takes the points as one table (``keeps_points``: no sink), every point's row."""
+    columns = len(problem.spec.summarised) + (8 + len(problem.criteria) if keeps_points else 0)
+    return PROCESS_BYTES + 8 * columns * n_points
+
+
+def announce_cost(cfg: DictConfig, problem: WorkspaceProblem, n_points: int, workers: int,
+                  keeps_points: bool = False) -> None:
+    """A warning before a job the cost model expects to take long or to need much memory, with
+    the key that matters."""
     cores = min(max(workers, 1), os.cpu_count() or 1)
     seconds = estimated_seconds(problem, n_points) / cores
-    if seconds < LONG_JOB_S:
+    memory = estimated_bytes(problem, n_points, keeps_points)
+    if seconds < LONG_JOB_S and memory < LARGE_JOB_BYTES:
         return
     hint = ""
     if "n_vel" in cfg.get("grid", {}) and cfg.grid.n_vel is None and problem.spec.set_size() > REFERENCE_SET:
         hint = (f"; grid.n_vel is null, so each pose tests {problem.spec.set_size()} velocities "
                 f"(grid.n_vel=6 tests {REFERENCE_SET}, as the paper's grid)")
-    log.warning("this job evaluates %d poses x %d orientations: about %s on %d core%s by the cost "
-                "model%s", n_points, len(problem.orientations), clock_text(seconds), cores,
-                "" if cores == 1 else "s", hint)
+    size = f"{memory / 2**30:.1f} GiB" if memory >= 2**30 else f"{memory / 2**20:.0f} MiB"
+    log.warning("this job evaluates %d poses x %d orientations: about %s on %d core%s and %s of memory by "
+                "the cost model%s", n_points, len(problem.orientations), clock_text(seconds), cores,
+                "" if cores == 1 else "s", size, hint)
 
 
 def bounded_chunk_size(problem: WorkspaceProblem, requested: int) -> int:

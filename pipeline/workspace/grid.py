@@ -1,4 +1,9 @@
-"""Position grids over a robot's search box (section 3: N * N * N points of the geometric workspace)."""
+"""Position grids over a robot's search box (section 3: N * N * N points of the geometric workspace).
+
+A grid is its three axes, not its points: ``grid[start:stop]`` gives the positions of one chunk,
+so a job holds one chunk's positions at a time whatever the grid's size (10^7 poses held as
+axes: a few kB instead of 240 MB of positions and as much again while they were built).
+"""
 
 from __future__ import annotations
 
@@ -9,14 +14,32 @@ import numpy as np
 
 @dataclass(frozen=True)
 class Grid:
-    """Positions (n, 3), ordered x-major then y then z, and the volume each point stands for."""
+    """Positions ordered x-major then y then z: the product of ``axes`` (three 1-D arrays), or
+    the listed ``points`` (n, 3) of a user's ``poses``; and the volume each point stands for.
+    ``len(grid)`` is the number of points, ``grid[a:b]`` their positions (b - a, 3)."""
 
-    positions: np.ndarray
     cell_volume: float
+    axes: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+    points: np.ndarray | None = None
 
     @property
     def n_points(self) -> int:
-        return self.positions.shape[0]
+        if self.points is not None:
+            return len(self.points)
+        return int(np.prod([len(axis) for axis in self.axes]))
+
+    def __len__(self) -> int:
+        return self.n_points
+
+    def __getitem__(self, span: slice) -> np.ndarray:
+        """The positions of the points ``span`` selects (a slice with step 1)."""
+        if self.points is not None:
+            return self.points[span]
+        start, stop, step = span.indices(self.n_points)
+        if step != 1:
+            raise ValueError("a grid is read in contiguous chunks")
+        i, j, k = np.unravel_index(np.arange(start, stop), [len(axis) for axis in self.axes])
+        return np.column_stack([self.axes[0][i], self.axes[1][j], self.axes[2][k]])
 
 
 def box_grid(lo: np.ndarray, hi: np.ndarray, n: int, spacing: str = "linspace") -> Grid:
@@ -34,9 +57,7 @@ def box_grid(lo: np.ndarray, hi: np.ndarray, n: int, spacing: str = "linspace") 
         axes = [a + (b - a) * (np.arange(n) + 0.5) / n for a, b in zip(lo, hi)]
     else:
         raise ValueError(f"unknown grid spacing {spacing!r}")
-    mesh = np.meshgrid(*axes, indexing="ij")
-    positions = np.column_stack([m.ravel() for m in mesh])
-    return Grid(positions=positions, cell_volume=float(np.prod(hi - lo)) / n**3)
+    return Grid(cell_volume=float(np.prod(hi - lo)) / n**3, axes=tuple(axes))
 
 
 def step_grid(lo: np.ndarray, hi: np.ndarray, step: float, spacing: str = "faces") -> Grid:
@@ -52,7 +73,10 @@ def step_grid(lo: np.ndarray, hi: np.ndarray, step: float, spacing: str = "faces
         counts, offset = np.floor((hi - lo) / step + 1e-9).astype(int), 0.5 * step
     else:
         raise ValueError(f"unknown grid spacing {spacing!r}")
-    axes = [a + offset + step * np.arange(k) for a, k in zip(lo, counts)]
-    mesh = np.meshgrid(*axes, indexing="ij")
-    positions = np.column_stack([m.ravel() for m in mesh])
-    return Grid(positions=positions, cell_volume=float(step) ** 3 if (hi > lo).all() else float("nan"))
+    axes = tuple(a + offset + step * np.arange(k) for a, k in zip(lo, counts))
+    return Grid(cell_volume=float(step) ** 3 if (hi > lo).all() else float("nan"), axes=axes)
+
+
+def listed_grid(points: np.ndarray) -> Grid:
+    """The user's own poses (n, 3): no grid cell, no volume."""
+    return Grid(cell_volume=float("nan"), points=np.asarray(points, dtype=float))

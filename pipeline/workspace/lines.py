@@ -32,7 +32,7 @@ def simulate_lines(cfg: DictConfig, problem: WorkspaceProblem, grid: Grid) -> tu
     the smallest margin along line O''-F'' (``line0_margin_*``: Fig. 6's verdict per limit);
     ``problem`` and ``grid``: CPR-WWA's (``pipeline.app.problem.build_problem``)."""
     points, summary = grid_workspace(cfg, problem, grid)
-    lines = _lines(grid.positions)
+    lines = _lines(grid[:])
     parts = []
     for number, (axis, start, end) in enumerate(lines):
         profile = trapezoid(float(np.linalg.norm(end - start)), cfg.motion.v_max,

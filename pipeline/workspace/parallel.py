@@ -36,14 +36,15 @@ def chunk_slices(n_items: int, n_jobs: int, chunk_size: int) -> list[slice]:
 def iter_chunks(
     function: Callable[..., dict[str, np.ndarray]],
     problem,
-    positions: np.ndarray,
+    positions,
     n_jobs: int = 2,
     backend: str = "loky",
     chunk_size: int = 20_000,
     scheduler: str | None = None,
 ) -> Iterator[tuple[slice, dict[str, np.ndarray]]]:
     """(slice, ``function(problem, positions[slice])``) for every chunk, in order, as each
-    finishes: a caller can write results out chunk by chunk (bounded memory)."""
+    finishes: a caller can write results out chunk by chunk (bounded memory). ``positions``: an
+    (n, 3) array or a ``Grid``, whose chunks are made as they are dispatched."""
     workers = n_jobs if n_jobs > 0 else max((os.cpu_count() or 1) + 1 + n_jobs, 1)  # joblib's rule
     here = backend != "dask" or not scheduler  # loky, or a Dask cluster started on this machine
     if here and workers > (os.cpu_count() or 1):  # more would only thrash memory
