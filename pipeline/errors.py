@@ -8,7 +8,11 @@ _NOISE = re.compile(r"^\s*(full_key|reference_type|object_type|object_type=).*$"
 
 
 class ConfigError(ValueError):
-    """A configuration or input file value that cannot be used; the message names key and value."""
+    """A configuration or input file value that cannot be used; the message names key and value.
+    It is one line whatever the value holds: a line break in a quoted value is shown as ``\\n``."""
+
+    def __init__(self, message: str = "") -> None:
+        super().__init__(str(message).replace("\r", "\\r").replace("\n", "\\n"))
 
 
 def one_line(exc: BaseException) -> str:

@@ -124,12 +124,19 @@ def load_study(name: str, directory: Path = STUDIES_DIR) -> StudySpec:
     try:
         refuse_aliases(path.read_text(encoding="utf-8"), str(path))
         spec = OmegaConf.merge(OmegaConf.structured(StudySpec), OmegaConf.load(path))
+        study: StudySpec = OmegaConf.to_object(spec)  # a missing mandatory value fails here
     except ConfigError:
         raise
-    except Exception as exc:  # YAML, OmegaConf key and type errors
-        raise ConfigError(f"{path}: {one_line(exc)}") from exc
-    study: StudySpec = OmegaConf.to_object(spec)
+    except Exception as exc:  # YAML, OmegaConf key and type errors (the key, and type hints in words)
+        key = getattr(exc, "full_key", None)
+        text = re.sub(r"<class '(\w+)'>", r"\1", one_line(exc))
+        raise ConfigError(f"{path}: {f'{key}: ' if key else ''}{text}") from exc
     study.name = name
+    for key, values in [("overrides", study.overrides), ("analyses", study.analyses), ("sweep", study.sweep.values()),
+                        *((f"cases.{case}", overrides) for case, overrides in study.cases.items())]:
+        for value in values:  # OmegaConf lets a list through where list[str] declares strings
+            if not isinstance(value, str):
+                raise ConfigError(f"{path}: {key}: {value!r} is not a string")
     for key in [*(_key(o) for o in study.overrides), *study.sweep,
                 *(_key(o) for case in study.cases.values() for o in case)]:
         if re.split(r"[./]", key)[0] == "hydra":  # callbacks and plugins run code: not from data

@@ -19,7 +19,7 @@ from enum import Enum
 from typing import Any, Optional
 
 from omegaconf import MISSING, DictConfig, ListConfig, OmegaConf
-from omegaconf.errors import OmegaConfBaseException
+from omegaconf.errors import MissingMandatoryValue, OmegaConfBaseException
 
 from pipeline.errors import ConfigError, one_line
 
@@ -562,8 +562,14 @@ def _structured(schema) -> DictConfig:
 
 
 def masked(full: DictConfig, present: DictConfig) -> DictConfig:
-    """``full``'s typed values at the keys of ``present`` only (struct: no key can be added)."""
-    typed = _masked(full, present)
+    """``full``'s typed values at the keys of ``present`` only (struct: no key can be added); a
+    value that resolves to the wrong type (an interpolation) is a ConfigError as in :func:`merged`."""
+    try:
+        typed = _masked(full, present)
+    except MissingMandatoryValue:  # its callers say which value is missing
+        raise
+    except OmegaConfBaseException as exc:
+        raise ConfigError(f"{exc.full_key}={exc.value}: {one_line(exc).split(': full_key')[0]}") from None
     OmegaConf.set_struct(typed, True)
     return typed
 

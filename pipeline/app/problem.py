@@ -83,9 +83,14 @@ def _step_grid(spacing: Callable[[DictConfig], str]):
 
     def size(cfg: DictConfig) -> int:
         search = cfg.robot.search
-        spans = np.asarray(search.hi, dtype=float) - np.asarray(search.lo, dtype=float)
-        counts = np.floor(spans / search.step + 1e-9) + (spacing(search) == "faces")
-        return int(np.prod(np.maximum(counts, 0)))
+        with np.errstate(over="ignore"):  # a count past any float is refused below
+            spans = np.asarray(search.hi, dtype=float) - np.asarray(search.lo, dtype=float)
+            counts = np.floor(spans / search.step + 1e-9) + (spacing(search) == "faces")
+            total = float(np.prod(np.maximum(counts, 0)))
+        if not np.isfinite(total):
+            raise ConfigError(f"robot.search.step={search.step}: the box from lo={list(search.lo)} to "
+                              f"hi={list(search.hi)} holds more grid points than a number can count")
+        return int(total)
     return grid, size
 
 
