@@ -89,7 +89,9 @@ class StudySpec:
     on the papers' own settings, so a command may add ``compute.*`` overrides only.
     ``optimise`` (:class:`pipeline.analyses.optimise.OptimiseSpec`) replaces the sweep by trials that an
     optimiser proposes; ``search`` (:class:`pipeline.analyses.search.SearchSpec`), alone or with it, by
-    the exact search over the drive train (``search.parquet``): no ``sweep`` or ``cases`` then."""
+    the exact search over the drive train (``search.parquet``): no ``sweep`` or ``cases`` then.
+    ``name`` and ``config_dir`` are not read from the file: the study's name, and the user's
+    folder it came from (its jobs read that folder's robots), None for the package's studies."""
 
     title: str
     source: str
@@ -103,6 +105,17 @@ class StudySpec:
     analyses: list[str] = field(default_factory=list)
     figures: list[FigureSpec] = field(default_factory=list)
     name: Optional[str] = None
+    config_dir: Optional[str] = None
+
+    @property
+    def location(self) -> list[str]:
+        """``--config-dir DIR`` for a user's study (its jobs read her robots), else nothing."""
+        return ["--config-dir", self.config_dir] if self.config_dir else []
+
+    @property
+    def arguments(self) -> list[str]:
+        """The study's overrides as a job's command-line arguments, after its :attr:`location`."""
+        return [*self.location, *self.overrides]
 
     @property
     def designs(self) -> bool:
@@ -114,10 +127,24 @@ def available(directory: Path = STUDIES_DIR) -> list[str]:
     return sorted(path.stem for path in directory.glob("*.yaml"))
 
 
-def load_study(name: str, directory: Path = STUDIES_DIR) -> StudySpec:
-    """Read and check ``studies/NAME.yaml``; unknown keys, analyses or figure kinds fail here."""
+def studies_folder(config_dir: Path | str | None) -> Path:
+    """Where the studies are: the package's, or ``studies/`` of a user's ``--config-dir``
+    (ConfigError when it has none)."""
+    if config_dir is None:
+        return STUDIES_DIR
+    folder = Path(config_dir) / "studies"
+    if not folder.is_dir():
+        raise ConfigError(f"--config-dir={config_dir}: no studies folder (put study files in {folder}/)")
+    return folder
+
+
+def load_study(name: str, directory: Path | None = None, config_dir: Path | str | None = None) -> StudySpec:
+    """Read and check ``studies/NAME.yaml`` of ``directory``, by default the package's or, given
+    a user's ``config_dir``, that folder's ``studies/``; unknown keys, analyses or figure kinds
+    fail here."""
     from pipeline.analyses.figures import KINDS
 
+    directory = directory or studies_folder(config_dir)
     path = directory / f"{name}.yaml"
     if name not in available(directory):  # a declared name, never a path to another file
         raise ConfigError(f"study {name!r} not found (available: {', '.join(available(directory))})")
@@ -132,6 +159,7 @@ def load_study(name: str, directory: Path = STUDIES_DIR) -> StudySpec:
         text = re.sub(r"<class '(\w+)'>", r"\1", one_line(exc))
         raise ConfigError(f"{path}: {f'{key}: ' if key else ''}{text}") from exc
     study.name = name
+    study.config_dir = None if config_dir is None else str(config_dir)
     for key, values in [("overrides", study.overrides), ("analyses", study.analyses), ("sweep", study.sweep.values()),
                         *((f"cases.{case}", overrides) for case, overrides in study.cases.items())]:
         for value in values:  # OmegaConf lets a list through where list[str] declares strings
@@ -184,7 +212,7 @@ def sweep_command(study: StudySpec, extra: list[str], jobs_dir: Path,
     excluded = ALWAYS_EXCLUDED + [o.key_or_group for o in parse(fixed)
                                   if o.key_or_group not in study.sweep and not o.is_sweep_override()]
     return [
-        "-m", f"hydra.sweep.dir={quoted(jobs_dir)}",  # a study folder name may hold = and ,
+        *study.location, "-m", f"hydra.sweep.dir={quoted(jobs_dir)}",  # a study folder name may hold = and ,
         f"hydra.job.config.override_dirname.exclude_keys=[{','.join(excluded)}]",
         *LAUNCHERS[launcher], *study.overrides, *swept, *extra,
     ]
@@ -225,26 +253,28 @@ def claim_study_dir(out: Path, name: str, extra: list[str], force: bool) -> str:
 
 def run_study(name: str, extra: list[str], out_root: Path | None = None,
               figures_only: bool = False, launcher: str = "pool",
-              checked: list[tuple[list[str], Plan]] | None = None, force: bool = False) -> list[Path]:
+              checked: list[tuple[list[str], Plan]] | None = None, force: bool = False,
+              config_dir: Path | None = None) -> list[Path]:
     """Sweep (unless ``figures_only``), analyses and figures of one study; returns the files.
     The jobs of an interrupted run of the same study are reused (``_start_or_resume``).
-    ``checked``: the study's sweep commands if already checked (:func:`checked_commands`)."""
+    ``checked``: the study's sweep commands if already checked (:func:`checked_commands`);
+    ``config_dir``: a user's folder (:func:`checked_commands`)."""
     out = study_dir(name, extra, out_root)
     if not figures_only:
         claim_study_dir(out, name, extra, force)  # refused here: nothing written
-        checked = checked or checked_commands(name, extra, out_root, launcher)
+        checked = checked or checked_commands(name, extra, out_root, launcher, config_dir)
         out.mkdir(parents=True, exist_ok=True)
     if not out.is_dir():
         raise ConfigError(f"study {name}: no results in {out}; run it without --figures-only")
     with folder_lock(out, f"another run of study {name} is writing this folder; wait for it or "
                           "write elsewhere (--out DIR)"):  # two runs would share the jobs
-        return _run_study(name, extra, out, figures_only, checked, force)
+        return _run_study(load_study(name, config_dir=config_dir), extra, out, figures_only, checked, force)
 
 
-def _run_study(name: str, extra: list[str], out: Path, figures_only: bool,
+def _run_study(study: StudySpec, extra: list[str], out: Path, figures_only: bool,
                checked: list[tuple[list[str], Plan]] | None, force: bool) -> list[Path]:
     """:func:`run_study` once the study's folder is held."""
-    study = load_study(name)
+    name = study.name
     cases = study.cases or {"": []}
     provenance = OmegaConf.to_yaml({"study": name, "extra_overrides": extra})
     if not figures_only:
@@ -358,11 +388,12 @@ def metrics(summary: pd.DataFrame, tables: dict[str, pd.DataFrame]) -> dict:
 
 
 def checked_commands(name: str, extra: list[str], out_root: Path | None = None,
-                     launcher: str = "pool") -> list[tuple[list[str], Plan]]:
+                     launcher: str = "pool", config_dir: Path | None = None) -> list[tuple[list[str], Plan]]:
     """The sweep commands of a study (one per case), each with its plan (every job checked):
     bad input fails here, before anything is written or removed. A design study: its lowest
-    and highest designs, planned the same way."""
-    study = load_study(name)
+    and highest designs, planned the same way. ``config_dir``: a user's folder, whose
+    ``studies/`` holds the study and whose robots its jobs read."""
+    study = load_study(name, config_dir=config_dir)
     for override in extra:
         if re.split(r"[./]", _key(override))[0] == "hydra":
             raise ConfigError(f"{override}: a study places and launches its own jobs (--out, --launcher); "
@@ -373,7 +404,7 @@ def checked_commands(name: str, extra: list[str], out_root: Path | None = None,
                           "their own settings; it takes compute.* overrides only")
     out = study_dir(name, extra, out_root)
     if study.designs:  # the lowest and highest designs
-        job = first_actuator_job([*study.overrides, *extra], out)
+        job = first_actuator_job([*study.arguments, *extra], out)
         cfg, catalogue = job.cfg, job.catalogue
         if catalogue is None:  # the objectives and the search read the job's catalogue actuator
             raise ConfigError(f"analysis={cfg.analysis}: study {name} designs a catalogue "
@@ -385,7 +416,7 @@ def checked_commands(name: str, extra: list[str], out_root: Path | None = None,
         ids = catalogue.ids
         variables = study.optimise.variables if study.optimise is not None else {
             "actuator": study.search.actuators, **study.search.variables}
-        corners = [(["design"], plan([*study.overrides, *extra, *corner,
+        corners = [(["design"], plan([*study.arguments, *extra, *corner,
                                       f"hydra.run.dir={quoted(trial_folder(out / 'jobs', 0))}"]))
                    for corner in corner_overrides(variables, ids)]
         return corners
@@ -402,7 +433,7 @@ def checked_commands(name: str, extra: list[str], out_root: Path | None = None,
 
 
 def _concurrently(names: list[str], extra: list[str], out_root: Path | None, launcher: str,
-                  force: bool, workers: int) -> list[Path]:
+                  force: bool, workers: int, config_dir: Path | None) -> list[Path]:
     """Every study checked (:func:`checked_commands`), then run (:func:`run_study`), ``workers``
     at a time in forked processes (the code is imported once, in this one): no study starts
     before all are checked, the first failing check is raised as in a serial run, and the
@@ -410,11 +441,11 @@ def _concurrently(names: list[str], extra: list[str], out_root: Path | None, lau
     raised once the running studies end, and none not yet started starts."""
     with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork")) as pool:
         try:
-            checks = [pool.submit(checked_commands, name, extra, out_root, launcher) for name in names]
+            checks = [pool.submit(checked_commands, name, extra, out_root, launcher, config_dir) for name in names]
             checked = {name: check.result() for name, check in zip(names, checks)}
-            designing = [name for name in names if load_study(name).designs]
+            designing = [name for name in names if load_study(name, config_dir=config_dir).designs]
             futures = {name: pool.submit(run_study, name, extra, out_root, False, launcher,
-                                         checked[name], force)
+                                         checked[name], force, config_dir)
                        for name in designing + [name for name in names if name not in designing]}
             return [path for name in names for path in futures[name].result()]
         except BaseException:
@@ -461,7 +492,7 @@ def _designs(study: StudySpec, extra: list[str], jobs_dir: Path, catalogue,
     reuse = Reuse()  # every trial has the same config files and catalogue: read once
 
     def run(folder: Path, overrides: list[str]) -> dict:
-        (job,) = plan([*study.overrides, *extra, *overrides, f"hydra.run.dir={quoted(folder)}"], reuse).jobs
+        (job,) = plan([*study.arguments, *extra, *overrides, f"hydra.run.dir={quoted(folder)}"], reuse).jobs
         return {"job": folder.name, **execute(job)}
 
     def run_searched(actuator: int, overrides: list[str]) -> tuple[dict, pd.DataFrame]:
@@ -541,6 +572,9 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--version", action="version", version=f"cdpr-studies {code_version()}")
     parser.add_argument("items", nargs="*", help="study names, then key=value overrides for every job")
     parser.add_argument("--all", action="store_true", help="run every study in studies/")
+    parser.add_argument("--config-dir", type=Path, default=None,
+                        help="your own folder: its studies/ holds your study files and its robot/ "
+                             "your robots (default: the package's studies)")
     parser.add_argument("--list", action="store_true", help="list the studies and exit")
     parser.add_argument("--figures-only", action="store_true", help="redo analyses and figures from Parquet")
     parser.add_argument("--out", type=Path, default=None,
@@ -555,14 +589,14 @@ def main(argv: list[str] | None = None) -> None:
                              "compute.n_jobs; one_core: one after another, each job on one core")
     args = parser.parse_intermixed_args(argv)
     _log_to_console()
-    if args.list:
-        for name in available():
-            print(f"{name}: {load_study(name).title}")
-        return
     names = [i for i in args.items if "=" not in i]
     extra = [i for i in args.items if "=" in i]
-    names = available() if args.all else names
     try:
+        if args.list:
+            for name in available(studies_folder(args.config_dir)):
+                print(f"{name}: {load_study(name, config_dir=args.config_dir).title}")
+            return
+        names = available(studies_folder(args.config_dir)) if args.all else names
         if not names:
             raise ConfigError("no study given (use --all or --list)")
         workers = min(STUDY_WORKERS, os.cpu_count() or 1, len(names))
@@ -570,14 +604,15 @@ def main(argv: list[str] | None = None) -> None:
         launcher = "one_core" if concurrent else args.launcher
         checked = {}  # every study of the command checked before the first one runs
         for name in names:
-            load_study(name)
+            load_study(name, config_dir=args.config_dir)
             if not args.figures_only:
                 claim_study_dir(study_dir(name, extra, args.out), name, extra, args.force)
                 if not concurrent:
-                    checked[name] = checked_commands(name, extra, args.out, launcher)
-        for path in (_concurrently(names, extra, args.out, launcher, args.force, workers) if concurrent
+                    checked[name] = checked_commands(name, extra, args.out, launcher, args.config_dir)
+        for path in (_concurrently(names, extra, args.out, launcher, args.force, workers, args.config_dir) if concurrent
                      else (path for name in names for path in run_study(
-                         name, extra, args.out, args.figures_only, launcher, checked.get(name), args.force))):
+                         name, extra, args.out, args.figures_only, launcher, checked.get(name), args.force,
+                         args.config_dir))):
             log.info("wrote %s", path)
     except ConfigError as exc:
         print(f"error: {exc}", file=sys.stderr)

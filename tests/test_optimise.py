@@ -90,7 +90,7 @@ def small_run(tmp_path_factory):
     spec = load_study("drive_pareto")
     small = replace(spec, optimise=replace(spec.optimise, budget=16))
     patch = pytest.MonkeyPatch()
-    patch.setattr(pipeline.study, "load_study", lambda name, directory=None: small)
+    patch.setattr(pipeline.study, "load_study", lambda name, directory=None, config_dir=None: small)
     try:
         run_study("drive_pareto", ["grid.n=4", "grid.n_vel=4"], root)
         out = root / "drive_pareto"
@@ -152,7 +152,7 @@ def priced_study(monkeypatch):
         variables={"actuator": "catalogue", "drive.gear_ratio": {"low": 15, "high": 35}},
         objectives=["feasible_pct", "catalogue.price_EUR"], budget=8),
         figures=[FigureSpec(kind="pareto", file="front.png", x="catalogue.price_EUR", y="feasible_pct", hue="actuator")])
-    monkeypatch.setattr(pipeline.study, "load_study", lambda name, directory=None: study)
+    monkeypatch.setattr(pipeline.study, "load_study", lambda name, directory=None, config_dir=None: study)
 
 
 def test_a_column_of_the_users_catalogue_is_an_objective(tmp_path, monkeypatch):
@@ -199,7 +199,7 @@ def test_figures_only_refuses_a_damaged_search_table_before_touching_the_figures
         searched.unlink()
     figures = sorted(p.name for p in (copy / "figures").iterdir())
     small = pipeline.study.load_study("drive_pareto")
-    monkeypatch.setattr(pipeline.study, "load_study", lambda name, directory=None: small)
+    monkeypatch.setattr(pipeline.study, "load_study", lambda name, directory=None, config_dir=None: small)
     message = "not a readable Parquet file" if damage == "truncated" else r"no results in .*\(search.parquet\)"
     with pytest.raises(ConfigError, match=message):
         run_study("drive_pareto", ["grid.n=4", "grid.n_vel=4"], tmp_path, figures_only=True)

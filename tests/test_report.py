@@ -89,7 +89,7 @@ def built_studies(tmp_path_factory, make_cfg, catalogue):
 
 
 def test_report_compares_paper_and_ours_and_carries_the_figures(studies, tmp_path, monkeypatch):
-    monkeypatch.setattr(pipeline.report, "available", lambda: STUDIES)
+    monkeypatch.setattr(pipeline.report, "available", lambda folder: STUDIES)
     index = pipeline.report.build(studies, tmp_path / "report")
     text = index.read_text()
     assert "| 4 | 87.04 | 85.19 | -1.85 | voltage 32 |" in text
@@ -137,7 +137,7 @@ def test_the_report_gives_each_studys_answer_and_the_figures_captions(studies, t
                              "job": f"{a}-{m}"} for a in (1, 3) for m in (0.5, 4.0)])
     save(summary, design / "summary.parquet")
     save(acceptance(summary), design / "acceptance.parquet")
-    monkeypatch.setattr(pipeline.report, "available", lambda: [*STUDIES, "design_mass"])
+    monkeypatch.setattr(pipeline.report, "available", lambda folder: [*STUDIES, "design_mass"])
     text = pipeline.report.build(studies, tmp_path / "report").read_text()
     assert ("Actuator choice at x &gt;= 90 %: accept 1, 2; reject 3 85.19 % (lost to torque 32); "
             "4 85.19 % (lost to voltage 32); 5 0.00 % (lost to torque 216).") in text
@@ -148,7 +148,7 @@ def test_the_report_gives_each_studys_answer_and_the_figures_captions(studies, t
 
 
 def test_html_page_has_the_tables_figures_and_views_and_needs_no_network(studies, tmp_path, monkeypatch):
-    monkeypatch.setattr(pipeline.report, "available", lambda: STUDIES)
+    monkeypatch.setattr(pipeline.report, "available", lambda folder: STUDIES)
     pipeline.report.build(studies, tmp_path / "report")
     page = (tmp_path / "report" / "index.html").read_text()
     assert "<td>4</td>\n<td>87.04</td>\n<td>85.19</td>" in page.replace(' style="text-align:right"', "")
@@ -163,7 +163,7 @@ def test_html_page_has_the_tables_figures_and_views_and_needs_no_network(studies
 def test_html_page_opens_in_headless_chromium(studies, tmp_path, monkeypatch):
     """scripts/check_report.py: every image loads, the 3-D view draws, no JavaScript error;
     and it fails when an image is missing. Chromium comes from scripts/install_chromium.sh."""
-    monkeypatch.setattr(pipeline.report, "available", lambda: STUDIES)
+    monkeypatch.setattr(pipeline.report, "available", lambda folder: STUDIES)
     pipeline.report.build(studies, tmp_path / "report")
     install = subprocess.run(["bash", str(REPO / "scripts" / "install_chromium.sh")],
                              capture_output=True, text=True, timeout=900)
@@ -235,7 +235,7 @@ def test_the_report_refuses_an_edited_result_and_a_full_disk_leaves_no_folder(st
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    monkeypatch.setattr(pipeline.report, "available", lambda: STUDIES)
+    monkeypatch.setattr(pipeline.report, "available", lambda folder: STUDIES)
     path = studies / "actuator_choice" / "choice.parquet"
     good = path.read_bytes()
     table = pq.read_table(path)

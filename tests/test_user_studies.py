@@ -1,0 +1,84 @@
+"""Your own studies, figures and report from your own folder (issue 39): ``--config-dir DIR``
+gives the study and report commands the robots of ``DIR/robot/`` and the studies of
+``DIR/studies/``, with nothing copied into the package. The documented example folder
+(``examples/my_robot``) is run end to end, and its numbers are checked against jobs run alone."""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from pipeline.app.plan import plan
+from pipeline.app.problem import compute_workspace
+from pipeline.app.resources import STUDIES_DIR
+from pipeline.app.results import read_verified
+from pipeline.errors import ConfigError
+from pipeline.study import available, checked_commands, load_study
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "my_robot"
+
+
+def run(cwd, module: str, *args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", module, *args], cwd=cwd, capture_output=True, text=True,
+                          timeout=600)
+
+
+@pytest.mark.slow
+def test_the_example_folder_gives_its_study_figures_and_report(tmp_path, catalogue):
+    folder = tmp_path / "my_robot"
+    shutil.copytree(EXAMPLE, folder)
+    package = {p.name: p.stat().st_mtime for p in STUDIES_DIR.iterdir()}
+    done = run(tmp_path, "pipeline.study", "--config-dir", str(folder), "my_payload")
+    assert done.returncode == 0, done.stderr[-3000:]
+    out = tmp_path / "outputs" / "studies" / "my_payload"
+    summary = read_verified(out / "summary.parquet").to_pandas()
+    assert len(summary) == 12 and set(summary["tension.t_max"]) == {100.0, 200.0, 400.0}
+    for _, row in summary.sample(3, random_state=0).iterrows():  # each job as the job run alone says
+        (job,) = plan(["--config-dir", str(folder), "robot=myrobot", "tension.t_min=1", f"load.mass={row['load.mass']}",
+                       f"tension.t_max={row['tension.t_max']}", "compute.n_jobs=1"]).jobs
+        _, alone = compute_workspace(job.cfg, job.catalogue)
+        assert alone["n_feasible"] == row["n_feasible"]
+    share = summary.set_index(["tension.t_max", "load.mass"])["feasible_pct"]
+    assert share[(400, 0)] == pytest.approx(43.55, abs=0.005) and share[(400, 20)] == pytest.approx(31.34, abs=0.005)
+    assert share[(100, 20)] == 0  # docs/studies.md's numbers
+    shares = summary.sort_values("load.mass").groupby("tension.t_max")["feasible_pct"].apply(list)
+    for values in shares:  # a heavier payload never holds on more poses
+        assert values == sorted(values, reverse=True)
+    figures = sorted(p.name for p in (out / "figures").glob("*.png"))
+    assert figures == ["feasible_share_vs_payload.png", "workspace_payload10.0_rating200.png"]
+    report = run(tmp_path, "pipeline.report", "--config-dir", str(folder))
+    assert report.returncode == 0, report.stderr
+    text = (tmp_path / "outputs" / "report" / "index.md").read_text()
+    assert "My robot: the share of the frame that holds a payload" in text
+    assert "Table 2" not in text and "IRPM" not in text  # the papers' sections are the papers' studies
+    assert (tmp_path / "outputs" / "report" / "figures" / "my_payload" / "feasible_share_vs_payload.png").exists()
+    assert (tmp_path / "outputs" / "report" / "index.html").exists()
+    assert package == {p.name: p.stat().st_mtime for p in STUDIES_DIR.iterdir()}  # nothing copied in
+
+
+def test_a_users_studies_are_found_in_her_folder_and_plan_with_her_robots():
+    assert available(EXAMPLE / "studies") == ["my_payload"]
+    study = load_study("my_payload", config_dir=EXAMPLE)
+    assert study.config_dir == str(EXAMPLE)
+    (command, planned), = checked_commands("my_payload", [], config_dir=EXAMPLE)
+    assert command[:2] == ["--config-dir", str(EXAMPLE)]
+    assert len(planned.jobs) == 12 and {job.cfg.robot.name for job in planned.jobs} == {"points"}
+    assert {len(job.problem.robot.anchors) for job in planned.jobs} == {8}
+
+
+def test_a_study_folder_without_studies_and_an_unknown_name_are_one_line(tmp_path):
+    with pytest.raises(ConfigError, match=r"--config-dir=.*: no studies folder \(put study files in .*/studies/\)$"):
+        load_study("my_payload", config_dir=tmp_path)
+    with pytest.raises(ConfigError, match=r"^study 'nope' not found \(available: my_payload\)$"):
+        load_study("nope", config_dir=EXAMPLE)
+    done = run(tmp_path, "pipeline.study", "--config-dir", str(tmp_path), "x")
+    assert done.returncode == 2 and done.stderr.count("\n") == 1 and list(tmp_path.iterdir()) == []
+
+
+def test_the_papers_studies_still_come_from_the_package():
+    assert "actuator_choice" in available()
+    assert load_study("actuator_choice").config_dir is None
