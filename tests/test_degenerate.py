@@ -12,8 +12,9 @@ import numpy as np
 import pytest
 
 from pipeline.app.problem import build_problem, compute_workspace
+from pipeline.workspace.degeneracy import Degeneracy
 
-from conftest import eq9_rotation
+from conftest import SPREAD_ANCHORS, eq9_rotation
 
 # Six anchors on one horizontal line, every cable on one platform point: the cables span the
 # plane through that line and the point, so no tension distribution holds the platform off it.
@@ -194,3 +195,46 @@ def test_the_compiled_kernels_mark_the_same_collapsed_poses(make_cfg, catalogue)
         assert summary["kernel"] == "fused"
         np.testing.assert_array_equal(fused["margin_zero_length"], by_numpy["margin_zero_length"])
         assert (fused["limiting"] == by_numpy["limiting"]).all()
+
+
+# A platform homothetic to its frame (each attachment a tenth of its anchor's offset from the
+# frame's centre), cables not crossed: every cable line passes through the centre of the homothety
+# that maps the frame onto the platform, at every pose, so the cables produce no moment about it:
+# rank 3 (a user's first design in issue 39 was a milder case of this, rank 5).
+HOMOTHETIC = ["robot=points", f"robot.anchors={SPREAD_ANCHORS}",
+              f"robot.attachments={[[0.1 * x, 0.1 * y, 0.1 * (z - 1)] for x, y, z in SPREAD_ANCHORS]}",
+              "robot.search.lo=[-1.5,-1,0.25]", "robot.search.hi=[1.5,1,1.75]", "robot.search.step=0.5",
+              "robot.platform.mass=2"]
+
+
+@pytest.mark.parametrize("extra, gate", [([], "unreachable"), (["tension=pinv"], "singular")])
+def test_a_degenerate_design_says_which_wrench_it_cannot_produce(make_cfg, catalogue, caplog, extra, gate):
+    """It said only "unreachable"; the user needed her own SVD. The log and the summary now give
+    the rank at a failing pose and a direction of the wrench space the cables cannot act along,
+    in words: checked against the structure matrix written out here (its rank, and the
+    direction orthogonal to every cable's wrench)."""
+    cfg = make_cfg(*HOMOTHETIC, *extra)
+    with caplog.at_level(logging.INFO, logger="pipeline"):
+        points, summary = compute_workspace(cfg, catalogue)
+    assert summary[f"lost_{gate}"] >= 136 and summary["n_feasible"] <= 4  # only where the weight's line
+    x, y, z = points.loc[~points["feasible"], ["x", "y", "z"]].to_numpy()[0]  # meets the common point
+    anchors, platform = np.array(SPREAD_ANCHORS, float), np.array(cfg.robot.attachments, float)
+    vectors = np.array([x, y, z]) + platform - anchors
+    units = vectors / np.linalg.norm(vectors, axis=1)[:, None]
+    structure = np.vstack([units.T, np.cross(platform, units).T])  # [u_i; b_i x u_i], level platform
+    sigma = np.linalg.svd(structure, compute_uv=False)
+    assert (sigma > 1e-9 * sigma[0]).sum() == summary["deficient_rank"] == 3
+    problem, _ = build_problem(cfg, catalogue)
+    sample = Degeneracy(problem).direction_at(np.array([x, y, z]))
+    assert np.abs(sample["vector"] @ structure).max() < 1e-12 and np.linalg.norm(sample["vector"]) == pytest.approx(1)
+    assert summary["missing_direction"] == sample["words"] and sample["main"].startswith("moment about ")
+    assert (f"at (x, y, z) = ({x:g}, {y:g}, {z:g}) m the structure matrix has rank 3 of 6: the cables cannot "
+            f"produce a {sample['main']} there") in caplog.text
+
+
+def test_the_cpr8_names_the_yaw_it_cannot_hold_at_the_zero_orientation(make_cfg, catalogue, caplog):
+    with caplog.at_level(logging.INFO, logger="pipeline"):
+        _, summary = compute_workspace(make_cfg(), catalogue)
+    assert summary["deficient_rank"] == 5 and summary["n_feasible"] == 216
+    assert summary["missing_direction"].startswith("moment about z (+0.99)")
+    assert "the structure matrix has rank 5 of 6: the cables cannot produce a moment about z there" in caplog.text

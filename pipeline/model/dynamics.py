@@ -195,6 +195,11 @@ class PoseDynamics(PoseGeometry):
         speed2 = np.einsum("vj,vj->v", v, v)[None, None, :]
         return centripetal(speed2, along, self.lengths[..., None], self.motion.winch_radius[None, :, None])
 
+    @property
+    def rows(self) -> tuple[int, ...]:
+        """The freedoms (indices into ``FREEDOMS``) of the rows of :attr:`structure`."""
+        return tuple(range(3 if self.motion.pinv_columns == "translational" else 6))
+
     @cached_property
     def structure(self) -> np.ndarray:
         """(n, c, m) J^T of eq. (20), c = 3 (``translational``) or 6 (``full``) rows."""

@@ -162,6 +162,8 @@ class PoseGeometry:
     - ``force_families(limits)``: the intervals each criterion puts on x (``feasible`` model);
     - ``ranges_over_a_set``: whether the forces range over a set (per-cable min and max columns)
       or are one value per cable;
+    - ``structure`` and ``rows``: the matrix S the forces balance the wrench with, and the freedoms
+      of its rows;
     - ``diagnostics()``: per-pose columns beside the margins (the Jacobian's rank, the poses the
       ``feasible`` model's LPs solved, ``tension_lp``, set by the criteria that ran them).
     """

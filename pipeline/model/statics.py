@@ -147,6 +147,11 @@ class PoseStatics(PoseGeometry):
         """A of eq. (8), the S of ``pipeline.model.tensions``: A s = f_ext."""
         return self.structure_matrix
 
+    @property
+    def rows(self) -> tuple[int, ...]:
+        """The freedoms (indices into ``FREEDOMS``) of the rows of :attr:`structure`."""
+        return self.robot.dofs
+
     @cached_property
     def wrench_pinv(self) -> tuple[np.ndarray, np.ndarray]:
         """A^+ (n, m, k) and the rank of A (n,)."""

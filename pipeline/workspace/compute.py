@@ -15,6 +15,7 @@ import pyarrow as pa
 from omegaconf import DictConfig, OmegaConf
 
 from pipeline.workspace.arrow import categories, numbers
+from pipeline.workspace.degeneracy import Degeneracy
 from pipeline.workspace.grid import Grid
 from pipeline.workspace.kernel import WorkspaceProblem, evaluate_chunk
 from pipeline.workspace.parallel import iter_chunks
@@ -80,53 +81,14 @@ def grid_workspace(
             sink(points)
     counts = {"n_points": grid.n_points, "n_feasible": n_feasible,
               "lost": dict(zip(problem.criteria, lost.tolist())), "least": least,
-              "summarised": {key: np.concatenate(values) for key, values in summarised.items()}}
+              "summarised": {key: np.concatenate(values) for key, values in summarised.items()},
+              "degenerate": degenerate.summary()}
     if problem.spec.tension.model == "feasible":
         log.info("feasible tension model: %d of %d poses by LP (poor conditioning or fallback), "
                  "the rest by hyperplane shifting", by_lp, grid.n_points)
     degenerate.explain(grid.n_points)
     table = pa.concat_tables(parts).to_pandas() if sink is None else None
     return table, summarize(cfg, counts, grid.cell_volume, problem)
-
-
-class Degeneracy:
-    """What a job says of its degenerate poses once the grid is done: the rank of J^T where it
-    is short (CPR-WWA, column ``jacobian_rank``) with the largest share of the required wrench
-    the forces miss (column ``wrench_residual``), and the cables that collapse (the
-    ``zero_length`` gate) by name."""
-
-    def __init__(self, problem: WorkspaceProblem):
-        self.problem = problem
-        self.ranks = np.zeros(7, dtype=np.int64)
-        self.missed = 0.0
-        self.collapsed: set[int] = set()
-
-    def add(self, positions: np.ndarray, raw: dict, margins: dict) -> None:
-        if "jacobian_rank" in raw:
-            self.ranks += np.bincount(raw["jacobian_rank"], minlength=7)
-        if "unreachable" in margins and len(positions):
-            self.missed = max(self.missed, float((1.0 - margins["unreachable"]).max()) * self.problem.spec.tension.residual_limit)
-        if "zero_length" in margins and (margins["zero_length"] < 0).any():
-            robot, tol = self.problem.robot, self.problem.robot.shortest_cable
-            for orientation in self.problem.orientations:
-                state = self.problem.spec.state(robot, positions[margins["zero_length"] < 0], orientation)
-                self.collapsed.update(np.flatnonzero((state.lengths < tol).any(axis=0)).tolist())
-
-    def explain(self, n_points: int) -> None:
-        problem, tension = self.problem, self.problem.spec.tension
-        point = not problem.robot.attachments.any()  # no moment arms: the moment rows are zero
-        full = 3 if point or getattr(problem.spec, "pinv_columns", "full") == "translational" else 6
-        short = {rank: int(count) for rank, count in enumerate(self.ranks) if count and rank < full}
-        if short:
-            ranks = ", ".join(f"rank {rank} at {count}" for rank, count in short.items())
-            log.info("J^T is short of rank %d at %d of %d poses (%s; column jacobian_rank): the cables cannot act "
-                     "along every direction of the wrench space there, and the forces miss up to %.2f%% of the "
-                     "required wrench (unreachable past tension.%s=%g)", full, sum(short.values()), n_points, ranks,
-                     100 * self.missed, "pinv_residual" if tension.model == "pinv" else "residual_rtol", tension.residual_limit)
-        if self.collapsed:
-            names = ", ".join(problem.robot.cable_names[i] for i in sorted(self.collapsed))
-            log.warning("cables %s have zero length at some poses (the attachment on its anchor: no "
-                        "direction); those poses are infeasible (zero_length)", names)
 
 
 def tabulate(problem: WorkspaceProblem, positions: np.ndarray, raw: dict,
@@ -288,6 +250,7 @@ def summarize(cfg: DictConfig, counts: dict, cell_volume: float, problem) -> dic
     for name in problem.criteria:
         least = counts["least"][name]
         row[f"least_margin_{name}"] = float(least) if np.isfinite(least) else np.nan
+    row.update(counts.get("degenerate", {}))  # the rank and the missing direction at a degenerate pose
     for key, values in counts.get("summarised", {}).items():  # over the poses that have one
         known = values[~np.isnan(values)]
         for stat, value in (("min", np.min), ("median", np.median), ("max", np.max)):
