@@ -83,3 +83,17 @@ def test_plots_show_renders_the_figures(project):
     page = (root / "plots_html" / "index.html").read_text()
     assert "fig9_feasible_share_by_actuator.png" in page
     assert "fig8_workspace_actuator1.png" in page
+
+
+def test_every_key_of_the_tension_files_is_a_dvc_parameter():
+    """`dvc params diff` and `dvc exp show` list what a study's results depend on: every key of
+    the tension group (tension.pinv_residual was missing when it was added)."""
+    import yaml
+
+    listed = {}
+    for entry in yaml.safe_load((REPO / "dvc.yaml").read_text())["stages"]["study"]["do"]["params"]:
+        listed.update(entry)
+    for name in ("pinv", "feasible"):
+        path = f"conf/tension/{name}.yaml"
+        keys = set(yaml.safe_load((REPO / path).read_text())) - {"defaults"}
+        assert keys == set(listed[path]), path
