@@ -52,6 +52,8 @@ def _cpr_wwa(positions, anchors, arms, rate_axes, radius, rows, extremes, centre
     warm = np.bool_(False)  # w holds the previous pose's direction (a good start for the next)
     inverse_radius = 1.0 / radius
     torque = np.empty((m, 4))  # C (3 columns) and d of M = C a + d, per cable
+    corners, sizes = np.empty((8, 3)), np.empty(8)  # the acceleration box's corners and |F| there
+    _vertices(loads, rows, centre, half, corners, sizes)
     speed_limit, torque_limit, accel_limit, voltage_limit = limits[0], limits[1], limits[2], limits[3]
     g_v, l_v, load_gain = gains[0], gains[1], gains[2]  # load_gain = -S_v (ActuatorModel.load_gain)
     for p in range(n):
@@ -78,7 +80,7 @@ def _cpr_wwa(positions, anchors, arms, rate_axes, radius, rows, extremes, centre
             source = deflated
             rank[p] = rows - 1
             warm = True
-            residual = _missed(w, loads, rows, centre, half)
+            residual = _missed(w, loads, rows, corners, sizes)
         else:
             warm = False
             unsettled[p] = True
@@ -161,22 +163,39 @@ def _shortest(lengths, m):
 
 
 @njit(cache=True, inline="always")
-def _missed(w, loads, rows, centre, half):
-    """The share of F = C a + d (``loads``: C and d) that J^T cannot reach when its range lacks
-    only the unit direction w, |w . F| / |F|, the worst over the 8 vertices of the acceleration
-    box (0 for a zero F): the ``unreachable`` margin's residual under the minimum-norm model."""
-    worst = 0.0
+def _vertices(loads, rows, centre, half, corners, sizes):
+    """The 8 corners of the acceleration box into ``corners`` (8, 3) and |F| = |C a + d| at each
+    into ``sizes`` (``loads``: C and d, the same at every pose of a chunk)."""
     for vertex in range(8):
-        along, size = 0.0, 0.0
+        for k in range(3):
+            sign = 1.0 if (vertex >> (2 - k)) & 1 else -1.0
+            corners[vertex, k] = centre[k] + sign * half[k]
+        size = 0.0
         for r in range(rows):
             force = loads[r, 3]
             for k in range(3):
-                sign = 1.0 if (vertex >> (2 - k)) & 1 else -1.0
-                force += loads[r, k] * (centre[k] + sign * half[k])
-            along += w[r] * force
+                force += loads[r, k] * corners[vertex, k]
             size += force * force
-        if size > 0.0:
-            worst = max(worst, abs(along) / np.sqrt(size))
+        sizes[vertex] = np.sqrt(size)
+
+
+@njit(cache=True, inline="always")
+def _missed(w, loads, rows, corners, sizes):
+    """The share of F = C a + d (``loads``: C and d) that J^T cannot reach when its range lacks
+    only the unit direction w, |w . F| / |F|, the worst over the 8 corners of the acceleration
+    box (:func:`_vertices`; 0 for a zero F): the ``unreachable`` margin's residual under the
+    minimum-norm model. w . F = (w^T C) a + w^T d: one product with C and d per pose."""
+    slope0 = slope1 = slope2 = offset = 0.0
+    for r in range(rows):
+        slope0 += w[r] * loads[r, 0]
+        slope1 += w[r] * loads[r, 1]
+        slope2 += w[r] * loads[r, 2]
+        offset += w[r] * loads[r, 3]
+    worst = 0.0
+    for vertex in range(8):
+        if sizes[vertex] > 0.0:
+            along = slope0 * corners[vertex, 0] + slope1 * corners[vertex, 1] + slope2 * corners[vertex, 2] + offset
+            worst = max(worst, abs(along) / sizes[vertex])
     return worst
 
 
