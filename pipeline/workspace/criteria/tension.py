@@ -20,8 +20,14 @@ def unreachable(state, limits) -> np.ndarray:
     rank 5, misses up to 1.4 % of F; a robot with every anchor on one line most of it)."""
     if feasible_model(state):
         return feasible_margins(state, limits)["unreachable"]
-    residual, _ = reachability(state.structure, state.wrench_pinv[0], state.required_wrenches)
-    return 1.0 - residual.max(axis=1) / state.tension.pinv_residual
+    pinv, rank = state.wrench_pinv
+    missed = np.zeros(len(rank))  # a full-rank S reaches every wrench: nothing to compute there
+    short = rank < state.structure.shape[1]
+    if short.any():
+        wrenches = state.required_wrenches
+        wrenches = wrenches[short] if wrenches.ndim == 3 else wrenches
+        missed[short] = reachability(state.structure[short], pinv[short], wrenches)[0].max(axis=1)
+    return 1.0 - missed / state.tension.pinv_residual
 
 
 def slack(state, limits) -> np.ndarray:
