@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import itertools
 import logging
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -238,3 +240,18 @@ def test_the_cpr8_names_the_yaw_it_cannot_hold_at_the_zero_orientation(make_cfg,
     assert summary["deficient_rank"] == 5 and summary["n_feasible"] == 216
     assert summary["missing_direction"].startswith("moment about z (+0.99)")
     assert "the structure matrix has rank 5 of 6: the cables cannot produce a moment about z there" in caplog.text
+
+
+@pytest.mark.parametrize("overrides, limit, remedy", [
+    (["actuator=5"], "torque", "a stronger actuator, a higher drive.gear_ratio or a smaller drive.winch_radius"),
+    ([*LINE], "unreachable", "anchors and attachments that give the cables independent directions"),
+    ([*SQUARE, "tension=pinv"], "slack", "tension=feasible if the cables may not push"),
+])
+def test_a_job_with_no_feasible_pose_says_what_to_try_next(tmp_path, overrides, limit, remedy):
+    """A 0 % result named only its counts; now it names what limited it and the next thing to try
+    (each criterion's remedy in the registry)."""
+    done = subprocess.run([sys.executable, "-m", "pipeline", *overrides, f"hydra.run.dir={tmp_path / 'run'}"],
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    (line,) = [line for line in (done.stdout + done.stderr).splitlines() if "no pose is feasible" in line]
+    assert f"are lost to {limit} first; to try next: {remedy}" in line

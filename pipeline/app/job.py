@@ -33,6 +33,7 @@ from pipeline.app.results import (
 from pipeline.workspace.arrow import one_row
 from pipeline.app.problem import build_grid
 from pipeline.workspace.compute import grid_workspace
+from pipeline.workspace.criteria import REGISTRY
 from pipeline.workspace.kernel import WorkspaceProblem
 
 log = logging.getLogger("pipeline")
@@ -115,6 +116,11 @@ def _run_locked(cfg: DictConfig, problem: WorkspaceProblem, out: Path, sweep_pay
         summary["n_feasible"], summary["n_points"], summary["feasible_pct"], summary["volume_m3"],
         lost, f"; headroom of the feasible poses: {headroom}" if headroom else "",
     )
+    if summary["n_feasible"] == 0 and summary["n_points"] > 0:
+        count, name = max((value, key[len("lost_"):]) for key, value in summary.items()
+                          if key.startswith("lost_") and key[len("lost_"):] in REGISTRY)
+        log.warning("no pose is feasible: %d of %d are lost to %s first; to try next: %s", count,
+                    summary["n_points"], name, REGISTRY[name].remedy)
     return summary
 
 

@@ -25,27 +25,42 @@ ANY, DYNAMICS, STATICS = "any", "dynamics", "statics"
 class Criterion:
     """``function(state, limits) -> (n,) margins``; ``reads``: ``any``, ``dynamics`` (a
     ``PoseDynamics`` and an ``ActuatorModel``) or ``statics`` (a ``PoseStatics`` and
-    ``StaticLimits``); ``gate``: priority among gates (0 first) or None; ``colour``: figures."""
+    ``StaticLimits``); ``gate``: priority among gates (0 first) or None; ``colour``: figures;
+    ``remedy``: what to try next when it limits every pose (a job with none feasible says it)."""
 
     name: str
     function: Callable[[Any, Any], np.ndarray]
     reads: str
     gate: int | None
     colour: str
+    remedy: str
 
 
 REGISTRY: dict[str, Criterion] = {c.name: c for c in (
-    Criterion("zero_length", geometry.zero_length, ANY, 0, "#999933"),
-    Criterion("singular", geometry.singular, STATICS, 1, "#000000"),
-    Criterion("unreachable", tension.unreachable, ANY, 2, "#777777"),
-    Criterion("slack", tension.slack, ANY, 3, "#882255"),
-    Criterion("tension_max", tension.tension_max, ANY, None, "#0072B2"),
-    Criterion("length", geometry.length, ANY, None, "#CC79A7"),
-    Criterion("payload", payload.payload, STATICS, None, "#56B4E9"),
-    Criterion("speed", actuator.speed, DYNAMICS, None, "#0072B2"),
-    Criterion("torque", actuator.torque, DYNAMICS, None, "#D55E00"),
-    Criterion("acceleration", actuator.acceleration, DYNAMICS, None, "#CC79A7"),
-    Criterion("voltage", actuator.voltage, DYNAMICS, None, "#E69F00"),
+    Criterion("zero_length", geometry.zero_length, ANY, 0, "#999933",
+              "a search box that does not reach the anchors (robot.search.lo, hi)"),
+    Criterion("singular", geometry.singular, STATICS, 1, "#000000",
+              "robot.dofs=[x,y,z] for a point platform (every attachment at one point), else anchors and "
+              "attachments that give the cables independent directions (the log names the wrench they cannot "
+              "produce), or tension=feasible"),
+    Criterion("unreachable", tension.unreachable, ANY, 2, "#777777",
+              "anchors and attachments that give the cables independent directions (the log names the "
+              "wrench they cannot produce), or more cables"),
+    Criterion("slack", tension.slack, ANY, 3, "#882255",
+              "tension=feasible if the cables may not push (tension=pinv's minimum-norm forces often do), "
+              "else a lower tension.t_min, more cables or anchors around the load"),
+    Criterion("tension_max", tension.tension_max, ANY, None, "#0072B2",
+              "stronger cables (a higher tension.t_max) or a lighter load"),
+    Criterion("length", geometry.length, ANY, None, "#CC79A7", "longer cables (robot.l_max) or a smaller box"),
+    Criterion("payload", payload.payload, STATICS, None, "#56B4E9", "a lighter payload (load.mass) or stronger cables"),
+    Criterion("speed", actuator.speed, DYNAMICS, None, "#0072B2",
+              "a lower motion.v_max, a larger drive.winch_radius or a smaller drive.gear_ratio"),
+    Criterion("torque", actuator.torque, DYNAMICS, None, "#D55E00",
+              "a stronger actuator, a higher drive.gear_ratio or a smaller drive.winch_radius"),
+    Criterion("acceleration", actuator.acceleration, DYNAMICS, None, "#CC79A7",
+              "longer motion.t_acc and motion.t_dec, or a larger drive.winch_radius"),
+    Criterion("voltage", actuator.voltage, DYNAMICS, None, "#E69F00",
+              "a lower motion.v_max or another actuator (its voltage and speed constants)"),
 )}
 GATES = tuple(sorted((c.name for c in REGISTRY.values() if c.gate is not None),
                      key=lambda name: REGISTRY[name].gate))
