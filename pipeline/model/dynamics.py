@@ -35,6 +35,9 @@ class Load:
     external: np.ndarray = field(default_factory=lambda: np.zeros(6))
 
 
+REFERENCE_VELOCITIES = 93  # the velocity set of eq. (23) with the paper's N = 6
+
+
 @dataclass(frozen=True)
 class MotionSpec:
     """What the carrier must do at every pose: velocity set, acceleration set, load, model options.
@@ -75,6 +78,11 @@ class MotionSpec:
     def set_size(self) -> int:
         """Largest per-pose, per-cable set a criterion holds in memory."""
         return max(len(self.velocities), len(self.accelerations))
+
+    def work(self) -> float:
+        """A pose's work against the cost model's reference, the paper's REFERENCE_VELOCITIES
+        (``grid.n_vel=6``): it grows with the velocity set."""
+        return max(1.0, self.set_size() / REFERENCE_VELOCITIES)
 
     def fused_unfit(self) -> str | None:
         """Why the compiled CPR-WWA kernel (``pipeline.workspace.fused``) cannot evaluate this

@@ -53,7 +53,14 @@ class StaticsSpec:
         return PoseStatics(robot, positions, orientation, self)
 
     def set_size(self) -> int:
-        return 1
+        """Largest per-pose, per-cable set a criterion holds in memory: the wrench set's vertices."""
+        return max(1, len(self.wrench_set))
+
+    def work(self) -> float:
+        """A pose's work against the statics of one wrench (the cost model's reference,
+        ``pipeline.workspace.compute``): each vertex of a wrench set adds about a sixth
+        (benchmarks/LOG.md, 2026-11-26: 4 vertices x1.8, 64 vertices x12.8, both tension models)."""
+        return 1.0 + len(self.wrench_set) / 6 if len(self.wrench_set) else 1.0
 
     def fused_unfit(self) -> str | None:
         """Why the compiled statics kernel cannot evaluate this spec, None when it can."""
@@ -207,6 +214,9 @@ class PoseStatics(PoseGeometry):
         return gram(self.structure_matrix)
 
 
+PAYLOAD_LP_WORK = 2.7  # measured: 14 976 poses of an 8-cable robot, 2.15 s against 0.81 s for its statics
+
+
 @dataclass(frozen=True)
 class PayloadSpec(StaticsSpec):
     """``analysis=payload``: the statics of the platform (``load``: its own mass and centre of
@@ -224,6 +234,11 @@ class PayloadSpec(StaticsSpec):
 
     def fused_unfit(self) -> str | None:
         return "it does not compute payloads (analysis=payload)"
+
+    def work(self) -> float:
+        """The payload's LP per pose (pulling cables) costs about 2.7 statics poses; the closed
+        form of the minimum-norm model about one (benchmarks/LOG.md, 2026-11-26)."""
+        return PAYLOAD_LP_WORK if self.tension.model == "feasible" else 1.0
 
 
 class PosePayload(PoseStatics):

@@ -14,6 +14,7 @@ import numpy as np
 import pyarrow as pa
 from omegaconf import DictConfig, OmegaConf
 
+from pipeline.model.dynamics import REFERENCE_VELOCITIES
 from pipeline.workspace.arrow import categories, numbers
 from pipeline.workspace.degeneracy import Degeneracy
 from pipeline.workspace.grid import Grid
@@ -120,8 +121,9 @@ def tabulate(problem: WorkspaceProblem, positions: np.ndarray, raw: dict,
 # kernel's imports, numpy only) and two workers at best halve the kernel time, so they pay off
 # when the kernel alone would take more than 2 x WORKER_START_S here. Kernel speeds per core,
 # measured by benchmarks/bench_kernel.py and bench_feasible.py (lower ends of their ranges).
-# The speeds hold for the paper's set of REFERENCE_SET velocities per pose (grid.n_vel = 6);
-# a pose's cost grows with its set. A job estimated above LONG_JOB_S is announced with a warning.
+# The speeds hold for the paper's set of 93 velocities per pose (grid.n_vel = 6) and the statics
+# of one wrench; a pose's cost grows with its set (each spec's ``work()``: its velocities, a wrench
+# set's vertices, the payload's LP). A job estimated above LONG_JOB_S is announced with a warning.
 WORKER_START_S = 0.4
 # The compiled kernels cost a process FUSED_START_S to load from numba's cache (numba's import,
 # with scipy.linalg, and the machine code: pipeline.model.jit), and the first process on a machine
@@ -132,7 +134,6 @@ FUSED_START_S = 0.4
 # workers pay only for long fused jobs (benchmarks/LOG.md, 2026-11-24: about 1.5 x 10^6 poses).
 FUSED_WORKERS_FROM_S = 1.5  # the fused kernel's time (cost model) from which workers are used
 POSES_PER_SECOND = {"pinv": 200_000, "feasible": 20_000, "fused": 1_000_000}
-REFERENCE_SET = 93
 LONG_JOB_S = 30.0
 # Memory: a job holds the chunks in flight (each array within CHUNK_BUDGET_FLOATS), never the
 # grid (pipeline.workspace.grid), so its peak is about PROCESS_BYTES whatever the grid's size
@@ -146,7 +147,7 @@ LARGE_JOB_BYTES = 2 * 2**30
 def estimated_seconds(problem: WorkspaceProblem, n_points: int) -> float:
     """The kernel's time for ``n_points`` positions on one core here, by the cost model."""
     evaluations = n_points * len(problem.orientations)
-    per_pose = max(1.0, problem.spec.set_size() / REFERENCE_SET)
+    per_pose = problem.spec.work()
     speed = POSES_PER_SECOND["fused" if problem.fused else problem.spec.tension.model]
     return evaluations * per_pose / speed
 
@@ -207,9 +208,9 @@ def announce_cost(cfg: DictConfig, problem: WorkspaceProblem, n_points: int, wor
     if seconds < LONG_JOB_S and memory < LARGE_JOB_BYTES:
         return
     hint = ""
-    if "n_vel" in cfg.get("grid", {}) and cfg.grid.n_vel is None and problem.spec.set_size() > REFERENCE_SET:
+    if "n_vel" in cfg.get("grid", {}) and cfg.grid.n_vel is None and problem.spec.set_size() > REFERENCE_VELOCITIES:
         hint = (f"; grid.n_vel is null, so each pose tests {problem.spec.set_size()} velocities "
-                f"(grid.n_vel=6 tests {REFERENCE_SET}, as the paper's grid)")
+                f"(grid.n_vel=6 tests {REFERENCE_VELOCITIES}, as the paper's grid)")
     size = f"{memory / 2**30:.1f} GiB" if memory >= 2**30 else f"{memory / 2**20:.0f} MiB"
     log.warning("this job evaluates %d poses x %d orientations: about %s on %d core%s and %s of memory by "
                 "the cost model%s", n_points, len(problem.orientations), clock_text(seconds), cores,
