@@ -15,7 +15,9 @@ refuses what it cannot mean:
 - ``payload``: the statics' problem and, per pose, the largest payload held (``max_payload_kg``).
 
 ``tension.model=feasible`` replaces the minimum-norm cable forces of both by pulling cables only
-(``pipeline.model.tensions``) and adds the criteria ``unreachable`` and ``slack``.
+(``pipeline.model.tensions``) and adds the criteria ``unreachable`` and ``slack``; under the
+minimum-norm forces CPR-WWA gates the share of the wrench they miss (``unreachable``, where J^T
+lacks a direction), and every analysis begins with the ``zero_length`` gate.
 :func:`validate` types a composed config, checks every declared rule, and returns it with its
 built problem, so a job builds its robot once.
 """
