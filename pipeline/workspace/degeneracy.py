@@ -14,7 +14,6 @@ log = logging.getLogger("pipeline")
 
 WORDS = {"x": "force along x", "y": "force along y", "z": "force along z",
          "rx": "moment about x", "ry": "moment about y", "rz": "moment about z"}
-RANK_RTOL = 1e-9  # singular values at or below this share of the largest are dropped (as batched_pinv)
 SHOWN = 0.1  # components of the missing direction named besides the largest one
 
 
@@ -58,22 +57,22 @@ class Degeneracy:
                 self.sample = self.direction_at(positions[index])
 
     def direction_at(self, position: np.ndarray) -> dict | None:
-        """The rank of the structure matrix at ``position`` (nominal orientation) and the first
-        direction its SVD drops; None at full rank."""
+        """The rank of the structure matrix at ``position`` (nominal orientation; singular values
+        at or below ``model.rank_rtol`` of the largest dropped, as the pseudo-inverse drops them)
+        and the first direction its SVD drops; None at full rank."""
         state = self.problem.spec.state(self.problem.robot, position[None, :], self.problem.orientations[0])
         rows = [k for k, freedom in enumerate(state.rows) if not (self.point and freedom >= 3)]
         left, sigma, _ = np.linalg.svd(state.structure[0][rows])
-        rank = int((sigma > RANK_RTOL * sigma[0]).sum()) if sigma[0] > 0 else 0
+        rank = int((sigma > self.problem.spec.rank_rtol * sigma[0]).sum()) if sigma[0] > 0 else 0
         if rank == len(rows):
             return None
         direction = left[:, rank] * np.sign(left[np.argmax(np.abs(left[:, rank])), rank])
-        order = np.argsort(-np.abs(direction))
-        names = [WORDS[FREEDOMS[state.rows[rows[k]]]] for k in order if abs(direction[k]) >= SHOWN]
-        words = ", ".join(f"{WORDS[FREEDOMS[state.rows[rows[k]]]]} ({direction[k]:+.2f})"
-                          for k in order if abs(direction[k]) >= SHOWN)
+        shown = [(WORDS[FREEDOMS[state.rows[rows[k]]]], direction[k])
+                 for k in np.argsort(-np.abs(direction)) if abs(direction[k]) >= SHOWN]
+        words = ", ".join(f"{name} ({value:+.2f})" for name, value in shown)
         vector = np.zeros(len(state.rows))
         vector[rows] = direction
-        return {"position": position, "rank": rank, "rows": len(rows), "main": names[0], "words": words,
+        return {"position": position, "rank": rank, "rows": len(rows), "main": shown[0][0], "words": words,
                 "vector": vector}
 
     def summary(self) -> dict:
