@@ -7,6 +7,7 @@ import pandas as pd
 import pytest
 
 from conftest import job_at_exit
+from golden import values
 from pipeline.app.results import read_metadata
 
 pytestmark = pytest.mark.slow
@@ -23,7 +24,7 @@ def test_main_job_writes_points_summaries_and_sweep_summary(tmp_path):
     (sweep,) = (tmp_path / "outputs" / "sweeps").iterdir()
     summary = pd.read_parquet(sweep / "summary.parquet")
     assert summary["actuator"].tolist() == [1, 2, 3, 4, 5]
-    assert summary["n_feasible"].tolist() == [216, 208, 184, 184, 0]
+    assert summary["n_feasible"].tolist() == values("full_default_zero")
     for actuator in range(1, 6):
         job = sweep / f"actuator={actuator}"
         points = pd.read_parquet(job / "points.parquet")
@@ -54,10 +55,10 @@ def test_irpm_gamma_sweep_summary_decreases_with_gamma(tmp_path):
     (sweep,) = (tmp_path / "outputs" / "sweeps").iterdir()
     summary = pd.read_parquet(sweep / "summary.parquet")
     assert summary["robot.gamma_deg"].tolist() == [0, 15, 30, 45]
-    assert summary["n_feasible"].tolist() == [2862, 1905, 1012, 266]
+    assert summary["n_feasible"].tolist() == values("irpm_gamma")
     assert summary["volume_m3"].to_numpy() == pytest.approx(summary["n_feasible"] * 0.4**3)
     points = pd.read_parquet(sweep / "robot.gamma_deg=30,robot=irpm6" / "points.parquet")
-    assert len(points) == 24986 and not points.isna().any().any()
+    assert len(points) == values("irpm_gamma", "n_points")[2] and not points.isna().any().any()
 
 
 def test_line_simulation_job_writes_samples(tmp_path):
@@ -68,8 +69,9 @@ def test_line_simulation_job_writes_samples(tmp_path):
     assert {"line", "t", "x", "y", "z", "theta_dot_8", "torque_1", "voltage_5", "margin_torque",
             "ok"} <= set(samples.columns)
     summary = pd.read_parquet(job / "summary.parquet").iloc[0]
-    assert (summary["n_feasible"], summary["n_feasible_grid"]) == (196, 208)
-    assert "agreement 94.4%" in (job / "pipeline.log").read_text()
+    assert [summary["n_feasible"], summary["n_feasible_grid"]] == [values("lines_full_paper_zero", key)[1]
+                                                                   for key in ("n_feasible", "n_feasible_grid")]
+    assert f"agreement {values('lines_full_paper_zero', 'agreement_pct')[1]:.1f}%" in (job / "pipeline.log").read_text()
     assert samples["line"].unique().tolist() == [0]  # lines.samples=first: line O''-F'' (Fig. 6)
     assert summary["n_lines"] == 72 and summary["lines.samples"] == "first"
     every = run(tmp_path, "analysis=lines", "actuator=2", "lines.samples=all", "hydra.run.dir=all")

@@ -10,6 +10,8 @@ import pandas as pd
 import pytest
 from omegaconf import OmegaConf
 
+from golden import values
+
 from pipeline.errors import ConfigError
 from pipeline.analyses.evidence import FACTS, MARGIN, POINTS, evidence, scores, sensitivity
 from pipeline.app.readings import reading_name
@@ -31,9 +33,9 @@ def study_summary(name, make_cfg, catalogue, readings=None) -> pd.DataFrame:
         swept += [(key, "1,2,3,4,5" if values == "catalogue" else values) for key, values in spec.sweep.items()]
         base = make_cfg(*spec.overrides, *fixed)
         keys = [key for key, _ in swept]
-        for values in itertools.product(*(v.split(",") for _, v in swept)):
+        for setting in itertools.product(*(v.split(",") for _, v in swept)):
             cfg = copy.deepcopy(base)
-            for key, value in zip(keys, values):
+            for key, value in zip(keys, setting):
                 OmegaConf.update(cfg, key, float(value) if "." in value or key.startswith("robot.") else int(value))
             if cfg.analysis == "lines":
                 summary = simulate_lines(cfg, *build_problem(cfg, catalogue))[2]
@@ -111,30 +113,19 @@ def test_the_verdict_rests_on_two_facts_read_the_other_way(cpr8):
     assert (best.drop(["fig5b_much_smaller", "table2_actuator_2"]) == "default").all()
 
 
-GRID = {  # case reading -> feasible grid points of 216, actuators 1-5, zero and 0.5 rad (docs/model.md section 4)
-    "translational": ([216, 208, 184, 184, 24], [207, 193, 183, 183, 24]),
-    "translational_include": ([216, 196, 184, 184, 24], [207, 188, 183, 180, 24]),
-    "translational_colon": ([216, 208, 184, 184, 28], [207, 193, 183, 183, 26]),
-    "translational_jdot": ([212, 204, 184, 184, 24], [200, 191, 183, 183, 24]),
-    "translational_noxi": ([216, 216, 184, 184, 120], [213, 205, 185, 183, 108]),
-    "translational_newton": ([216, 208, 184, 184, 24], [207, 193, 183, 183, 24]),
-    "full": ([216, 208, 184, 184, 0], [182, 120, 30, 10, 0]),
-    "full_include": ([216, 192, 184, 168, 0], [177, 69, 30, 4, 0]),
-    "full_colon": ([216, 208, 184, 184, 0], [182, 125, 37, 13, 0]),
-    "full_jdot": ([212, 204, 184, 184, 0], [177, 119, 30, 10, 0]),
-    "full_noxi": ([216, 216, 184, 184, 12], [193, 164, 64, 10, 0]),
-    "full_newton": ([216, 208, 184, 184, 0], [182, 120, 30, 9, 0]),
-}
+# the study's case reading -> its golden case (tests/golden.yaml, the table of docs/model.md section 4)
+GRID = {f"{pinv}{'_' + reading if reading != 'default' else ''}": f"{pinv}_{reading}"
+        for pinv in ("full", "translational") for reading in ("default", "include", "colon", "jdot", "noxi", "newton")}
 
 
-def test_grid_counts_under_each_reading_match_the_documented_table(cpr8_jobs):
+def test_grid_counts_under_each_reading_are_the_golden_numbers(cpr8_jobs):
     got = cpr8_jobs.sort_values("actuator").groupby("case", sort=False)["n_feasible_grid"].apply(list)
-    for reading, (zero, rotated) in GRID.items():
-        assert got[f"zero-{reading}"] == zero, reading
-        assert got[f"rot05-{reading}"] == rotated, reading
+    for reading, case in GRID.items():
+        assert got[f"zero-{reading}"] == values(f"{case}_zero"), reading
+        assert got[f"rot05-{reading}"] == values(f"{case}_rotated"), reading
     assert set(got.index) == {f"{s}-{r}" for s in ("zero", "rot05") for r in GRID}
-    for zero, rotated in GRID.values():  # section 3.1.2: smaller at 0.5 rad, under every reading
-        assert sum(rotated) < sum(zero)
+    for case in GRID.values():  # section 3.1.2: smaller at 0.5 rad, under every reading
+        assert sum(values(f"{case}_rotated")) < sum(values(f"{case}_zero"))
 
 
 def test_irpm_section_iii_conclusions_hold_exactly_under_either_cable_direction(make_cfg, catalogue):

@@ -4,12 +4,14 @@ forces-only reading of eq. (20) that fits Table 2 alone best (docs/model.md sect
 
 import pytest
 
+from golden import values
+
 from pipeline.analyses.paper import TABLE2_FEASIBLE_PCT
 from pipeline.app.problem import compute_workspace
 
 PAPER = TABLE2_FEASIBLE_PCT
-OURS = {1: 216, 2: 208, 3: 184, 4: 184, 5: 0}  # feasible grid points out of 216, the default
-FORCES_ONLY = {1: 216, 2: 208, 3: 184, 4: 184, 5: 24}  # model.pinv_columns=translational
+OURS = dict(zip(PAPER, values("full_default_zero")))  # feasible grid points of 216 (tests/golden.yaml)
+FORCES_ONLY = dict(zip(PAPER, values("translational_default_zero")))  # model.pinv_columns=translational
 TOLERANCE_PP = 4.0
 
 
@@ -58,7 +60,8 @@ def test_each_lost_point_is_attributed_to_one_constraint(table2):
     for row in table2.values():
         lost = sum(row[f"lost_{c}"] for c in ("speed", "torque", "acceleration", "voltage"))
         assert lost == row["n_points"] - row["n_feasible"]
-    assert table2[3]["lost_torque"] == 32 and table2[4]["lost_voltage"] == 32
+    assert [table2[a]["lost_torque"] for a in PAPER] == values("full_default_zero", "lost_torque")
+    assert [table2[a]["lost_voltage"] for a in PAPER] == values("full_default_zero", "lost_voltage")
 
 
 def test_shaft_acceleration_limit_never_binds_for_table1(results):

@@ -31,8 +31,7 @@ from pipeline.app.results import (
     read_metadata, read_verified, write_parquet,
 )
 from pipeline.workspace.arrow import one_row
-from pipeline.app.problem import build_grid
-from pipeline.workspace.compute import grid_workspace
+from pipeline.app.problem import ANALYSES, build_grid
 from pipeline.workspace.criteria import REGISTRY
 from pipeline.workspace.kernel import WorkspaceProblem
 
@@ -80,30 +79,10 @@ def _run_locked(cfg: DictConfig, problem: WorkspaceProblem, out: Path, sweep_pay
         return done
     log.info("reading: %s (docs/model.md, sections 4-5)", describe_reading(cfg.model))
     log.info("tension model: %s (%s)", cfg.tension.model.value, TENSION_MODELS[cfg.tension.model.value])
-    grid = build_grid(cfg, problem.robot)
-    if cfg.analysis == "lines":
-        from pipeline.workspace.lines import simulate_lines  # pandas: only this analysis needs it
-
-        samples, points, summary = simulate_lines(cfg, problem, grid)
-        if cfg.lines.samples.name == "first":  # the verdicts of every line are in points.parquet
-            samples = samples[samples["line"] == 0].reset_index(drop=True)
-        write_parquet(samples, out / "samples.parquet", config_yaml)
-        log.info("%d lines, %d samples; simulated %d vs grid %d feasible points, agreement %.1f%%",
-                 summary["n_lines"], summary["n_samples"], summary["n_feasible"],
-                 summary["n_feasible_grid"], summary["agreement_pct"])
-        written = [out / "samples.parquet"]
-        if cfg.output.points:
-            write_parquet(points, out / "points.parquet", config_yaml)
-            written.append(out / "points.parquet")
-    elif cfg.output.points:  # streamed chunk by chunk: memory bounded by a chunk, not by the grid
-        with ParquetSink(out / "points.parquet", config_yaml) as sink:
-            _, summary = grid_workspace(cfg, problem, grid, sink.write, sweep_pays)
-        written = [out / "points.parquet"]
-    else:  # the summary only: each chunk's rows are counted, then dropped
-        _, summary = grid_workspace(cfg, problem, grid, lambda chunk: None, sweep_pays)
-        written = []
+    files = JobFiles(out, config_yaml)
+    summary = ANALYSES[cfg.analysis].files(cfg, problem, build_grid(cfg, problem.robot), files, sweep_pays)
     write_parquet(one_row(summary), out / "summary.parquet", config_yaml,
-                  {DIGESTS_KEY: digests_json(written)})
+                  {DIGESTS_KEY: digests_json(files.written)})
     lost = ", ".join(
         f"{key[len('lost_'):]} {value}" for key, value in summary.items() if key.startswith("lost_")
     )
@@ -122,6 +101,30 @@ def _run_locked(cfg: DictConfig, problem: WorkspaceProblem, out: Path, sweep_pay
         log.warning("no pose is feasible: %d of %d are lost to %s first; to try next: %s", count,
                     summary["n_points"], name, REGISTRY[name].remedy)
     return summary
+
+
+class JobFiles:
+    """The data files of one job in its folder, each under a temporary name until complete
+    (``pipeline.app.results``): a table written whole (:meth:`write`) or chunk by chunk
+    (:meth:`stream`); ``written``: their paths in the order they were completed, whose digests
+    the summary records."""
+
+    def __init__(self, folder: Path, config_yaml: str):
+        self.folder = folder
+        self.config_yaml = config_yaml
+        self.written: list[Path] = []
+
+    def write(self, name: str, frame) -> None:
+        """``name``.parquet holding ``frame`` (an Arrow table or a pandas DataFrame)."""
+        write_parquet(frame, self.folder / f"{name}.parquet", self.config_yaml)
+        self.written.append(self.folder / f"{name}.parquet")
+
+    @contextmanager
+    def stream(self, name: str):
+        """A :class:`ParquetSink` for ``name``.parquet, complete when the block ends."""
+        with ParquetSink(self.folder / f"{name}.parquet", self.config_yaml) as sink:
+            yield sink
+        self.written.append(sink.path)
 
 
 def changed_files(out: Path, meta: dict | None = None) -> list[str]:

@@ -210,8 +210,40 @@ def _payload(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
     return spec, limits, (*GEOMETRY_GATES, *gates, "payload", *(("length",) if robot.l_max is not None else ()))
 
 
-# analysis -> (the typed config, its catalogue or None, the robot) -> (spec, limits, criteria)
-ANALYSES = {"cpr_wwa": _cpr_wwa, "statics": _statics, "lines": _cpr_wwa, "payload": _payload}
+def _grid_files(cfg: DictConfig, problem: WorkspaceProblem, grid: Grid, files, sweep_pays: bool) -> dict:
+    """A grid job's files: points.parquet streamed chunk by chunk (memory bounded by a chunk, not
+    by the grid), or with ``output.points=false`` no file (each chunk's rows counted, then
+    dropped); returns the summary."""
+    if not cfg.output.points:
+        return grid_workspace(cfg, problem, grid, lambda chunk: None, sweep_pays)[1]
+    with files.stream("points") as sink:
+        return grid_workspace(cfg, problem, grid, sink.write, sweep_pays)[1]
+
+
+def _line_files(cfg: DictConfig, problem: WorkspaceProblem, grid: Grid, files, sweep_pays: bool) -> dict:
+    from pipeline.workspace.lines import line_files  # pandas: only this analysis needs it
+
+    return line_files(cfg, problem, grid, files, sweep_pays)
+
+
+@dataclass(frozen=True)
+class AnalysisKind:
+    """An analysis a config can name: the spec, limits and criteria of its workspace from the
+    typed config, its catalogue (or None) and the robot (``build``), and the files a job of it
+    writes (``files``: (typed config, problem, grid, the job's files, whether its sweep pays for
+    the compiled kernels) -> the summary; the job's files (``pipeline.app.job.JobFiles``) take
+    tables whole or streamed chunk by chunk)."""
+
+    build: Callable[[DictConfig, Catalogue | None, CableRobot], tuple]
+    files: Callable[..., dict]
+
+
+ANALYSES = {
+    "cpr_wwa": AnalysisKind(_cpr_wwa, _grid_files),
+    "statics": AnalysisKind(_statics, _grid_files),
+    "lines": AnalysisKind(_cpr_wwa, _line_files),
+    "payload": AnalysisKind(_payload, _grid_files),
+}
 
 
 MAX_SET_VERTICES = 4096  # wrenches of a wrench.set: each is an LP block or a solve per pose
@@ -327,7 +359,7 @@ def build(cfg: DictConfig, catalogue: Catalogue | None) -> WorkspaceProblem:
     """The workspace problem of a typed config: its robot kind's robot, its analysis kind's
     spec, limits and criteria, the orientation set."""
     robot = ROBOTS[cfg.robot.name].build(cfg.robot)
-    spec, limits, criteria = ANALYSES[cfg.analysis](cfg, catalogue, robot)
+    spec, limits, criteria = ANALYSES[cfg.analysis].build(cfg, catalogue, robot)
     given = cfg.orientation
     return WorkspaceProblem(robot, orientation_set(given), spec, limits, criteria, cfg.model.margin_atol,
                             cfg.output.cables, nominal=(float(given.psi), float(given.theta), float(given.phi)))

@@ -12,6 +12,8 @@ sample of its x-line and of its y-line within half a grid step of it satisfies e
 
 from __future__ import annotations
 
+import logging
+
 import numpy as np
 import pandas as pd
 from omegaconf import DictConfig
@@ -22,16 +24,35 @@ from pipeline.workspace.trajectory import inverse_dynamics, sample_margins, trap
 from pipeline.workspace.verdict import classify
 from pipeline.workspace.compute import grid_workspace
 
+log = logging.getLogger("pipeline")
 QUANTITIES = ("theta_dot", "torque", "voltage")
 DT = 0.01  # s, time step of the simulated lines
 
 
-def simulate_lines(cfg: DictConfig, problem: WorkspaceProblem, grid: Grid) -> tuple[pd.DataFrame, pd.DataFrame, dict]:
+def line_files(cfg: DictConfig, problem: WorkspaceProblem, grid: Grid, files, sweep_pays: bool = False) -> dict:
+    """A lines job's files, each written whole: samples.parquet (line O''-F'' only under
+    ``lines.samples=first``: the verdicts of every line are in points.parquet) and, with
+    ``output.points``, points.parquet; returns the summary (:func:`simulate_lines`)."""
+    samples, points, summary = simulate_lines(cfg, problem, grid, sweep_pays)
+    if cfg.lines.samples.name == "first":
+        samples = samples[samples["line"] == 0].reset_index(drop=True)
+    files.write("samples", samples)
+    log.info("%d lines, %d samples; simulated %d vs grid %d feasible points, agreement %.1f%%",
+             summary["n_lines"], summary["n_samples"], summary["n_feasible"],
+             summary["n_feasible_grid"], summary["agreement_pct"])
+    if cfg.output.points:
+        files.write("points", points)
+    return summary
+
+
+def simulate_lines(cfg: DictConfig, problem: WorkspaceProblem, grid: Grid,
+                   sweep_pays: bool = False) -> tuple[pd.DataFrame, pd.DataFrame, dict]:
     """(samples, points, summary): every line sample, the grid points with both verdicts, and
     the CPR-WWA summary extended with the simulated count, the agreement and, per criterion,
     the smallest margin along line O''-F'' (``line0_margin_*``: Fig. 6's verdict per limit);
-    ``problem`` and ``grid``: CPR-WWA's (``pipeline.app.problem.build_problem``)."""
-    points, summary = grid_workspace(cfg, problem, grid)
+    ``problem`` and ``grid``: CPR-WWA's (``pipeline.app.problem.build_problem``); ``sweep_pays``:
+    as :func:`pipeline.workspace.compute.grid_workspace`."""
+    points, summary = grid_workspace(cfg, problem, grid, sweep_pays=sweep_pays)
     lines = _lines(grid[:])
     parts = []
     for number, (axis, start, end) in enumerate(lines):

@@ -1,0 +1,103 @@
+"""Every case of the golden file (tests/golden.py): the model gives today the numbers it
+pinned, counts exactly and shares to 1e-9 relative. A change that moves one is either a defect
+or an intended change of the model, regenerated with ``python tests/golden.py``."""
+
+import re
+from pathlib import Path
+
+import pytest
+
+from golden import cases, compute, values
+
+CASES = cases()
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_the_model_gives_the_golden_numbers(catalogue, name):
+    case = CASES[name]
+    found = compute(case, catalogue)
+    for key, pinned in case["values"].items():
+        (each,) = case["each"].values()
+        assert len(pinned) == len(each), (name, key)
+        if all(isinstance(value, int) for value in pinned):
+            assert found[key] == pinned, (name, key)
+        else:
+            assert found[key] == pytest.approx(pinned, rel=1e-9), (name, key)
+
+
+def test_the_golden_file_is_data_the_tests_can_trust():
+    """Each case sweeps one key over at least one value and pins at least one summary key, with
+    one value per setting (a regeneration that lost a value would fail here, not pass empty)."""
+    assert len(CASES) >= 20
+    for name, case in CASES.items():
+        assert set(case) == {"overrides", "each", "values"}, name
+        (settings,) = case["each"].values()
+        assert settings and case["values"], name
+        assert all(len(pinned) == len(settings) for pinned in case["values"].values()), name
+
+
+MODEL_MD = Path(__file__).parents[1] / "docs" / "model.md"
+READING_ROWS = {  # docs/model.md section 4: a table row's first cell -> the golden case it shows
+    "**default** (`pinv_columns=full`)": "full_default", "`model.pinv_columns=translational`": "translational_default",
+    "`grid.spacing=centred`": "grid_centred", "`robot.lower_anchor_drop=2.2`": "anchors_at_floor",
+    **{f"`{switch}`": f"full_{name}" for switch, name in (
+        ("model.velocity_boundary=include", "include"), ("model.acceleration_set=colon", "colon"),
+        ("model.jdot=true", "jdot"), ("model.xi_in_torque_limit=false", "noxi"), ("model.inertia=newton", "newton"))},
+}
+FORCES_ONLY_ROWS = {"nothing else": "translational_default", **{
+    cell: case.replace("full_", "translational_") for cell, case in READING_ROWS.items() if case.startswith("full_")
+    and cell.startswith("`model.") and "pinv" not in cell}}
+INERTIA_ROWS = {"`motion.t_dec=0.91` (braking twice as hard), forces only": "braking_translational",
+                "`motion.t_dec=0.91`, all six columns": "braking_full",
+                "`model.acceleration_set=colon` ({−0.714, 0.286} per axis), forces only": "colon_translational"}
+
+
+def _table_rows(header: str) -> dict[str, list[str]]:
+    """The rows of the docs/model.md table whose header line starts with ``header``: first cell
+    -> the other cells."""
+    lines = MODEL_MD.read_text().splitlines()
+    start = next(i for i, line in enumerate(lines) if line.startswith(header))
+    rows = {}
+    for line in lines[start + 2:]:
+        if not line.startswith("|"):
+            return rows
+        first, *cells = [cell.strip() for cell in line.strip("|").split("|")]
+        rows[first] = cells
+    return rows
+
+
+def _counts(text: str) -> list[int]:
+    return [int(n) for n in re.findall(r"\d+", text.split("(")[0].replace("*", ""))]
+
+
+def test_the_documented_tables_of_docs_model_md_are_the_golden_numbers():
+    """docs/model.md section 4 states the counts of every reading and of the inertia readings on
+    asymmetric sets, and the lines' agreement: each cell is the golden case's (one source)."""
+    for header, mapping in (("| reading (switch)", READING_ROWS), ("| `pinv_columns=translational` and", FORCES_ONLY_ROWS)):
+        rows = _table_rows(header)
+        for cell, case in mapping.items():
+            zero, rotated = rows[cell]
+            assert _counts(zero) == CASES[f"{case}_zero"]["values"]["n_feasible"], cell
+            assert _counts(rotated) == CASES[f"{case}_rotated"]["values"]["n_feasible"], cell
+        assert len(rows) == len(mapping) + (header.startswith("| reading")), header  # + the paper's row
+    rows = _table_rows("| setting | `paper`")
+    for cell, case in INERTIA_ROWS.items():
+        for inertia, text in zip(("paper", "newton"), rows[cell]):
+            zero, rotated = text.split("/")
+            assert _counts(zero) == CASES[f"{case}_{inertia}_zero"]["values"]["n_feasible"], (cell, inertia)
+            assert _counts(rotated) == CASES[f"{case}_{inertia}_rotated"]["values"]["n_feasible"], (cell, inertia)
+    for inertia, text in zip(("paper", "newton"), rows["lines vs grid agreement (%), forces only"]):
+        for part, orientation in zip(text.split(";"), ("zero", "rotated")):
+            shown = [float(n) for n in re.findall(r"\d+(?:\.\d+)?", part.split("rad")[-1])]
+            pinned = CASES[f"lines_translational_{inertia}_{orientation}"]["values"]["agreement_pct"]
+            assert shown == [round(value, 2) for value in pinned], (inertia, orientation)
+
+
+def test_the_inertia_readings_differ_only_where_the_acceleration_set_is_asymmetric():
+    """Eq. (31) as printed flips a against Newton's law with z up; the default box is symmetric
+    (t_acc = t_dec), so at zero orientation both readings give the same counts, and a braking
+    time of its own or the colon set tells them apart (docs/model.md section 4)."""
+    for pinv in ("full", "translational"):
+        assert values(f"{pinv}_newton_zero") == values(f"{pinv}_default_zero"), pinv
+    for case in ("braking_full", "braking_translational", "colon_translational"):
+        assert values(f"{case}_paper_zero") != values(f"{case}_newton_zero"), case
