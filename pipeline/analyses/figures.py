@@ -15,9 +15,9 @@ from pathlib import Path
 from typing import Any, Callable, Optional
 
 import matplotlib
+import matplotlib.style
 import numpy as np
 import pandas as pd
-import seaborn as sns
 from matplotlib.figure import Figure
 
 from pipeline.workspace.criteria import COLOURS, FEASIBLE_COLOUR
@@ -284,6 +284,8 @@ def survival_bar(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, o
 
 def curve(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
     """Volume (or share) versus a swept parameter, one line per ``hue`` value (Figs. 13-15)."""
+    import seaborn as sns  # with scipy.stats, 0.7 s of a study's start: only where a figure needs it
+
     data = pd.DataFrame({"x": _column(table, spec.x), "y": _column(table, spec.y)})
     fig = Figure()
     ax = fig.subplots()
@@ -336,6 +338,8 @@ def _field(text) -> str:
 
 def heatmap(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
     """``value`` over two swept keys ``x`` and ``y``, one panel per ``facet`` value (Figs. 16-29)."""
+    import seaborn as sns  # as in curve
+
     facets = sorted(table[spec.facet].unique()) if spec.facet else [None]
     fig = Figure(figsize=(2.6 * len(facets) + 0.8, 3.1), layout="constrained")  # no title overlap
     axes = fig.subplots(1, len(facets), squeeze=False, sharey=True)
