@@ -32,6 +32,7 @@ from pathlib import Path
 from typing import Callable, Optional
 
 import pandas as pd
+import yaml
 from omegaconf import DictConfig, OmegaConf
 
 from pipeline.model.catalogue import load_catalogue
@@ -345,22 +346,21 @@ def _check_jobs(jobs_dir: Path, jobs) -> None:
 
 
 NEEDS_POINTS = {"cloud", "map", "survival"}  # figure kinds and analyses that read jobs/*/points.parquet
-MAX_JOBS_LISTED = 24  # metrics per job up to this many jobs, else their range
 
 
 def metrics(summary: pd.DataFrame, tables: dict[str, pd.DataFrame]) -> dict:
-    """A study's headline numbers (``metrics.json``, read by ``dvc metrics``): the feasible
-    share and volume per job (their min, median and max for a large sweep), the actuators
-    the choice accepts, the accepted (actuator, value) pairs of a design study."""
+    """A study's headline numbers (``metrics.json``, read by ``dvc metrics``), a few keys shared
+    by every study so that ``dvc metrics show`` stays one narrow table: the jobs, the feasible
+    share and volume over them (min, median, max), and where the study has them, the actuators
+    its choice accepts (and how many), the accepted (actuator, value) pairs of a design study, the
+    actuators for which a drive synthesis found a drive (the exact search's where it has one),
+    and the published facts the default reading matches. Each job's numbers are in
+    summary.parquet and the report."""
     found: dict = {"jobs": len(summary)}
     for column in ("feasible_pct", "volume_m3"):
-        values = [None if pd.isna(v) else round(float(v), 6) for v in summary[column]]
-        if len(summary) <= MAX_JOBS_LISTED:
-            found[column] = dict(zip(summary["job"].astype(str), values))
-        else:
-            found[column] = {"min": round(float(summary[column].min()), 6),
-                             "median": round(float(summary[column].median()), 6),
-                             "max": round(float(summary[column].max()), 6)}
+        values = summary[column].dropna()
+        found[column] = {stat: round(float(getattr(values, stat)()), 6) if len(values) else None
+                         for stat in ("min", "median", "max")}
     if "choice" in tables:
         choice = tables["choice"]
         accepted = choice.loc[choice["accepted"], "actuator"].tolist()
@@ -368,22 +368,12 @@ def metrics(summary: pd.DataFrame, tables: dict[str, pd.DataFrame]) -> dict:
         found["n_accepted"] = len(accepted)
     if "acceptance" in tables:
         found["n_accepted_pairs"] = int(tables["acceptance"]["accepted"].sum())
-    if "best_drive" in tables:
-        found["best_drive"] = {str(row.actuator): ({"winch_radius_m": row.winch_radius_m, "gear_ratio": row.gear_ratio,
-                                                    "motor_torque_demand_Nm": round(row.motor_torque_demand_Nm, 6)}
-                                                   if row.found else "none")
-                               for row in tables["best_drive"].itertuples()}
-    if "exact_drive" in tables:
-        found["exact_drive"] = {str(row["actuator"]): {
-            **({key: round(float(row[key]), 6) for key in ("winch_radius_m", "gear_ratio", row["objective_name"])}
-               if row["found"] else {"found": "none"}),
-            "evaluated": int(row["evaluated"]), "candidates": int(row["candidates"]),
-            **({"agrees_with_optimiser": bool(row["agree"])} if "agree" in row else {})}
-            for row in tables["exact_drive"].to_dict("records")}
+    drives = tables.get("exact_drive", tables.get("best_drive"))
+    if drives is not None:
+        found["drives_found"] = int(drives["found"].sum())
     if "evidence" in tables:
-        found["evidence"] = {row.reading: {"matched": int(row.matched), "facts": int(row.facts),
-                                           "points": round(float(row.points), 6)}
-                             for row in scores(tables["evidence"]).itertuples()}
+        default = scores(tables["evidence"]).set_index("reading").loc["default"]
+        found["facts_matched"], found["facts"] = int(default["matched"]), int(default["facts"])
     return found
 
 
@@ -559,6 +549,53 @@ def catalogue_of(overrides: list[str]):
     return load_catalogue(paths[-1] if paths and paths[-1] not in ("null", "") else None)
 
 
+def params_overrides(path: Path) -> list[str]:
+    """The overrides a parameters file holds (``--params``; the DVC stages pass ``params.yaml``,
+    which ``dvc exp run -S`` edits instead of conf/): each leaf of its nested mappings as
+    ``dotted.key=value`` in Hydra's grammar, in the file's order; an empty file or ``{}``: none.
+    A file that is not a mapping of names to plain values is refused in one line."""
+    try:
+        data = yaml.safe_load(Path(path).read_text())
+    except OSError as exc:
+        raise ConfigError(f"--params {path}: {exc.strerror or exc}") from None
+    except yaml.YAMLError as exc:
+        raise ConfigError(f"--params {path}: not YAML ({one_line(exc)})") from None
+    if data is None:
+        return []
+    if not isinstance(data, dict):
+        raise ConfigError(f"--params {path}: needs a mapping of keys to values (found {type(data).__name__})")
+    found: list[str] = []
+
+    def walk(node: dict, prefix: str) -> None:
+        for key, value in node.items():
+            if not isinstance(key, str) or not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", key):
+                raise ConfigError(f"--params {path}: {prefix}{key}: not a key name")
+            if isinstance(value, dict) and value:
+                walk(value, f"{prefix}{key}.")
+            else:
+                found.append(f"{prefix}{key}={_grammar(value, f'{prefix}{key}', path)}")
+
+    walk(data, "")
+    return found
+
+
+def _grammar(value, key: str, path: Path) -> str:
+    """``value`` (a YAML scalar, list or mapping) in Hydra's override grammar."""
+    if value is None:
+        return "null"
+    if isinstance(value, bool):
+        return str(value).lower()
+    if isinstance(value, (int, float)):
+        return repr(value)
+    if isinstance(value, str):
+        return quoted(value)
+    if isinstance(value, list):
+        return "[" + ",".join(_grammar(item, key, path) for item in value) + "]"
+    if isinstance(value, dict):
+        return "{" + ",".join(f"{name}:{_grammar(item, key, path)}" for name, item in value.items()) + "}"
+    raise ConfigError(f"--params {path}: {key}={value}: not a number, string, list or mapping")
+
+
 def _log_to_console() -> None:
     logging.basicConfig(level=logging.INFO, format="[%(name)s] %(message)s", force=True)
 
@@ -580,6 +617,9 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--out", type=Path, default=None,
                         help="output root (default outputs/studies, where extra overrides give "
                              "the study its own folder NAME+<overrides>)")
+    parser.add_argument("--params", type=Path, default=None, metavar="FILE",
+                        help="a YAML file of keys and values added to every study's overrides (the DVC "
+                             "stages pass params.yaml, which `dvc exp run -S` edits instead of conf/)")
     parser.add_argument("--force", action="store_true",
                         help="replace a study folder that holds another configuration's results")
     parser.add_argument("--launcher", choices=sorted(LAUNCHERS), default="pool",
@@ -592,6 +632,7 @@ def main(argv: list[str] | None = None) -> None:
     names = [i for i in args.items if "=" not in i]
     extra = [i for i in args.items if "=" in i]
     try:
+        extra = [*(params_overrides(args.params) if args.params else []), *extra]
         if args.list:
             for name in available(studies_folder(args.config_dir)):
                 print(f"{name}: {load_study(name, config_dir=args.config_dir).title}")

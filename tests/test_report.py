@@ -189,7 +189,7 @@ def test_dvc_yaml_has_one_stage_per_study_and_a_report_on_all_of_them():
     dvc = yaml.safe_load((REPO / "dvc.yaml").read_text())
     stages = dvc["stages"]
     assert stages["study"]["foreach"] == available()
-    assert stages["study"]["do"]["cmd"] == "python -m pipeline.study ${item}"
+    assert stages["study"]["do"]["cmd"] == "python -m pipeline.study ${item} --params params.yaml --out outputs/studies"
     assert {f"outputs/studies/{n}" for n in available()} <= set(stages["report"]["deps"])
     for dep in stages["study"]["do"]["deps"]:
         assert (REPO / dep.replace("${item}", available()[0])).exists()

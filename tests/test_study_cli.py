@@ -293,3 +293,40 @@ def test_a_figure_expression_pandas_refuses_stops_the_study_before_its_jobs(tmp_
         "title: t\nsource: s\nsweep: {load.mass: '1,2'}\n"
         "figures:\n  - {kind: curve, file: f.png, x: load.mass, y: 'volume_m3 / `load.mass` ** 2'}\n")
     assert load_study("fine", tmp_path).figures[0].y == "volume_m3 / `load.mass` ** 2"
+
+
+def test_a_params_file_gives_overrides_in_hydras_grammar(tmp_path):
+    """--params (the DVC stages' params.yaml): every leaf of its mappings is one override that
+    Hydra's parser reads back as the same value, strings quoted, lists and nulls kept."""
+    from pipeline.app.plan import parse
+    from pipeline.study import params_overrides
+
+    path = tmp_path / "params.yaml"
+    path.write_text("robot:\n  platform: {mass: 0.5, com: [0, 0, -0.1]}\nchoice: {required_pct: 80}\n"
+                    "catalogue: \"my cat's, list.csv\"\ntension: {t_max: null}\noutput: {cables: true}\n")
+    overrides = params_overrides(path)
+    assert overrides == ["robot.platform.mass=0.5", "robot.platform.com=[0,0,-0.1]", "choice.required_pct=80",
+                         "catalogue='my cat\\'s, list.csv'", "tension.t_max=null", "output.cables=true"]
+    values = {o.key_or_group: o.value() for o in parse(overrides)}
+    assert values == {"robot.platform.mass": 0.5, "robot.platform.com": [0, 0, -0.1], "choice.required_pct": 80,
+                      "catalogue": "my cat's, list.csv", "tension.t_max": None, "output.cables": True}
+    for text in ("", "{}\n", "# nothing\n"):
+        path.write_text(text)
+        assert params_overrides(path) == []
+
+
+@pytest.mark.parametrize("text, message", [
+    ("[1, 2]\n", "needs a mapping of keys to values (found list)"),
+    ("load: {mass: [1\n", "not YAML"),
+    ("load: {1: 2}\n", "load.1: not a key name"),
+    ("when: 2026-11-26\n", "when=2026-11-26: not a number, string, list or mapping"),
+])
+def test_a_bad_params_file_is_one_line_and_nothing_runs(tmp_path, text, message):
+    (tmp_path / "params.yaml").write_text(text)
+    proc = study(tmp_path, "design_mass", "--params", "params.yaml")
+    assert proc.returncode == 2
+    (line,) = proc.stderr.strip().splitlines()
+    assert line.startswith("error: --params params.yaml: ") and message in line, line
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["params.yaml"]
+    missing = study(tmp_path, "design_mass", "--params", "nosuch.yaml")
+    assert missing.returncode == 2 and missing.stderr.strip() == "error: --params nosuch.yaml: No such file or directory"

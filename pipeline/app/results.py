@@ -9,7 +9,6 @@ import hashlib
 import json
 import os
 import secrets
-import subprocess
 from contextlib import contextmanager
 from functools import lru_cache
 from importlib import metadata
@@ -30,27 +29,24 @@ CONTENT_KEY = "cdpr.content"  # in a table written whole: sha256 of its rows (co
 
 @lru_cache(maxsize=1)
 def code_version() -> str:
-    """Package version, plus the git commit (and '.dirty') when run from a checkout of this
-    repository (not when installed in a virtual environment inside another one)."""
+    """Package version plus the first 12 hex digits of a sha256 over the package's own files
+    (code, configs, studies, Table 1, the plot style; their paths and contents), so the version
+    names what computes, whatever the git history: committing results, tests or docs leaves
+    finished jobs reusable and their files byte-identical, and any edit of the code, a checkout or
+    an install, makes them stale."""
     try:
         version = metadata.version("cdpr-studies")
     except metadata.PackageNotFoundError:
         version = "0+unknown"
-    here = Path(__file__).resolve().parents[1]  # pipeline/, above app/
-    try:
-        top, sha = subprocess.run(
-            ["git", "rev-parse", "--show-toplevel", "--short=12", "HEAD"], cwd=here,
-            capture_output=True, text=True, check=True,
-        ).stdout.split()
-        if Path(top).resolve() != here.parent:  # installed inside another repository's tree
-            return version
-        dirty = subprocess.run(
-            ["git", "status", "--porcelain", "--untracked-files=no", "--", "pipeline", "conf"],
-            cwd=here.parent, capture_output=True, text=True, check=True,
-        ).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return version
-    return f"{version}+g{sha}{'.dirty' if dirty else ''}"
+    package = Path(__file__).resolve().parents[1]  # pipeline/, above app/
+    digest = hashlib.sha256()
+    files = []
+    for folder, subfolders, names in os.walk(package, followlinks=True):  # conf/ and studies/ are links in a checkout
+        subfolders[:] = sorted(s for s in subfolders if s != "__pycache__")  # bytecode, numba's cache
+        files += [Path(folder, name) for name in names]
+    for path in sorted(files, key=lambda p: p.relative_to(package).as_posix()):
+        digest.update(path.relative_to(package).as_posix().encode() + b"\0" + path.read_bytes() + b"\0")
+    return f"{version}+{digest.hexdigest()[:12]}"
 
 
 def write_parquet(frame: pa.Table | pd.DataFrame, path: Path, config_yaml: str,
