@@ -23,8 +23,11 @@ the joint's axes; never the display range (a plot extent). The box used is print
 The joint gives the platform's freedoms (``robot.dofs``): ``SPATIAL_EULER_XYZ`` and
 ``SPATIAL_QUATERNION`` all six, ``T_XYZ`` x, y, z, ``PLANAR_XY`` x, y, rz (and ``PLANAR_XZ``,
 ``PLANAR_YZ``), ``P_XY`` and ``P_XZ`` a point in a plane; a planar joint's box is its plane
-through the joint's origin. Refused, in one line and exit status 2, with the reason: a joint whose
-workspace is a set of orientations or one axis (spherical, revolute, universal, prismatic), a
+through the joint's origin. A joint that holds the platform's reference point (``S_EULER_XYZ``,
+``S_FIXED_XYZ``: rx, ry, rz; ``R_X``, ``R_Y``, ``R_Z``: one of them) makes the grid one of
+orientations at the origin: the box is the joint's angle limits (else CASPR's own, [-pi, pi]),
+in rad, with ``S_EULER_XYZ``'s angles in the xyz convention. Refused, in one line and exit status
+2, with the reason: a quaternion, universal, prismatic or free-axis joint, a
 multi-link (MCDM) model, a cable that is not ``<cable_ideal>`` (springs, variable stiffness), a
 cable routed through more than two points or a pulley (``<attachment_base_pulley>``), two
 cables of one name (both named), and a file that is not such XML. CASPR's ``SPATIAL_EULER_XYZ`` orientation is R = Rx Ry Rz of its
@@ -59,23 +62,26 @@ SHIPPED_ROBOTS = tuple(sorted(p.stem for p in (CONF_DIR / "robot").glob("*.yaml"
 
 # CASPR's joint types (src/Model/Bodies/Joints/) that move a platform through positions: its
 # freedoms (robot.dofs) and which of x, y, z the first values of q_min/q_max are (the others 0)
-JOINTS = {
-    "SPATIAL_EULER_XYZ": (["x", "y", "z", "rx", "ry", "rz"], "xyz"),
-    "SPATIAL_QUATERNION": (["x", "y", "z", "rx", "ry", "rz"], "xyz"),
-    "T_XYZ": (["x", "y", "z"], "xyz"),  # a platform that only translates
-    "PLANAR_XY": (["x", "y", "rz"], "xy"), "PLANAR_XZ": (["x", "z", "ry"], "xz"),
-    "PLANAR_YZ": (["y", "z", "rx"], "yz"),
-    "P_XY": (["x", "y"], "xy"), "P_XZ": (["x", "z"], "xz"),  # a point in a plane
+JOINTS = {  # type -> (freedoms, the grid axes its q values fill, the angle convention of its rotation)
+    "SPATIAL_EULER_XYZ": (["x", "y", "z", "rx", "ry", "rz"], "xyz", "xyz"),
+    "SPATIAL_QUATERNION": (["x", "y", "z", "rx", "ry", "rz"], "xyz", "zyx"),
+    "T_XYZ": (["x", "y", "z"], "xyz", "zyx"),  # a platform that only translates
+    "PLANAR_XY": (["x", "y", "rz"], "xy", "zyx"), "PLANAR_XZ": (["x", "z", "ry"], "xz", "zyx"),
+    "PLANAR_YZ": (["y", "z", "rx"], "yz", "zyx"),
+    "P_XY": (["x", "y"], "xy", "zyx"), "P_XZ": (["x", "z"], "xz", "zyx"),  # a point in a plane
+    # the joint holds the reference point: the grid is of angles (psi, theta, phi fill x, y, z)
+    "S_EULER_XYZ": (["rx", "ry", "rz"], "xyz", "xyz"),  # R = Rx(a) Ry(b) Rz(c)
+    "S_FIXED_XYZ": (["rx", "ry", "rz"], "xyz", "zyx"),  # R = Rz(c) Ry(b) Rx(a): eq. (9)'s
+    "R_X": (["rx"], "x", "zyx"), "R_Y": (["ry"], "y", "zyx"), "R_Z": (["rz"], "z", "zyx"),
 }
-# joints whose workspace is a set of orientations, or one axis: not a grid of positions
+# joints this version cannot model, and what they move
 ORIENTING = {
-    "S_EULER_XYZ": "rx, ry, rz (a spherical joint)", "S_FIXED_XYZ": "rx, ry, rz (a spherical joint)",
-    "S_QUATERNION": "rx, ry, rz (a spherical joint)",
-    "R_X": "rx (a revolute joint)", "R_Y": "ry (a revolute joint)", "R_Z": "rz (a revolute joint)",
-    "R_AXIS": "one rotation (a revolute joint)", "U_XY": "rx, ry (a universal joint)",
+    "S_QUATERNION": "rx, ry, rz by a quaternion (four coordinates; S_EULER_XYZ or S_FIXED_XYZ give angles)",
+    "R_AXIS": "one rotation about its own axis (a revolute joint)", "U_XY": "rx, ry (a universal joint)",
     "U_XZ": "rx, rz (a universal joint)", "U_YZ": "ry, rz (a universal joint)",
     "P_X": "x (a prismatic joint)", "P_AXIS": "one translation (a prismatic joint)",
 }
+DEFAULT_ANGLE_LIMIT = np.pi  # CASPR's own q_lb/q_ub of its angle joints, without q_min/q_max
 
 
 def read_cables(path: Path, cable_set: str | None = None) -> dict:
@@ -153,9 +159,8 @@ def read_body(path: Path) -> dict:
     if kind not in JOINTS:
         freedoms = ORIENTING.get(kind)
         what = f"joint {kind or '(none)'}" + (f" moves the platform in {freedoms}" if freedoms else ", not a CASPR joint type")
-        raise ConfigError(f"{where}: {what}; imported are platforms that move through positions: "
-                          f"{', '.join(JOINTS)}")
-    dofs, axes = JOINTS[kind]
+        raise ConfigError(f"{where}: {what}; imported are the joints {', '.join(JOINTS)}")
+    dofs, axes, convention = JOINTS[kind]
     mass = _number(link, "physical/mass", where)
     if not 0 <= mass <= MAX_MASS:
         raise ConfigError(f"{where}: mass {mass:g} must be in [0, {MAX_MASS:g}] kg")
@@ -171,6 +176,7 @@ def read_body(path: Path) -> dict:
                 corner["xyz".index(axis)] = value
     origin = link.find("parent/location")
     return {"name": link.get("name") or "", "joint": kind, "dofs": dofs, "mass": mass, "box": box,
+            "convention": convention, "angles": all(d.startswith("r") for d in dofs),
             "com": _vector(link, "physical/com_location", where),
             "origin": np.zeros(3) if origin is None else np.asarray(_vector(link, "parent/location", where))}
 
@@ -182,6 +188,9 @@ def search_box(cables: dict, body: dict | None, box=None) -> tuple[np.ndarray, n
         return np.asarray(box[0], float), np.asarray(box[1], float), "--lo/--hi"
     if body is not None and body["box"] is not None:
         return body["box"][0], body["box"][1], "the joint's q_min/q_max"
+    if body is not None and body["angles"]:  # the grid is of angles: CASPR's own limits
+        turning = np.array([axis in JOINTS[body["joint"]][1] for axis in "xyz"])
+        return -DEFAULT_ANGLE_LIMIT * turning, DEFAULT_ANGLE_LIMIT * turning, "CASPR's joint limits [-pi, pi]"
     anchors = np.asarray(cables["anchors"]) - (0.0 if body is None else body["origin"])
     lo, hi = anchors.min(axis=0), anchors.max(axis=0)
     moving = np.array([axis in (JOINTS[body["joint"]][1] if body else "xyz") for axis in "xyz"])
@@ -209,7 +218,7 @@ def robot_yaml(cables: dict, body: dict | None, step: float, sources: tuple[str,
         f"# Imported from CASPR: {_one_line(sources[0])} (cable set {_one_line(str(cables['set']))!r}){bodies}.",
         "# Anchors: link 0, relative to the joint's origin; attachments: link 1 (platform frame, joint origin).",
     ]
-    xyz = body is not None and body["joint"] == "SPATIAL_EULER_XYZ"
+    xyz = body is not None and body["convention"] == "xyz"
     if xyz:
         lines.append("# Orientation: CASPR's angles (a, b, c), R = Rx(a) Ry(b) Rz(c): orientation.convention=xyz "
                      "(psi, theta, phi = a, b, c).")
@@ -355,10 +364,13 @@ def main(argv: list[str] | None = None) -> None:
     lo, hi, origin = box
     mass = (f"platform {body['mass']:g} kg (bodies file)" if body is not None else
             "platform 0 kg (no --bodies: give the model's bodies file for its mass)")
-    extent = ", ".join(f"{axis} [{a:g}, {b:g}]" for axis, a, b in zip("xyz", lo, hi))
-    print(f"wrote {out}: {len(cables['names'])} cables, {mass}; search box {extent} m from {origin}, "
-          f"step {args.step:g} m")
-    if body is not None and body["joint"] == "SPATIAL_EULER_XYZ":
+    angles = body is not None and body["angles"]
+    extent = ", ".join(f"{axis} [{a:g}, {b:g}]" for axis, a, b in zip(("psi", "theta", "phi") if angles else "xyz", lo, hi))
+    unit = "rad" if angles else "m"
+    print(f"wrote {out}: {len(cables['names'])} cables, {mass}; search box {extent} {unit} from {origin}, "
+          f"step {args.step:g} {unit}" + ("; the joint holds the platform at the origin, the grid is of its "
+                                          "orientations" if angles else ""))
+    if body is not None and body["convention"] == "xyz":
         print("orientation: the file sets orientation.convention=xyz, CASPR's XYZ Euler angles "
               "(orientation.psi, theta, phi are its a, b, c)")
     print(f"run: python -m pipeline --config-dir {out.parent.parent} robot={out.stem}")

@@ -145,10 +145,11 @@ def _write(tmp_path, cables=CABLES, bodies=BODIES):
 JOINT = 'type="SPATIAL_EULER_XYZ"'
 LIMITS = ' q_min="-2.5 -1.5 0.2 -3.1416 -3.1416 -3.1416" q_max="2.5 1.5 2.8 3.1416 3.1416 3.1416"'
 BAD_BODIES = {
-    "spherical": (BODIES.replace(JOINT, 'type="S_EULER_XYZ"'),
-                  "joint S_EULER_XYZ moves the platform in rx, ry, rz (a spherical joint); imported are platforms "
-                  "that move through positions: SPATIAL_EULER_XYZ, SPATIAL_QUATERNION, T_XYZ, PLANAR_XY"),
-    "revolute": (BODIES.replace(JOINT, 'type="R_Z"'), "joint R_Z moves the platform in rz (a revolute joint)"),
+    "quaternion": (BODIES.replace(JOINT, 'type="S_QUATERNION"'),
+                   "joint S_QUATERNION moves the platform in rx, ry, rz by a quaternion (four coordinates; "
+                   "S_EULER_XYZ or S_FIXED_XYZ give angles); imported are the joints SPATIAL_EULER_XYZ, "
+                   "SPATIAL_QUATERNION, T_XYZ, PLANAR_XY"),
+    "universal": (BODIES.replace(JOINT, 'type="U_XY"'), "joint U_XY moves the platform in rx, ry (a universal joint)"),
     "unknown_joint": (BODIES.replace(JOINT, 'type="HINGE"'), "joint HINGE, not a CASPR joint type"),
     "two_links": (BODIES.replace("    </links>", '      <link_rigid num="2" name="arm">\n      </link_rigid>\n'
                                                   "    </links>"), "2 <link_rigid> links: only single-body models"),
@@ -284,3 +285,34 @@ def test_names_from_the_files_cannot_become_yaml_keys(tmp_path):
     assert set(yaml.safe_load(text)) == {"defaults", "robot", "tension"}  # no bodies file: no orientation convention
     assert yaml.safe_load(text)["robot"]["cable_names"][0] == "one?hydra: 1"
     assert text.splitlines()[1].startswith("# Imported from CASPR: x?hydra:?  callbacks:")
+
+
+@pytest.mark.parametrize("joint, convention", [("S_EULER_XYZ", "xyz"), ("S_FIXED_XYZ", "zyx")])
+def test_a_spherical_joint_imports_as_an_orientation_grid_that_runs(tmp_path, joint, convention):
+    """The joint holds the platform at its origin: the freedoms are rx, ry, rz, the box is the
+    joint's angle limits (rad), CASPR's Euler angles keep their convention; the run checks one
+    orientation per row, at the origin, and agrees with the same robot typed by hand."""
+    bodies = BODIES.replace(JOINT, f'type="{joint}"').replace(LIMITS, ' q_min="-0.4 -0.3 -0.2" q_max="0.4 0.3 0.2"')
+    done = _write(tmp_path, bodies=bodies)
+    assert done.returncode == 0, done.stderr
+    assert "psi [-0.4, 0.4], theta [-0.3, 0.3], phi [-0.2, 0.2] rad" in done.stdout
+    data = yaml.safe_load((tmp_path / "mine" / "robot" / "x.yaml").read_text())
+    assert data["robot"]["dofs"] == ["rx", "ry", "rz"]
+    assert data["robot"]["search"]["lo"] == [-0.4, -0.3, -0.2] and data["robot"]["search"]["hi"] == [0.4, 0.3, 0.2]
+    assert data.get("orientation", {}).get("convention", "zyx") == convention
+    run_ = run(tmp_path, "pipeline", "--config-dir", "mine", "robot=x", "robot.search.step=0.1", "tension.t_max=1000",
+               "hydra.run.dir=out")
+    assert run_.returncode == 0, run_.stderr
+    points = pd.read_parquet(tmp_path / "out" / "points.parquet")
+    assert (points[["x", "y", "z"]] == 0).all().all() and points["psi"].nunique() == 8
+    robot = data["robot"]
+    typed = run(tmp_path, "pipeline", "robot=points", f"robot.anchors={robot['anchors']}",
+                f"robot.attachments={robot['attachments']}", "robot.dofs=[rx,ry,rz]",
+                f"robot.platform.mass={robot['platform']['mass']}", f"robot.platform.com={robot['platform']['com']}",
+                f"robot.search.lo={robot['search']['lo']}", f"robot.search.hi={robot['search']['hi']}",
+                "robot.search.step=0.1", f"robot.search.spacing={robot['search']['spacing']}", "robot.cable_names=null",
+                f"tension.t_min={data['tension']['t_min']}", "tension.t_max=1000",
+                f"orientation.convention={convention}", "hydra.run.dir=typed")
+    assert typed.returncode == 0, typed.stderr
+    by_hand = pd.read_parquet(tmp_path / "typed" / "points.parquet")
+    assert by_hand["feasible"].tolist() == points["feasible"].tolist() and 0 < points["feasible"].mean() <= 1

@@ -255,3 +255,23 @@ def test_a_job_with_no_feasible_pose_says_what_to_try_next(tmp_path, overrides, 
     assert done.returncode == 0, done.stderr
     (line,) = [line for line in (done.stdout + done.stderr).splitlines() if "no pose is feasible" in line]
     assert f"are lost to {limit} first; to try next: {remedy}" in line
+
+
+# A spherical platform (freedoms rx, ry, rz) whose every cable points at its centre: no cable has a
+# moment arm, so its structure matrix is zero (rank 0) at the centre.
+RADIAL = ["robot=points", "analysis=statics", "tension=feasible", "robot.dofs=[rx,ry,rz]", "robot.cable_names=null",
+          "robot.anchors=[[1,0,0],[-1,0,0],[0,1,0],[0,-1,0],[0,0,1],[0,0,-1],[1,1,1]]",
+          "robot.attachments=[[0.1,0,0],[-0.1,0,0],[0,0.1,0],[0,-0.1,0],[0,0,0.1],[0,0,-0.1],[0.05,0.05,0.05]]",
+          "robot.search.lo=[0,0,0]", "robot.search.hi=[0,0,0]", "robot.search.step=0.1"]
+
+
+@pytest.mark.parametrize("moment, feasible", [(0.0, True), (1.0, False)])
+def test_a_structure_matrix_of_rank_zero_holds_no_wrench_and_the_zero_wrench(make_cfg, catalogue, moment, feasible):
+    """Rank 0 (the feasible model's search had a traceback here: a binomial of q - 1 = -1): the
+    zero wrench is held by slack cables, a moment about z is unreachable."""
+    points, summary = compute_workspace(make_cfg(*RADIAL, f"wrench.mz={moment}"), catalogue)
+    assert summary["n_points"] == 1 and bool(points["feasible"].iloc[0]) is feasible
+    residual = 1.0 if moment else 0.0  # the share of the wrench missed: all of it, or nothing to miss
+    assert points["margin_unreachable"].iloc[0] == pytest.approx(1.0 - residual / 1e-6)  # tension.residual_rtol
+    if not feasible:
+        assert points["limiting"].iloc[0] == "unreachable"

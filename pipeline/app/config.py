@@ -276,7 +276,8 @@ class PointsConfig:
     none); the search box; ``dofs``, the platform's freedoms among x, y, z, rx, ry, rz (the
     wrench rows the cables balance; a joint or a plane takes the others): all six for a free
     body, [x, y, z] for a point platform in space, [x, y] for a planar point, [x, y, rz] for a
-    body in the x-y plane."""
+    body in the x-y plane, [rx, ry, rz] for a platform on a spherical joint at the origin, whose
+    search box is then of angles (psi, theta, phi in rad, in ``orientation.convention``)."""
 
     name: str = MISSING
     anchors: Any = MISSING

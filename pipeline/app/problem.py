@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import importlib.util
 import itertools
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, replace
 from typing import Callable
 
 import numpy as np
@@ -361,16 +361,22 @@ def build(cfg: DictConfig, catalogue: Catalogue | None) -> WorkspaceProblem:
     robot = ROBOTS[cfg.robot.name].build(cfg.robot)
     spec, limits, criteria = ANALYSES[cfg.analysis].build(cfg, catalogue, robot)
     given = cfg.orientation
+    if robot.fixed_point and (orientation_count(given) > 1 or any(given[a] != 0 for a in ("psi", "theta", "phi"))):
+        freedoms = ", ".join(FREEDOMS[i] for i in robot.dofs)
+        raise ConfigError(f"orientation: robot.dofs=[{freedoms}] holds the platform at the origin and its grid is "
+                          "of orientations (robot.search: psi, theta, phi in rad, in orientation.convention); "
+                          "orientation.psi, theta, phi and total are not read, leave them 0")
     return WorkspaceProblem(robot, orientation_set(given), spec, limits, criteria, cfg.model.margin_atol,
-                            cfg.output.cables, nominal=(float(given.psi), float(given.theta), float(given.phi)))
+                            cfg.output.cables, nominal=(float(given.psi), float(given.theta), float(given.phi)),
+                            angles=name_of(given.convention) if robot.fixed_point else None)
 
 
 def build_grid(cfg: DictConfig, robot: CableRobot) -> Grid:
     """The positions a job checks: the robot kind's grid, or the user's own ``poses`` (no grid
-    cell, no volume)."""
-    if cfg.poses is None:
-        return ROBOTS[cfg.robot.name].grid(cfg, robot)
-    return listed_grid(point_list("poses", cfg.poses))
+    cell, no volume); for a robot whose reference point a joint holds, the orientations (the
+    same boxes and lists, in rad; no volume)."""
+    grid = ROBOTS[cfg.robot.name].grid(cfg, robot) if cfg.poses is None else listed_grid(point_list("poses", cfg.poses))
+    return replace(grid, cell_volume=float("nan")) if robot.fixed_point else grid  # rad^3 is no volume
 
 
 def build_problem(cfg: DictConfig, catalogue: Catalogue | None) -> tuple[WorkspaceProblem, Grid]:

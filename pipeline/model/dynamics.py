@@ -243,17 +243,21 @@ class PoseDynamics(PoseGeometry):
 
 
 def load_wrench_terms(load: Load, sign: float, up: np.ndarray, rotation: np.ndarray):
-    """F of eq. (31) as L a + F_0: L (6, 3) and F_0 (6,). The load (mass m, centre of mass
+    """F of eq. (31) as L a + F_0: L (6, 3) and F_0 (6,) (L (n, 6, 3) and F_0 (n, 6) for a
+    rotation per pose, ``rotation`` (n, 3, 3)). The load (mass m, centre of mass
     R com from the platform's reference point) carries its weight m g (-up) and the inertial
     force ``sign`` m a (``inertia``: ``paper`` +1, ``newton`` -1), both acting at the centre of
     mass, plus ``load.external``. With z up, com = 0 and sign +1 this is the paper's
     F = [m xdd, m ydd, m (zdd - g), 0, 0, 0]; with a = 0 it is the wrench of eq. (7) of the
     IRPM paper that the weight adds to f_ext."""
-    arm = rotation @ np.asarray(load.com, dtype=float)
-    cross = np.array([[0.0, -arm[2], arm[1]], [arm[2], 0.0, -arm[0]], [-arm[1], arm[0], 0.0]])
-    slope = sign * load.mass * np.vstack([np.eye(3), cross])
+    arm = rotation @ np.asarray(load.com, dtype=float)  # (3,), or (n, 3) for one rotation per pose
+    zero = np.zeros(arm.shape[:-1])
+    cross = np.stack([np.stack([zero, -arm[..., 2], arm[..., 1]], axis=-1),
+                      np.stack([arm[..., 2], zero, -arm[..., 0]], axis=-1),
+                      np.stack([-arm[..., 1], arm[..., 0], zero], axis=-1)], axis=-2)
+    slope = sign * load.mass * np.concatenate([np.broadcast_to(np.eye(3), cross.shape), cross], axis=-2)
     weight = -load.mass * load.gravity * np.asarray(up, dtype=float)
-    return slope, np.concatenate([weight, cross @ weight]) + load.external
+    return slope, np.concatenate([np.broadcast_to(weight, arm.shape), cross @ weight], axis=-1) + load.external
 
 
 def load_wrenches(motion: MotionSpec, accelerations: np.ndarray, up: np.ndarray,

@@ -57,6 +57,13 @@ class CableRobot:
         return self.anchors.shape[0]
 
     @property
+    def fixed_point(self) -> bool:
+        """Whether a joint holds the platform's reference point at the frame's origin (no freedom
+        along x, y, z: a spherical, universal or revolute joint), so that its workspace is a set of
+        orientations rather than positions."""
+        return all(freedom >= 3 for freedom in self.dofs)
+
+    @property
     def shortest_cable(self) -> float:
         """A cable shorter than this (m) has collapsed: its attachment point sits on its anchor
         and eq. (1) gives it no direction. ``ZERO_LENGTH_RTOL`` times the robot's extent (at
@@ -91,10 +98,28 @@ def rotation_partials(psi: float, theta: float, phi: float) -> np.ndarray:
     return np.stack([rz @ ry @ _drx(psi), rz @ _dry(theta) @ rx, _drz(phi) @ ry @ rx])
 
 
+def rotation_matrices(angles: np.ndarray, convention: str = "zyx") -> np.ndarray:
+    """(n, 3, 3) one rotation per row of ``angles`` (n, 3) = (psi, theta, phi), rad: eq. (9)'s
+    Rz(phi) Ry(theta) Rx(psi) (``zyx``), or CASPR's Rx(psi) Ry(theta) Rz(phi) (``xyz``)."""
+    angles = np.asarray(angles, dtype=float)
+    c, s = np.cos(angles), np.sin(angles)
+    zero, one = np.zeros(len(angles)), np.ones(len(angles))
+    rx = np.stack([one, zero, zero, zero, c[:, 0], -s[:, 0], zero, s[:, 0], c[:, 0]], axis=1).reshape(-1, 3, 3)
+    ry = np.stack([c[:, 1], zero, s[:, 1], zero, one, zero, -s[:, 1], zero, c[:, 1]], axis=1).reshape(-1, 3, 3)
+    rz = np.stack([c[:, 2], -s[:, 2], zero, s[:, 2], c[:, 2], zero, zero, zero, one], axis=1).reshape(-1, 3, 3)
+    return rz @ ry @ rx if convention == "zyx" else rx @ ry @ rz
+
+
+def attached_points(robot: CableRobot, rotation: np.ndarray) -> np.ndarray:
+    """R b_i: (m, 3) for one rotation (3, 3), (n, m, 3) for one per pose (n, 3, 3)."""
+    return robot.attachments @ np.swapaxes(rotation, -1, -2)
+
+
 def cable_vectors(robot: CableRobot, positions: np.ndarray, rotation: np.ndarray) -> np.ndarray:
-    """(n, m, 3) vectors from each anchor to its attachment point, for n positions (n, 3)."""
-    attached = robot.attachments @ rotation.T
-    return positions[:, None, :] + attached[None, :, :] - robot.anchors[None, :, :]
+    """(n, m, 3) vectors from each anchor to its attachment point, for n positions (n, 3) at one
+    rotation (3, 3) or one per pose (n, 3, 3)."""
+    attached = attached_points(robot, rotation)
+    return positions[:, None, :] + attached - robot.anchors[None, :, :]
 
 
 def structure_matrix(unit: np.ndarray, arms: np.ndarray) -> np.ndarray:
@@ -173,11 +198,14 @@ class PoseGeometry:
     def __init__(self, robot: CableRobot, positions: np.ndarray, orientation):
         self.robot = robot
         self.positions = np.asarray(positions, dtype=float)
-        self.orientation = tuple(float(a) for a in orientation)
+        given = np.asarray(orientation, dtype=float)
+        self.orientation = given if given.ndim == 3 else tuple(float(a) for a in orientation)
 
     @cached_property
     def rotation(self) -> np.ndarray:
-        return rotation_matrix(*self.orientation)
+        """(3, 3) R of eq. (9) at the chunk's one orientation (eq. 9's angles), or (n, 3, 3) one
+        rotation per pose when the state was given them (an orientation grid: a spherical robot)."""
+        return self.orientation if isinstance(self.orientation, np.ndarray) else rotation_matrix(*self.orientation)
 
     @cached_property
     def vectors(self) -> np.ndarray:
@@ -198,7 +226,7 @@ class PoseGeometry:
     @cached_property
     def arms(self) -> np.ndarray:
         """(n, m, 3) R b_i: attachment points from the platform's reference point, fixed axes."""
-        return np.broadcast_to(self.robot.attachments @ self.rotation.T, self.vectors.shape)
+        return np.broadcast_to(attached_points(self.robot, self.rotation), self.vectors.shape)
 
     @cached_property
     def structure_matrix(self) -> np.ndarray:

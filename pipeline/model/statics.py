@@ -146,8 +146,9 @@ class PoseStatics(PoseGeometry):
     def wrench(self) -> np.ndarray:
         """(k,) the wrench the cables balance along the robot's freedoms: the load's weight, its
         moment about the reference point and the load's external wrench (which holds f_ext of
-        eq. 11); a joint or a plane takes the other rows."""
-        return load_wrench_terms(self.spec.load, 0.0, self.robot.up, self.rotation)[1][list(self.robot.dofs)]
+        eq. 11); a joint or a plane takes the other rows. (n, k) for a rotation per pose: the
+        weight's moment turns with the platform."""
+        return load_wrench_terms(self.spec.load, 0.0, self.robot.up, self.rotation)[1][..., list(self.robot.dofs)]
 
     @property
     def structure(self) -> np.ndarray:
@@ -167,10 +168,10 @@ class PoseStatics(PoseGeometry):
     @property
     def required_wrenches(self) -> np.ndarray:
         """(K, k) the wrenches the cables must balance: :attr:`wrench`, plus each wrench of the
-        set (``wrench.set``) when there is one."""
+        set (``wrench.set``) when there is one; (n, K, k) for a rotation per pose."""
         if not self.ranges_over_a_set:
-            return self.wrench[None, :]
-        return self.wrench + self.spec.wrench_set[:, list(self.robot.dofs)]
+            return self.wrench[..., None, :]
+        return self.wrench[..., None, :] + self.spec.wrench_set[:, list(self.robot.dofs)]
 
     @cached_property
     def gram_ratio(self) -> np.ndarray:
@@ -188,7 +189,7 @@ class PoseStatics(PoseGeometry):
         """(n, m) minimum-norm tensions with A s = f_ext (eq. 7), N: s = A^T (A A^T)^-1 f, which
         is A^-1 f for six cables (eq. 10). Singular poses get the least-squares s = A^+ f from an
         SVD, so every value is finite."""
-        return self._minimum_norm(self.wrench[None, :])[:, 0]
+        return self._minimum_norm(self.wrench[..., None, :])[:, 0]
 
     @cached_property
     def tensions_over_set(self) -> np.ndarray:
@@ -196,17 +197,18 @@ class PoseStatics(PoseGeometry):
         return self._minimum_norm(self.required_wrenches)
 
     def _minimum_norm(self, wrenches: np.ndarray) -> np.ndarray:
-        """(n, K, m) s = A^T (A A^T)^-1 w for each of the wrenches (K, k); A^+ w where singular."""
+        """(n, K, m) s = A^T (A A^T)^-1 w for each of the wrenches (K, k), or each pose's own
+        (n, K, k); A^+ w where singular."""
         a = self.structure_matrix
-        out = np.empty((a.shape[0], len(wrenches), a.shape[2]))
+        every = np.broadcast_to(wrenches, (a.shape[0], *wrenches.shape[-2:]))
+        out = np.empty((a.shape[0], wrenches.shape[-2], a.shape[2]))
         ok = ~self.singular
         if ok.any():
-            rhs = np.broadcast_to(wrenches.T, (int(ok.sum()), *wrenches.T.shape))
-            y = np.linalg.solve(self._gram[ok], rhs)  # (n, k, K)
+            y = np.linalg.solve(self._gram[ok], np.swapaxes(every[ok], 1, 2))  # (n, k, K)
             out[ok] = np.einsum("nkm,nkj->njm", a[ok], y)
         if (~ok).any():
             pinv, _ = batched_pinv(a[~ok], self.spec.rank_rtol)
-            out[~ok] = np.einsum("nmk,jk->njm", pinv, wrenches)
+            out[~ok] = np.einsum("nmk,njk->njm", pinv, every[~ok])
         return out
 
     @cached_property
@@ -249,9 +251,10 @@ class PosePayload(PoseStatics):
 
     @cached_property
     def per_kg(self) -> np.ndarray:
-        """(k,) the load wrench of 1 kg of payload at ``payload_com``, along the freedoms."""
+        """(k,) the load wrench of 1 kg of payload at ``payload_com``, along the freedoms; (n, k)
+        for a rotation per pose."""
         unit = Load(1.0, self.spec.load.gravity, np.asarray(self.spec.payload_com, float), np.zeros(6))
-        return load_wrench_terms(unit, 0.0, self.robot.up, self.rotation)[1][list(self.robot.dofs)]
+        return load_wrench_terms(unit, 0.0, self.robot.up, self.rotation)[1][..., list(self.robot.dofs)]
 
     @cached_property
     def max_payload(self) -> np.ndarray:
@@ -266,7 +269,9 @@ class PosePayload(PoseStatics):
             return np.where(collapsed, np.nan, payloads)
         upper = np.inf if t_max is None else t_max
         start = self.tensions
-        slope = np.einsum("nmk,k->nm", self.wrench_pinv[0], self.per_kg)
+        pinv = self.wrench_pinv[0]
+        slope = (np.einsum("nmk,k->nm", pinv, self.per_kg) if self.per_kg.ndim == 1
+                 else np.einsum("nmk,nk->nm", pinv, self.per_kg))
         room = np.where(slope > 0, (upper - start) / np.where(slope > 0, slope, 1.0),
                         np.where(slope < 0, (t_min - start) / np.where(slope < 0, slope, 1.0), np.inf))
         held = ((start >= t_min) & (start <= upper)).all(axis=1) & ~self.singular & ~collapsed

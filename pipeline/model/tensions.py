@@ -133,7 +133,7 @@ def capacity_margins(
     by_lp, shifted = ~unique, np.zeros(n, dtype=bool)
     if not distribution:
         for q in np.unique(rank[by_lp]):
-            if 2 * comb(m, int(q) - 1) > MAX_NORMALS:
+            if q == 0 or 2 * comb(m, int(q) - 1) > MAX_NORMALS:  # q = 0: no wrench at all, the LPs say
                 continue
             poses = np.flatnonzero(by_lp & (rank == q))
             structure_q, wrenches_q = range_coordinates(structure[poses], wrenches[poses], int(q))
@@ -266,8 +266,8 @@ MAX_PAYLOAD_KG = 1e8  # a payload the LPs reach is "unlimited" (inf): the cables
 
 def max_payloads(structure: np.ndarray, wrench: np.ndarray, per_kg: np.ndarray, t_min, t_max) -> np.ndarray:
     """(n,) the largest mu >= 0 (kg) with S t = w + mu d for some t in [t_min, t_max]: the payload
-    of ``analysis=payload`` (``S`` (n, r, m), ``w`` and ``d`` (r,): the platform's load wrench
-    and that of 1 kg of payload). The weight is linear in the mass, so this is one LP per pose;
+    of ``analysis=payload`` (``S`` (n, r, m), ``w`` and ``d`` (r,) or each pose's own (n, r): the
+    platform's load wrench and that of 1 kg of payload). The weight is linear in the mass, so this is one LP per pose;
     inf where no tension bound is met below MAX_PAYLOAD_KG (the rows that carry the weight are
     not the cables': a table), NaN where not even mu = 0 is held (the platform alone). Solved as
     two block-diagonal LPs per group of poses: the least violation of the equality over any mu
@@ -277,9 +277,10 @@ def max_payloads(structure: np.ndarray, wrench: np.ndarray, per_kg: np.ndarray, 
     out = np.full(n, np.nan)
     upper = np.inf if t_max is None else t_max
     unit = float(np.max(upper)) if np.isfinite(upper).all() else max(1.0, float(np.abs(wrench).max()))
+    wrench, per_kg = (np.broadcast_to(a, (n, structure.shape[1])) for a in (wrench, per_kg))
     for start in range(0, n, LP_BLOCKS):
         group = slice(start, min(n, start + LP_BLOCKS))
-        out[group] = _payload_group(structure[group], wrench, per_kg, t_min, upper, unit)
+        out[group] = _payload_group(structure[group], wrench[group], per_kg[group], t_min, upper, unit)
     return out
 
 
@@ -288,10 +289,10 @@ def _payload_group(structure, wrench, per_kg, t_min, t_max, unit) -> np.ndarray:
 
     count, r, m = structure.shape
     bounds_t = np.column_stack([np.broadcast_to(t_min, (m,)), np.broadcast_to(t_max, (m,))]) / unit
-    size = 1.0 + float(np.abs(wrench).max())
+    size = 1.0 + np.abs(wrench).max(axis=1)  # (count,): each pose's own wrench
     # phase 1: the least |S t - mu d - w| over t in its bounds and any mu
     width = m + 1 + 2 * r
-    blocks = np.concatenate([structure * unit, np.broadcast_to(-per_kg[:, None], (count, r, 1)),
+    blocks = np.concatenate([structure * unit, -per_kg[:, :, None],
                              np.broadcast_to(np.eye(r), (count, r, r)), np.broadcast_to(-np.eye(r), (count, r, r))],
                             axis=2)
     bounds = np.empty((count, width, 2))
@@ -299,7 +300,7 @@ def _payload_group(structure, wrench, per_kg, t_min, t_max, unit) -> np.ndarray:
     bounds[:, m + 1:] = (0.0, np.inf)
     cost = np.zeros((count, width))
     cost[:, m + 1:] = 1.0
-    first = linprog(cost.ravel(), A_eq=_block_matrix(blocks, width), b_eq=np.tile(wrench, count),
+    first = linprog(cost.ravel(), A_eq=_block_matrix(blocks, width), b_eq=wrench.ravel(),
                     bounds=bounds.reshape(-1, 2), method="highs")
     if first.status != 0:
         raise RuntimeError(f"payload LP (least violation) failed: {first.message}")
@@ -307,7 +308,7 @@ def _payload_group(structure, wrench, per_kg, t_min, t_max, unit) -> np.ndarray:
     out = np.full(count, np.nan)
     poses = np.flatnonzero(held)
     if len(poses):
-        out[poses] = _largest_mu(structure[poses], wrench, per_kg, bounds_t, unit)
+        out[poses] = _largest_mu(structure[poses], wrench[poses], per_kg[poses], bounds_t, unit)
     out[out < -1e-9] = np.nan  # held only by a negative payload: not the platform alone
     out = np.maximum(out, 0.0)  # keeps NaN
     out[out >= MAX_PAYLOAD_KG * (1 - 1e-12)] = np.inf
@@ -321,18 +322,18 @@ def _largest_mu(structure, wrench, per_kg, bounds_t, unit) -> np.ndarray:
 
     count, r, m = structure.shape
     width = m + 1
-    blocks = np.concatenate([structure * unit, np.broadcast_to(-per_kg[:, None], (count, r, 1))], axis=2)
+    blocks = np.concatenate([structure * unit, -per_kg[:, :, None]], axis=2)
     bounds = np.empty((count, width, 2))
     bounds[:, :m], bounds[:, m] = bounds_t, (-MAX_PAYLOAD_KG, MAX_PAYLOAD_KG)
     cost = np.zeros((count, width))
     cost[:, m] = -1.0
-    done = linprog(cost.ravel(), A_eq=_block_matrix(blocks, width), b_eq=np.tile(wrench, count),
+    done = linprog(cost.ravel(), A_eq=_block_matrix(blocks, width), b_eq=wrench.ravel(),
                    bounds=bounds.reshape(-1, 2), method="highs")
     if done.status == 0:
         return done.x.reshape(count, width)[:, m]
     found = np.full(count, np.nan)
     for pose in range(count):
-        single = linprog(cost[pose], A_eq=blocks[pose], b_eq=wrench, bounds=bounds[pose], method="highs")
+        single = linprog(cost[pose], A_eq=blocks[pose], b_eq=wrench[pose], bounds=bounds[pose], method="highs")
         if single.status == 0:
             found[pose] = single.x[m]
     return found

@@ -94,12 +94,17 @@ def grid_workspace(
 
 def tabulate(problem: WorkspaceProblem, positions: np.ndarray, raw: dict,
              margins: dict[str, np.ndarray], feasible: np.ndarray, limiting: np.ndarray) -> pa.Table:
-    """One chunk's points: position, orientation, verdict, limiting criterion (a dictionary
+    """One chunk's points (its grid rows: positions, or orientations for a robot whose reference
+    point a joint holds, ``WorkspaceProblem.angles``): position, orientation, verdict, limiting criterion (a dictionary
     column: int8 codes into the criteria's names), margins; ``margins``, ``feasible`` and
     ``limiting`` as :func:`pipeline.workspace.verdict.classify` returns them."""
-    columns = {"x": positions[:, 0], "y": positions[:, 1], "z": positions[:, 2]}
-    for name, value in zip(("psi", "theta", "phi"), problem.nominal):
-        columns[name] = np.full(len(positions), value)
+    if problem.angles is None:
+        columns = {"x": positions[:, 0], "y": positions[:, 1], "z": positions[:, 2]}
+        for name, value in zip(("psi", "theta", "phi"), problem.nominal):
+            columns[name] = np.full(len(positions), value)
+    else:  # the rows are orientations (a joint holds the reference point at the origin)
+        columns = {name: np.zeros(len(positions)) for name in "xyz"}
+        columns.update(psi=positions[:, 0], theta=positions[:, 1], phi=positions[:, 2])
     columns["feasible"] = feasible
     columns["limiting"] = categories(limiting, list(problem.criteria))
     for name, margin in margins.items():

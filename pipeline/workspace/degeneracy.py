@@ -41,8 +41,8 @@ class Degeneracy:
             self.missed = max(self.missed, float((1.0 - margins["unreachable"]).max()) * limit)
         if "zero_length" in margins and (margins["zero_length"] < 0).any():
             robot, tol = self.problem.robot, self.problem.robot.shortest_cable
-            for orientation in self.problem.orientations:
-                state = self.problem.spec.state(robot, positions[margins["zero_length"] < 0], orientation)
+            for placed, orientation in self.problem.poses(positions[margins["zero_length"] < 0]):
+                state = self.problem.spec.state(robot, placed, orientation)
                 self.collapsed.update(np.flatnonzero((state.lengths < tol).any(axis=0)).tolist())
         if self.sample is None:
             suspect = np.zeros(len(positions), dtype=bool)
@@ -60,7 +60,7 @@ class Degeneracy:
         """The rank of the structure matrix at ``position`` (nominal orientation; singular values
         at or below ``model.rank_rtol`` of the largest dropped, as the pseudo-inverse drops them)
         and the first direction its SVD drops; None at full rank."""
-        state = self.problem.spec.state(self.problem.robot, position[None, :], self.problem.orientations[0])
+        state = self.problem.spec.state(self.problem.robot, *self.problem.poses(position[None, :])[0])
         rows = [k for k, freedom in enumerate(state.rows) if not (self.point and freedom >= 3)]
         left, sigma, _ = np.linalg.svd(state.structure[0][rows])
         rank = int((sigma > self.problem.spec.rank_rtol * sigma[0]).sum()) if sigma[0] > 0 else 0
@@ -92,9 +92,9 @@ class Degeneracy:
                      ranks, 100 * self.missed, "pinv_residual" if tension.model == "pinv" else "residual_rtol",
                      tension.residual_limit)
         if self.sample is not None:
-            x, y, z = self.sample["position"]
-            log.info("at (x, y, z) = (%g, %g, %g) m the structure matrix has rank %d of %d: the cables cannot "
-                     "produce a %s there (the missing direction: %s)", x, y, z, self.sample["rank"],
+            where = "(psi, theta, phi) = (%g, %g, %g) rad" if self.problem.angles else "(x, y, z) = (%g, %g, %g) m"
+            log.info("at " + where + " the structure matrix has rank %d of %d: the cables cannot produce a %s "
+                     "there (the missing direction: %s)", *self.sample["position"], self.sample["rank"],
                      self.sample["rows"], self.sample["main"], self.sample["words"])
         if self.collapsed:
             names = ", ".join(self.problem.robot.cable_names[i] for i in sorted(self.collapsed))

@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from pipeline.workspace.criteria import REGISTRY
-from pipeline.model.geometry import CableRobot
+from pipeline.model.geometry import CableRobot, rotation_matrices
 from pipeline.workspace.quantities import cable_quantities
 
 @dataclass(frozen=True)
@@ -24,7 +24,10 @@ class WorkspaceProblem:
     ``fused``: evaluate with the compiled kernel of ``pipeline.workspace.fused`` (numpy for the
     poses it leaves unsettled); the job decides (``pipeline.workspace.compute.use_fused``).
     ``nominal``: the orientation as the config gives it, in its convention (``orientation.*``),
-    reported with every pose; ``orientations`` are always eq. (9)'s angles.
+    reported with every pose; ``orientations`` are always eq. (9)'s angles. ``angles``: for a
+    robot whose reference point a joint holds (``CableRobot.fixed_point``), the convention of
+    the grid's rows, which are then orientations (psi, theta, phi) at the frame's origin, one
+    verdict each; None: the rows are positions.
     """
 
     robot: CableRobot
@@ -36,21 +39,31 @@ class WorkspaceProblem:
     cables: bool = False
     fused: bool = False
     nominal: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    angles: str | None = None
 
     @property
     def orientation(self) -> tuple[float, float, float]:
         """The nominal (first) orientation, reported with every pose."""
         return tuple(float(a) for a in self.orientations[0])
 
+    def poses(self, rows: np.ndarray) -> list[tuple[np.ndarray, Any]]:
+        """(positions (n, 3), orientation) for each orientation the grid's ``rows`` are checked
+        at: the rows as positions at each orientation of the set (eq. 9's angles), or, when the
+        rows are orientations (``angles``), the frame's origin with one rotation per row."""
+        if self.angles is None:
+            return [(rows, orientation) for orientation in self.orientations]
+        return [(np.zeros_like(rows), rotation_matrices(rows, self.angles))]
 
-def evaluate_chunk(problem: WorkspaceProblem, positions: np.ndarray) -> dict[str, np.ndarray]:
+
+def evaluate_chunk(problem: WorkspaceProblem, rows: np.ndarray) -> dict[str, np.ndarray]:
     """Margins ``margin_<criterion>`` (n,), the worst over the orientation set (also the
-    largest payload under ``analysis=payload``), for positions (n, 3); with ``problem.cables``
+    largest payload under ``analysis=payload``), for the grid's rows (n, 3): positions, or
+    orientations (:meth:`WorkspaceProblem.poses`); with ``problem.cables``
     also the cable quantities at the nominal orientation; under the feasible tension model
     ``lp_poses`` (n,): poses whose margins came from the LPs; with a wrench set, the vertex that
     limits each pose at its worst orientation (:func:`_limiting_vertex`)."""
     result = {}
-    for number, orientation in enumerate(problem.orientations):
+    for number, (positions, orientation) in enumerate(problem.poses(rows)):
         if problem.fused:
             part = _fused(problem, positions, orientation)
         else:
@@ -93,7 +106,8 @@ def _limiting_vertex(problem: WorkspaceProblem, positions: np.ndarray, orientati
         worst[failing] = np.inf
         for number, wrench in enumerate(problem.spec.wrench_set, start=1):
             alone = replace(problem.spec, wrench_set=wrench[None, :])
-            state = alone.state(problem.robot, positions[failing], orientation)
+            turned = orientation[failing] if np.ndim(orientation) == 3 else orientation  # one rotation per pose
+            state = alone.state(problem.robot, positions[failing], turned)
             own = np.min([REGISTRY[name].function(state, problem.limits) for name in problem.criteria], axis=0)
             lower = own < worst[failing]
             vertex[failing[lower]], worst[failing[lower]] = number, own[lower]
