@@ -37,17 +37,20 @@ def test_velocity_grid_decoupled_from_position_grid(make_cfg, catalogue):
 
 
 def test_chunk_size_bounded_by_memory_budget(make_cfg, catalogue):
-    """grid.n=40 with the velocity grid tied to it tests 41^3 candidates (33 371 kept) per pose;
-    chunks shrink so one chunk's largest array stays within 4e6 floats."""
+    """grid.n=100 with the velocity grid tied to it keeps 101^3 candidates (2 376 of them extremes,
+    which the kernel evaluates) per pose; chunks shrink so one chunk's largest array stays within
+    4e6 floats, counted on the extremes (on every velocity with J-dot, which is not linear in v)."""
     from pipeline.workspace.compute import CHUNK_BUDGET_FLOATS, bounded_chunk_size
     from pipeline.app.problem import build_problem
 
-    dense, _ = build_problem(make_cfg("grid.n=40"), catalogue)
+    dense, _ = build_problem(make_cfg("grid.n=100"), catalogue)
     size = bounded_chunk_size(dense, 20_000)
-    assert size * 8 * len(dense.spec.velocities) <= CHUNK_BUDGET_FLOATS
-    assert size == 4_000_000 // (8 * len(dense.spec.velocities))
+    assert len(dense.spec.velocity_extremes) == 2376 and size * 8 * 2376 <= CHUNK_BUDGET_FLOATS
+    assert size == 4_000_000 // (8 * 2376)
     paper, _ = build_problem(make_cfg(), catalogue)
-    assert bounded_chunk_size(paper, 20_000) == 4_000_000 // (8 * 93)
+    assert bounded_chunk_size(paper, 20_000) == 20_000  # 8 x 12 extremes: far within
+    centripetal, _ = build_problem(make_cfg("grid.n_vel=20", "model.jdot=true"), catalogue)
+    assert bounded_chunk_size(centripetal, 20_000) == 4_000_000 // (8 * len(centripetal.spec.velocities))
 
 
 @pytest.mark.parametrize("n", [2, 5, 6, 9, 12])

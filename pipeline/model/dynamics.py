@@ -35,7 +35,11 @@ class Load:
     external: np.ndarray = field(default_factory=lambda: np.zeros(6))
 
 
-REFERENCE_VELOCITIES = 93  # the velocity set of eq. (23) with the paper's N = 6
+REFERENCE_SET = 12  # the velocities evaluated per pose at the paper's N = 6: the 12 extremes of eq. (23)'s 93
+# A pose's work grows by this share of the paper's for each velocity evaluated beyond REFERENCE_SET
+# (benchmarks/LOG.md, 2026-11-26: 936 extremes at grid.n_vel=60 cost 3.9x the paper's pose under the
+# minimum-norm model, numpy, and 4.5x fused; 1.7x under the feasible model, whose LPs dominate).
+WORK_PER_VELOCITY = {"pinv": 0.0032, "feasible": 0.0007}
 
 
 @dataclass(frozen=True)
@@ -76,13 +80,16 @@ class MotionSpec:
         return PoseDynamics(robot, positions, orientation, self)
 
     def set_size(self) -> int:
-        """Largest per-pose, per-cable set a criterion holds in memory."""
-        return max(len(self.velocities), len(self.accelerations))
+        """Largest per-pose, per-cable set a criterion holds in memory: the velocities it
+        evaluates (their extremes, unless J-dot, which is not linear in v, needs every one) or
+        the accelerations."""
+        held = self.velocities if self.jdot or self.velocity_extremes is None else self.velocity_extremes
+        return max(len(held), len(self.accelerations))
 
     def work(self) -> float:
-        """A pose's work against the cost model's reference, the paper's REFERENCE_VELOCITIES
-        (``grid.n_vel=6``): it grows with the velocity set."""
-        return max(1.0, self.set_size() / REFERENCE_VELOCITIES)
+        """A pose's work against the cost model's reference, the paper's pose (``grid.n_vel=6``):
+        it grows with the velocities evaluated (WORK_PER_VELOCITY)."""
+        return 1.0 + WORK_PER_VELOCITY[self.tension.model] * max(0, self.set_size() - REFERENCE_SET)
 
     def fused_unfit(self) -> str | None:
         """Why the compiled CPR-WWA kernel (``pipeline.workspace.fused``) cannot evaluate this

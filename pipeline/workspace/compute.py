@@ -14,7 +14,7 @@ import numpy as np
 import pyarrow as pa
 from omegaconf import DictConfig, OmegaConf
 
-from pipeline.model.dynamics import REFERENCE_VELOCITIES
+from pipeline.model.dynamics import REFERENCE_SET
 from pipeline.workspace.arrow import categories, numbers
 from pipeline.workspace.degeneracy import Degeneracy
 from pipeline.workspace.grid import Grid
@@ -138,7 +138,11 @@ FUSED_START_S = 0.4
 # Fused chunks are computed several times faster than the parent classifies and writes them, so
 # workers pay only for long fused jobs (benchmarks/LOG.md, 2026-11-24: about 1.5 x 10^6 poses).
 FUSED_WORKERS_FROM_S = 1.5  # the fused kernel's time (cost model) from which workers are used
-POSES_PER_SECOND = {"pinv": 200_000, "feasible": 20_000, "fused": 1_000_000}
+# A paper pose per second on one core, whole process (benchmarks/LOG.md, 2026-11-26): the numpy
+# kernel 82 000 at the zero orientation (rank 5: every pose takes the SVD) and about 190 000 at
+# 0.5 rad, so 150 000 keeps both within 2x (the IRPM's statics run 476 000); the feasible model
+# 23 000; the fused kernel 1 000 000.
+POSES_PER_SECOND = {"pinv": 150_000, "feasible": 20_000, "fused": 1_000_000}
 LONG_JOB_S = 30.0
 # Memory: a job holds the chunks in flight (each array within CHUNK_BUDGET_FLOATS), never the
 # grid (pipeline.workspace.grid), so its peak is about PROCESS_BYTES whatever the grid's size
@@ -213,9 +217,9 @@ def announce_cost(cfg: DictConfig, problem: WorkspaceProblem, n_points: int, wor
     if seconds < LONG_JOB_S and memory < LARGE_JOB_BYTES:
         return
     hint = ""
-    if "n_vel" in cfg.get("grid", {}) and cfg.grid.n_vel is None and problem.spec.set_size() > REFERENCE_VELOCITIES:
-        hint = (f"; grid.n_vel is null, so each pose tests {problem.spec.set_size()} velocities "
-                f"(grid.n_vel=6 tests {REFERENCE_VELOCITIES}, as the paper's grid)")
+    if "n_vel" in cfg.get("grid", {}) and cfg.grid.n_vel is None and problem.spec.set_size() > REFERENCE_SET:
+        hint = (f"; grid.n_vel is null (grid.n's), so each pose tests {problem.spec.set_size()} velocities "
+                f"(grid.n_vel=6 tests {REFERENCE_SET}, as the paper's grid)")
     size = f"{memory / 2**30:.1f} GiB" if memory >= 2**30 else f"{memory / 2**20:.0f} MiB"
     log.warning("this job evaluates %d poses x %d orientations: about %s on %d core%s and %s of memory by "
                 "the cost model%s", n_points, len(problem.orientations), clock_text(seconds), cores,
