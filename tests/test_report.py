@@ -6,15 +6,17 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
+from PIL import Image
 import yaml
 
 import pipeline.report
 from pipeline.analyses.choice import choose
 from pipeline.analyses.results import StudyResults
 from pipeline.analyses.survival import survival
-from pipeline.analyses.views import write_view
+from pipeline.analyses.views import robot_traces, write_view
 from pipeline.app.results import DIGESTS_KEY, digests_json, write_parquet
 from pipeline.workspace.lines import simulate_lines
 from pipeline.study import available
@@ -47,10 +49,12 @@ def built_studies(tmp_path_factory, make_cfg, catalogue):
     save(summary, root / "actuator_choice" / "summary.parquet")
     save(choose(summary), root / "actuator_choice" / "choice.parquet")
     _png(root / "actuator_choice" / "figures" / "fig9.png")
-    _png(root / "actuator_choice" / "figures" / "fig8_workspace_actuator5.png")
-    points, _ = compute_workspace(make_cfg("actuator=5"), catalogue)
-    write_view([(points, "feasible", None)], "actuator 5", False,
-               root / "actuator_choice" / "figures" / "fig8_workspace_actuator5.json")
+    _png(root / "actuator_choice" / "figures" / "fig8_workspace_actuator4.png")
+    points, _ = compute_workspace(make_cfg("actuator=4"), catalogue)  # its feasible set as a surface, the robot
+    robot = build_problem(make_cfg("actuator=4"), catalogue)[0].robot
+    write_view([(points, "feasible", None)], "actuator 4", False,
+               root / "actuator_choice" / "figures" / "fig8_workspace_actuator4.json",
+               robot_traces(robot, np.array([1.6, 1.1, -1.1]), np.eye(3)))
     pulling = pd.DataFrame([compute_workspace(make_cfg("tension=feasible", f"actuator={a}",
                                                        "model.pinv_columns=translational"), catalogue)[1]
                             for a in range(1, 6)])
@@ -154,7 +158,8 @@ def test_html_page_has_the_tables_figures_and_views_and_needs_no_network(studies
     assert "<td>4</td>\n<td>87.04</td>\n<td>85.19</td>" in page.replace(' style="text-align:right"', "")
     assert '<img src="figures/actuator_choice/fig9.png" alt="fig9"' in page
     assert page.count('<figure class="view"') == 1
-    assert '"lost to torque (216)"' in page  # actuator 5: no pose holds, 216 lost to the torque limit
+    assert '"lost to voltage (32)"' in page and '"feasible set (184)"' in page  # actuator 4
+    assert '"cables at (1.6, 1.1, -1.1) m"' in page and '"anchors"' in page
     assert (tmp_path / "report" / "plotly.min.js").stat().st_size > 1_000_000  # shipped, not fetched
     assert not re.findall(r'(?:src|href)="(?:https?:)?//', page)
 
@@ -174,6 +179,15 @@ def test_html_page_opens_in_headless_chromium(studies, tmp_path, monkeypatch):
     assert done.returncode == 0, done.stdout + done.stderr
     assert "(0 broken), 1 of 1 3-D views drawn, 0 errors" in done.stdout
     assert (tmp_path / "shot.png").read_bytes()[:4] == b"\x89PNG"
+    view = subprocess.run([*check, "--screenshot", str(tmp_path / "view.png"), "--view", "1"],
+                          capture_output=True, text=True, timeout=900)
+    assert view.returncode == 0, view.stdout + view.stderr
+    pixels = np.asarray(Image.open(tmp_path / "view.png").convert("RGB"), dtype=int)
+    assert (pixels[-25:] > 245).all()  # the bottom of the view is page: the scene is not cut off
+    red, green, blue = pixels[..., 0], pixels[..., 1], pixels[..., 2]
+    surface = (green > red + 40) & (green > blue + 10)  # the feasible set's surface (#009e73, blended)
+    dark = (red < 70) & (green < 70) & (blue < 70)  # anchors, cables and frame
+    assert surface.sum() > 20_000 and dark.sum() > 300, (surface.sum(), dark.sum())
     (tmp_path / "report" / "figures" / "actuator_choice" / "fig9.png").unlink()
     broken = subprocess.run(check, capture_output=True, text=True, timeout=900)
     assert broken.returncode == 1 and "(1 broken)" in broken.stdout

@@ -23,7 +23,7 @@ from matplotlib.figure import Figure
 from pipeline.workspace.criteria import COLOURS, FEASIBLE_COLOUR
 from pipeline.errors import ConfigError, one_line
 from pipeline.app.results import write_csv
-from pipeline.analyses.views import write_view
+from pipeline.analyses.views import pose_axes, robot_traces, write_view
 from pipeline.analyses.results import StudyResults
 
 STYLE = "pipeline.styles.paper"
@@ -140,17 +140,36 @@ def cloud(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir:
         panels = [(results.points(job["job"]), "feasible",
                    f"{spec.panels_from} = {job[spec.panels_from]}: {job['n_feasible']}/{job['n_points']}")
                   for job in jobs]
-        return [_cloud_figure(spec, panels, jobs[0], out_dir)]
+        return [_cloud_figure(spec, panels, jobs[0], out_dir, results)]
     written = []
     for _, job in table.iterrows():
         points = results.points(job["job"])
         titles = [PANEL_TITLES.get(c, c) if len(spec.panels) > 1 else None for c in spec.panels]
         panels = [(points, column, title) for column, title in zip(spec.panels, titles)]
-        written.append(_cloud_figure(spec, panels, job, out_dir))
+        written.append(_cloud_figure(spec, panels, job, out_dir, results))
     return written
 
 
-def _cloud_figure(spec: FigureSpec, panels: list, job: pd.Series, out_dir: Path) -> Path:
+def _robot_at_a_feasible_pose(results: StudyResults, job: pd.Series, points: pd.DataFrame, column: str) -> list[dict]:
+    """The traces of the job's robot (rebuilt from the config its summary records) at the
+    feasible pose nearest the feasible set's centre (any pose when none is feasible), at that
+    pose's orientation; none for a grid of orientations, whose view is in angles."""
+    from pipeline.app.problem import ROBOTS
+    from pipeline.model.geometry import rotation_matrices
+
+    if pose_axes(points)[0] != "x":
+        return []
+    cfg = results.config(job["job"])
+    robot = ROBOTS[cfg.robot.name].build(cfg.robot)
+    chosen = points[points[column].to_numpy(dtype=bool)] if points[column].any() else points
+    xyz = chosen[["x", "y", "z"]].to_numpy()
+    row = chosen.iloc[int(np.argmin(np.linalg.norm(xyz - xyz.mean(axis=0), axis=1)))]
+    angles = row[["psi", "theta", "phi"]].to_numpy(dtype=float)[None, :]
+    rotation = rotation_matrices(angles, str(cfg.orientation.convention))[0]
+    return robot_traces(robot, row[["x", "y", "z"]].to_numpy(dtype=float), rotation)
+
+
+def _cloud_figure(spec: FigureSpec, panels: list, job: pd.Series, out_dir: Path, results: StudyResults) -> Path:
     fig = Figure(figsize=(5.6 * len(panels), 4.6))
     for i, (points, column, title) in enumerate(panels, start=1):
         ax = fig.add_subplot(1, len(panels), i, projection="3d")
@@ -160,13 +179,15 @@ def _cloud_figure(spec: FigureSpec, panels: list, job: pd.Series, out_dir: Path)
             ax.set_title(title, fontsize=9)
     fig.suptitle(_fill(spec.title or "", job), fontsize=10)
     png = _save(fig, spec, out_dir, job)
-    write_view(panels, _fill(spec.title or "", job), spec.invert_z, png.with_suffix(".json"))
+    write_view(panels, _fill(spec.title or "", job), spec.invert_z, png.with_suffix(".json"),
+               _robot_at_a_feasible_pose(results, job, *panels[0][:2]))
     return png
 
 
 def _cloud_panel(ax, points: pd.DataFrame, column: str, invert_z: bool) -> None:
+    axes = pose_axes(points)
     feasible = points[column].to_numpy()
-    ax.scatter(*(points.loc[feasible, c] for c in "xyz"), s=6, c=FEASIBLE_COLOUR,
+    ax.scatter(*(points.loc[feasible, c] for c in axes), s=6, c=FEASIBLE_COLOUR,
                depthshade=False, label=f"feasible ({feasible.sum()})")
     infeasible = points.loc[~feasible]
     limiting = "limiting" + column[len("feasible"):]
@@ -174,14 +195,15 @@ def _cloud_panel(ax, points: pd.DataFrame, column: str, invert_z: bool) -> None:
         groups = (infeasible.groupby(limiting, observed=True) if limiting in points
                   else [("infeasible", infeasible)])
         for name, group in groups:
-            ax.scatter(*(group[c] for c in "xyz"), s=10, marker="x", linewidths=0.7,
+            ax.scatter(*(group[c] for c in axes), s=10, marker="x", linewidths=0.7,
                        c=COLOURS.get(name, "0.5"), depthshade=False,
                        label=f"{name} ({len(group)})")
     if invert_z:
         ax.invert_zaxis()
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
-    ax.set_zlabel("z (m)")
+    unit = "rad" if axes[0] == "psi" else "m"
+    ax.set_xlabel(f"{axes[0]} ({unit})")
+    ax.set_ylabel(f"{axes[1]} ({unit})")
+    ax.set_zlabel(f"{axes[2]} ({unit})")
     ax.legend(loc="upper left", fontsize=7, bbox_to_anchor=(0.0, 1.0))
 
 

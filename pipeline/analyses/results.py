@@ -8,9 +8,10 @@ from __future__ import annotations
 from pathlib import Path
 
 import pandas as pd
+from omegaconf import DictConfig, OmegaConf
 
 from pipeline.app.job import changed_files
-from pipeline.app.results import read_verified
+from pipeline.app.results import CONFIG_KEY, read_metadata, read_verified
 
 
 class StudyResults:
@@ -31,6 +32,10 @@ class StudyResults:
 
     def samples(self, job: str) -> pd.DataFrame:
         return self._data(job, "samples.parquet")
+
+    def config(self, job: str) -> DictConfig:
+        """The resolved config ``job`` ran with, as its summary records it."""
+        return OmegaConf.create(read_metadata(self.directory / "jobs" / job / "summary.parquet")[CONFIG_KEY])
 
     def _data(self, job: str, name: str) -> pd.DataFrame:
         folder = self.directory / "jobs" / job

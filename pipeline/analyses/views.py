@@ -2,7 +2,10 @@
 HTML report (``pipeline.analyses.webpage``). Points are coloured by their limiting constraint, with every
 margin on hover. A dense grid keeps all its feasible points and an evenly drawn sample of the
 infeasible ones (fixed seed), so the view never hides where the workspace ends; the legend
-says how many of each are shown.
+says how many of each are shown. On a full grid the feasible set is also drawn as its boundary
+surface (the feasible points then start hidden: the legend shows them), and the robot is drawn
+at one feasible pose (:func:`robot_traces`): its frame, anchors, cables and platform. A robot
+whose grid is of orientations (a joint holds its platform) is shown in its angles instead.
 """
 
 from __future__ import annotations
@@ -19,29 +22,97 @@ MAX_POINTS = 6000  # per panel: the page stays light with ~40 views
 
 
 def write_view(panels: list[tuple[pd.DataFrame, str, str | None]], title: str, invert_z: bool,
-               path: Path) -> Path:
+               path: Path, robot: list[dict] | None = None) -> Path:
     """Write the view of one cloud figure: ``panels`` as (points, verdict column, panel
-    title), one 3-D scene each, side by side."""
-    import plotly.graph_objects as go
+    title), one 3-D scene each, side by side; ``robot``: the traces of the robot drawn in each
+    scene (:func:`robot_traces`), None for none."""
     from plotly.subplots import make_subplots
 
+    axes = pose_axes(panels[0][0])
     fig = make_subplots(rows=1, cols=len(panels), specs=[[{"type": "scene"}] * len(panels)],
                         subplot_titles=[t or "" for _, _, t in panels], horizontal_spacing=0.02)
     for col, (points, column, _) in enumerate(panels, start=1):
-        for trace in _traces(points, column, legend=col == 1):
-            fig.add_trace(go.Scatter3d(**trace), row=1, col=col)
-    scene = {"xaxis_title": "x (m)", "yaxis_title": "y (m)", "zaxis_title": "z (m)",
-             "aspectmode": "data"}
+        traces = _traces(points, column, legend=col == 1, axes=axes)
+        surface = _surface(points, column, axes)
+        if surface is not None:
+            traces[0]["visible"] = "legendonly"  # the feasible points: the surface shows the set
+            traces.insert(0, {**surface, "showlegend": col == 1})
+        for trace in traces + [{**t, "showlegend": col == 1 and t.get("showlegend", True)} for t in robot or []]:
+            fig.add_trace(trace, row=1, col=col)
+    unit = "rad" if axes[0] == "psi" else "m"
+    scene = {"xaxis_title": f"{axes[0]} ({unit})", "yaxis_title": f"{axes[1]} ({unit})",
+             "zaxis_title": f"{axes[2]} ({unit})", "aspectmode": "data",
+             "camera": {"eye": {"x": 1.9, "y": 1.9, "z": 1.2}}}  # far enough that no corner is cut
     if invert_z:
         scene["zaxis_autorange"] = "reversed"
     fig.update_scenes(**scene)
-    fig.update_layout(title={"text": title, "font": {"size": 13}}, height=520,
-                      margin={"l": 0, "r": 0, "t": 60, "b": 0}, legend={"itemsizing": "constant"})
+    fig.update_layout(title={"text": title, "font": {"size": 13}}, height=560,
+                      margin={"l": 10, "r": 10, "t": 60, "b": 30}, legend={"itemsizing": "constant"})
     write_text(path, fig.to_json())
     return path
 
 
-def _traces(points: pd.DataFrame, column: str, legend: bool) -> list[dict]:
+def pose_axes(points: pd.DataFrame) -> tuple[str, str, str]:
+    """The columns a view places the poses by: x, y, z, or the angles psi, theta, phi when every
+    pose is at the origin and the orientation varies (a grid of orientations)."""
+    at_origin = not points[["x", "y", "z"]].to_numpy().any()
+    turning = len(points) > 1 and (points[["psi", "theta", "phi"]].nunique() > 1).any()
+    return ("psi", "theta", "phi") if at_origin and turning else ("x", "y", "z")
+
+
+def _surface(points: pd.DataFrame, column: str, axes) -> dict | None:
+    """The boundary of the feasible set on a full grid (two values or more on every axis, one
+    pose per node): the 0.5 level of the verdict, closed by caps where it meets the grid's
+    faces; None otherwise (a plane, a list of poses, no feasible pose)."""
+    feasible = points[column].to_numpy(dtype=bool)
+    counts = [points[a].nunique() for a in axes]
+    if min(counts) < 2 or int(np.prod(counts)) != len(points) or not feasible.any():
+        return None
+    return {"type": "isosurface", "x": points[axes[0]].to_numpy(), "y": points[axes[1]].to_numpy(),
+            "z": points[axes[2]].to_numpy(), "value": feasible.astype(float), "isomin": 0.5, "isomax": 1.0,
+            "surface_count": 1, "opacity": 0.45, "showscale": False, "hoverinfo": "skip",
+            "colorscale": [[0, FEASIBLE_COLOUR], [1, FEASIBLE_COLOUR]], "name": f"feasible set ({int(feasible.sum())})",
+            "legendgroup": "feasible"}
+
+
+def robot_traces(robot, position: np.ndarray, rotation: np.ndarray) -> list[dict]:
+    """The robot at one pose (``position`` (3,), ``rotation`` (3, 3)): its frame (the edges of
+    the anchors' bounding box), the anchors, the cables to the platform's attachment points and
+    the platform (the hull of those points, or their outline when they lie in a plane)."""
+    anchors = np.asarray(robot.anchors, float)
+    attached = position + np.asarray(robot.attachments, float) @ rotation.T
+    lo, hi = anchors.min(axis=0), anchors.max(axis=0)
+    corners = np.array([[(lo, hi)[i][0], (lo, hi)[j][1], (lo, hi)[k][2]] for i in (0, 1) for j in (0, 1) for k in (0, 1)])
+    edges = [(a, b) for a in range(8) for b in range(a + 1, 8) if bin(a ^ b).count("1") == 1]
+    traces = [_lines(corners, edges, "frame", "#9a9a9a", 2),
+              {"type": "scatter3d", "mode": "markers", "name": "anchors", "legendgroup": "robot",
+               "x": anchors[:, 0], "y": anchors[:, 1], "z": anchors[:, 2], "text": list(robot.cable_names),
+               "marker": {"size": 3, "color": "#222222"}, "hovertemplate": "anchor %{text}<extra></extra>"},
+              _lines(np.vstack([anchors, attached]), [(i, i + len(anchors)) for i in range(len(anchors))],
+                     f"cables at ({', '.join(f'{v:g}' for v in np.round(position, 3))}) m", "#555555", 1.5)]
+    centred = attached - attached.mean(axis=0)
+    if np.linalg.matrix_rank(centred, tol=1e-9 * max(1.0, float(np.abs(attached).max()))) == 3:
+        traces.append({"type": "mesh3d", "x": attached[:, 0], "y": attached[:, 1], "z": attached[:, 2],
+                       "alphahull": 0, "color": "#8c6d31", "opacity": 0.6, "name": "platform",
+                       "legendgroup": "robot", "showlegend": True, "hoverinfo": "skip"})
+    elif len(attached) > 1:
+        order = np.argsort(np.arctan2(*(centred @ np.linalg.svd(centred)[2][:2].T).T[::-1]))  # around its centre
+        traces.append(_lines(attached, [(int(a), int(b)) for a, b in zip(order, np.roll(order, -1))],
+                             "platform", "#8c6d31", 4))
+    return traces
+
+
+def _lines(points: np.ndarray, pairs: list[tuple[int, int]], name: str, colour: str, width: float) -> dict:
+    """One line trace of the segments ``pairs`` (indices into ``points``), gaps between them."""
+    xyz = [[], [], []]
+    for a, b in pairs:
+        for axis in range(3):
+            xyz[axis] += [float(points[a, axis]), float(points[b, axis]), None]
+    return {"type": "scatter3d", "mode": "lines", "x": xyz[0], "y": xyz[1], "z": xyz[2], "name": name,
+            "legendgroup": "robot", "line": {"color": colour, "width": width}, "hoverinfo": "skip"}
+
+
+def _traces(points: pd.DataFrame, column: str, legend: bool, axes=("x", "y", "z")) -> list[dict]:
     feasible = points[column].to_numpy(dtype=bool)
     limiting = "limiting" + column[len("feasible"):]
     margins = [c for c in points.columns if c.startswith("margin_")]
@@ -63,13 +134,14 @@ def _traces(points: pd.DataFrame, column: str, legend: bool) -> list[dict]:
     for name, group, colour, symbol in groups:
         shown = "" if len(group) == total.get(name, len(group)) else f", {len(group)} shown"
         traces.append({
-            "x": group["x"].round(4).to_numpy(), "y": group["y"].round(4).to_numpy(),
-            "z": group["z"].round(4).to_numpy(), "mode": "markers",
+            "type": "scatter3d", "x": group[axes[0]].round(4).to_numpy(), "y": group[axes[1]].round(4).to_numpy(),
+            "z": group[axes[2]].round(4).to_numpy(), "mode": "markers",
             "name": f"{'feasible' if name == 'feasible' else 'lost to ' + name} ({total.get(name, len(group))}{shown})",
             "legendgroup": name, "showlegend": legend,
             "marker": {"size": 2.5 if symbol == "circle" else 2, "color": colour, "symbol": symbol},
             "customdata": group[margins].round(4).to_numpy(),
-            "hovertemplate": "x %{x} m, y %{y} m, z %{z} m<br>" + "<br>".join(
+            "hovertemplate": (f"{axes[0]} %{{x}}, {axes[1]} %{{y}}, {axes[2]} %{{z}}" if axes[0] == "psi" else
+                              "x %{x} m, y %{y} m, z %{z} m") + "<br>" + "<br>".join(
                 f"{m[len('margin_'):]} margin %{{customdata[{i}]}}" for i, m in enumerate(margins))
             + f"<extra>{name}</extra>",
         })

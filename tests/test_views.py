@@ -1,0 +1,74 @@
+"""The report's 3-D views (pipeline/analyses/views.py): the feasible set as its boundary surface on a
+full grid, the robot drawn where a written-out pose puts it, a grid of orientations shown in its
+angles."""
+
+import base64
+import json
+
+import numpy as np
+
+from conftest import eq9_rotation
+from pipeline.analyses.views import pose_axes, robot_traces, write_view
+from pipeline.app.problem import build_problem, compute_workspace
+
+
+def array(value) -> np.ndarray:
+    """An array of a Plotly JSON figure: a list, or numpy's bytes in base64 (plotly >= 6)."""
+    if isinstance(value, dict):
+        return np.frombuffer(base64.b64decode(value["bdata"]), dtype=value["dtype"])
+    return np.asarray(value, dtype=float)
+
+
+def test_a_full_grid_shows_its_feasible_set_as_a_surface_and_the_robot_at_a_pose(make_cfg, catalogue, tmp_path):
+    cfg = make_cfg("actuator=2", "orientation.psi=0.2")
+    points, summary = compute_workspace(cfg, catalogue)
+    robot = build_problem(cfg, catalogue)[0].robot
+    position = np.array([1.0, 0.9, -1.1])
+    traces = robot_traces(robot, position, eq9_rotation(0.2, 0.0, -0.3))  # a tilted, turned carrier
+    view = json.loads(write_view([(points, "feasible", None)], "t", False, tmp_path / "v.json", traces).read_text())
+    by_name = {trace["name"]: trace for trace in view["data"]}
+    surface = by_name[f"feasible set ({summary['n_feasible']})"]
+    assert surface["type"] == "isosurface" and surface["isomin"] == 0.5 and 0 < summary["n_feasible"] < 216
+    assert np.array_equal(array(surface["value"]), points["feasible"].to_numpy(float))
+    assert np.array_equal(array(surface["x"]), points["x"].to_numpy())
+    assert by_name[f"feasible ({summary['n_feasible']})"]["visible"] == "legendonly"  # the surface shows them
+    anchors = by_name["anchors"]
+    assert np.array_equal(np.column_stack([array(anchors[a]) for a in "xyz"]), robot.anchors) and robot.n_cables == 8
+    cables = next(t for name, t in by_name.items() if name.startswith("cables at (1, 0.9, -1.1) m"))
+    ends = np.array([cables[axis][1::3] for axis in "xyz"], dtype=float).T  # anchor, end, gap per cable
+    written_out = position + np.asarray(robot.attachments) @ eq9_rotation(0.2, 0.0, -0.3).T
+    assert np.allclose(ends, written_out, atol=1e-12)
+    assert by_name["platform"]["type"] == "mesh3d"  # the carrier's eight corners span a volume
+    assert view["layout"]["scene"]["camera"]["eye"]["x"] > 1.5
+
+
+def test_a_plane_a_list_and_an_empty_set_have_no_surface_and_a_flat_platform_an_outline(tmp_path):
+    import pandas as pd
+
+    grid = pd.DataFrame([(x, y, 0.0) for x in range(3) for y in range(3)], columns=list("xyz"))
+    grid = grid.assign(psi=0.0, theta=0.0, phi=0.0, feasible=True, limiting="slack", margin_slack=1.0)
+    view = json.loads(write_view([(grid, "feasible", None)], "t", False, tmp_path / "v.json").read_text())
+    assert [t["type"] for t in view["data"]] == ["scatter3d"]  # a plane: points only
+
+    class Flat:  # four attachments in one plane, four anchors
+        anchors = np.array([[-1, -1, 1], [1, -1, 1], [1, 1, 1], [-1, 1, 1]], float)
+        attachments = np.array([[0.1, 0.1, 0], [-0.1, -0.1, 0], [0.1, -0.1, 0], [-0.1, 0.1, 0]], float)
+        cable_names = ("a", "b", "c", "d")
+    outline = [t for t in robot_traces(Flat, np.zeros(3), np.eye(3)) if t["name"] == "platform"][0]
+    corners = {(x, y) for x, y in zip(outline["x"], outline["y"]) if x is not None}
+    assert outline["type"] == "scatter3d" and corners == {(0.1, 0.1), (-0.1, -0.1), (0.1, -0.1), (-0.1, 0.1)}
+    segments = [(outline["x"][i], outline["y"][i], outline["x"][i + 1], outline["y"][i + 1]) for i in range(0, 12, 3)]
+    assert all(abs(x0 - x1) + abs(y0 - y1) < 0.21 for x0, y0, x1, y1 in segments)  # around, not across
+
+
+def test_a_grid_of_orientations_is_shown_in_its_angles(make_cfg, catalogue, tmp_path):
+    gimbal = ["robot=points", "robot.anchors=[[1,0,0.5],[-0.5,0.87,0.5],[-0.5,-0.87,0.5],[1,0,-0.5],[-0.5,0.87,-0.5],"
+              "[-0.5,-0.87,-0.5]]", "robot.attachments=[[0,0.2,0.2],[0.17,-0.1,0.2],[-0.17,-0.1,0.2],[0,0.2,-0.2],"
+              "[0.17,-0.1,-0.2],[-0.17,-0.1,-0.2]]", "robot.dofs=[rx,ry,rz]", "robot.platform.mass=2",
+              "robot.platform.com=[0.05,0,0.1]", "robot.search.lo=[-0.6,-0.6,-0.6]", "robot.search.hi=[0.6,0.6,0.6]",
+              "robot.search.step=0.3", "analysis=statics", "tension=feasible", "tension.t_max=150"]
+    points, _ = compute_workspace(make_cfg(*gimbal), catalogue)
+    assert pose_axes(points) == ("psi", "theta", "phi")
+    view = json.loads(write_view([(points, "feasible", None)], "t", False, tmp_path / "v.json").read_text())
+    assert view["layout"]["scene"]["xaxis"]["title"]["text"] == "psi (rad)"
+    assert view["data"][0]["type"] == "isosurface"
