@@ -197,6 +197,9 @@ def load_study(name: str, directory: Path | None = None, config_dir: Path | str 
             if problem:
                 raise ConfigError(f"{path}: figures: {figure.file}: {key}={getattr(figure, key)!r}: pandas cannot "
                                   f"evaluate it ({problem})")
+        if figure.axis not in ("x", "y", "z") or not (isinstance(figure.layers, int) and figure.layers >= 1):
+            raise ConfigError(f"{path}: figures: {figure.file}: axis={figure.axis!r}, layers={figure.layers!r}: "
+                              "slices cut across x, y or z, at 1 or more layers")
         if figure.kind == "map" and not figure.value:
             raise ConfigError(f"{path}: figures: {figure.file}: a map colours the poses by a points column: "
                               "give value (e.g. value: max_payload_kg)")
@@ -345,7 +348,7 @@ def _check_jobs(jobs_dir: Path, jobs) -> None:
                               "finished; rerun the study without --figures-only to recompute it")
 
 
-NEEDS_POINTS = {"cloud", "map", "survival"}  # figure kinds and analyses that read jobs/*/points.parquet
+NEEDS_POINTS = {"cloud", "map", "slices", "survival"}  # figure kinds and analyses that read jobs/*/points.parquet
 
 
 def metrics(summary: pd.DataFrame, tables: dict[str, pd.DataFrame]) -> dict:

@@ -39,11 +39,28 @@ def test_choice_command_accepts_actuators_1_and_2_and_draws_every_figure(choice_
     assert figures == sorted(
         ["fig9_feasible_share_by_actuator.png", "limiting_constraints_by_actuator.png"]
         + [f"fig8_workspace_actuator{a}.{kind}" for a in range(1, 6) for kind in ("png", "json")]
+        + ["fig8_slices_actuator3.png", "fig8_slices_actuator4.png"]
     )  # each workspace picture with its interactive view (pipeline/analyses/views.py)
     from pipeline.analyses.figures import caption
 
     assert caption(choice_run / "figures" / "fig8_workspace_actuator5.png").endswith(
         "0 of 216 points are feasible.")  # the study's caption, filled from the job
+
+
+def test_the_slices_show_each_layers_least_margin_and_where_the_workspace_ends(choice_run):
+    """Actuator 4: four sections across z (both ends of the six levels and two between), each
+    cell the least of the job's margins, clipped to +-1; the top layer holds its 32 lost poses."""
+    series = pd.read_csv(choice_run / "series" / "fig8_slices_actuator4.csv")
+    (job,) = [p for p in (choice_run / "jobs").iterdir() if p.name == "actuator=4"]
+    points = pd.read_parquet(job / "points.parquet")
+    levels = np.sort(points["z"].unique())
+    assert np.allclose(np.sort(series["z"].unique()), levels[[0, 2, 3, 5]])
+    merged = series.merge(points.round({"x": 9, "y": 9, "z": 9}).assign(
+        least=points.filter(like="margin_").min(axis=1).clip(-1, 1)), on=["x", "y", "z"])
+    assert len(merged) == len(series) == 4 * 36
+    assert np.allclose(merged["least_margin"], merged["least"], atol=1e-9)
+    top = merged[np.isclose(merged["z"], levels[-1])]
+    assert ((top["least_margin"] < 0) == ~top["feasible"]).all() and (~top["feasible"]).sum() == 32
 
 
 def test_figures_are_drawn_from_the_parquet_results(choice_run, monkeypatch):
@@ -193,7 +210,7 @@ def test_a_study_that_reads_points_refuses_a_summary_only_run():
     with pytest.raises(ConfigError, match=r"^output.points=false: study tension_comparison reads every "
                                           r"job's points.parquet \(cloud, survival\)$"):
         checked_commands("tension_comparison", ["output.points=false"])
-    with pytest.raises(ConfigError, match=r"study actuator_choice reads every job's points.parquet \(cloud\)"):
+    with pytest.raises(ConfigError, match=r"study actuator_choice reads every job's points.parquet \(cloud, slices\)"):
         checked_commands("actuator_choice", ["output.points=false"])
     assert len(checked_commands("design_mass", ["output.points=false"])) == 1
 
@@ -293,6 +310,14 @@ def test_a_figure_expression_pandas_refuses_stops_the_study_before_its_jobs(tmp_
         "title: t\nsource: s\nsweep: {load.mass: '1,2'}\n"
         "figures:\n  - {kind: curve, file: f.png, x: load.mass, y: 'volume_m3 / `load.mass` ** 2'}\n")
     assert load_study("fine", tmp_path).figures[0].y == "volume_m3 / `load.mass` ** 2"
+
+
+@pytest.mark.parametrize("keys, shown", [("axis: w", "axis='w', layers=4"), ("layers: 0", "axis='z', layers=0")])
+def test_slices_across_no_axis_or_no_layer_stop_the_study_at_load(tmp_path, keys, shown):
+    (tmp_path / "mine.yaml").write_text(
+        f"title: t\nsource: s\nsweep: {{load.mass: '1,2'}}\nfigures:\n  - {{kind: slices, file: s.png, {keys}}}\n")
+    with pytest.raises(ConfigError, match=rf"^.*mine.yaml: figures: s.png: {re.escape(shown)}: slices cut across x, y or z"):
+        load_study("mine", tmp_path)
 
 
 def test_a_params_file_gives_overrides_in_hydras_grammar(tmp_path):

@@ -45,7 +45,9 @@ class FigureSpec:
     what to conclude (``{column}`` fields as in ``title``), printed under it in the report;
     ``bars`` draws a curve's categories (actuator ids) as grouped bars; ``legend`` titles a
     curve's legend (default: the ``hue`` key in words); ``table`` draws from an analysis table
-    of the study (e.g. ``exact_drive``: its rows name their jobs) instead of the summary."""
+    of the study (e.g. ``exact_drive``: its rows name their jobs) instead of the summary;
+    ``slices`` cuts each job's grid across ``axis`` (x, y or z) at ``layers`` evenly spaced
+    levels."""
 
     kind: str
     file: str
@@ -68,6 +70,8 @@ class FigureSpec:
     bars: bool = False
     legend: Optional[str] = None
     table: Optional[str] = None
+    axis: str = "z"
+    layers: int = 4
 
 
 def render(spec: FigureSpec, results: StudyResults, out_dir: Path) -> list[Path]:
@@ -406,7 +410,46 @@ def pareto(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir
     return [_save(fig, spec, out_dir)]
 
 
+def slices(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
+    """Sections of each selected job's grid across ``axis`` at ``layers`` evenly spaced levels
+    (both ends included), side by side: the least margin over the criteria in each cell, green
+    where the pose is feasible and red where it is not (clipped to +-1: a margin is a share of its
+    limit), and the workspace's boundary, its 0 contour, as a black line; the numbers as CSV in
+    ``series/`` (one row per pose of the layers drawn)."""
+    written = []
+    across = [a for a in "xyz" if a != spec.axis]
+    for _, job in table.iterrows():
+        points = results.points(job["job"])
+        least = points.filter(like="margin_").min(axis=1).clip(-1.0, 1.0)
+        levels = np.sort(points[spec.axis].unique())
+        picked = levels[np.unique(np.linspace(0, len(levels) - 1, min(spec.layers, len(levels))).round().astype(int))]
+        fig = Figure(figsize=(3.0 * len(picked) + 1.2, 3.3), layout="constrained")
+        axes = fig.subplots(1, len(picked), squeeze=False, sharey=True)[0]
+        rows = []
+        for ax, level in zip(axes, picked):
+            layer = points.loc[points[spec.axis] == level, across].assign(least_margin=least)
+            grid = layer.pivot_table(index=across[1], columns=across[0], values="least_margin", aggfunc="first")
+            u, v = np.meshgrid(grid.columns.to_numpy(float), grid.index.to_numpy(float))
+            values = grid.to_numpy(float)
+            drawn = ax.pcolormesh(u, v, values, shading="nearest", cmap="RdYlGn", vmin=-1.0, vmax=1.0)
+            if min(values.shape) >= 2 and np.nanmin(values) < 0 < np.nanmax(values):
+                ax.contour(u, v, values, levels=[0.0], colors="black", linewidths=1.0)
+            ax.set_title(f"{spec.axis} = {level:g} m", fontsize=8)
+            ax.set_xlabel(f"{across[0]} (m)")
+            rows.append(layer.assign(**{spec.axis: level}))
+        axes[0].set_ylabel(f"{across[1]} (m)")
+        fig.colorbar(drawn, ax=list(axes), label="least margin (feasible > 0)", shrink=0.9)
+        fig.suptitle(_fill(spec.title or "", job), fontsize=10)
+        png = _save(fig, spec, out_dir, job)
+        series = out_dir.parent / SERIES_DIR / png.with_suffix(".csv").name
+        series.parent.mkdir(parents=True, exist_ok=True)
+        write_csv(pd.concat(rows)[[spec.axis, *across, "least_margin"]].round(9), series)
+        written += [png, series]
+    return written
+
+
 KINDS: dict[str, Callable[[FigureSpec, pd.DataFrame, StudyResults, Path], list[Path]]] = {
+    "slices": slices,
     "pareto": pareto,
     "choice_bar": choice_bar,
     "limiting_bar": limiting_bar,
