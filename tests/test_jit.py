@@ -162,3 +162,22 @@ def test_processes_starting_at_once_compile_a_loops_module_once(tmp_path):
     counts = sorted(tuple(map(int, proc.communicate(timeout=120)[0].split())) for proc in procs)
     assert counts == [(0, 1), (1, 0)]  # (cache misses, cache hits): one compiled, one loaded
     assert (tmp_path / "__pycache__" / "slowloops.compile.lock").exists()
+
+
+def test_the_first_compile_is_counted_until_numbas_cache_is_newer_than_the_module(tmp_path, monkeypatch):
+    """compile_seconds: a module without a cache beside it, or with one older than its source
+    (numba compiles again), costs its first compile; a cache at least as new costs nothing."""
+    import os
+
+    (tmp_path / "loopsmod.py").write_text("X = 1\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.setitem(jit.COMPILE_S, "loopsmod", 9.0)
+    assert jit.compile_seconds("loopsmod") == 9.0
+    (tmp_path / "__pycache__").mkdir(exist_ok=True)
+    index = tmp_path / "__pycache__" / "loopsmod.f-1.py311.nbi"
+    index.write_bytes(b"")
+    source = (tmp_path / "loopsmod.py").stat().st_mtime
+    os.utime(index, (source + 5, source + 5))
+    assert jit.compile_seconds("loopsmod") == 0.0
+    os.utime(tmp_path / "loopsmod.py", (source + 10, source + 10))  # the module edited since
+    assert jit.compile_seconds("loopsmod") == 9.0

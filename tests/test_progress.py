@@ -153,3 +153,25 @@ def test_the_cost_model_counts_a_wrench_sets_vertices_and_the_payloads_lp():
     assert seconds["plain"] == pytest.approx(1155 / 20_000)
     assert seconds["set"] == pytest.approx(seconds["plain"] * (1 + 64 / 6))
     assert seconds["payload"] == pytest.approx(seconds["plain"] * 2.7)
+
+
+def test_a_job_that_will_compile_numbas_loops_says_so_in_its_estimate(caplog, monkeypatch):
+    """On a machine without numba's cache, a long fused job's estimate adds the first compile,
+    once, and says so; the feasible model adds its own search's."""
+    from pipeline.model import jit
+
+    monkeypatch.setattr(jit, "compile_seconds", lambda name: jit.COMPILE_S[name])
+    (job,) = plan(["grid.n=100", "tension=feasible"]).jobs
+    problem, grid = build_problem(job.cfg, job.catalogue)
+    with caplog.at_level(logging.WARNING, logger="pipeline"):
+        announce_cost(job.cfg, problem, grid.n_points, 2)
+    (record,) = caplog.records
+    assert record.getMessage().startswith("this job evaluates 1000000 poses x 1 orientations: about 1:13 on 2 cores")
+    assert record.getMessage().endswith("this includes numba's first compile of the loops it needs, about 7 s, "
+                                        "once per machine")
+    caplog.clear()
+    dense = plan(["grid.n=350", "grid.n_vel=6"]).jobs[0].cfg  # 4.3 x 10^7 poses: about 21 s fused on 2 cores
+    fused_job = replace(build_problem(dense, job.catalogue)[0], fused=True)
+    with caplog.at_level(logging.WARNING, logger="pipeline"):
+        announce_cost(dense, fused_job, 350 ** 3, 2)
+    assert "about 15 s, once per machine" in caplog.records[0].getMessage()

@@ -175,17 +175,32 @@ def _robot_at_a_feasible_pose(results: StudyResults, job: pd.Series, points: pd.
 
 def _cloud_figure(spec: FigureSpec, panels: list, job: pd.Series, out_dir: Path, results: StudyResults) -> Path:
     fig = Figure(figsize=(5.6 * len(panels), 4.6))
+    robot = _robot_at_a_feasible_pose(results, job, *panels[0][:2])
     for i, (points, column, title) in enumerate(panels, start=1):
         ax = fig.add_subplot(1, len(panels), i, projection="3d")
         _cloud_panel(ax, points, column, spec.invert_z)
         _box(ax, job)
+        _draw_robot(ax, robot)
         if title:
             ax.set_title(title, fontsize=9)
     fig.suptitle(_fill(spec.title or "", job), fontsize=10)
     png = _save(fig, spec, out_dir, job)
-    write_view(panels, _fill(spec.title or "", job), spec.invert_z, png.with_suffix(".json"),
-               _robot_at_a_feasible_pose(results, job, *panels[0][:2]))
+    write_view(panels, _fill(spec.title or "", job), spec.invert_z, png.with_suffix(".json"), robot)
     return png
+
+
+def _draw_robot(ax, traces: list[dict]) -> None:
+    """The robot's traces (:func:`pipeline.analyses.views.robot_traces`) on a matplotlib 3-D axis:
+    lines as lines (gaps where the trace has None), the anchors as dots, the platform's
+    attachment points as its corners."""
+    for trace in traces:
+        xyz = [np.array([np.nan if v is None else v for v in trace[axis]], dtype=float) for axis in "xyz"]
+        if trace["type"] == "mesh3d":
+            ax.scatter(*xyz, s=8, c=trace["color"], depthshade=False)
+        elif trace["mode"] == "lines":
+            ax.plot(*xyz, color=trace["line"]["color"], linewidth=0.5 * trace["line"]["width"])
+        else:
+            ax.scatter(*xyz, s=10, c=trace["marker"]["color"], depthshade=False)
 
 
 def _cloud_panel(ax, points: pd.DataFrame, column: str, invert_z: bool) -> None:

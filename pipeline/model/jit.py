@@ -41,6 +41,17 @@ from types import ModuleType
 
 log = logging.getLogger(__name__)
 ANNOUNCE_AFTER_S = 1.0  # an import still running after this is numba compiling: say so
+# numba's first compile of each loops module on a machine (docs/performance.md)
+COMPILE_S = {"pipeline.workspace.fused_loops": 15.0, "pipeline.model.crossings": 7.0}
+
+
+def compile_seconds(name: str) -> float:
+    """The seconds numba will spend compiling the loops module ``name`` at its first use here:
+    0 when its cache beside it is at least as new as the module (a cache kept elsewhere, or a
+    stale one numba finds unusable, counts as none: the estimate errs long)."""
+    origin = Path(importlib.util.find_spec(name).origin)
+    newest = max((p.stat().st_mtime for p in (origin.parent / "__pycache__").glob(f"{origin.stem}.*.nbi")), default=0.0)
+    return 0.0 if newest >= origin.stat().st_mtime else COMPILE_S[name]
 
 
 @functools.cache

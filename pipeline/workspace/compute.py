@@ -212,7 +212,8 @@ def announce_cost(cfg: DictConfig, problem: WorkspaceProblem, n_points: int, wor
     """A warning before a job the cost model expects to take long or to need much memory, with
     the key that matters."""
     cores = min(max(workers, 1), os.cpu_count() or 1)
-    seconds = estimated_seconds(problem, n_points) / cores
+    compiling = first_compile_seconds(problem)
+    seconds = estimated_seconds(problem, n_points) / cores + compiling
     memory = estimated_bytes(problem, n_points, keeps_points)
     if seconds < LONG_JOB_S and memory < LARGE_JOB_BYTES:
         return
@@ -221,9 +222,21 @@ def announce_cost(cfg: DictConfig, problem: WorkspaceProblem, n_points: int, wor
         hint = (f"; grid.n_vel is null (grid.n's), so each pose tests {problem.spec.set_size()} velocities "
                 f"(grid.n_vel=6 tests {REFERENCE_SET}, as the paper's grid)")
     size = f"{memory / 2**30:.1f} GiB" if memory >= 2**30 else f"{memory / 2**20:.0f} MiB"
+    if compiling:
+        hint += f"; this includes numba's first compile of the loops it needs, about {compiling:.0f} s, once per machine"
     log.warning("this job evaluates %d poses x %d orientations: about %s on %d core%s and %s of memory by "
                 "the cost model%s", n_points, len(problem.orientations), clock_text(seconds), cores,
                 "" if cores == 1 else "s", size, hint)
+
+
+def first_compile_seconds(problem: WorkspaceProblem) -> float:
+    """numba's compile of the loops this job runs, where this machine has not cached them yet:
+    the fused kernels', the feasible model's search (``pipeline.model.jit``)."""
+    from pipeline.model.jit import compile_seconds
+
+    needed = (["pipeline.workspace.fused_loops"] if problem.fused else []) + (
+        ["pipeline.model.crossings"] if problem.spec.tension.model == "feasible" else [])
+    return sum(compile_seconds(name) for name in needed)
 
 
 def bounded_chunk_size(problem: WorkspaceProblem, requested: int) -> int:
