@@ -231,7 +231,8 @@ def value_map(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_
     e.g. ``max_payload_kg`` of ``analysis=payload``) coloured on one scale with its bar, unbounded
     ones (inf) at its top; poses at 0 and without a value (NaN: not even the platform held) as
     small grey crosses, counted in the legend and drawn only on grids of at most 5 000 of them
-    (on dense grids they would hide the coloured set); the searched box outlined."""
+    (on dense grids they would hide the coloured set); the searched box outlined, the robot drawn
+    at the feasible pose nearest the feasible set's centre."""
     written = []
     for _, job in table.iterrows():
         points = results.points(job["job"])
@@ -252,6 +253,7 @@ def value_map(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_
                            depthshade=False, label=f"{name} ({rows.sum()})")
         fig.colorbar(drawn, ax=ax, shrink=0.7, pad=0.12, label=label(spec.value))
         _box(ax, job)
+        _draw_robot(ax, _robot_at_a_feasible_pose(results, job, points, "feasible"))
         if spec.invert_z:
             ax.invert_zaxis()
         ax.set_xlabel("x (m)")
