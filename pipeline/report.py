@@ -54,8 +54,9 @@ def build(studies_dir: Path = OUTPUT_DIR, out: Path = REPORT_DIR, config_dir: Pa
 
 def _answer(directory: Path) -> list[str]:
     """A study's answer in words, from its analysis tables: the actuator choice's verdict, the
-    values of a design variable at which each actuator is accepted."""
-    lines = []
+    values of a design variable at which each actuator is accepted; and from its summary, the
+    wrench directions its cables cannot produce where the structure matrix is short of rank."""
+    lines = _degenerate(read_table(directory / "summary.parquet")) if (directory / "summary.parquet").exists() else []
     if (directory / "choice.parquet").exists():
         lines += [md(verdict(read_table(directory / "choice.parquet"))).capitalize() + ".", ""]
     if (directory / "best_drive.parquet").exists():
@@ -78,6 +79,21 @@ def _answer(directory: Path) -> list[str]:
         lines += [f"Accepted (x ≥ {table['required_pct'].iloc[0]:g} %) by "
                   f"{md(label(table['parameter'].iloc[0]))}: " + "; ".join(parts) + ".", ""]
     return lines
+
+
+def _degenerate(summary: pd.DataFrame) -> list[str]:
+    """The jobs whose structure matrix is short of rank at some pose, and what their cables then
+    cannot produce (the job summaries' ``deficient_rank``, ``missing_direction``: the first such
+    pose of each job), the most frequent direction first."""
+    if "missing_direction" not in summary or summary["missing_direction"].isna().all():
+        return []
+    short = summary.dropna(subset=["missing_direction"])
+    counts = short.groupby(["deficient_rank", "missing_direction"], sort=False).size().sort_values(ascending=False)
+    parts = [f"rank {int(rank)}: {md(direction)} ({count} job{'s' if count > 1 else ''})"
+             for (rank, direction), count in counts.items()]
+    return [f"Degenerate poses: in {len(short)} of {len(summary)} jobs the structure matrix is short of rank at some "
+            f"pose, where the cables cannot produce " + "; ".join(parts) + " (docs/outputs.md: the jobs' logs "
+            "name the first such pose).", ""]
 
 
 def _exact_drive(table: pd.DataFrame) -> list[str]:

@@ -148,6 +148,11 @@ def test_the_report_gives_each_studys_answer_and_the_figures_captions(studies, t
     assert "Accepted (x ≥ 90 %) by carried mass m (kg): actuator 1 at 0.5; actuator 3 at 0.5." in text
     assert "![Feasible share \\| per actuator](figures/actuator_choice/fig9.png)" in text
     assert "*Feasible share \\| per actuator*" in text
+    # the CPR-8 at the zero orientation: rank 5 everywhere (docs/model.md section 1), said per study
+    direction = summary["missing_direction"].iloc[0]
+    assert direction.startswith("moment about z")
+    assert (f"Degenerate poses: in 4 of 4 jobs the structure matrix is short of rank at some pose, where the cables "
+            f"cannot produce rank 5: {direction} (4 jobs)") in text
 
 
 
