@@ -15,9 +15,8 @@ them as claims, with their tolerances.
 from __future__ import annotations
 
 import sys
-from contextlib import contextmanager
+import tempfile
 from pathlib import Path
-from types import SimpleNamespace
 
 import yaml
 
@@ -40,22 +39,13 @@ def values(name: str, key: str = "n_feasible") -> list:
     return cases()[name]["values"][key]
 
 
-class _Discard:
-    """A job's files (``pipeline.app.job.JobFiles``) that keeps none: only summaries are pinned."""
-
-    def write(self, name, frame) -> None:
-        pass
-
-    @contextmanager
-    def stream(self, name):
-        yield SimpleNamespace(write=lambda chunk: None)
-
-
 def compute(case: dict, catalogue) -> dict:
     """The values of ``case``'s keys as the model gives them today, one per value of its
-    ``each`` key, each job run as the command line runs it (its analysis kind's files)."""
+    ``each`` key, each job run as the command line runs it: its analysis kind writes its files
+    (``pipeline.app.job.JobFiles``) into a scratch folder, and every file it names exists."""
     from conftest import make_cfg
 
+    from pipeline.app.job import JobFiles
     from pipeline.app.problem import ANALYSES, build_problem
 
     (key, settings), = case["each"].items()
@@ -63,7 +53,10 @@ def compute(case: dict, catalogue) -> dict:
     for setting in settings:
         cfg = make_cfg(*case["overrides"], f"{key}={setting}")
         problem, grid = build_problem(cfg, catalogue)
-        summary = ANALYSES[cfg.analysis].files(cfg, problem, grid, _Discard(), False)
+        with tempfile.TemporaryDirectory() as folder:
+            files = JobFiles(Path(folder), "golden")
+            summary = ANALYSES[cfg.analysis].files(cfg, problem, grid, files, False)
+            assert files.written and all(path.is_file() for path in files.written), files.written
         for name in found:
             value = summary[name]
             found[name].append(value.item() if hasattr(value, "item") else value)  # numpy -> Python
