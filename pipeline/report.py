@@ -89,7 +89,7 @@ def _degenerate(summary: pd.DataFrame) -> list[str]:
         return []
     short = summary.dropna(subset=["missing_direction"])
     counts = short.groupby(["deficient_rank", "missing_direction"], sort=False).size().sort_values(ascending=False)
-    parts = [f"rank {int(rank)}: {md(direction)} ({count} job{'s' if count > 1 else ''})"
+    parts = [f"{md(direction)} (rank {int(rank)}, {count} job{'s' if count > 1 else ''})"
              for (rank, direction), count in counts.items()]
     return [f"Degenerate poses: in {len(short)} of {len(summary)} jobs the structure matrix is short of rank at some "
             f"pose, where the cables cannot produce " + "; ".join(parts) + " (docs/outputs.md: the jobs' logs "

@@ -152,7 +152,7 @@ def test_the_report_gives_each_studys_answer_and_the_figures_captions(studies, t
     direction = summary["missing_direction"].iloc[0]
     assert direction.startswith("moment about z")
     assert (f"Degenerate poses: in 4 of 4 jobs the structure matrix is short of rank at some pose, where the cables "
-            f"cannot produce rank 5: {direction} (4 jobs)") in text
+            f"cannot produce {direction} (rank 5, 4 jobs)") in text
 
 
 

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from pipeline.model.geometry import attached_points
 from pipeline.workspace.criteria import COLOURS, FEASIBLE_COLOUR
 from pipeline.app.results import write_text
 
@@ -80,7 +81,7 @@ def robot_traces(robot, position: np.ndarray, rotation: np.ndarray) -> list[dict
     the anchors' bounding box), the anchors, the cables to the platform's attachment points and
     the platform (the hull of those points, or their outline when they lie in a plane)."""
     anchors = np.asarray(robot.anchors, float)
-    attached = position + np.asarray(robot.attachments, float) @ rotation.T
+    attached = position + attached_points(robot, rotation)
     lo, hi = anchors.min(axis=0), anchors.max(axis=0)
     corners = np.array([[(lo, hi)[i][0], (lo, hi)[j][1], (lo, hi)[k][2]] for i in (0, 1) for j in (0, 1) for k in (0, 1)])
     edges = [(a, b) for a in range(8) for b in range(a + 1, 8) if bin(a ^ b).count("1") == 1]
