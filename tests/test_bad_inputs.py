@@ -132,6 +132,12 @@ CASES = [
     ("pipeline", ["--config-dir", "robots", "robot=empty"], "robot: the robot file gives no robot keys"),
     ("pipeline", ["--config-dir", "robots", "robot=list"], "robot: the robot file gives no robot keys"),
     ("pipeline", ["compute.max_poses=-1"], "compute.max_poses=-1: must be >= 1"),
+    ("pipeline", ["robot.cable_diameter=-0.01"], "robot.cable_diameter=-0.01: must be a number > 0"),
+    ("pipeline", ["robot.cable_diameter=nan"], "robot.cable_diameter=nan: must be a number > 0"),
+    ("pipeline", ["robot.cable_diameter=abc"], "robot.cable_diameter=abc: must be a number > 0"),
+    ("pipeline", ["robot.cable_diameter=[0.01,0.02]"], "robot.cable_diameter=[0.01, 0.02]: 2 values for 8 cables"),
+    ("pipeline", ["--config-dir", "robots", "robot=square", "robot.cable_diameter=0.01"],
+     "robot.cable_diameter=0.01: every two cables share an anchor or an attachment point"),
     # a ZeroDivisionError after the run folder existed; a sweep of 10^8 jobs hung while it was listed
     ("pipeline", ["--config-dir", "robots", "robot=square", "robot.search.step=5", "robot.search.spacing=centres"],
      "robot.search.step=5.0: no grid point in the search box"),

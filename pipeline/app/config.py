@@ -208,13 +208,16 @@ class PlatformConfig:
 @dataclass
 class Cpr8Config:
     """CPR-8 robot (Fig. 1). ``lower_anchor_drop``: depth of O', F', G', H' below O, F, G, H
-    (null = h_o as eqs. 14-17)."""
+    (null = h_o as eqs. 14-17). ``cable_diameter`` (every robot): m, one or one per cable,
+    cables closer than the sum of their radii interfere (criterion ``cable_cable``; null: not
+    checked)."""
 
     name: str = MISSING
     frame: FrameConfig = field(default_factory=FrameConfig)
     carrier: CarrierConfig = field(default_factory=CarrierConfig)
     lower_anchor_drop: Optional[float] = rule(non_negative)
     platform: PlatformConfig = field(default_factory=PlatformConfig)
+    cable_diameter: Any = MISSING
 
     @staticmethod
     def check_fields(robot: DictConfig) -> None:
@@ -258,6 +261,7 @@ class Irpm6Config:
     l_max: float = rule(positive)
     search: SearchConfig = field(default_factory=SearchConfig)
     platform: PlatformConfig = field(default_factory=PlatformConfig)
+    cable_diameter: Any = MISSING
 
 
 @dataclass
@@ -288,6 +292,7 @@ class PointsConfig:
     l_max: Optional[float] = rule(positive)
     search: PointsSearchConfig = field(default_factory=PointsSearchConfig)
     platform: PlatformConfig = field(default_factory=PlatformConfig)
+    cable_diameter: Any = MISSING
 
 
 @dataclass

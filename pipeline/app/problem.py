@@ -358,8 +358,9 @@ def validate(cfg: DictConfig, catalogue: Catalogue | None,
 def build(cfg: DictConfig, catalogue: Catalogue | None) -> WorkspaceProblem:
     """The workspace problem of a typed config: its robot kind's robot, its analysis kind's
     spec, limits and criteria, the orientation set."""
-    robot = ROBOTS[cfg.robot.name].build(cfg.robot)
+    robot, interference = surroundings(cfg, ROBOTS[cfg.robot.name].build(cfg.robot))
     spec, limits, criteria = ANALYSES[cfg.analysis].build(cfg, catalogue, robot)
+    criteria = (*criteria, *interference)
     given = cfg.orientation
     if robot.fixed_point and (orientation_count(given) > 1 or any(given[a] != 0 for a in ("psi", "theta", "phi"))):
         freedoms = ", ".join(FREEDOMS[i] for i in robot.dofs)
@@ -369,6 +370,25 @@ def build(cfg: DictConfig, catalogue: Catalogue | None) -> WorkspaceProblem:
     return WorkspaceProblem(robot, orientation_set(given), spec, limits, criteria, cfg.model.margin_atol,
                             cfg.output.cables, nominal=(float(given.psi), float(given.theta), float(given.phi)),
                             angles=name_of(given.convention) if robot.fixed_point else None)
+
+
+def surroundings(cfg: DictConfig, robot: CableRobot) -> tuple[CableRobot, tuple[str, ...]]:
+    """The robot with what its cables could touch, and the interference criteria that check it:
+    ``robot.cable_diameter`` (one or one per cable, m) gives the cables' radii and the
+    ``cable_cable`` criterion. Refused where no two cables can meet along their length."""
+    diameter = cfg.robot.cable_diameter
+    if diameter is None:
+        return robot, ()
+    items = OmegaConf.to_container(diameter) if isinstance(diameter, ListConfig) else [diameter]
+    if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and 0 < v < float("inf") for v in items):
+        raise ConfigError(f"robot.cable_diameter={shown(diameter)}: must be a number > 0 (m) or a list of one per cable")
+    if len(items) not in (1, robot.n_cables):
+        raise ConfigError(f"robot.cable_diameter={shown(diameter)}: {len(items)} values for {robot.n_cables} cables")
+    robot = replace(robot, cable_radii=np.broadcast_to(np.asarray(items, dtype=float) / 2, (robot.n_cables,)).copy())
+    if not len(robot.cable_pairs[0]):
+        raise ConfigError(f"robot.cable_diameter={shown(diameter)}: every two cables share an anchor or an attachment "
+                          "point (a point platform), so none can touch another along its length; set it null")
+    return robot, ("cable_cable",)
 
 
 def build_grid(cfg: DictConfig, robot: CableRobot) -> Grid:

@@ -40,6 +40,7 @@ class CableRobot:
     dofs: the platform's freedoms, indices into (x, y, z, rx, ry, rz) in that order: the rows of
     the structure matrix the cables balance (:data:`FREEDOMS`; a joint or a plane holds the others:
     a point platform in space (0, 1, 2), a planar point (0, 1), a planar body (0, 1, 5)).
+    cable_radii: (m,) each cable's radius, m (None: cables are lines, no cable-cable check).
     """
 
     name: str
@@ -51,6 +52,7 @@ class CableRobot:
     up: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, 1.0]))
     l_max: float | None = None
     dofs: tuple[int, ...] = (0, 1, 2, 3, 4, 5)
+    cable_radii: np.ndarray | None = None
 
     @property
     def n_cables(self) -> int:
@@ -70,6 +72,16 @@ class CableRobot:
         least 1 m): far below any grid step, far above the round-off of a grid's positions."""
         extent = max(1.0, float(np.abs(self.anchors).max(initial=0.0)), float(np.abs(self.attachments).max(initial=0.0)))
         return ZERO_LENGTH_RTOL * extent
+
+    @cached_property
+    def cable_pairs(self) -> tuple[np.ndarray, np.ndarray]:
+        """(i, j) index arrays, i < j, of the pairs of cables that may touch along their length:
+        every pair but those sharing an anchor or an attachment point (within
+        :attr:`shortest_cable`), which meet there by design (a point platform: every pair)."""
+        i, j = np.triu_indices(self.n_cables, k=1)
+        apart = ((np.linalg.norm(self.anchors[i] - self.anchors[j], axis=1) > self.shortest_cable)
+                 & (np.linalg.norm(self.attachments[i] - self.attachments[j], axis=1) > self.shortest_cable))
+        return i[apart], j[apart]
 
 
 FREEDOMS = ("x", "y", "z", "rx", "ry", "rz")  # the rows of the structure matrix, in order
@@ -190,10 +202,12 @@ class PoseGeometry:
     - ``structure`` and ``rows``: the matrix S the forces balance the wrench with, and the freedoms
       of its rows;
     - ``diagnostics()``: per-pose columns beside the margins (the Jacobian's rank, the poses the
-      ``feasible`` model's LPs solved, ``tension_lp``, set by the criteria that ran them).
+      ``feasible`` model's LPs solved, ``tension_lp``, and the closest cables, ``closest_pair``,
+      set by the criteria that computed them).
     """
 
     tension_lp: np.ndarray | None = None
+    closest_pair: np.ndarray | None = None
 
     def __init__(self, robot: CableRobot, positions: np.ndarray, orientation):
         self.robot = robot
@@ -229,11 +243,19 @@ class PoseGeometry:
         return np.broadcast_to(attached_points(self.robot, self.rotation), self.vectors.shape)
 
     @cached_property
+    def attachment_points(self) -> np.ndarray:
+        """(n, m, 3) p + R b_i: where each cable meets the platform, fixed frame (whatever cable
+        direction a model reads: the cable itself runs from its anchor to this point)."""
+        return self.positions[:, None, :] + self.arms
+
+    @cached_property
     def structure_matrix(self) -> np.ndarray:
         """(n, 6, m) A = [u_i; (R b_i) x u_i] (``geometry.structure_matrix``): A t balances the
         wrench on the platform, moments about its reference point."""
         return structure_matrix(self.unit, self.arms)
 
     def diagnostics(self) -> dict[str, np.ndarray]:
-        """Per-pose columns besides the margins: the poses the feasible model's LPs solved."""
-        return {} if self.tension_lp is None else {"lp_poses": self.tension_lp}
+        """Per-pose columns besides the margins, set by the criteria that computed them: the
+        poses the feasible model's LPs solved, the closest pair of cables."""
+        found = {"lp_poses": self.tension_lp, "closest_pair": self.closest_pair}
+        return {key: value for key, value in found.items() if value is not None}

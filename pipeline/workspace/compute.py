@@ -112,6 +112,9 @@ def tabulate(problem: WorkspaceProblem, positions: np.ndarray, raw: dict,
     for key in ("jacobian_rank", "max_payload_kg", "limiting_wrench"):
         if key in raw:
             columns[key] = raw[key]
+    if "closest_pair" in raw:  # the cable_cable criterion's closest cables, "i-j" by their names
+        names, (i, j) = problem.robot.cable_names, problem.robot.cable_pairs
+        columns["closest_cables"] = categories(raw["closest_pair"], [f"{names[a]}-{names[b]}" for a, b in zip(i, j)])
     for key, values in raw.items():  # output.cables: lengths and tensions (pipeline.workspace.quantities)
         if key.startswith(("length_", "tension_")):
             columns[key] = values

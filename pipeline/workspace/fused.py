@@ -58,7 +58,8 @@ LOOPS = "pipeline.workspace.fused_loops"  # the compiled loops, and the constant
 
 def margins(problem, positions: np.ndarray, orientation) -> tuple[dict[str, np.ndarray], np.ndarray]:
     """``margin_<criterion>`` (n,) (and CPR-WWA's ``jacobian_rank``) at one orientation, and
-    (n,) the poses left unsettled (their entries are NaN: evaluate them with numpy)."""
+    (n,) the poses left unsettled (their entries are NaN: evaluate them with numpy); not the
+    criteria that read the geometry alone (``pipeline.workspace.kernel`` adds them)."""
     return MARGINS[problem.spec.kind](problem, positions, orientation)
 
 
@@ -78,7 +79,8 @@ def _statics_margins(problem, positions: np.ndarray, orientation):
         np.array(np.broadcast_to(lim.s_max, (m,)), dtype=float), float(lim.scale),
         np.inf if robot.l_max is None else float(robot.l_max), out, unsettled)
     out[:, 4] = zero_length_margin(out[:, 4], robot.shortest_cable)
-    return {f"margin_{name}": out[:, STATICS_CRITERIA.index(name)] for name in problem.criteria}, unsettled
+    return {f"margin_{name}": out[:, STATICS_CRITERIA.index(name)]
+            for name in problem.criteria if name in STATICS_CRITERIA}, unsettled
 
 
 def _cpr_wwa_margins(problem, positions: np.ndarray, orientation):
@@ -105,7 +107,7 @@ def _cpr_wwa_margins(problem, positions: np.ndarray, orientation):
         np.array([act.G_v, act.L_v, act.load_gain], dtype=float), t_max, l_max, out, rank, unsettled)
     out[:, 6] = zero_length_margin(out[:, 6], robot.shortest_cable)
     out[:, 7] = 1.0 - out[:, 7] / spec.tension.pinv_residual
-    result = {f"margin_{name}": out[:, CRITERIA.index(name)] for name in problem.criteria}
+    result = {f"margin_{name}": out[:, CRITERIA.index(name)] for name in problem.criteria if name in CRITERIA}
     result["jacobian_rank"] = rank
     return result, unsettled
 

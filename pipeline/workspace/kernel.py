@@ -7,8 +7,8 @@ from typing import Any
 
 import numpy as np
 
-from pipeline.workspace.criteria import REGISTRY
-from pipeline.model.geometry import CableRobot, rotation_matrices
+from pipeline.workspace.criteria import GEOMETRY, REGISTRY
+from pipeline.model.geometry import CableRobot, PoseGeometry, rotation_matrices
 from pipeline.workspace.quantities import cable_quantities
 
 @dataclass(frozen=True)
@@ -68,17 +68,21 @@ def evaluate_chunk(problem: WorkspaceProblem, rows: np.ndarray) -> dict[str, np.
             part = _fused(problem, positions, orientation)
         else:
             part = _criteria(problem, positions, orientation, problem.cables and number == 0)
+        worse = {key: part[margin] < result[margin] for key, margin in AT_THE_WORST.items() if key in result}
         for key, value in part.items():
             if key not in result:
                 result[key] = value
-            elif key == "limiting_wrench":  # before its margin is merged below
-                worse = part["limiting_wrench_margin"] < result["limiting_wrench_margin"]
-                result[key] = np.where(worse, value, result[key])
+            elif key in worse:
+                result[key] = np.where(worse[key], value, result[key])
             elif key.startswith("margin_") or key in ("jacobian_rank", "max_payload_kg", "limiting_wrench_margin"):
                 result[key] = np.minimum(result[key], value)
             elif key == "lp_poses":
                 result[key] = result[key] | value
     return result
+
+
+# per-pose columns that name what limits a margin: kept from the orientation where it is lowest
+AT_THE_WORST = {"limiting_wrench": "limiting_wrench_margin", "closest_pair": "margin_cable_cable"}
 
 
 def _criteria(problem: WorkspaceProblem, positions: np.ndarray, orientation, cables: bool) -> dict:
@@ -115,10 +119,16 @@ def _limiting_vertex(problem: WorkspaceProblem, positions: np.ndarray, orientati
 
 
 def _fused(problem: WorkspaceProblem, positions: np.ndarray, orientation) -> dict:
-    """:func:`_criteria` by the compiled kernel, numpy for the poses it leaves unsettled."""
+    """:func:`_criteria` by the compiled kernel, numpy for the poses it leaves unsettled and for
+    the criteria that read the geometry alone (the same code in either kernel)."""
     from pipeline.workspace import fused
 
     result, unsettled = fused.margins(problem, positions, orientation)
+    geometric = [name for name in problem.criteria if REGISTRY[name].reads == GEOMETRY]
+    if geometric:
+        state = PoseGeometry(problem.robot, positions, orientation)
+        result.update({f"margin_{name}": REGISTRY[name].function(state, problem.limits) for name in geometric})
+        result.update(state.diagnostics())
     if unsettled.any():
         for key, value in _criteria(problem, positions[unsettled], orientation, False).items():
             result[key][unsettled] = value

@@ -5,7 +5,8 @@ A :class:`Criterion` says what it reads (``reads``: the CPR-WWA dynamics, the st
 chunk state), whether it is a gate (a violated gate decides the verdict whatever the other
 margins say; gates in priority order) and its colour in every figure. One module per family:
 ``actuator`` (eqs. 30, 32-34 of the CPR-8 paper), ``tension`` (unreachable, slack, tension
-rating), ``geometry`` (zero_length, singular, cable length), ``payload`` (the largest payload); ``forces``
+rating), ``geometry`` (zero_length, singular, cable length), ``interference`` (cable_cable),
+``payload`` (the largest payload); ``forces``
 holds the ``feasible`` tension model they share. A new criterion is one function in its family's module and one entry here.
 """
 
@@ -16,16 +17,17 @@ from typing import Any, Callable
 
 import numpy as np
 
-from pipeline.workspace.criteria import actuator, geometry, payload, tension
+from pipeline.workspace.criteria import actuator, geometry, interference, payload, tension
 
-ANY, DYNAMICS, STATICS = "any", "dynamics", "statics"
+ANY, DYNAMICS, STATICS, GEOMETRY = "any", "dynamics", "statics", "geometry"
 
 
 @dataclass(frozen=True)
 class Criterion:
     """``function(state, limits) -> (n,) margins``; ``reads``: ``any``, ``dynamics`` (a
-    ``PoseDynamics`` and an ``ActuatorModel``) or ``statics`` (a ``PoseStatics`` and
-    ``StaticLimits``); ``gate``: priority among gates (0 first) or None; ``colour``: figures;
+    ``PoseDynamics`` and an ``ActuatorModel``), ``statics`` (a ``PoseStatics`` and
+    ``StaticLimits``) or ``geometry`` (the pose alone: any ``PoseGeometry``, one code in
+    every kernel); ``gate``: priority among gates (0 first) or None; ``colour``: figures;
     ``remedy``: what to try next when it limits every pose (a job with none feasible says it)."""
 
     name: str
@@ -52,6 +54,9 @@ REGISTRY: dict[str, Criterion] = {c.name: c for c in (
     Criterion("tension_max", tension.tension_max, ANY, None, "#0072B2",
               "stronger cables (a higher tension.t_max) or a lighter load"),
     Criterion("length", geometry.length, ANY, None, "#CC79A7", "longer cables (robot.l_max) or a smaller box"),
+    Criterion("cable_cable", interference.cable_cable, GEOMETRY, None, "#AA4499",
+              "thinner cables (robot.cable_diameter), anchors and attachments that keep the cables apart, "
+              "or a smaller box"),
     Criterion("payload", payload.payload, STATICS, None, "#56B4E9", "a lighter payload (load.mass) or stronger cables"),
     Criterion("speed", actuator.speed, DYNAMICS, None, "#0072B2",
               "a lower motion.v_max, a larger drive.winch_radius or a smaller drive.gear_ratio"),

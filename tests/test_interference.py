@@ -1,0 +1,178 @@
+"""Cable-cable interference: the closed-form distance of two segments against a dense sampling
+and against the enumeration of the quadratic's candidate minima; the criterion, pose by pose,
+against that enumeration on a tilted CPR-8; the numpy and compiled kernels give the same
+margins; the closest pair is the one at the worst orientation."""
+
+from dataclasses import replace
+from fractions import Fraction
+
+import numpy as np
+import pytest
+
+from pipeline.app.problem import build_problem, compute_workspace, validate
+from pipeline.model.clearance import segment_distance
+from pipeline.model.geometry import CableRobot, PoseGeometry
+from pipeline.workspace.criteria.interference import cable_cable
+from pipeline.workspace.kernel import evaluate_chunk
+
+
+def sampled_distance(p1, d1, p2, d2, n=801):
+    """The least distance between n points spread evenly on each segment; at most
+    (|d1| + |d2|) / (2 (n - 1)) above the segments' distance."""
+    s = np.linspace(0.0, 1.0, n)[:, None]
+    a, b = p1 + s * d1, p2 + s * d2
+    return np.sqrt(((a[:, None, :] - b[None, :, :]) ** 2).sum(axis=2)).min()
+
+
+def exact_distance(p1, d1, p2, d2) -> float:
+    """The distance of two segments (3-vectors) in exact rational arithmetic: the minimum of the
+    quadratic q(s, t) = |p1 + s d1 - p2 - t d2|^2 over [0, 1]^2 by the Karush-Kuhn-Tucker
+    conditions, each solved exactly: either a corner, a point of an edge where q's derivative
+    along it vanishes, or the interior point where its gradient does."""
+    p1, d1, p2, d2 = ([Fraction(float(x)) for x in v] for v in (p1, d1, p2, d2))
+
+    def dot(u, v):
+        return sum(x * y for x, y in zip(u, v))
+
+    r = [x - y for x, y in zip(p1, p2)]
+    a, e, b, c, f = dot(d1, d1), dot(d2, d2), dot(d1, d2), dot(d1, r), dot(d2, r)
+
+    def q(s, t):
+        gap = [x + s * y - t * z for x, y, z in zip(r, d1, d2)]
+        return dot(gap, gap)
+
+    points = [(Fraction(s), Fraction(t)) for s in (0, 1) for t in (0, 1)]
+    for side in (Fraction(0), Fraction(1)):
+        if e:
+            points.append((side, (b * side + f) / e))  # dq/dt = 0 on the edge s = side
+        if a:
+            points.append(((b * side - c) / a, side))  # dq/ds = 0 on the edge t = side
+    if a * e - b * b:
+        points.append(((b * f - c * e) / (a * e - b * b), (a * f - b * c) / (a * e - b * b)))
+    return float(min(q(s, t) for s, t in points if 0 <= s <= 1 and 0 <= t <= 1)) ** 0.5
+
+
+X, Y, Z = np.eye(3)
+NEARLY_X = np.array([np.cos(1e-5), np.sin(1e-5), 0.0])
+CASES = {  # p1, d1, p2, d2, the distance
+    "crossing": (-X, 2 * X, -Y, 2 * Y, 0.0),
+    "parallel side by side": (0 * X, X, 0.5 * X + Y, X, 1.0),
+    "collinear apart": (0 * X, X, 3 * X, X, 2.0),
+    "antiparallel overlapping": (0 * X, X, 2 * X + 0.3 * Y, -1.5 * X, 0.3),
+    "touching at an end": (0 * X, X, X, Y + Z, 0.0),
+    "a T short of touching": (0 * X, X, 0.5 * X + 0.2 * Y, Y, 0.2),
+    "skew, closest beyond both": (0 * X, X, 3 * X - Y + Z, 2 * Y, np.sqrt(5.0)),
+    "a point and a segment": (0.5 * X + 2 * Z, 0 * X, 0 * X, X, 2.0),
+    "two points": (X, 0 * X, Y, 0 * X, np.sqrt(2.0)),
+    # 5 m cables crossing at 1e-5 rad, 0.1 um apart: a e - b^2 would lose the crossing to round-off
+    "nearly parallel, crossing": (-2.5 * X, 5 * X, -2.5 * NEARLY_X + 1e-7 * Z, 5 * NEARLY_X, 1e-7),
+}
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_closed_form_distance_of_known_pairs(case):
+    p1, d1, p2, d2, expected = CASES[case]
+    assert segment_distance(p1, d1, p2, d2) == pytest.approx(expected, rel=1e-9, abs=1e-15)
+    assert segment_distance(p2, d2, p1, d1) == pytest.approx(expected, rel=1e-9, abs=1e-15)  # symmetric
+    assert exact_distance(p1, d1, p2, d2) == pytest.approx(expected, rel=1e-9, abs=1e-15)
+
+
+def test_closed_form_distance_against_exact_arithmetic_and_dense_sampling():
+    rng = np.random.default_rng(7)
+    p1, d1, p2, d2 = rng.normal(size=(4, 300, 3))
+    d2[:40] = d1[:40] * rng.uniform(-2, 2, size=(40, 1))  # parallel and antiparallel pairs
+    d2[40:80] = d1[40:80] + 1e-9 * rng.normal(size=(40, 3))  # all but parallel
+    p2[80:120] = p1[80:120] + d1[80:120] * rng.uniform(0, 1, size=(40, 1))  # touching: a point of one on the other
+    closed = segment_distance(p1, d1, p2, d2)
+    exact = [exact_distance(*pair) for pair in zip(p1, d1, p2, d2)]
+    np.testing.assert_allclose(closed, exact, rtol=1e-12, atol=1e-12)
+    assert closed[80:120] == pytest.approx(0, abs=1e-12)
+    for k in range(0, 300, 3):
+        sampled = sampled_distance(p1[k], d1[k], p2[k], d2[k])
+        bound = (np.linalg.norm(d1[k]) + np.linalg.norm(d2[k])) / (2 * 800)
+        assert closed[k] - 1e-12 <= sampled <= closed[k] + bound
+
+
+def _square_robot(radius: float) -> CableRobot:
+    """Four cables from the corners of a square at height 2 to the corners of a 0.2 m platform,
+    the two front ones crossed (each to the opposite side's attachment)."""
+    anchors = np.array([[-1, -1, 2], [1, -1, 2], [1, 1, 2], [-1, 1, 2]], dtype=float)
+    attachments = np.array([[0.1, -0.1, 0], [-0.1, -0.1, 0], [0.1, 0.1, 0], [-0.1, 0.1, 0]])
+    return CableRobot("square", anchors, attachments, np.zeros(3), np.ones(3), ("a", "b", "c", "d"),
+                      cable_radii=np.full(4, radius))
+
+
+def test_crossed_cables_have_margin_minus_one_and_name_their_pair():
+    robot = _square_robot(0.005)
+    state = PoseGeometry(robot, np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 1.999]]), (0.0, 0.0, 0.0))
+    margin = cable_cable(state, None)
+    assert margin[0] == pytest.approx(-1.0, abs=1e-12)  # the crossed pair's axes meet in the plane x = 0
+    i, j = robot.cable_pairs
+    assert (robot.cable_names[i[state.closest_pair[0]]], robot.cable_names[j[state.closest_pair[0]]]) == ("a", "b")
+    # just below the anchors the crossed front cables are still crossed, the other pairs far apart
+    assert margin[1] == pytest.approx(-1.0, abs=1e-9)
+
+
+def test_pairs_sharing_an_anchor_or_an_attachment_are_not_checked():
+    robot = _square_robot(0.01)
+    robot = replace(robot, anchors=robot.anchors[[0, 0, 2, 3]], attachments=robot.attachments[[0, 1, 2, 2]])
+    i, j = robot.cable_pairs
+    pairs = set(zip(i.tolist(), j.tolist()))
+    assert (0, 1) not in pairs and (2, 3) not in pairs and len(pairs) == 4
+
+
+@pytest.mark.parametrize("orientation", [(0.0, 0.0, 0.0), (0.3, -0.2, 0.4)])
+def test_criterion_equals_the_exact_distances_pose_by_pose(make_cfg, catalogue, orientation):
+    psi, theta, phi = orientation
+    cfg = make_cfg("robot.cable_diameter=[0.01,0.02,0.01,0.02,0.03,0.01,0.02,0.01]", "grid.n=6",
+                   f"orientation.psi={psi}", f"orientation.theta={theta}", f"orientation.phi={phi}")
+    cfg, problem = validate(cfg, catalogue, typed=True)
+    problem, grid = build_problem(cfg, catalogue)
+    robot, positions = problem.robot, grid[:]
+    state = PoseGeometry(robot, positions, problem.orientation)
+    margin = cable_cable(state, None)
+    ends = state.attachment_points
+    radii = robot.cable_radii
+    pairs = [(i, j) for i in range(8) for j in range(i + 1, 8)]
+    relative = np.array([[
+        exact_distance(robot.anchors[i], ends[k, i] - robot.anchors[i], robot.anchors[j], ends[k, j] - robot.anchors[j])
+        / (radii[i] + radii[j]) - 1.0 for i, j in pairs] for k in range(len(positions))])
+    np.testing.assert_allclose(margin, np.minimum(1.0, relative.min(axis=1)), rtol=0, atol=1e-12)
+    i, j = robot.cable_pairs
+    assert len(i) == 28  # no two CPR-8 cables share an anchor or an attachment point
+    assert [(i[k], j[k]) for k in state.closest_pair] == [pairs[k] for k in relative.argmin(axis=1)]
+    assert (margin < 0).any() and (margin > 0).any()  # the check decides something on this grid
+
+
+@pytest.mark.parametrize("orientation", [(0.0, 0.0, 0.0), (0.5, 0.5, 0.5)])
+def test_numpy_and_compiled_kernels_give_the_same_interference(make_cfg, catalogue, orientation):
+    psi, theta, phi = orientation
+    tables = {}
+    for kernel in ("numpy", "fused"):
+        cfg = make_cfg("robot.cable_diameter=0.02", "grid.n=12", f"compute.kernel={kernel}",
+                       f"orientation.psi={psi}", f"orientation.theta={theta}", f"orientation.phi={phi}")
+        cfg, _ = validate(cfg, catalogue, typed=True)
+        tables[kernel] = compute_workspace(cfg, catalogue)[0]
+    numpy_table, fused_table = tables["numpy"], tables["fused"]
+    assert (numpy_table["limiting"] == "cable_cable").any()
+    np.testing.assert_array_equal(numpy_table["margin_cable_cable"], fused_table["margin_cable_cable"])
+    assert numpy_table["closest_cables"].tolist() == fused_table["closest_cables"].tolist()
+    assert numpy_table["feasible"].tolist() == fused_table["feasible"].tolist()
+
+
+def test_the_closest_pair_is_the_one_at_the_worst_orientation(make_cfg, catalogue):
+    cfg = make_cfg("robot.cable_diameter=0.02", "grid.n=8", "orientation.total.bound=0.3", "orientation.total.n=2")
+    cfg, problem = validate(cfg, catalogue, typed=True)
+    grid = build_problem(cfg, catalogue)[1]
+    positions = grid[:]
+    merged = evaluate_chunk(problem, positions)
+    per_orientation = []
+    for orientation in problem.orientations:
+        state = PoseGeometry(problem.robot, positions, orientation)
+        per_orientation.append((cable_cable(state, None), state.closest_pair))
+    margins = np.array([m for m, _ in per_orientation])
+    worst = margins.argmin(axis=0)
+    np.testing.assert_array_equal(merged["margin_cable_cable"], margins.min(axis=0))
+    expected = np.array([per_orientation[w][1][k] for k, w in enumerate(worst)])
+    np.testing.assert_array_equal(merged["closest_pair"], expected)
+    assert len(set(worst.tolist())) > 1  # the worst orientation differs between poses
