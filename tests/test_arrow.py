@@ -9,7 +9,7 @@ import pytest
 
 from conftest import job_imports
 from pipeline.app.results import read_verified, write_parquet
-from pipeline.workspace.arrow import categories, numbers, one_row, sorted_by, texts
+from pipeline.workspace.arrow import categories, numbers, one_row, sorted_by, texts, values
 
 
 def _round_trip(table: pa.Table, path) -> pd.DataFrame:
@@ -84,3 +84,13 @@ def test_the_main_job_and_a_grid_job_never_import_pandas(tmp_path):
     assert "pandas imported: False" in job_imports(tmp_path, *irpm)
     table = pd.read_parquet(tmp_path / "sweep" / "summary.parquet")
     assert table["actuator"].tolist() == [1, 2, 3] and table["job"].is_unique
+
+
+def test_values_reads_back_what_numbers_wrote_also_from_slices_and_several_chunks():
+    flags, floats = np.arange(37) % 3 == 0, np.linspace(-1, 1, 37)
+    for start, stop in ((0, 37), (3, 20), (9, 10), (17, 17)):
+        np.testing.assert_array_equal(values(numbers(flags).slice(start, stop - start)), flags[start:stop])
+        np.testing.assert_array_equal(values(numbers(floats).slice(start, stop - start)), floats[start:stop])
+    several = pa.chunked_array([numbers(flags[:10]), numbers(flags[10:])]).slice(5, 20)
+    np.testing.assert_array_equal(values(several), flags[5:25])
+    assert values(pa.array(np.array([1, -2], dtype=np.int8))).dtype == np.int8

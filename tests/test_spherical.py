@@ -93,3 +93,12 @@ def test_what_a_platform_held_at_a_point_cannot_mean_is_refused_in_one_line(make
     with pytest.raises(ConfigError, match=None) as refused:
         build_problem(make_cfg(*GIMBAL, *overrides), catalogue)
     assert message in str(refused.value) and "\n" not in str(refused.value)
+
+
+def test_an_orientation_grid_has_no_boundary_mesh_to_write(make_cfg, catalogue):
+    from pipeline.app.problem import validate
+
+    with pytest.raises(ConfigError) as refused:
+        validate(make_cfg(*GIMBAL, "output.mesh=true"), catalogue, typed=True)
+    assert str(refused.value) == ("output.mesh=true: the grid is of orientations (a robot on a joint), whose boundary "
+                                  "has no volume in m^3, so there is no boundary to write")

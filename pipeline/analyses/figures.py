@@ -206,8 +206,16 @@ def _draw_robot(ax, traces: list[dict]) -> None:
 def _cloud_panel(ax, points: pd.DataFrame, column: str, invert_z: bool) -> None:
     axes = pose_axes(points)
     feasible = points[column].to_numpy()
-    ax.scatter(*(points.loc[feasible, c] for c in axes), s=6, c=FEASIBLE_COLOUR,
-               depthshade=False, label=f"feasible ({feasible.sum()})")
+    if column == "feasible" and "connected" in points:  # workspace.home: its component filled, the rest hollow
+        connected = points["connected"].to_numpy()
+        ax.scatter(*(points.loc[connected, c] for c in axes), s=6, c=FEASIBLE_COLOUR,
+                   depthshade=False, label=f"connected to home ({connected.sum()})")
+        apart = feasible & ~connected
+        ax.scatter(*(points.loc[apart, c] for c in axes), s=6, facecolors="none", edgecolors=FEASIBLE_COLOUR,
+                   linewidths=0.5, depthshade=False, label=f"feasible, not connected ({apart.sum()})")
+    else:
+        ax.scatter(*(points.loc[feasible, c] for c in axes), s=6, c=FEASIBLE_COLOUR,
+                   depthshade=False, label=f"feasible ({feasible.sum()})")
     infeasible = points.loc[~feasible]
     limiting = "limiting" + column[len("feasible"):]
     if len(infeasible) <= 5000:  # dense grids: draw the feasible set only

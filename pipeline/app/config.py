@@ -487,10 +487,25 @@ class OutputConfig:
     ``tension_min_/tension_max_<cable>`` over the acceleration set (CPR-WWA), N, to
     points.parquet: the forces the checked model uses (``pipeline.workspace.quantities``).
     ``points``: write the per-pose table points.parquet (false: the summary only, for sweeps
-    whose figures read summaries; a study that draws clouds or compares poses refuses it)."""
+    whose figures read summaries; a study that draws clouds or compares poses refuses it).
+    ``mesh``: write the boundary of the feasible set, boundary.stl and boundary.ply (m, fixed
+    frame; ``pipeline.workspace.boundary``)."""
 
     cables: bool = MISSING
     points: bool = MISSING
+    mesh: bool = MISSING
+
+
+@dataclass
+class WorkspaceConfig:
+    """Connected reach (``pipeline.workspace.reach``): ``home``, a pose [x, y, z] (m; for a
+    robot on a joint, its angles in rad) whose connected component of the feasible grid the job
+    reports (summary ``connected_pct``, column ``connected``; null: not computed);
+    ``neighbourhood``: grid nodes are neighbours when their cells share a face (6), also an edge
+    (18) or also a corner (26)."""
+
+    home: Optional[list[float]] = rule(vector(3, "x y z, m"))
+    neighbourhood: int = rule(lambda value: None if value in (6, 18, 26) else "must be 6, 18 or 26")
 
 
 @dataclass
@@ -521,6 +536,7 @@ class Config:
     model: ModelConfig = field(default_factory=ModelConfig)
     compute: ComputeConfig = field(default_factory=ComputeConfig)
     output: OutputConfig = field(default_factory=OutputConfig)
+    workspace: WorkspaceConfig = field(default_factory=WorkspaceConfig)
     lines: LinesConfig = field(default_factory=LinesConfig)
     poses: Any = MISSING
 

@@ -19,7 +19,10 @@ import json
 import logging
 from contextlib import contextmanager
 from pathlib import Path
+from typing import Callable
 
+import pyarrow as pa
+import pyarrow.parquet as pq
 from omegaconf import DictConfig
 
 from pipeline.app.plan import Job
@@ -28,7 +31,7 @@ from pipeline.app.readings import describe_reading
 from pipeline.app.yamltext import to_yaml
 from pipeline.app.results import (
     CONFIG_KEY, DIGESTS_KEY, VERSION_KEY, ParquetSink, code_version, digests_json, file_digest,
-    read_metadata, read_verified, write_parquet,
+    read_metadata, read_verified, replacing, write_parquet,
 )
 from pipeline.workspace.arrow import one_row
 from pipeline.app.problem import ANALYSES, build_grid
@@ -120,11 +123,37 @@ class JobFiles:
         self.written.append(self.folder / f"{name}.parquet")
 
     @contextmanager
-    def stream(self, name: str):
-        """A :class:`ParquetSink` for ``name``.parquet, complete when the block ends."""
-        with ParquetSink(self.folder / f"{name}.parquet", self.config_yaml) as sink:
-            yield sink
+    def stream(self, name: str, then: Callable[[pa.Table, int], pa.Table] | None = None):
+        """A :class:`ParquetSink` for ``name``.parquet, complete when the block ends. ``then``:
+        (chunk, its first row) -> the chunk as written, for columns known only once every chunk
+        is in (the connected reach): the chunks wait in a scratch file meanwhile."""
+        if then is None:
+            with ParquetSink(self.folder / f"{name}.parquet", self.config_yaml) as sink:
+                yield sink
+        else:
+            scratch = self.folder / f".{name}.unfinished.parquet"
+            try:
+                with ParquetSink(scratch, self.config_yaml) as first:
+                    yield first
+                with ParquetSink(self.folder / f"{name}.parquet", self.config_yaml) as sink:
+                    start, chunks = 0, pq.ParquetFile(scratch)
+                    for group in range(chunks.num_row_groups):
+                        table = chunks.read_row_group(group).replace_schema_metadata(None)
+                        sink.write(then(table, start))
+                        start += table.num_rows
+            finally:
+                scratch.unlink(missing_ok=True)
         self.written.append(sink.path)
+
+    def mesh(self, name: str, vertices, triangles, title: str) -> None:
+        """``name``.stl and ``name``.ply: a triangle mesh (``pipeline.workspace.boundary``)."""
+        from pipeline.workspace.boundary import write_ply, write_stl
+
+        for suffix, writer in ((".stl", write_stl), (".ply", write_ply)):
+            path = self.folder / f"{name}{suffix}"
+            with replacing(path) as tmp:
+                writer(tmp, vertices, triangles, title)
+            self.written.append(path)
 
 
 def changed_files(out: Path, meta: dict | None = None) -> list[str]:

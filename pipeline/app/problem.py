@@ -50,6 +50,8 @@ from pipeline.workspace.compute import (
 )
 from pipeline.workspace.grid import Grid, box_grid, listed_grid, step_grid
 from pipeline.workspace.kernel import WorkspaceProblem
+from pipeline.workspace.reach import home_node
+from pipeline.workspace.shape import MESH_MAX_POSES, GridShape, meshable
 
 CPR_WWA_CRITERIA = ("speed", "torque", "acceleration", "voltage")  # eqs. (30), (32), (33), (34)
 FEASIBLE_GATES = ("unreachable", "slack")  # tension=feasible (pipeline.model.tensions)
@@ -213,11 +215,31 @@ def _payload(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
 def _grid_files(cfg: DictConfig, problem: WorkspaceProblem, grid: Grid, files, sweep_pays: bool) -> dict:
     """A grid job's files: points.parquet streamed chunk by chunk (memory bounded by a chunk, not
     by the grid), or with ``output.points=false`` no file (each chunk's rows counted, then
-    dropped); returns the summary."""
+    dropped); returns the summary. The feasible set's boundary (``pipeline.workspace.shape``):
+    its volume and area in the summary where the grid has one, the mesh files with
+    ``output.mesh``; with ``workspace.home``, the connected reach in the summary and as the
+    column ``connected``."""
+    home = cfg.workspace.home
+    mesh = meshable(grid, problem.angles is not None) is None and (
+        cfg.output.mesh or grid.n_points <= MESH_MAX_POSES)
+    if home is None and not mesh:
+        if not cfg.output.points:
+            summary = grid_workspace(cfg, problem, grid, lambda chunk: None, sweep_pays)[1]
+        else:
+            with files.stream("points") as sink:
+                summary = grid_workspace(cfg, problem, grid, sink.write, sweep_pays)[1]
+        return {**summary, "mesh_volume_m3": float("nan"), "mesh_surface_m2": float("nan")}
+    robot = problem.robot
+    shape = GridShape(grid, (robot.box_lo, robot.box_hi) if mesh else None, home, cfg.workspace.neighbourhood)
     if not cfg.output.points:
-        return grid_workspace(cfg, problem, grid, lambda chunk: None, sweep_pays)[1]
-    with files.stream("points") as sink:
-        return grid_workspace(cfg, problem, grid, sink.write, sweep_pays)[1]
+        summary = {**grid_workspace(cfg, problem, grid, shape.watching(None), sweep_pays)[1], **shape.summary()}
+    else:
+        with files.stream("points", then=None if home is None else shape.label) as sink:
+            summary = {**grid_workspace(cfg, problem, grid, shape.watching(sink.write), sweep_pays)[1],
+                       **shape.summary()}
+    if cfg.output.mesh:
+        files.mesh("boundary", shape.vertices, shape.triangles, f"cdpr-studies feasible set of {problem.robot.name}, m")
+    return summary
 
 
 def _line_files(cfg: DictConfig, problem: WorkspaceProblem, grid: Grid, files, sweep_pays: bool) -> dict:
@@ -348,6 +370,16 @@ def validate(cfg: DictConfig, catalogue: Catalogue | None,
         point_list("poses", cfg.poses)
     _validate_size(cfg)  # before anything the size would make large is built
     problem = build(cfg, catalogue)
+    for key, asked in (("workspace.home", cfg.workspace.home is not None), ("output.mesh=true", cfg.output.mesh)):
+        if asked and cfg.analysis == "lines":
+            raise ConfigError(f"{key}: analysis=lines follows straight lines; the connected reach and the mesh are "
+                              "of a grid analysis (cpr_wwa, statics, payload)")
+    if cfg.workspace.home is not None:
+        home_node(build_grid(cfg, problem.robot), cfg.workspace.home)
+    if cfg.output.mesh:
+        unfit = meshable(build_grid(cfg, problem.robot), problem.angles is not None)
+        if unfit:
+            raise ConfigError(f"output.mesh=true: {unfit}, so there is no boundary to write")
     if name_of(cfg.compute.kernel) == "fused":
         unfit = fused_unfit(problem)
         if unfit:

@@ -26,6 +26,21 @@ def numbers(values: np.ndarray) -> pa.Array:
                                  [None, pa.py_buffer(values)])
 
 
+def values(column: pa.ChunkedArray | pa.Array) -> np.ndarray:
+    """A numeric or boolean column without nulls as a numpy array, read from its buffers (the
+    reverse of :func:`numbers`; pyarrow's ``to_numpy`` imports pandas)."""
+    parts = []
+    for chunk in column.chunks if isinstance(column, pa.ChunkedArray) else [column]:
+        data = chunk.buffers()[1]
+        if pa.types.is_boolean(chunk.type):
+            bits = np.unpackbits(np.frombuffer(data, dtype=np.uint8), bitorder="little")
+            parts.append(bits[chunk.offset:chunk.offset + len(chunk)].astype(bool))
+        else:
+            stored = np.frombuffer(data, dtype=chunk.type.to_pandas_dtype())
+            parts.append(stored[chunk.offset:chunk.offset + len(chunk)])
+    return np.concatenate(parts) if parts else np.zeros(0)
+
+
 def texts(values: list[str | None]) -> pa.Array:
     """Strings as an Arrow string array; None is null."""
     encoded = [b"" if value is None else value.encode() for value in values]
