@@ -9,6 +9,7 @@ from fractions import Fraction
 import numpy as np
 import pytest
 
+from pipeline.api import workspace
 from pipeline.app.problem import build_problem, compute_workspace, validate
 from pipeline.model.clearance import segment_distance
 from pipeline.model.geometry import CableRobot, PoseGeometry
@@ -176,3 +177,16 @@ def test_the_closest_pair_is_the_one_at_the_worst_orientation(make_cfg, catalogu
     expected = np.array([per_orientation[w][1][k] for k, w in enumerate(worst)])
     np.testing.assert_array_equal(merged["closest_pair"], expected)
     assert len(set(worst.tolist())) > 1  # the worst orientation differs between poses
+
+
+@pytest.mark.parametrize("bound, diameter, feasible, lost", [(0.0, 0.04, 3593, 29), (0.2, 0.02, 2509, 437)])
+def test_the_cogiro_study_gives_the_numbers_its_docs_state(tmp_path, bound, diameter, feasible, lost):
+    """docs/studies.md quotes these jobs of the study interference_cogiro, run from its own
+    overrides: every surviving pose is connected to home."""
+    from pipeline.study import load_study
+
+    overrides = [o.strip('"') for o in load_study("interference_cogiro").overrides]
+    summary = workspace([*overrides, f"orientation.total.bound={bound}", f"robot.cable_diameter={diameter}",
+                         "output.points=false"], tmp_path).summary
+    assert (summary["n_feasible"], summary["n_points"], summary["lost_cable_cable"]) == (feasible, 5040, lost)
+    assert summary["n_connected"] == feasible

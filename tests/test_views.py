@@ -9,7 +9,11 @@ import numpy as np
 
 from conftest import eq9_rotation
 from pipeline.analyses.views import pose_axes, robot_traces, write_view
+import pytest
+
+from pipeline.api import workspace
 from pipeline.app.problem import build_problem, compute_workspace
+from pipeline.workspace.boundary import enclosed_volume
 
 
 def array(value) -> np.ndarray:
@@ -20,17 +24,23 @@ def array(value) -> np.ndarray:
 
 
 def test_a_full_grid_shows_its_feasible_set_as_a_surface_and_the_robot_at_a_pose(make_cfg, catalogue, tmp_path):
+    """The surface is the job's own boundary: the volume it encloses, read back from the view's
+    JSON, is the summary's mesh_volume_m3 (computed as the job streamed its chunks)."""
     cfg = make_cfg("actuator=2", "orientation.psi=0.2")
-    points, summary = compute_workspace(cfg, catalogue)
+    done = workspace(["actuator=2", "orientation.psi=0.2"], tmp_path / "job")
+    points, summary = done.points, done.summary
     robot = build_problem(cfg, catalogue)[0].robot
     position = np.array([1.0, 0.9, -1.1])
     traces = robot_traces(robot, position, eq9_rotation(0.2, 0.0, -0.3))  # a tilted, turned carrier
-    view = json.loads(write_view([(points, "feasible", None)], "t", False, tmp_path / "v.json", traces).read_text())
+    box = tuple(np.array([summary[f"box.{a}_{end}"] for a in "xyz"]) for end in ("min", "max"))
+    view = json.loads(write_view([(points, "feasible", None)], "t", False, tmp_path / "v.json", traces, box).read_text())
     by_name = {trace["name"]: trace for trace in view["data"]}
     surface = by_name[f"feasible set ({summary['n_feasible']})"]
-    assert surface["type"] == "isosurface" and surface["isomin"] == 0.5 and 0 < summary["n_feasible"] < 216
-    assert np.array_equal(array(surface["value"]), points["feasible"].to_numpy(float))
-    assert np.array_equal(array(surface["x"]), points["x"].to_numpy())
+    assert surface["type"] == "mesh3d" and 0 < summary["n_feasible"] < 216
+    vertices = np.column_stack([array(surface[a]) for a in "xyz"])
+    triangles = np.column_stack([array(surface[k]) for k in "ijk"]).astype(int)
+    assert enclosed_volume(vertices, triangles) == pytest.approx(summary["mesh_volume_m3"], rel=1e-4)
+    assert (vertices >= box[0] - 1e-4).all() and (vertices <= box[1] + 1e-4).all()  # closed on the box
     assert by_name[f"feasible ({summary['n_feasible']})"]["visible"] == "legendonly"  # the surface shows them
     anchors = by_name["anchors"]
     assert np.array_equal(np.column_stack([array(anchors[a]) for a in "xyz"]), robot.anchors) and robot.n_cables == 8
@@ -71,4 +81,4 @@ def test_a_grid_of_orientations_is_shown_in_its_angles(make_cfg, catalogue, tmp_
     assert pose_axes(points) == ("psi", "theta", "phi")
     view = json.loads(write_view([(points, "feasible", None)], "t", False, tmp_path / "v.json").read_text())
     assert view["layout"]["scene"]["xaxis"]["title"]["text"] == "psi (rad)"
-    assert view["data"][0]["type"] == "isosurface"
+    assert view["data"][0]["type"] == "mesh3d"

@@ -185,7 +185,10 @@ def _cloud_figure(spec: FigureSpec, panels: list, job: pd.Series, out_dir: Path,
             ax.set_title(title, fontsize=9)
     fig.suptitle(_fill(spec.title or "", job), fontsize=10)
     png = _save(fig, spec, out_dir, job)
-    write_view(panels, _fill(spec.title or "", job), spec.invert_z, png.with_suffix(".json"), robot)
+    box = None
+    if all(f"box.{axis}_{end}" in job for axis in "xyz" for end in ("min", "max")):
+        box = tuple(np.array([job[f"box.{axis}_{end}"] for axis in "xyz"], dtype=float) for end in ("min", "max"))
+    write_view(panels, _fill(spec.title or "", job), spec.invert_z, png.with_suffix(".json"), robot, box)
     return png
 
 

@@ -3,7 +3,8 @@ HTML report (``pipeline.analyses.webpage``). Points are coloured by their limiti
 margin on hover. A dense grid keeps all its feasible points and an evenly drawn sample of the
 infeasible ones (fixed seed), so the view never hides where the workspace ends; the legend
 says how many of each are shown. On a full grid the feasible set is also drawn as its boundary
-surface (the feasible points then start hidden: the legend shows them), and the robot is drawn
+surface, the job's own (``pipeline.workspace.boundary``; the feasible points then start hidden:
+the legend shows them), and the robot is drawn
 at one feasible pose (:func:`robot_traces`): its frame, anchors, cables and platform. A robot
 whose grid is of orientations (a joint holds its platform) is shown in its angles instead.
 """
@@ -16,6 +17,7 @@ import numpy as np
 import pandas as pd
 
 from pipeline.model.geometry import attached_points
+from pipeline.workspace.boundary import boundary_mesh
 from pipeline.workspace.criteria import COLOURS, FEASIBLE_COLOUR
 from pipeline.app.results import write_text
 
@@ -23,10 +25,11 @@ MAX_POINTS = 6000  # per panel: the page stays light with ~40 views
 
 
 def write_view(panels: list[tuple[pd.DataFrame, str, str | None]], title: str, invert_z: bool,
-               path: Path, robot: list[dict] | None = None) -> Path:
+               path: Path, robot: list[dict] | None = None, box: tuple | None = None) -> Path:
     """Write the view of one cloud figure: ``panels`` as (points, verdict column, panel
     title), one 3-D scene each, side by side; ``robot``: the traces of the robot drawn in each
-    scene (:func:`robot_traces`), None for none."""
+    scene (:func:`robot_traces`), None for none; ``box``: the searched box (lo, hi), where the
+    feasible set's surface closes (None: on the outermost poses)."""
     from plotly.subplots import make_subplots
 
     axes = pose_axes(panels[0][0])
@@ -34,7 +37,7 @@ def write_view(panels: list[tuple[pd.DataFrame, str, str | None]], title: str, i
                         subplot_titles=[t or "" for _, _, t in panels], horizontal_spacing=0.02)
     for col, (points, column, _) in enumerate(panels, start=1):
         traces = _traces(points, column, legend=col == 1, axes=axes)
-        surface = _surface(points, column, axes)
+        surface = _surface(points, column, axes, box)
         if surface is not None:
             traces[0]["visible"] = "legendonly"  # the feasible points: the surface shows the set
             traces.insert(0, {**surface, "showlegend": col == 1})
@@ -61,18 +64,25 @@ def pose_axes(points: pd.DataFrame) -> tuple[str, str, str]:
     return ("psi", "theta", "phi") if at_origin and turning else ("x", "y", "z")
 
 
-def _surface(points: pd.DataFrame, column: str, axes) -> dict | None:
+def _surface(points: pd.DataFrame, column: str, axes, box: tuple | None) -> dict | None:
     """The boundary of the feasible set on a full grid (two values or more on every axis, one
-    pose per node): the 0.5 level of the verdict, closed by caps where it meets the grid's
-    faces; None otherwise (a plane, a list of poses, no feasible pose)."""
+    pose per node), the surface of the job's summary (``pipeline.workspace.boundary``): the zero
+    level of the least margin (of the verdict alone, +-0.5, for a panel of other verdicts),
+    closed on ``box``; None otherwise (a plane, a list of poses, no feasible pose)."""
     feasible = points[column].to_numpy(dtype=bool)
     counts = [points[a].nunique() for a in axes]
     if min(counts) < 2 or int(np.prod(counts)) != len(points) or not feasible.any():
         return None
-    return {"type": "isosurface", "x": points[axes[0]].to_numpy(), "y": points[axes[1]].to_numpy(),
-            "z": points[axes[2]].to_numpy(), "value": feasible.astype(float), "isomin": 0.5, "isomax": 1.0,
-            "surface_count": 1, "opacity": 0.45, "showscale": False, "hoverinfo": "skip",
-            "colorscale": [[0, FEASIBLE_COLOUR], [1, FEASIBLE_COLOUR]], "name": f"feasible set ({int(feasible.sum())})",
+    margins = [name for name in points.columns if name.startswith("margin_")] if column == "feasible" else []
+    least = points[margins].min(axis=1).to_numpy() if margins else np.full(len(points), 0.5)
+    field = np.where(feasible, np.maximum(least, 0.0), np.minimum(-np.abs(least), -1e-30))
+    order = np.lexsort([points[a].to_numpy() for a in reversed(axes)])  # the grid's order: first axis slowest
+    nodes = tuple(np.unique(points[a].to_numpy()) for a in axes)
+    lo, hi = box if box is not None and axes[0] == "x" else ([n[0] for n in nodes], [n[-1] for n in nodes])
+    vertices, triangles = boundary_mesh(field[order].reshape(counts), nodes, np.asarray(lo), np.asarray(hi))
+    return {"type": "mesh3d", "x": vertices[:, 0].round(5), "y": vertices[:, 1].round(5), "z": vertices[:, 2].round(5),
+            "i": triangles[:, 0], "j": triangles[:, 1], "k": triangles[:, 2], "color": FEASIBLE_COLOUR,
+            "opacity": 0.45, "hoverinfo": "skip", "name": f"feasible set ({int(feasible.sum())})",
             "legendgroup": "feasible"}
 
 

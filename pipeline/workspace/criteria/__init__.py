@@ -54,7 +54,7 @@ REGISTRY: dict[str, Criterion] = {c.name: c for c in (
     Criterion("tension_max", tension.tension_max, ANY, None, "#0072B2",
               "stronger cables (a higher tension.t_max) or a lighter load"),
     Criterion("length", geometry.length, ANY, None, "#CC79A7", "longer cables (robot.l_max) or a smaller box"),
-    Criterion("cable_cable", interference.cable_cable, GEOMETRY, None, "#AA4499",
+    Criterion("cable_cable", interference.cable_cable, GEOMETRY, None, "#DDCC77",
               "thinner cables (robot.cable_diameter), anchors and attachments that keep the cables apart, "
               "or a smaller box"),
     Criterion("payload", payload.payload, STATICS, None, "#56B4E9", "a lighter payload (load.mass) or stronger cables"),
