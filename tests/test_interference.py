@@ -190,3 +190,141 @@ def test_the_cogiro_study_gives_the_numbers_its_docs_state(tmp_path, bound, diam
                          "output.points=false"], tmp_path).summary
     assert (summary["n_feasible"], summary["n_points"], summary["lost_cable_cable"]) == (feasible, 5040, lost)
     assert summary["n_connected"] == feasible
+
+
+# --- cable-obstacle and cable-platform ---------------------------------------------------------
+
+def point_box_distance(points, lo, hi):
+    """Each point's distance from the box (0 inside) and its depth inside (0 outside)."""
+    outside = np.linalg.norm(np.maximum(np.maximum(lo - points, points - hi), 0.0), axis=-1)
+    depth = np.minimum(points - lo, hi - points).min(axis=-1).clip(min=0.0)
+    return outside, depth
+
+
+def test_separating_axes_of_a_segment_and_a_box_against_dense_sampling():
+    """Apart, the gap is positive and at most the sampled distance; crossing, it is negative;
+    along a face it is that face's distance exactly."""
+    from pipeline.model.clearance import box_separation
+
+    rng = np.random.default_rng(11)
+    lo, hi = np.array([-0.5, -0.3, -0.2]), np.array([0.4, 0.6, 0.3])
+    starts, ends = rng.uniform(-1.5, 1.5, size=(2, 400, 3))
+    segments = np.stack([starts, ends], axis=1)
+    direction = (ends - starts) / np.linalg.norm(ends - starts, axis=1, keepdims=True)
+    gaps = box_separation(segments, np.zeros((400, 0, 3)), direction[:, None, :], lo, hi)
+    s = np.linspace(0, 1, 4001)[:, None, None]
+    outside, depth = point_box_distance(starts + s * (ends - starts), lo, hi)
+    nearest, deepest = outside.min(axis=0), depth.max(axis=0)
+    step = np.linalg.norm(ends - starts, axis=1) / 4000
+    apart, crossing = nearest > step, deepest > step
+    assert apart.sum() > 100 and crossing.sum() > 50
+    assert (gaps[apart] > 0).all() and (gaps[apart] <= nearest[apart] + 1e-12).all()
+    assert (gaps[crossing] < 0).all()
+    along = np.array([[[-1.0, 0.9, 0.0], [1.0, 0.9, 0.0]]])  # parallel to the face y = 0.6, 0.3 above it
+    assert box_separation(along, np.zeros((1, 0, 3)), np.array([[[1.0, 0, 0]]]), lo, hi)[0] == pytest.approx(0.3)
+
+
+def test_separating_axes_of_turned_cubes_and_a_box_against_a_linear_program():
+    """A convex body and a box intersect exactly when some convex combination of the body's
+    vertices lies in the box (a linear feasibility problem, solved by scipy's HiGHS)."""
+    from scipy.optimize import linprog
+
+    from conftest import eq9_rotation
+    from pipeline.model.clearance import Polytope, box_separation
+
+    rng = np.random.default_rng(5)
+    cube = Polytope.hull(np.array([[x, y, z] for x in (0, 0.4) for y in (0, 0.3) for z in (0, 0.2)]) - 0.1, 1e-12)
+    lo, hi = np.zeros(3), np.array([1.0, 0.5, 0.7])
+    verdicts = []
+    for _ in range(150):
+        turn = eq9_rotation(*rng.uniform(-np.pi, np.pi, 3))
+        at = rng.uniform(-0.5, 1.5, 3)
+        vertices = at + cube.vertices @ turn.T
+        gap = box_separation(vertices, cube.normals @ turn.T, cube.edges @ turn.T, lo, hi)
+        k = len(vertices)
+        lp = linprog(np.zeros(k), A_ub=np.vstack([vertices.T, -vertices.T]), b_ub=np.concatenate([hi, -lo]),
+                     A_eq=np.ones((1, k)), b_eq=[1.0], bounds=[(0, None)] * k, method="highs")
+        if abs(gap) > 1e-9:
+            verdicts.append((gap < 0, lp.status == 0))
+    assert all(sat == lp for sat, lp in verdicts) and 20 < sum(sat for sat, _ in verdicts) < len(verdicts) - 20
+
+
+def _cpr8_with(make_cfg, catalogue, *overrides):
+    cfg = make_cfg(*overrides)
+    cfg, problem = validate(cfg, catalogue, typed=True)
+    return problem, build_problem(cfg, catalogue)[1]
+
+
+@pytest.mark.parametrize("orientation", [(0.0, 0.0, 0.0), (0.5, -0.4, 0.6)])
+def test_cable_platform_against_sampled_cables(make_cfg, catalogue, orientation):
+    """A cable enters the carrier (its box, the attachments at its corners) exactly when points
+    of it just past its attachment lie inside the box."""
+    from pipeline.workspace.criteria.interference import cable_platform
+
+    psi, theta, phi = orientation
+    problem, grid = _cpr8_with(make_cfg, catalogue, "robot.platform.shape=hull", "grid.n=8", f"orientation.psi={psi}",
+                               f"orientation.theta={theta}", f"orientation.phi={phi}")
+    robot = problem.robot
+    state = PoseGeometry(robot, grid[:], problem.orientation)
+    margin = cable_platform(state, None)
+    half = np.abs(robot.attachments).max(axis=0)
+    local = (robot.anchors[None] - state.attachment_points) @ state.rotation  # platform frame, from b_i
+    t = np.geomspace(1e-6, 1.0, 200)[:, None, None, None]
+    inside = (np.abs(robot.attachments[None, None] + t * local[None]) < half - 1e-9).all(axis=-1).any(axis=(0, 2))
+    assert np.array_equal(margin < 0, inside)
+    assert inside.any() == (orientation != (0.0, 0.0, 0.0))  # level, every cable leaves the carrier outwards
+
+
+def test_cable_obstacle_against_sampled_cables_and_the_platforms_corners(make_cfg, catalogue):
+    """A tilted floor under the tilted CPR-8 carrier: the margin is the exact least clearance of
+    the cables (less their radius) and the carrier's corners, over the robot's extent. A table
+    beside it: every pose where sampled points of a cable lie inside it has a negative margin,
+    the table named as the closest obstacle."""
+    from pipeline.workspace.criteria.interference import cable_obstacle, obstacle_pairs
+
+    floor = "{name: floor, point: [0, 0, -1.9], normal: [0, 0.1, 1]}"
+    table = "{name: table, lo: [1.2, 0.6, -3], hi: [2.2, 1.4, -1.5]}"
+    common = ["grid.n=7", "orientation.psi=0.3", "orientation.theta=-0.2", "robot.cable_diameter=0.02",
+              "robot.platform.shape=hull"]
+    problem, grid = _cpr8_with(make_cfg, catalogue, *common, f"obstacles=[{floor}]")
+    robot = problem.robot
+    state = PoseGeometry(robot, grid[:], problem.orientation)
+    margin = cable_obstacle(state, None)
+    plane = robot.obstacles[0]
+    ends = np.stack([np.broadcast_to(robot.anchors, state.attachment_points.shape), state.attachment_points])
+    cables = ((ends - plane.point) @ plane.normal).min(axis=0) - 0.01  # a segment is lowest at an end
+    corners = state.positions[:, None, :] + robot.attachments @ state.rotation.T
+    exact = np.minimum(cables.min(axis=1), ((corners - plane.point) @ plane.normal).min(axis=1)) / robot.extent
+    np.testing.assert_allclose(margin, np.minimum(exact, 1.0), rtol=0, atol=1e-12)
+    assert (margin < 0).any() and (margin > 0).any()
+    # a lower cable ends at a lower corner of the carrier, one radius nearer the floor than the corner itself
+    assert {obstacle_pairs(robot)[k] for k in state.closest_obstacle} <= {"floor: k'", "floor: h'", "floor: m'", "floor: n'"}
+
+    problem, grid = _cpr8_with(make_cfg, catalogue, *common, f"obstacles=[{floor}, {table}]")
+    robot = problem.robot
+    state = PoseGeometry(robot, grid[:], problem.orientation)
+    margin = cable_obstacle(state, None)
+    s = np.linspace(0, 1, 2001)[:, None, None, None]
+    points = robot.anchors[None, None] + s * (state.attachment_points - robot.anchors)[None]  # (s, n, m, 3)
+    depth = point_box_distance(points, robot.obstacles[1].lo, robot.obstacles[1].hi)[1].max(axis=0)
+    hits = (depth > 1e-3).any(axis=1)
+    assert hits.sum() > 10 and (margin[hits] < 0).all()
+    named = [obstacle_pairs(robot)[k] for k in state.closest_obstacle[hits]]
+    assert all(name.startswith("table: ") or margin[hits][i] <= exact[hits][i] for i, name in enumerate(named))
+
+
+@pytest.mark.parametrize("extra", [["robot.platform.shape=hull", "robot.cable_diameter=0.01",
+                                    "obstacles=[{name: table, lo: [1, 0.5, -2.5], hi: [2, 1.5, -1.6]}]"]])
+@pytest.mark.parametrize("orientation", [(0.0, 0.0, 0.0), (0.5, 0.5, 0.5)])
+def test_numpy_and_compiled_kernels_give_the_same_platform_and_obstacle_margins(make_cfg, catalogue, extra,
+                                                                                  orientation):
+    psi, theta, phi = orientation
+    tables = {}
+    for kernel in ("numpy", "fused"):
+        cfg = make_cfg(*extra, "grid.n=10", f"compute.kernel={kernel}", f"orientation.psi={psi}",
+                       f"orientation.theta={theta}", f"orientation.phi={phi}")
+        cfg, _ = validate(cfg, catalogue, typed=True)
+        tables[kernel] = compute_workspace(cfg, catalogue)[0]
+    for column in ("margin_cable_platform", "margin_cable_obstacle", "closest_obstacle", "limiting", "feasible"):
+        assert tables["numpy"][column].tolist() == tables["fused"][column].tolist()
+    assert (tables["numpy"]["limiting"] == "cable_obstacle").any()

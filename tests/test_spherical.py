@@ -102,3 +102,21 @@ def test_an_orientation_grid_has_no_boundary_mesh_to_write(make_cfg, catalogue):
         validate(make_cfg(*GIMBAL, "output.mesh=true"), catalogue, typed=True)
     assert str(refused.value) == ("output.mesh=true: the grid is of orientations (a robot on a joint), whose boundary "
                                   "has no volume in m^3, so there is no boundary to write")
+
+
+def test_interference_turns_with_each_orientation_of_the_grid(make_cfg, catalogue):
+    """A robot on a joint with a post beside it and a platform body: the per-pose rotations give
+    each orientation's own clearances, as a state built for that orientation alone does."""
+    from pipeline.model.geometry import PoseGeometry
+    from pipeline.workspace.criteria.interference import cable_obstacle, cable_platform
+
+    extra = ["obstacles=[{name: post, lo: [0.15, -0.05, -0.3], hi: [0.4, 0.05, 0.3]}]", "robot.platform.shape=hull"]
+    problem, grid = build_problem(make_cfg(*GIMBAL, *extra), catalogue)
+    table = compute_workspace(make_cfg(*GIMBAL, *extra), catalogue)[0]
+    rows = grid[:]
+    for k in range(0, len(rows), 97):
+        rotation = xyz_rotation(*rows[k]) if problem.angles == "xyz" else eq9_rotation(*rows[k])
+        state = PoseGeometry(problem.robot, np.zeros((1, 3)), rotation[None])
+        assert table["margin_cable_obstacle"].iloc[k] == pytest.approx(cable_obstacle(state, None)[0], abs=1e-12)
+        assert table["margin_cable_platform"].iloc[k] == pytest.approx(cable_platform(state, None)[0], abs=1e-12)
+    assert (table["margin_cable_obstacle"] < 0).any() and (table["margin_cable_obstacle"] > 0).any()

@@ -199,10 +199,14 @@ class PlatformConfig:
     """The robot's own moving platform: its mass (kg) and centre of mass (m, platform frame).
     With the payload (``load.*``) it is the mass m of eq. (31) and the weight every analysis
     balances (CPR-8: the paper's carrier with its load, 2 kg; IRPM: 0, as its paper puts the
-    weight in f_ext; a robot of points: 0 unless its file gives one)."""
+    weight in f_ext; a robot of points: 0 unless its file gives one). ``shape``: its body, which
+    no cable may enter (criterion ``cable_platform``) and obstacles see: ``hull`` (the convex hull
+    of the attachment points), a box ``{lo: [x, y, z], hi: [x, y, z]}`` (m, platform frame) with
+    every attachment on its surface, or null (not checked; obstacles see the attachments' hull)."""
 
     mass: float = rule(mass_kg)
     com: list[float] = rule(vector(3, "x y z, m, platform frame"))
+    shape: Any = MISSING
 
 
 @dataclass
@@ -515,7 +519,11 @@ class Config:
     pose; ``robot=irpm6`` and ``points`` pick statics), ``actuator`` (the id of a catalogue
     row), ``catalogue`` (a CSV or Parquet path; null = Table 1 of the CPR-8 paper, shipped in
     pipeline/data), ``poses`` (a list of [x, y, z] positions in m checked instead of the robot's
-    grid, e.g. ``poses=[[0,0,5]]``; null = the grid; the summary's volume_m3 is then NaN). A
+    grid, e.g. ``poses=[[0,0,5]]``; null = the grid; the summary's volume_m3 is then NaN),
+    ``obstacles`` (the cell's obstacles no cable and not the platform may touch, criterion
+    ``cable_obstacle``: a list of boxes ``{name: table, lo: [x, y, z], hi: [x, y, z]}`` and
+    half-spaces ``{name: floor, point: [x, y, z], normal: [x, y, z]}``, the obstacle behind the
+    plane, m, fixed frame). A
     job has the keys of conf/config.yaml plus those of its tension, analysis and robot files,
     and only those (checked against this schema by ``pipeline.app.problem.typed_config``; the
     robot and analysis kinds are named there)."""
@@ -539,6 +547,7 @@ class Config:
     workspace: WorkspaceConfig = field(default_factory=WorkspaceConfig)
     lines: LinesConfig = field(default_factory=LinesConfig)
     poses: Any = MISSING
+    obstacles: Any = MISSING
 
 
 def register() -> None:

@@ -39,6 +39,7 @@ from pipeline.app.config import (
 from pipeline.errors import ConfigError
 from pipeline.model.actuators import actuator_model
 from pipeline.model.catalogue import Catalogue
+from pipeline.model.clearance import Obstacle, Polytope
 from pipeline.model.dynamics import Load, MotionSpec
 from pipeline.model.geometry import FREEDOMS, CableRobot, eq9_angles
 from pipeline.model.motion import acceleration_set, cartesian_cube, extreme_points, velocity_set
@@ -405,22 +406,102 @@ def build(cfg: DictConfig, catalogue: Catalogue | None) -> WorkspaceProblem:
 
 
 def surroundings(cfg: DictConfig, robot: CableRobot) -> tuple[CableRobot, tuple[str, ...]]:
-    """The robot with what its cables could touch, and the interference criteria that check it:
-    ``robot.cable_diameter`` (one or one per cable, m) gives the cables' radii and the
-    ``cable_cable`` criterion. Refused where no two cables can meet along their length."""
+    """The robot with what its cables could touch, and the interference criteria that check it
+    (docs/model.md section 8): ``robot.cable_diameter`` (one or one per cable, m) gives the
+    cables' radii and ``cable_cable``, ``robot.platform.shape`` the platform's body and
+    ``cable_platform``, ``obstacles`` the cell's obstacles and ``cable_obstacle``. Each is refused
+    where it cannot mean anything: no two cables that can meet along their length, a body with
+    no inside or an attachment off its surface, an obstacle that holds an anchor."""
+    criteria = []
     diameter = cfg.robot.cable_diameter
-    if diameter is None:
-        return robot, ()
-    items = OmegaConf.to_container(diameter) if isinstance(diameter, ListConfig) else [diameter]
-    if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and 0 < v < float("inf") for v in items):
-        raise ConfigError(f"robot.cable_diameter={shown(diameter)}: must be a number > 0 (m) or a list of one per cable")
-    if len(items) not in (1, robot.n_cables):
-        raise ConfigError(f"robot.cable_diameter={shown(diameter)}: {len(items)} values for {robot.n_cables} cables")
-    robot = replace(robot, cable_radii=np.broadcast_to(np.asarray(items, dtype=float) / 2, (robot.n_cables,)).copy())
-    if not len(robot.cable_pairs[0]):
-        raise ConfigError(f"robot.cable_diameter={shown(diameter)}: every two cables share an anchor or an attachment "
-                          "point (a point platform), so none can touch another along its length; set it null")
-    return robot, ("cable_cable",)
+    if diameter is not None:
+        items = OmegaConf.to_container(diameter) if isinstance(diameter, ListConfig) else [diameter]
+        if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and 0 < v < float("inf") for v in items):
+            raise ConfigError(f"robot.cable_diameter={shown(diameter)}: must be a number > 0 (m) or a list of one per cable")
+        if len(items) not in (1, robot.n_cables):
+            raise ConfigError(f"robot.cable_diameter={shown(diameter)}: {len(items)} values for {robot.n_cables} cables")
+        robot = replace(robot, cable_radii=np.broadcast_to(np.asarray(items, dtype=float) / 2, (robot.n_cables,)).copy())
+        if not len(robot.cable_pairs[0]):
+            raise ConfigError(f"robot.cable_diameter={shown(diameter)}: every two cables share an anchor or an attachment "
+                              "point (a point platform), so none can touch another along its length; set it null")
+        criteria.append("cable_cable")
+    if cfg.robot.platform.shape is not None:
+        robot = replace(robot, platform_shape=platform_shape(cfg.robot.platform.shape, robot))
+        criteria.append("cable_platform")
+    if cfg.obstacles is not None and not (isinstance(cfg.obstacles, ListConfig) and not len(cfg.obstacles)):
+        robot = replace(robot, obstacles=obstacles(cfg.obstacles, robot))
+        criteria.append("cable_obstacle")
+    return robot, tuple(criteria)
+
+
+def platform_shape(value, robot: CableRobot) -> Polytope:
+    """The body of ``robot.platform.shape``: ``hull`` or a box {lo, hi} (m, platform frame),
+    every attachment point on its surface (a cable leaves the platform there)."""
+    shown_value = OmegaConf.to_container(value) if isinstance(value, DictConfig) else value
+    key = "robot.platform.shape"
+    tol = robot.shortest_cable
+    if value == "hull":
+        shape = Polytope.hull(robot.attachments, tol)
+        if not len(shape.normals):
+            raise ConfigError(f"{key}=hull: the attachment points span no volume (a plate, a line or a point), so no "
+                              "cable can enter it; declare a box {lo: [x, y, z], hi: [x, y, z]} (m, platform frame)")
+    elif isinstance(value, DictConfig) and set(value) == {"lo", "hi"}:
+        lo, hi = (_obstacle_vector(value[end], f"{key}.{end}") for end in ("lo", "hi"))
+        if not (lo < hi).all():
+            raise ConfigError(f"{key}.lo={lo.tolist()}: must be below {key}.hi={hi.tolist()} on every axis")
+        shape = Polytope.box(lo, hi)
+    else:
+        raise ConfigError(f"{key}={shown_value}: hull, or a box {{lo: [x, y, z], hi: [x, y, z]}} (m, platform frame)")
+    heights = robot.attachments @ shape.normals.T - shape.offsets  # <= 0 inside, 0 on a face
+    for i, row in enumerate(heights):
+        if row.max() > tol or row.max() < -tol:
+            where = "outside" if row.max() > tol else "inside"
+            raise ConfigError(f"{key}: attachment {i + 1} {robot.attachments[i].tolist()} is {where} the platform's "
+                              "body, not on its surface (each cable leaves the platform at its surface)")
+    return shape
+
+
+def obstacles(value, robot: CableRobot) -> tuple[Obstacle, ...]:
+    """The obstacles of ``obstacles``: boxes {lo, hi} and planes {point, normal} (m, fixed frame,
+    each with an optional name); refuses one that holds an anchor (every cable from it would
+    cross it)."""
+    if not isinstance(value, ListConfig):
+        raise ConfigError(f"obstacles={shown(value)}: a list of boxes {{lo: [3], hi: [3]}} and planes "
+                          "{point: [3], normal: [3]} (m)")
+    found = []
+    for number, item in enumerate(value):
+        key = f"obstacles[{number}]"
+        fields_ = set(item) - {"name"} if isinstance(item, DictConfig) else None
+        name = str(item.get("name", f"obstacle {number + 1}")) if fields_ is not None else ""
+        if fields_ == {"lo", "hi"}:
+            lo, hi = (_obstacle_vector(item[end], f"{key}.{end}") for end in ("lo", "hi"))
+            if not (lo < hi).all():
+                raise ConfigError(f"{key}.lo={lo.tolist()}: must be below {key}.hi={hi.tolist()} on every axis")
+            obstacle = Obstacle(name, lo=lo, hi=hi)
+            inside = ((robot.anchors > lo) & (robot.anchors < hi)).all(axis=1)
+        elif fields_ == {"point", "normal"}:
+            point, normal = (_obstacle_vector(item[end], f"{key}.{end}") for end in ("point", "normal"))
+            if not np.linalg.norm(normal) > 0:
+                raise ConfigError(f"{key}.normal={normal.tolist()}: must not be zero")
+            obstacle = Obstacle(name, point=point, normal=normal / np.linalg.norm(normal))
+            inside = (robot.anchors - point) @ obstacle.normal < -robot.shortest_cable
+        else:
+            raise ConfigError(f"{key}={shown(item)}: a box {{lo: [3], hi: [3]}} or a plane {{point: [3], normal: [3]}} "
+                              "(m, fixed frame), with an optional name")
+        if inside.any():
+            anchor = int(np.flatnonzero(inside)[0])
+            raise ConfigError(f"{key} ({name}): anchor {anchor + 1} {robot.anchors[anchor].tolist()} is inside it, so "
+                              "every pose would have a cable through it")
+        found.append(obstacle)
+    return tuple(found)
+
+
+def _obstacle_vector(value, key: str) -> np.ndarray:
+    items = OmegaConf.to_container(value) if isinstance(value, ListConfig) else value
+    broken = vector(3, "x, y, z, m", MAX_FORCE)(items) if isinstance(items, list) else "must be 3 numbers [x, y, z] (m)"
+    if broken:
+        raise ConfigError(f"{key}={items}: {broken}")
+    return np.asarray(items, dtype=float)
 
 
 def build_grid(cfg: DictConfig, robot: CableRobot) -> Grid:

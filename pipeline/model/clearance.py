@@ -9,6 +9,8 @@ other.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 
@@ -51,3 +53,101 @@ def segment_distance(p1: np.ndarray, d1: np.ndarray, p2: np.ndarray, d2: np.ndar
 
 def _dot(u: np.ndarray, v: np.ndarray) -> np.ndarray:
     return np.einsum("...k,...k->...", u, v)
+
+
+@dataclass(frozen=True)
+class Polytope:
+    """A convex body as its vertices (k, 3), the unit outward normals (f, 3) and offsets (f,) of
+    its faces (inside: normals . x <= offsets) and the unit directions of its edges (e, 3); a
+    flat one (a plate, a segment, a point) has no faces, its separating axes come from its edges
+    and its plane's normal (``plane``, (0, 3) or (1, 3))."""
+
+    vertices: np.ndarray
+    normals: np.ndarray
+    offsets: np.ndarray
+    edges: np.ndarray
+    plane: np.ndarray
+
+    @classmethod
+    def box(cls, lo, hi) -> "Polytope":
+        """The axis-aligned box [lo, hi] (m)."""
+        lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
+        corners = np.array([[(lo, hi)[i][0], (lo, hi)[j][1], (lo, hi)[k][2]] for i in (0, 1) for j in (0, 1) for k in (0, 1)])
+        axes = np.eye(3)
+        return cls(corners, np.vstack([axes, -axes]), np.concatenate([hi, -lo]), axes, np.zeros((0, 3)))
+
+    @classmethod
+    def hull(cls, points, tol: float) -> "Polytope":
+        """The convex hull of ``points`` (k, 3): its faces and edges (scipy's Qhull), or, for
+        points within ``tol`` of one plane, the plate they span (no faces, its outline's edges)."""
+        from scipy.spatial import ConvexHull
+
+        points = np.asarray(points, dtype=float)
+        centred = points - points.mean(axis=0)
+        _, sizes, frame = np.linalg.svd(centred, full_matrices=True)
+        if len(points) < 4 or sizes[2] <= tol:  # a plate, a segment or a point
+            flat = centred @ frame[:2].T
+            if len(points) >= 3 and sizes[1] > tol:
+                outline = points[ConvexHull(flat).vertices]
+                edges = _unit(np.roll(outline, -1, axis=0) - outline)
+                return cls(outline, np.zeros((0, 3)), np.zeros(0), edges, frame[2:3])
+            ends = points[[int(np.argmin(flat[:, 0])), int(np.argmax(flat[:, 0]))]]
+            edges = _unit(ends[1:] - ends[:1]) if sizes[0] > tol else np.zeros((0, 3))
+            return cls(ends, np.zeros((0, 3)), np.zeros(0), edges, np.zeros((0, 3)))
+        hull = ConvexHull(points)
+        normals, offsets = hull.equations[:, :3], -hull.equations[:, 3]
+        pairs = {tuple(sorted((int(a), int(b)))) for simplex in hull.simplices for a, b in zip(simplex, np.roll(simplex, 1))}
+        edges = _unit(np.array([points[b] - points[a] for a, b in sorted(pairs)]))
+        return cls(points[hull.vertices], normals, offsets, edges, np.zeros((0, 3)))
+
+
+def _unit(vectors: np.ndarray) -> np.ndarray:
+    return vectors / np.linalg.norm(vectors, axis=-1, keepdims=True)
+
+
+def box_separation(vertices: np.ndarray, normals: np.ndarray, edges: np.ndarray, lo: np.ndarray,
+                   hi: np.ndarray) -> np.ndarray:
+    """The signed separation (m) of convex bodies from the axis-aligned box [lo, hi], by the
+    separating axis theorem: the largest gap between their projections over the axes that
+    decide two convex polytopes (the box's three axes, the body's face normals and every body
+    edge crossed with every box axis). Positive: apart, by at most the true distance; zero:
+    touching; negative: the smallest overlap over those axes, the depth of penetration.
+    ``vertices`` (..., k, 3), ``normals`` (..., f, 3), ``edges`` (..., e, 3), unit vectors, any
+    leading axes (poses, cables) shared by the three."""
+    crossed = np.cross(edges[..., :, None, :], np.eye(3)).reshape(*edges.shape[:-2], -1, 3)
+    length = np.linalg.norm(crossed, axis=-1, keepdims=True)
+    crossed = np.divide(crossed, length, out=np.zeros_like(crossed), where=length > 1e-12)
+    axes = np.concatenate([np.broadcast_to(np.eye(3), (*vertices.shape[:-2], 3, 3)), normals, crossed], axis=-2)
+    body = np.einsum("...ad,...kd->...ak", axes, vertices)
+    centre, half = (hi + lo) / 2.0, (hi - lo) / 2.0
+    middle, radius = axes @ centre, np.abs(axes) @ half
+    gaps = np.maximum(body.min(axis=-1) - (middle + radius), (middle - radius) - body.max(axis=-1))
+    usable = np.linalg.norm(axes, axis=-1) > 0.5  # an edge parallel to a box axis crosses it into nothing
+    return np.where(usable, gaps, -np.inf).max(axis=-1)
+
+
+def plane_clearance(vertices: np.ndarray, point: np.ndarray, normal: np.ndarray) -> np.ndarray:
+    """The least signed distance (m) of ``vertices`` (..., k, 3) from the plane through ``point``
+    with unit ``normal``, positive on the side it points to: a convex body's (or a segment's)
+    exact clearance from the half-space behind the plane."""
+    return ((vertices - point) @ normal).min(axis=-1)
+
+
+@dataclass(frozen=True)
+class Obstacle:
+    """A fixed obstacle of the robot's cell (fixed frame, m): the axis-aligned box [lo, hi], or
+    the half-space behind the plane through ``point`` (the side its unit ``normal`` points away
+    from; e.g. a floor: point [0, 0, 0], normal [0, 0, 1])."""
+
+    name: str
+    lo: np.ndarray | None = None
+    hi: np.ndarray | None = None
+    point: np.ndarray | None = None
+    normal: np.ndarray | None = None
+
+    def clearance(self, vertices: np.ndarray, normals: np.ndarray, edges: np.ndarray) -> np.ndarray:
+        """The signed clearance (m) of convex bodies (:func:`box_separation`'s arguments) from it:
+        exact for the half-space, the separating-axis gap for the box."""
+        if self.normal is not None:
+            return plane_clearance(vertices, self.point, self.normal)
+        return box_separation(vertices, normals, edges, self.lo, self.hi)

@@ -25,6 +25,8 @@ from functools import cached_property
 
 import numpy as np
 
+from pipeline.model.clearance import Obstacle, Polytope
+
 
 @dataclass(frozen=True)
 class CableRobot:
@@ -41,6 +43,10 @@ class CableRobot:
     the structure matrix the cables balance (:data:`FREEDOMS`; a joint or a plane holds the others:
     a point platform in space (0, 1, 2), a planar point (0, 1), a planar body (0, 1, 5)).
     cable_radii: (m,) each cable's radius, m (None: cables are lines, no cable-cable check).
+    platform_shape: the platform's body (``pipeline.model.clearance.Polytope``, platform frame)
+    that no cable may enter, every attachment on its surface (None: not checked).
+    obstacles: the cell's obstacles (``pipeline.model.clearance.Obstacle``) that no cable and not
+    the platform may touch.
     """
 
     name: str
@@ -53,6 +59,8 @@ class CableRobot:
     l_max: float | None = None
     dofs: tuple[int, ...] = (0, 1, 2, 3, 4, 5)
     cable_radii: np.ndarray | None = None
+    platform_shape: Polytope | None = None
+    obstacles: tuple[Obstacle, ...] = ()
 
     @property
     def n_cables(self) -> int:
@@ -70,8 +78,25 @@ class CableRobot:
         """A cable shorter than this (m) has collapsed: its attachment point sits on its anchor
         and eq. (1) gives it no direction. ``ZERO_LENGTH_RTOL`` times the robot's extent (at
         least 1 m): far below any grid step, far above the round-off of a grid's positions."""
-        extent = max(1.0, float(np.abs(self.anchors).max(initial=0.0)), float(np.abs(self.attachments).max(initial=0.0)))
-        return ZERO_LENGTH_RTOL * extent
+        return ZERO_LENGTH_RTOL * self.extent
+
+    @property
+    def extent(self) -> float:
+        """The robot's size (m, at least 1): its farthest anchor or attachment coordinate."""
+        return max(1.0, float(np.abs(self.anchors).max(initial=0.0)), float(np.abs(self.attachments).max(initial=0.0)))
+
+    @cached_property
+    def platform_body(self) -> Polytope:
+        """The platform as the obstacles see it: its declared shape, else the convex hull of its
+        attachment points (a plate, a segment or a point when they span no volume)."""
+        return self.platform_shape or Polytope.hull(self.attachments, self.shortest_cable)
+
+    @cached_property
+    def attachment_faces(self) -> np.ndarray:
+        """(m, f) whether attachment i lies on face f of :attr:`platform_shape` (within
+        :attr:`shortest_cable`)."""
+        shape = self.platform_shape
+        return np.abs(self.attachments @ shape.normals.T - shape.offsets) <= self.shortest_cable
 
     @cached_property
     def cable_pairs(self) -> tuple[np.ndarray, np.ndarray]:
@@ -208,6 +233,7 @@ class PoseGeometry:
 
     tension_lp: np.ndarray | None = None
     closest_pair: np.ndarray | None = None
+    closest_obstacle: np.ndarray | None = None
 
     def __init__(self, robot: CableRobot, positions: np.ndarray, orientation):
         self.robot = robot
@@ -256,6 +282,7 @@ class PoseGeometry:
 
     def diagnostics(self) -> dict[str, np.ndarray]:
         """Per-pose columns besides the margins, set by the criteria that computed them: the
-        poses the feasible model's LPs solved, the closest pair of cables."""
-        found = {"lp_poses": self.tension_lp, "closest_pair": self.closest_pair}
+        poses the feasible model's LPs solved, the closest pair of cables, the closest obstacle."""
+        found = {"lp_poses": self.tension_lp, "closest_pair": self.closest_pair,
+                 "closest_obstacle": self.closest_obstacle}
         return {key: value for key, value in found.items() if value is not None}

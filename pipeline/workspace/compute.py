@@ -16,6 +16,7 @@ from omegaconf import DictConfig, OmegaConf
 
 from pipeline.model.dynamics import REFERENCE_SET
 from pipeline.workspace.arrow import categories, numbers
+from pipeline.workspace.criteria.interference import obstacle_pairs
 from pipeline.workspace.degeneracy import Degeneracy
 from pipeline.workspace.grid import Grid
 from pipeline.workspace.kernel import WorkspaceProblem, evaluate_chunk
@@ -115,6 +116,8 @@ def tabulate(problem: WorkspaceProblem, positions: np.ndarray, raw: dict,
     if "closest_pair" in raw:  # the cable_cable criterion's closest cables, "i-j" by their names
         names, (i, j) = problem.robot.cable_names, problem.robot.cable_pairs
         columns["closest_cables"] = categories(raw["closest_pair"], [f"{names[a]}-{names[b]}" for a, b in zip(i, j)])
+    if "closest_obstacle" in raw:  # the cable_obstacle criterion's closest obstacle and body
+        columns["closest_obstacle"] = categories(raw["closest_obstacle"], obstacle_pairs(problem.robot))
     for key, values in raw.items():  # output.cables: lengths and tensions (pipeline.workspace.quantities)
         if key.startswith(("length_", "tension_")):
             columns[key] = values

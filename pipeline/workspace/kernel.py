@@ -82,7 +82,8 @@ def evaluate_chunk(problem: WorkspaceProblem, rows: np.ndarray) -> dict[str, np.
 
 
 # per-pose columns that name what limits a margin: kept from the orientation where it is lowest
-AT_THE_WORST = {"limiting_wrench": "limiting_wrench_margin", "closest_pair": "margin_cable_cable"}
+AT_THE_WORST = {"limiting_wrench": "limiting_wrench_margin", "closest_pair": "margin_cable_cable",
+                "closest_obstacle": "margin_cable_obstacle"}
 
 
 def _criteria(problem: WorkspaceProblem, positions: np.ndarray, orientation, cables: bool) -> dict:

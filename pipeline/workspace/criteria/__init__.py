@@ -5,7 +5,8 @@ A :class:`Criterion` says what it reads (``reads``: the CPR-WWA dynamics, the st
 chunk state), whether it is a gate (a violated gate decides the verdict whatever the other
 margins say; gates in priority order) and its colour in every figure. One module per family:
 ``actuator`` (eqs. 30, 32-34 of the CPR-8 paper), ``tension`` (unreachable, slack, tension
-rating), ``geometry`` (zero_length, singular, cable length), ``interference`` (cable_cable),
+rating), ``geometry`` (zero_length, singular, cable length), ``interference`` (cable_cable,
+cable_platform, cable_obstacle),
 ``payload`` (the largest payload); ``forces``
 holds the ``feasible`` tension model they share. A new criterion is one function in its family's module and one entry here.
 """
@@ -57,6 +58,11 @@ REGISTRY: dict[str, Criterion] = {c.name: c for c in (
     Criterion("cable_cable", interference.cable_cable, GEOMETRY, None, "#DDCC77",
               "thinner cables (robot.cable_diameter), anchors and attachments that keep the cables apart, "
               "or a smaller box"),
+    Criterion("cable_platform", interference.cable_platform, GEOMETRY, None, "#332288",
+              "attachments on the platform's outer corners or edges, a platform shape that holds them on its "
+              "surface (robot.platform.shape), or a smaller box"),
+    Criterion("cable_obstacle", interference.cable_obstacle, GEOMETRY, None, "#994F00",
+              "anchors that route the cables around the obstacles, a smaller box, or obstacles moved"),
     Criterion("payload", payload.payload, STATICS, None, "#56B4E9", "a lighter payload (load.mass) or stronger cables"),
     Criterion("speed", actuator.speed, DYNAMICS, None, "#0072B2",
               "a lower motion.v_max, a larger drive.winch_radius or a smaller drive.gear_ratio"),

@@ -1,6 +1,7 @@
-"""Interference criteria: cables that must not touch each other (docs/model.md, "Interference").
-They read only the pose's geometry, so the numpy and the compiled kernels evaluate them with
-the same code (``pipeline.workspace.kernel``)."""
+"""Interference criteria (docs/model.md section 8): cables that must not touch each other
+(``cable_cable``), enter the platform's body (``cable_platform``) or touch an obstacle of the
+cell, nor the platform either (``cable_obstacle``). They read only the pose's geometry, so the
+numpy and the compiled kernels evaluate them with the same code (``pipeline.workspace.kernel``)."""
 
 from __future__ import annotations
 
@@ -24,3 +25,51 @@ def cable_cable(state, limits) -> np.ndarray:
     relative = distance / (robot.cable_radii[i] + robot.cable_radii[j]) - 1.0
     state.closest_pair = relative.argmin(axis=1).astype(np.int16)
     return np.minimum(1.0, relative.min(axis=1))
+
+
+def cable_platform(state, limits) -> np.ndarray:
+    """No cable enters the platform's body (``robot.platform.shape``, convex, every attachment
+    b_i on its surface). A segment that leaves a point of a convex body's surface either enters
+    the body at once or never does, so cable i is clear exactly when its direction u_i (from b_i
+    towards its anchor, platform frame) points out of some face f that holds b_i: n_f . u_i >= 0.
+    Margin min_i max_f n_f . u_i, the sine of the angle between the cable and the face it
+    clears best: 0 for a cable along a face, -1 for one that leaves straight into the body."""
+    robot = state.robot
+    toward = robot.anchors[None, :, :] - state.attachment_points  # fixed frame
+    local = toward @ state.rotation  # R^T u for each row u: the platform's frame
+    unit = local / np.linalg.norm(local, axis=2, keepdims=True).clip(min=np.finfo(float).tiny)
+    sines = unit @ robot.platform_shape.normals.T  # (n, m, f)
+    return np.where(robot.attachment_faces[None], sines, -np.inf).max(axis=2).min(axis=1)
+
+
+def cable_obstacle(state, limits) -> np.ndarray:
+    """No cable (a segment of radius r_i, 0 without ``robot.cable_diameter``) and not the
+    platform (its shape, else the hull of its attachments) touches an obstacle (``obstacles``):
+    margin min(1, least clearance / the robot's extent), the clearance exact from a plane's
+    half-space and the separating-axis gap from a box (``pipeline.model.clearance``). The
+    closest (obstacle, body) of each pose goes to ``state.closest_obstacle`` (an index into
+    :func:`obstacle_pairs`, column ``closest_obstacle``)."""
+    robot = state.robot
+    anchors = np.broadcast_to(robot.anchors, state.attachment_points.shape)
+    cables = np.stack([anchors, state.attachment_points], axis=2)  # (n, m, 2, 3)
+    along = state.attachment_points - anchors
+    length = np.linalg.norm(along, axis=2, keepdims=True)
+    along = np.divide(along, length, out=np.zeros_like(along), where=length > 0)[:, :, None, :]
+    none = np.zeros((*along.shape[:2], 0, 3))
+    body = robot.platform_body
+    turn = np.swapaxes(state.rotation, -1, -2)
+    vertices = state.positions[:, None, :] + body.vertices @ turn
+    normals = np.broadcast_to(np.concatenate([body.normals, body.plane]) @ turn,
+                              (len(vertices), len(body.normals) + len(body.plane), 3))
+    edges = np.broadcast_to(body.edges @ turn, (len(vertices), len(body.edges), 3))
+    radii = np.zeros(robot.n_cables) if robot.cable_radii is None else robot.cable_radii
+    clearance = np.concatenate([np.column_stack([obstacle.clearance(cables, none, along) - radii,
+                                                 obstacle.clearance(vertices, normals, edges)])
+                                for obstacle in robot.obstacles], axis=1)  # (n, obstacles x (m + 1))
+    state.closest_obstacle = clearance.argmin(axis=1).astype(np.int16)
+    return np.minimum(1.0, clearance.min(axis=1) / robot.extent)
+
+
+def obstacle_pairs(robot) -> list[str]:
+    """The names of :func:`cable_obstacle`'s (obstacle, body) pairs, in its order."""
+    return [f"{obstacle.name}: {body}" for obstacle in robot.obstacles for body in (*robot.cable_names, "platform")]
