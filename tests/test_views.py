@@ -64,6 +64,7 @@ def test_a_plane_a_list_and_an_empty_set_have_no_surface_and_a_flat_platform_an_
         anchors = np.array([[-1, -1, 1], [1, -1, 1], [1, 1, 1], [-1, 1, 1]], float)
         attachments = np.array([[0.1, 0.1, 0], [-0.1, -0.1, 0], [0.1, -0.1, 0], [-0.1, 0.1, 0]], float)
         cable_names = ("a", "b", "c", "d")
+        obstacles = ()
     outline = [t for t in robot_traces(Flat, np.zeros(3), np.eye(3)) if t["name"] == "platform"][0]
     corners = {(x, y) for x, y in zip(outline["x"], outline["y"]) if x is not None}
     assert outline["type"] == "scatter3d" and corners == {(0.1, 0.1), (-0.1, -0.1), (0.1, -0.1), (-0.1, 0.1)}
@@ -82,3 +83,21 @@ def test_a_grid_of_orientations_is_shown_in_its_angles(make_cfg, catalogue, tmp_
     view = json.loads(write_view([(points, "feasible", None)], "t", False, tmp_path / "v.json").read_text())
     assert view["layout"]["scene"]["xaxis"]["title"]["text"] == "psi (rad)"
     assert view["data"][0]["type"] == "mesh3d"
+
+
+def test_the_obstacles_are_drawn_where_the_config_puts_them(make_cfg, catalogue):
+    """A box's twelve edges at its corners; a plane's patch lies in the plane and spans the frame."""
+    cfg = make_cfg("obstacles=[{name: table, lo: [1, 0.5, -2.5], hi: [2, 1.5, -1.6]},"
+                   "{name: wall, point: [0, 0, -3], normal: [0, 0.2, 1]}]")
+    problem, _ = build_problem(cfg, catalogue)
+    by_name = {t["name"]: t for t in robot_traces(problem.robot, np.array([1.5, 1.0, -1.0]), np.eye(3))}
+    table = np.array([by_name["table"][a] for a in "xyz"], dtype=float).T
+    table = table[~np.isnan(table).any(axis=1)]
+    assert len(table) == 24 and {tuple(p) for p in table} == {
+        (x, y, z) for x in (1, 2) for y in (0.5, 1.5) for z in (-2.5, -1.6)}
+    wall = np.array([by_name["wall"][a] for a in "xyz"], dtype=float).T
+    wall = wall[~np.isnan(wall).any(axis=1)]
+    normal = np.array([0, 0.2, 1]) / np.linalg.norm([0, 0.2, 1])
+    assert np.allclose((wall - [0, 0, -3]) @ normal, 0, atol=1e-12)
+    anchors = problem.robot.anchors
+    assert np.ptp(wall[:, 0]) >= np.ptp(anchors[:, 0]) - 1e-9

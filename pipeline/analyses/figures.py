@@ -158,13 +158,13 @@ def _robot_at_a_feasible_pose(results: StudyResults, job: pd.Series, points: pd.
     """The traces of the job's robot (rebuilt from the config its summary records) at the
     feasible pose nearest the feasible set's centre (any pose when none is feasible), at that
     pose's orientation; none for a grid of orientations, whose view is in angles."""
-    from pipeline.app.problem import ROBOTS
+    from pipeline.app.problem import ROBOTS, surroundings
     from pipeline.model.geometry import rotation_matrices
 
     if pose_axes(points)[0] != "x":
         return []
     cfg = results.config(job["job"])
-    robot = ROBOTS[cfg.robot.name].build(cfg.robot)
+    robot = surroundings(cfg, ROBOTS[cfg.robot.name].build(cfg.robot))[0]  # with its obstacles
     chosen = points[points[column].to_numpy(dtype=bool)] if points[column].any() else points
     xyz = chosen[["x", "y", "z"]].to_numpy()
     row = chosen.iloc[int(np.argmin(np.linalg.norm(xyz - xyz.mean(axis=0), axis=1)))]

@@ -88,14 +88,13 @@ def _surface(points: pd.DataFrame, column: str, axes, box: tuple | None) -> dict
 
 def robot_traces(robot, position: np.ndarray, rotation: np.ndarray) -> list[dict]:
     """The robot at one pose (``position`` (3,), ``rotation`` (3, 3)): its frame (the edges of
-    the anchors' bounding box), the anchors, the cables to the platform's attachment points and
-    the platform (the hull of those points, or their outline when they lie in a plane)."""
+    the anchors' bounding box), the anchors, the cables to the platform's attachment points, the
+    platform (the hull of those points, or their outline when they lie in a plane) and the
+    obstacles of its cell (``obstacles``: a box's edges, a plane's patch across the frame)."""
     anchors = np.asarray(robot.anchors, float)
     attached = position + attached_points(robot, rotation)
     lo, hi = anchors.min(axis=0), anchors.max(axis=0)
-    corners = np.array([[(lo, hi)[i][0], (lo, hi)[j][1], (lo, hi)[k][2]] for i in (0, 1) for j in (0, 1) for k in (0, 1)])
-    edges = [(a, b) for a in range(8) for b in range(a + 1, 8) if bin(a ^ b).count("1") == 1]
-    traces = [_lines(corners, edges, "frame", "#9a9a9a", 2),
+    traces = [_lines(_corners(lo, hi), BOX_EDGES, "frame", "#9a9a9a", 2),
               {"type": "scatter3d", "mode": "markers", "name": "anchors", "legendgroup": "robot",
                "x": anchors[:, 0], "y": anchors[:, 1], "z": anchors[:, 2], "text": list(robot.cable_names),
                "marker": {"size": 3, "color": "#222222"}, "hovertemplate": "anchor %{text}<extra></extra>"},
@@ -110,7 +109,26 @@ def robot_traces(robot, position: np.ndarray, rotation: np.ndarray) -> list[dict
         order = np.argsort(np.arctan2(*(centred @ np.linalg.svd(centred)[2][:2].T).T[::-1]))  # around its centre
         traces.append(_lines(attached, [(int(a), int(b)) for a, b in zip(order, np.roll(order, -1))],
                              "platform", "#8c6d31", 4))
+    for obstacle in robot.obstacles:
+        if obstacle.normal is None:
+            traces.append(_lines(_corners(obstacle.lo, obstacle.hi), BOX_EDGES, obstacle.name, OBSTACLE_COLOUR, 3))
+        else:  # the plane across the frame: its patch over the frame's corners seen along the normal
+            basis = np.linalg.svd(obstacle.normal[None, :])[2][1:]  # two unit vectors in the plane
+            spread = (_corners(lo, hi) - obstacle.point) @ basis.T
+            low, high = spread.min(axis=0), spread.max(axis=0)
+            patch = obstacle.point + np.array([[low[0], low[1]], [high[0], low[1]], [high[0], high[1]],
+                                               [low[0], high[1]]]) @ basis
+            traces.append(_lines(patch, [(0, 1), (1, 2), (2, 3), (3, 0)], obstacle.name, OBSTACLE_COLOUR, 3))
     return traces
+
+
+BOX_EDGES = [(a, b) for a in range(8) for b in range(a + 1, 8) if bin(a ^ b).count("1") == 1]  # of _corners
+OBSTACLE_COLOUR = COLOURS["cable_obstacle"]
+
+
+def _corners(lo, hi) -> np.ndarray:
+    """The eight corners of the box [lo, hi], corner k at bit i of k set: hi on axis 2 - i."""
+    return np.array([[(lo, hi)[i][0], (lo, hi)[j][1], (lo, hi)[k][2]] for i in (0, 1) for j in (0, 1) for k in (0, 1)])
 
 
 def _lines(points: np.ndarray, pairs: list[tuple[int, int]], name: str, colour: str, width: float) -> dict:

@@ -493,11 +493,14 @@ class OutputConfig:
     ``points``: write the per-pose table points.parquet (false: the summary only, for sweeps
     whose figures read summaries; a study that draws clouds or compares poses refuses it).
     ``mesh``: write the boundary of the feasible set, boundary.stl and boundary.ply (m, fixed
-    frame; ``pipeline.workspace.boundary``)."""
+    frame; ``pipeline.workspace.boundary``). ``metrics``: add per-pose ``tension_factor`` and
+    ``wrench_max_<w>``, ``wrench_min_<w>`` (the largest external wrench along each freedom the
+    pose holds on top of its load; ``pipeline.model.metrics``), ``analysis=statics``."""
 
     cables: bool = MISSING
     points: bool = MISSING
     mesh: bool = MISSING
+    metrics: bool = MISSING
 
 
 @dataclass

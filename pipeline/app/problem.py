@@ -400,9 +400,14 @@ def build(cfg: DictConfig, catalogue: Catalogue | None) -> WorkspaceProblem:
         raise ConfigError(f"orientation: robot.dofs=[{freedoms}] holds the platform at the origin and its grid is "
                           "of orientations (robot.search: psi, theta, phi in rad, in orientation.convention); "
                           "orientation.psi, theta, phi and total are not read, leave them 0")
+    if cfg.output.metrics and (cfg.analysis != "statics" or len(spec.wrench_set)):
+        why = "a wrench set has several loads" if cfg.analysis == "statics" else f"analysis={cfg.analysis} is not"
+        raise ConfigError(f"output.metrics=true: the tension factor and the largest wrenches are of a static pose "
+                          f"under one load (analysis=statics without wrench.set); {why}")
     return WorkspaceProblem(robot, orientation_set(given), spec, limits, criteria, cfg.model.margin_atol,
                             cfg.output.cables, nominal=(float(given.psi), float(given.theta), float(given.phi)),
-                            angles=name_of(given.convention) if robot.fixed_point else None)
+                            angles=name_of(given.convention) if robot.fixed_point else None,
+                            metrics=bool(cfg.output.metrics))
 
 
 def surroundings(cfg: DictConfig, robot: CableRobot) -> tuple[CableRobot, tuple[str, ...]]:

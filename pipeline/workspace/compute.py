@@ -15,6 +15,7 @@ import pyarrow as pa
 from omegaconf import DictConfig, OmegaConf
 
 from pipeline.model.dynamics import REFERENCE_SET
+from pipeline.model.metrics import WORK as METRICS_WORK
 from pipeline.workspace.arrow import categories, numbers
 from pipeline.workspace.criteria.interference import obstacle_pairs
 from pipeline.workspace.degeneracy import Degeneracy
@@ -118,8 +119,8 @@ def tabulate(problem: WorkspaceProblem, positions: np.ndarray, raw: dict,
         columns["closest_cables"] = categories(raw["closest_pair"], [f"{names[a]}-{names[b]}" for a, b in zip(i, j)])
     if "closest_obstacle" in raw:  # the cable_obstacle criterion's closest obstacle and body
         columns["closest_obstacle"] = categories(raw["closest_obstacle"], obstacle_pairs(problem.robot))
-    for key, values in raw.items():  # output.cables: lengths and tensions (pipeline.workspace.quantities)
-        if key.startswith(("length_", "tension_")):
+    for key, values in raw.items():  # output.cables and output.metrics (quantities, pipeline.model.metrics)
+        if key.startswith(("length_", "tension_", "wrench_max_", "wrench_min_")):
             columns[key] = values
     if "unreachable" in margins:  # |S S^+ w - w| / |w|, worst over the required wrenches
         columns["wrench_residual"] = (1.0 - margins["unreachable"]) * problem.spec.tension.residual_limit
@@ -162,7 +163,7 @@ LARGE_JOB_BYTES = 2 * 2**30
 def estimated_seconds(problem: WorkspaceProblem, n_points: int) -> float:
     """The kernel's time for ``n_points`` positions on one core here, by the cost model."""
     evaluations = n_points * len(problem.orientations)
-    per_pose = problem.spec.work()
+    per_pose = problem.spec.work() + (METRICS_WORK[problem.spec.tension.model] if problem.metrics else 0.0)
     speed = POSES_PER_SECOND["fused" if problem.fused else problem.spec.tension.model]
     return evaluations * per_pose / speed
 
@@ -173,6 +174,8 @@ def fused_unfit(problem: WorkspaceProblem) -> str | None:
     (:meth:`pipeline.model.dynamics.MotionSpec.fused_unfit`) and no per-pose cable quantities."""
     if problem.cables:
         return "it does not write the per-pose cable quantities of output.cables=true"
+    if problem.metrics:
+        return "it does not write the per-pose metrics of output.metrics=true"
     if len(problem.robot.dofs) != 6 and problem.spec.kind == "statics":
         return "it balances all six rows of a free platform only (robot.dofs)"
     return problem.spec.fused_unfit()

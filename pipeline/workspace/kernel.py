@@ -9,6 +9,8 @@ import numpy as np
 
 from pipeline.workspace.criteria import GEOMETRY, REGISTRY
 from pipeline.model.geometry import CableRobot, PoseGeometry, rotation_matrices
+from pipeline.model.metrics import pose_metrics
+from pipeline.workspace.criteria.forces import written_distribution
 from pipeline.workspace.quantities import cable_quantities
 
 @dataclass(frozen=True)
@@ -20,7 +22,9 @@ class WorkspaceProblem:
     ``StaticLimits``). ``orientations`` (k, 3): the pose must satisfy every criterion at every
     one of them (k = 1: constant-orientation workspace; k > 1: total-orientation workspace).
     ``margin_atol``: margins within it of zero count as exactly 0 (``pipeline.workspace.verdict``).
-    ``cables``: also return the per-pose cable lengths and tensions (``pipeline.workspace.quantities``).
+    ``cables``: also return the per-pose cable lengths and tensions (``pipeline.workspace.quantities``);
+    ``metrics``: the per-pose metrics of a static pose (``pipeline.model.metrics``), both at the
+    nominal orientation.
     ``fused``: evaluate with the compiled kernel of ``pipeline.workspace.fused`` (numpy for the
     poses it leaves unsettled); the job decides (``pipeline.workspace.compute.use_fused``).
     ``nominal``: the orientation as the config gives it, in its convention (``orientation.*``),
@@ -40,6 +44,7 @@ class WorkspaceProblem:
     fused: bool = False
     nominal: tuple[float, float, float] = (0.0, 0.0, 0.0)
     angles: str | None = None
+    metrics: bool = False
 
     @property
     def orientation(self) -> tuple[float, float, float]:
@@ -67,7 +72,7 @@ def evaluate_chunk(problem: WorkspaceProblem, rows: np.ndarray) -> dict[str, np.
         if problem.fused:
             part = _fused(problem, positions, orientation)
         else:
-            part = _criteria(problem, positions, orientation, problem.cables and number == 0)
+            part = _criteria(problem, positions, orientation, number == 0)
         worse = {key: part[margin] < result[margin] for key, margin in AT_THE_WORST.items() if key in result}
         for key, value in part.items():
             if key not in result:
@@ -86,10 +91,13 @@ AT_THE_WORST = {"limiting_wrench": "limiting_wrench_margin", "closest_pair": "ma
                 "closest_obstacle": "margin_cable_obstacle"}
 
 
-def _criteria(problem: WorkspaceProblem, positions: np.ndarray, orientation, cables: bool) -> dict:
-    """Every criterion's margins at one orientation, from the chunk state (numpy)."""
+def _criteria(problem: WorkspaceProblem, positions: np.ndarray, orientation, nominal: bool) -> dict:
+    """Every criterion's margins at one orientation, from the chunk state (numpy); at the
+    ``nominal`` one also the cable quantities and the metrics the problem asks for."""
     state = problem.spec.state(problem.robot, positions, orientation)
-    result = cable_quantities(state, problem.limits) if cables else {}
+    result = cable_quantities(state, problem.limits) if problem.cables and nominal else {}
+    if problem.metrics and nominal:
+        result.update(pose_metrics(state, problem.limits, written_distribution))
     for name in problem.criteria:
         result[f"margin_{name}"] = REGISTRY[name].function(state, problem.limits)
     result.update(state.diagnostics())  # the Jacobian's rank, the poses the feasible model's LPs solved
