@@ -125,7 +125,7 @@ def test_pairs_sharing_an_anchor_or_an_attachment_are_not_checked():
 @pytest.mark.parametrize("orientation", [(0.0, 0.0, 0.0), (0.3, -0.2, 0.4)])
 def test_criterion_equals_the_exact_distances_pose_by_pose(make_cfg, catalogue, orientation):
     psi, theta, phi = orientation
-    cfg = make_cfg("robot.cable_diameter=[0.01,0.02,0.01,0.02,0.03,0.01,0.02,0.01]", "grid.n=6",
+    cfg = make_cfg("robot.cable_diameter=[0.01,0.02,0.01,0.02,0.03,0.01,0.02,0.01]", "grid.n=5",
                    f"orientation.psi={psi}", f"orientation.theta={theta}", f"orientation.phi={phi}")
     cfg, problem = validate(cfg, catalogue, typed=True)
     problem, grid = build_problem(cfg, catalogue)
@@ -328,3 +328,26 @@ def test_numpy_and_compiled_kernels_give_the_same_platform_and_obstacle_margins(
     for column in ("margin_cable_platform", "margin_cable_obstacle", "closest_obstacle", "limiting", "feasible"):
         assert tables["numpy"][column].tolist() == tables["fused"][column].tolist()
     assert (tables["numpy"]["limiting"] == "cable_obstacle").any()
+
+
+def test_the_irpm_plate_cables_and_a_floor(make_cfg, catalogue):
+    """The IRPM (Z down from the base): at gamma = 0 its cables share anchors and attachments in
+    pairs, which are not compared (9 of 15 pairs left); a plate below the attachments (towards +Z)
+    lets every cable leave it upwards, one above them (towards the base) is crossed by all of them;
+    a floor at Z = 9 m (normal up, -Z) removes the poses whose platform reaches past it."""
+    common = ["robot=irpm6", "robot.gamma_deg=0", "robot.cable_diameter=0.05", "robot.search.step=1",
+              "obstacles=[{name: floor, point: [0, 0, 9], normal: [0, 0, -1]}]"]
+    tables = {}
+    for side, (lo, hi) in {"below": (0, 0.1), "above": (-0.1, 0)}.items():
+        cfg, problem = validate(make_cfg(*common, f"robot.platform.shape={{lo:[-1.3,-1.3,{lo}],hi:[1.3,1.3,{hi}]}}"),
+                                catalogue, typed=True)
+        tables[side] = compute_workspace(cfg, catalogue)[0]
+    assert len(problem.robot.cable_pairs[0]) == 9
+    level = tables["below"]["z"] < 1e-9  # in the base's plane the cables run along the plate: margin 0
+    assert (tables["below"]["margin_cable_platform"] >= 0).all()
+    assert (tables["below"].loc[~level, "margin_cable_platform"] > 0).all()
+    assert (tables["above"].loc[~level, "margin_cable_platform"] < 0).all()
+    below = tables["below"]
+    reaches = below["z"] > 9 - 1e-9  # the plate's lowest face is 0.1 m below the reference point
+    assert (below.loc[reaches, "margin_cable_obstacle"] < 0).all() and (below.loc[~reaches & (below["z"] < 8.5),
+                                                                                  "margin_cable_obstacle"] > 0).all()
