@@ -128,7 +128,7 @@ def test_an_import_that_compiles_is_announced_while_it_runs(tmp_path, monkeypatc
 
 
 @pytest.mark.parametrize("module, exports", [(fused_loops, {"cpr_wwa", "statics"}),
-                                             (crossings, {"least_margins"})])
+                                             (crossings, {"least_margins", "largest_wrenches"})])
 def test_the_compiled_loops_use_nothing_but_their_own_text(module, exports):
     """numba keys its cache of a module's functions by the module's file: the compiled code may use
     numpy, numba and the module's own names only (any other value is an argument), else a

@@ -32,25 +32,35 @@ def pulls_and_loads(position):
 
 
 def lp_payload(position, t_min=5.0, t_max=400.0):
-    """max mu: M t = -(platform + mu per_kg), t_min <= t <= t_max; NaN if not even mu = 0."""
+    """(least, largest) mu >= 0 with M t = -(platform + mu per_kg), t_min <= t <= t_max: two
+    LPs; NaN, NaN where no payload is held."""
     matrix, platform, per_kg = pulls_and_loads(position)
-    cost = np.zeros(9)
-    cost[8] = -1.0
-    done = linprog(cost, A_eq=np.hstack([matrix, per_kg[:, None]]), b_eq=-platform,
-                   bounds=[(t_min, t_max)] * 8 + [(0, None)], method="highs")
-    return done.x[8] if done.status == 0 else np.nan
+    found = []
+    for sense in (1.0, -1.0):
+        cost = np.zeros(9)
+        cost[8] = sense
+        done = linprog(cost, A_eq=np.hstack([matrix, per_kg[:, None]]), b_eq=-platform,
+                       bounds=[(t_min, t_max)] * 8 + [(0, None)], method="highs")
+        found.append(done.x[8] if done.status == 0 else np.nan)
+    return tuple(found)
 
 
 def pinv_payload(position, t_min=5.0, t_max=400.0):
-    """The minimum-norm tensions are linear in the payload: t = t0 + mu s; the largest mu >= 0
-    keeping every t_i in [t_min, t_max], NaN if mu = 0 does not."""
+    """The minimum-norm tensions are linear in the payload: t = t0 + mu s; the interval of mu >= 0
+    keeping every t_i in [t_min, t_max], each cable bounding mu from one side or the other;
+    (NaN, NaN) where it is empty."""
     matrix, platform, per_kg = pulls_and_loads(position)
     inverse = np.linalg.pinv(matrix)
     t0, s = inverse @ -platform, inverse @ -per_kg
-    if not ((t0 >= t_min - 1e-9) & (t0 <= t_max + 1e-9)).all():
-        return np.nan
-    ups = [(t_max - a) / b if b > 0 else (t_min - a) / b for a, b in zip(t0, s) if b != 0]
-    return min(ups) if ups else np.inf
+    least, largest = 0.0, np.inf
+    for a, b in zip(t0, s):
+        if b > 0:
+            least, largest = max(least, (t_min - a) / b), min(largest, (t_max - a) / b)
+        elif b < 0:
+            least, largest = max(least, (t_max - a) / b), min(largest, (t_min - a) / b)
+        elif not t_min <= a <= t_max:
+            return np.nan, np.nan
+    return (least, largest) if least <= largest else (np.nan, np.nan)
 
 
 @pytest.fixture(scope="module")
@@ -58,19 +68,25 @@ def feasible_map(make_cfg, catalogue):
     return compute_workspace(make_cfg(*ROBOT, "tension=feasible"), catalogue)
 
 
-def test_the_largest_payload_of_each_pose_is_the_lps(feasible_map):
+def test_the_payloads_of_each_pose_are_the_lps(feasible_map):
+    """The largest and the least payload each pose holds; a 5 kg platform with cables at >= 5 N
+    needs a payload's weight at some poses to pull every cable taut (least > 0: not feasible
+    without one, although it holds some payloads)."""
     points, summary = feasible_map
     ours = points["max_payload_kg"].to_numpy()
-    expected = np.array([lp_payload(p) for p in points[["x", "y", "z"]].to_numpy()])
+    least, expected = np.array([lp_payload(p) for p in points[["x", "y", "z"]].to_numpy()]).T
     assert np.array_equal(np.isnan(ours), np.isnan(expected))
     held = ~np.isnan(expected)
     np.testing.assert_allclose(ours[held], expected[held], rtol=1e-6, atol=1e-6)
+    np.testing.assert_allclose(points["min_payload_kg"].to_numpy()[held], least[held], rtol=1e-6, atol=1e-6)
+    needs = held & (least > 1e-6)
+    assert needs.sum() >= 3 and not points["feasible"].to_numpy()[needs].any()
     assert held.sum() > 10 and np.ptp(expected[held]) > 5  # a map, not a constant
     assert summary["max_payload_kg_min"] == pytest.approx(np.nanmin(ours))
     assert summary["max_payload_kg_median"] == pytest.approx(np.nanmedian(ours))
     assert summary["max_payload_kg_max"] == pytest.approx(np.nanmax(ours))
-    # load.mass is the payload required: the default 0 kg, held wherever the platform is
-    assert points["feasible"].tolist() == held.tolist()
+    # load.mass is the payload required: the default 0 kg, held wherever the platform alone is
+    assert points["feasible"].tolist() == (held & (least <= 1e-6)).tolist()
 
 
 def test_a_pose_holds_just_less_than_its_payload_and_not_just_more(feasible_map, make_cfg, catalogue):
@@ -78,6 +94,7 @@ def test_a_pose_holds_just_less_than_its_payload_and_not_just_more(feasible_map,
     shifting and LPs of the feasible model), agrees on both sides of the answer."""
     points, _ = feasible_map
     held = points.dropna(subset=["max_payload_kg"])
+    held = held[held["min_payload_kg"] < 0.999 * held["max_payload_kg"]]
     chosen = held.iloc[np.linspace(0, len(held) - 1, 4).astype(int)]
     for _, row in chosen.iterrows():
         pose = f"poses=[[{row.x},{row.y},{row.z}]]"
@@ -92,18 +109,20 @@ def test_the_required_payload_decides_the_verdict_and_the_limiting_criterion(fea
     required = float(np.nanmedian(points["max_payload_kg"]))
     heavy, summary = compute_workspace(make_cfg(*ROBOT, "tension=feasible", f"load.mass={required}"), catalogue)
     np.testing.assert_allclose(heavy["max_payload_kg"], points["max_payload_kg"])  # the map does not move
-    assert heavy["feasible"].tolist() == (points["max_payload_kg"] >= required).tolist()
+    assert heavy["feasible"].tolist() == ((points["min_payload_kg"] <= required)
+                                          & (points["max_payload_kg"] >= required)).tolist()
     assert set(heavy.loc[~heavy["feasible"], "limiting"]) == {"payload"}
     assert summary["lost_payload"] == (~heavy["feasible"]).sum()
 
 
 def test_under_the_minimum_norm_model_the_payload_is_the_closed_form(make_cfg, catalogue):
     points, _ = compute_workspace(make_cfg(*ROBOT, "tension=pinv"), catalogue)
-    ours = points["max_payload_kg"].to_numpy()
     expected = np.array([pinv_payload(p) for p in points[["x", "y", "z"]].to_numpy()])
-    assert np.array_equal(np.isnan(ours), np.isnan(expected))
-    np.testing.assert_allclose(ours[~np.isnan(ours)], expected[~np.isnan(expected)], rtol=1e-9, atol=1e-9)
-    assert (~np.isnan(ours)).sum() > 0
+    for column, values in zip(("min_payload_kg", "max_payload_kg"), expected.T):
+        ours = points[column].to_numpy()
+        assert np.array_equal(np.isnan(ours), np.isnan(values))
+        np.testing.assert_allclose(ours[~np.isnan(ours)], values[~np.isnan(values)], rtol=1e-9, atol=1e-9)
+    assert (~np.isnan(points["max_payload_kg"])).sum() > 0
 
 
 def test_a_payload_the_cables_never_carry_is_unlimited(make_cfg, catalogue):
@@ -134,3 +153,17 @@ def test_the_irpm_workspace_is_where_its_payload_map_holds_the_papers_weight(mak
     assert payload["feasible"].tolist() == statics["feasible"].tolist()
     held = payload["max_payload_kg"].to_numpy()
     assert ((held >= 100_000 / 9.81) == statics["feasible"].to_numpy())[~np.isnan(held)].all()
+
+
+@pytest.mark.parametrize("required", [0.0, 3.0])
+def test_the_payload_verdict_is_the_statics_verdict_with_that_payload(feasible_map, make_cfg, catalogue, required):
+    """Another code path (hyperplane shifting): the statics analysis with the payload as
+    load.mass holds exactly the poses whose payload interval holds it, including the poses that
+    hold some payloads but not the platform alone (once counted feasible without a payload)."""
+    payload, _ = compute_workspace(make_cfg(*ROBOT, "tension=feasible", f"load.mass={required}"), catalogue)
+    statics, _ = compute_workspace(make_cfg(*ROBOT, "tension=feasible", "analysis=statics", f"load.mass={required}"),
+                                   catalogue)
+    assert payload["feasible"].tolist() == statics["feasible"].tolist()
+    if required == 0.0:
+        points, _ = feasible_map
+        assert (points["max_payload_kg"].notna() & ~payload["feasible"]).any()  # such poses exist here

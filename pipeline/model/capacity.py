@@ -54,6 +54,44 @@ def range_coordinates(structure: np.ndarray, wrenches: np.ndarray, rank: int):
     return np.swapaxes(basis, 1, 2) @ structure, wrenches @ basis
 
 
+def _candidates(structure: np.ndarray):
+    """What ``crossings._normals`` builds the candidate normals of ``structure`` (n, q, m) from:
+    the (q - 1)-subsets of columns and the other columns of each, and, where it is the cheaper
+    route, (S^+)^T and an orthonormal basis of the null space of S per pose ((n, 0, 0) else)."""
+    n, q, m = structure.shape
+    subsets = np.array(list(combinations(range(m), q - 1)), dtype=np.int64).reshape(-1, q - 1)
+    others = np.array([[i for i in range(m) if i not in chosen] for chosen in subsets],
+                      dtype=np.int64).reshape(len(subsets), m - q + 1)
+    spread = null = np.empty((n, 0, 0))
+    if m - q + 1 < q:  # the normals through the null space (``crossings._normals``)
+        factor, triangle = np.linalg.qr(np.swapaxes(structure, 1, 2), mode="complete")
+        null = np.ascontiguousarray(factor[:, :, q:])
+        spread = np.linalg.solve(triangle[:, :q, :], np.swapaxes(factor[:, :, :q], 1, 2))
+    return subsets, others, spread, null
+
+
+def ray_reach(structure: np.ndarray, wrench: np.ndarray, directions: np.ndarray, lower: np.ndarray,
+              upper: np.ndarray, tolerance: np.ndarray) -> np.ndarray:
+    """(n, 2, d) the largest mu >= 0 with w + mu e_j, and w - mu e_j, in S [lower, upper], for
+    full-row-rank ``structure`` (n, q, m), ``wrench`` (n, q) and ``directions`` (n, d, q) in the
+    same coordinates, cable bounds (m,) (infinite sides allowed): the candidate normals'
+    inequalities of hyperplane shifting, each a bound on mu along the ray (the available wrench
+    set is their intersection, so the least bound is exact). NaN where w is outside by more than
+    ``tolerance`` (n,); inf where no inequality bounds the ray."""
+    from pipeline.model.jit import compiled_loops
+
+    subsets, others, spread, null = _candidates(structure)
+    n, d = directions.shape[:2]
+    reach = np.empty((n, 2, d))
+    rays = np.ascontiguousarray(np.concatenate([wrench[:, None], directions], axis=1))  # w, then each e_j
+    compiled_loops("pipeline.model.crossings").largest_wrenches(
+        np.ascontiguousarray(structure), spread, null, rays, subsets, others,
+        np.clip(lower, -BIG, BIG).astype(float), np.clip(upper, -BIG, BIG).astype(float),
+        np.ascontiguousarray(tolerance, dtype=float), reach)
+    reach[reach >= BIG * 1e-3] = np.inf  # bounded only by an infinite side
+    return reach
+
+
 def shifted_margins(structure: np.ndarray, wrenches: np.ndarray, families) -> tuple[dict, np.ndarray]:
     """Nested capacity margins (n,) per family, least over the K required wrenches, as the LPs
     of ``pipeline.model.tensions`` define them, for full-row-rank ``structure`` (n, q, m) and
@@ -64,14 +102,7 @@ def shifted_margins(structure: np.ndarray, wrenches: np.ndarray, families) -> tu
 
     n, k, q = wrenches.shape
     m = structure.shape[2]
-    subsets = np.array(list(combinations(range(m), q - 1)), dtype=np.int64).reshape(-1, q - 1)
-    others = np.array([[i for i in range(m) if i not in chosen] for chosen in subsets],
-                      dtype=np.int64).reshape(len(subsets), m - q + 1)
-    spread = null = np.empty((n, 0, 0))
-    if m - q + 1 < q:  # the normals through the null space (``crossings._normals``)
-        factor, triangle = np.linalg.qr(np.swapaxes(structure, 1, 2), mode="complete")
-        null = np.ascontiguousarray(factor[:, :, q:])
-        spread = np.linalg.solve(triangle[:, :q, :], np.swapaxes(factor[:, :, :q], 1, 2))
+    subsets, others, spread, null = _candidates(structure)
     # each family's (lower, upper, scale), +-BIG for no side, laid out per pose only if it varies
     sides = [[np.clip(np.asarray(v, dtype=float), -BIG, BIG) for v in (f.lower, f.upper, f.scale)]
              for f in families]

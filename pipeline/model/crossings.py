@@ -39,9 +39,11 @@ SETTLE_RTOL = 1e-12  # a crossing is found when h is within this share of n . w
 DEPENDENT_RTOL = 1e-9  # volume / product of lengths below it: a normal's vectors are dependent
 PARALLEL_RTOL = 1e-10  # |n . S_i| below this share of |S_i|: column i lies in the facet
 _A = "[:, :, ::1]"  # C-contiguous, three axes
-SIGNATURES = {  # the one signature of the function capacity.shifted_margins calls
+SIGNATURES = {  # the signatures of the functions capacity.shifted_margins and capacity.ray_reach call
     "least_margins": f"b1[::1](f8{_A}, f8{_A}, f8{_A}, f8{_A}, i8[:, ::1], i8[:, ::1], f8[:, :, :, ::1], "
                      f"f8[:, :, :, :, ::1], i8[::1], b1[::1], f8, f8, f8[:, ::1])",
+    "largest_wrenches": f"void(f8{_A}, f8{_A}, f8{_A}, f8{_A}, i8[:, ::1], i8[:, ::1], f8[::1], f8[::1], f8[::1], "
+                        f"f8{_A})",
 }
 
 
@@ -379,3 +381,54 @@ def least_margins(structure, spread, null, wrenches, subsets, others, fixed, pos
                     earlier_up[k, i] = min(earlier_up[k, i], up[i] - relax * c[i])
             agree = agree and not varies[f] and least >= 0.0
     return unsettled
+
+
+@njit(SIGNATURES["largest_wrenches"], cache=True)
+def largest_wrenches(structure, spread, null, wrenches, subsets, others, lower, upper, tolerance, reach):
+    """Fill ``reach`` (n, 2, d) with the largest mu >= 0 for which w + mu e_j (``reach[p, 0, j]``)
+    and w - mu e_j (``reach[p, 1, j]``) stay in S [lower, upper]: ray shooting against every
+    candidate normal's inequality n . w' <= h(n), h(n) = sum_i max(a_i lower_i, a_i upper_i),
+    both signs of each normal, mu <= (h(n) - n . w) / (n . e) where n . e > 0. ``structure``
+    (n, q, m) of full row rank, ``spread``, ``null``, ``subsets``, ``others`` as for
+    :func:`least_margins`; ``wrenches`` (n, 1 + d, q): w, then the d directions e_j (in the same
+    coordinates); ``lower``, ``upper`` (m,) the cable bounds (+-big: no side); ``tolerance`` (n,):
+    how far w may stand outside an inequality and count as held (round-off). NaN where w is not
+    held; a very large mu (about big) where no facet bounds the ray."""
+    n, q, m = structure.shape
+    count = subsets.shape[0]
+    directions = wrenches.shape[1] - 1
+    a = np.zeros((count, m))
+    target = np.zeros((directions + 1, count))
+    vectors = np.empty((max(q, m - q + 1), max(q, m - q + 1)))
+    for p in range(n):
+        _normals(structure[p], spread[p], null[p], wrenches[p], subsets, others, vectors, a, target)
+        held = True
+        for j in range(directions):
+            reach[p, 0, j] = np.inf
+            reach[p, 1, j] = np.inf
+        for c in range(count):
+            along, against = 0.0, 0.0  # h(n_c), h(-n_c)
+            for i in range(m):
+                if a[c, i] > 0.0:
+                    along += a[c, i] * upper[i]
+                    against -= a[c, i] * lower[i]
+                elif a[c, i] < 0.0:
+                    along += a[c, i] * lower[i]
+                    against -= a[c, i] * upper[i]
+            room_up = along - target[0, c]  # h(n) - n . w
+            room_down = against + target[0, c]  # h(-n) + n . w
+            if room_up < -tolerance[p] or room_down < -tolerance[p]:
+                held = False
+            room_up, room_down = max(room_up, 0.0), max(room_down, 0.0)
+            for j in range(directions):
+                rate = target[1 + j, c]  # n . e_j
+                if rate > 0.0:
+                    reach[p, 0, j] = min(reach[p, 0, j], room_up / rate)
+                    reach[p, 1, j] = min(reach[p, 1, j], room_down / rate)
+                elif rate < 0.0:
+                    reach[p, 0, j] = min(reach[p, 0, j], room_down / -rate)
+                    reach[p, 1, j] = min(reach[p, 1, j], room_up / -rate)
+        if not held:
+            for j in range(directions):
+                reach[p, 0, j] = np.nan
+                reach[p, 1, j] = np.nan

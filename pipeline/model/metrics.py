@@ -8,9 +8,9 @@ tensions the checked model uses (docs/model.md section 8):
   my, mz in N m): the largest external wrench along +w and -w the pose holds on top of its load
   within the tension limits (``wrench_min_`` as a negative number). Under ``pinv`` the tensions
   t + mu A^+ e stay minimum-norm, so each cable's limits bound mu in closed form; under
-  ``feasible`` it is the LP max mu, A t = w + mu e, t in [t_min, t_max]
-  (:func:`pipeline.model.tensions.max_payloads`). inf where no limit binds, NaN where the pose
-  does not hold its load (or is singular).
+  ``feasible`` it is max mu with A t = w + mu e, t in [t_min, t_max], by ray shooting against
+  hyperplane shifting's inequalities (:func:`pipeline.model.tensions.wrench_reach`). inf where no
+  limit binds, NaN where the pose does not hold its load (or is singular).
 
 The capacity margin (how far the tensions can shrink into their limits) is every criterion's
 own margin, ``margin_slack`` and ``margin_tension_max``.
@@ -21,10 +21,10 @@ from __future__ import annotations
 import numpy as np
 
 from pipeline.model.geometry import FREEDOMS
-from pipeline.model.tensions import max_payloads
+from pipeline.model.tensions import unique_reach, wrench_reach
 
 NAMES = {"x": "fx", "y": "fy", "z": "fz", "rx": "mx", "ry": "my", "rz": "mz"}  # a freedom's wrench
-WORK = {"pinv": 0.3, "feasible": 20.0}  # a pose's metrics against its statics (the cost model's unit)
+WORK = {"pinv": 0.3, "feasible": 3.5}  # a pose's metrics against its statics (the cost model's unit)
 
 
 def pose_metrics(state, limits, distribution) -> dict[str, np.ndarray]:
@@ -35,35 +35,26 @@ def pose_metrics(state, limits, distribution) -> dict[str, np.ndarray]:
     t_max = np.broadcast_to(np.asarray(limits.s_max, dtype=float), (state.robot.n_cables,))
     structure = state.structure
     wrench = np.broadcast_to(state.wrench, (len(structure), structure.shape[1]))
+    pinv, rank = state.wrench_pinv
     if spec.tension.model == "pinv":
         tensions = state.tensions
         held = ~state.singular & (tensions >= t_min - TOL * limits.scale).all(axis=1) & (
             tensions <= t_max + TOL * limits.scale).all(axis=1)
     else:
         tensions = distribution(state, limits)[:, 0, :]
+        reach = wrench_reach(structure, pinv, rank, wrench, spec.tension.t_min, spec.tension.t_max)
     top = tensions.max(axis=1)
     with np.errstate(divide="ignore", invalid="ignore"):
         columns = {"tension_factor": np.where(top > 0, tensions.min(axis=1) / top, np.nan)}
     for row, freedom in enumerate(state.rows):
         name = NAMES[FREEDOMS[freedom]]
-        for sign, key in ((1.0, f"wrench_max_{name}"), (-1.0, f"wrench_min_{name}")):
+        for side, sign, key in ((0, 1.0, f"wrench_max_{name}"), (1, -1.0, f"wrench_min_{name}")):
             if spec.tension.model == "pinv":
-                mu = np.where(held, _pinv_reach(tensions, sign * state.wrench_pinv[0][:, :, row], t_min, t_max), np.nan)
+                mu = np.where(held, unique_reach(tensions, sign * pinv[:, :, row], t_min, t_max), np.nan)
             else:
-                direction = np.zeros(structure.shape[1])
-                direction[row] = sign
-                mu = max_payloads(structure, wrench, direction, spec.tension.t_min, spec.tension.t_max)
+                mu = reach[:, side, row]
             columns[key] = sign * mu
     return columns
 
 
 TOL = 1e-9  # a tension within TOL x the limits' scale of its limit holds it (the margins' atol)
-
-
-def _pinv_reach(tensions: np.ndarray, rate: np.ndarray, t_min: np.ndarray, t_max: np.ndarray) -> np.ndarray:
-    """The largest mu >= 0 with t_min <= t + mu rate <= t_max for every cable (n,): each cable
-    whose tension grows with mu meets its rating, each one that falls meets t_min."""
-    with np.errstate(divide="ignore", invalid="ignore"):
-        up = np.where(rate > 0, (t_max - tensions) / rate, np.inf)
-        down = np.where(rate < 0, (t_min - tensions) / rate, np.inf)
-    return np.maximum(np.minimum(up, down).min(axis=1), 0.0)

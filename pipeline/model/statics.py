@@ -17,7 +17,7 @@ import numpy as np
 from pipeline.model.dynamics import Load, load_wrench_terms
 from pipeline.model.linalg import batched_pinv, gram, gram_ratio
 from pipeline.model.geometry import CableRobot, PoseGeometry, structure_matrix
-from pipeline.model.tensions import Family, TensionSpec, max_payloads
+from pipeline.model.tensions import Family, TensionSpec, payload_ranges
 
 
 @dataclass(frozen=True)
@@ -244,10 +244,12 @@ class PayloadSpec(StaticsSpec):
 
 
 class PosePayload(PoseStatics):
-    """The statics of a chunk with, per pose, the largest payload it holds (kg): the weight is
-    linear in the mass, w + mu d with d the load wrench of 1 kg at the payload's centre of mass,
-    so the answer is exact: one LP per pose (pulling cables, ``tensions.max_payloads``) or, for
-    the minimum-norm tensions t0 + mu A^+ d (eq. 10), the first bound a cable meets."""
+    """The statics of a chunk with, per pose, the payloads it holds (kg): the weight is linear in
+    the mass, w + mu d with d the load wrench of 1 kg at the payload's centre of mass, and the
+    tensions' box convex, so the payloads held form one interval [least, largest], exact: LPs
+    per pose (pulling cables, ``tensions.payload_ranges``) or, for the minimum-norm tensions
+    t0 + mu A^+ d (eq. 10), the bounds each cable puts on mu. The least is above 0 where the
+    platform alone cannot keep its cables at t_min: they need a payload's weight."""
 
     @cached_property
     def per_kg(self) -> np.ndarray:
@@ -257,26 +259,35 @@ class PosePayload(PoseStatics):
         return load_wrench_terms(unit, 0.0, self.robot.up, self.rotation)[1][..., list(self.robot.dofs)]
 
     @cached_property
-    def max_payload(self) -> np.ndarray:
-        """(n,) the largest payload (kg) each pose holds within [t_min, t_max]; inf when the
-        cables never carry it, NaN when not even the platform alone is held (or, under the
-        minimum-norm model, the pose is singular) and where a cable has collapsed (no direction:
-        the ``zero_length`` gate)."""
+    def payload_range(self) -> np.ndarray:
+        """(n, 2) the least and the largest payload (kg) each pose holds within [t_min, t_max];
+        the largest inf when the cables never carry it; both NaN when no payload is held (or,
+        under the minimum-norm model, the pose is singular) and where a cable has collapsed (no
+        direction: the ``zero_length`` gate)."""
         t_min, t_max = self.tension.t_min, self.tension.t_max
         collapsed = self.lengths.min(axis=1) < self.robot.shortest_cable
         if self.tension.model != "pinv":
-            payloads = max_payloads(self.structure_matrix, self.wrench, self.per_kg, t_min, t_max)
-            return np.where(collapsed, np.nan, payloads)
+            payloads = payload_ranges(self.structure_matrix, self.wrench, self.per_kg, t_min, t_max)
+            return np.where(collapsed[:, None], np.nan, payloads)
         upper = np.inf if t_max is None else t_max
         start = self.tensions
         pinv = self.wrench_pinv[0]
         slope = (np.einsum("nmk,k->nm", pinv, self.per_kg) if self.per_kg.ndim == 1
                  else np.einsum("nmk,nk->nm", pinv, self.per_kg))
-        room = np.where(slope > 0, (upper - start) / np.where(slope > 0, slope, 1.0),
-                        np.where(slope < 0, (t_min - start) / np.where(slope < 0, slope, 1.0), np.inf))
-        held = ((start >= t_min) & (start <= upper)).all(axis=1) & ~self.singular & ~collapsed
-        return np.where(held, np.maximum(room.min(axis=1), 0.0), np.nan)
+        with np.errstate(divide="ignore", invalid="ignore"):  # t0 + mu s within [t_min, upper], cable by cable
+            to_min, to_max = (t_min - start) / slope, (upper - start) / slope
+            lows = np.where(slope > 0, to_min, np.where(slope < 0, to_max, np.where(start >= t_min, -np.inf, np.inf)))
+            highs = np.where(slope > 0, to_max, np.where(slope < 0, to_min, np.where(start <= upper, np.inf, -np.inf)))
+        least, largest = np.maximum(lows.max(axis=1), 0.0), highs.min(axis=1)
+        held = (least <= largest) & ~self.singular & ~collapsed
+        return np.where(held[:, None], np.column_stack([least, largest]), np.nan)
+
+    @property
+    def max_payload(self) -> np.ndarray:
+        """(n,) the largest payload (kg) each pose holds (:attr:`payload_range`)."""
+        return self.payload_range[:, 1]
 
     def diagnostics(self) -> dict[str, np.ndarray]:
-        return {**super().diagnostics(), "max_payload_kg": self.max_payload}
+        return {**super().diagnostics(), "max_payload_kg": self.max_payload,
+                "min_payload_kg": self.payload_range[:, 0]}
 

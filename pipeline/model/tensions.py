@@ -41,7 +41,7 @@ from math import comb
 
 import numpy as np
 
-from pipeline.model.capacity import MAX_NORMALS, RELAX, range_coordinates, shifted_margins
+from pipeline.model.capacity import MAX_NORMALS, RELAX, range_coordinates, ray_reach, shifted_margins
 from pipeline.model.linalg import gram, gram_ratio
 
 LP_BLOCKS = 256  # (pose, wrench) pairs per HiGHS call; HiGHS time grows faster than linearly
@@ -264,17 +264,19 @@ def _shrink_rows(lower, upper, scale, width):
 MAX_PAYLOAD_KG = 1e8  # a payload the LPs reach is "unlimited" (inf): the cables never carry it
 
 
-def max_payloads(structure: np.ndarray, wrench: np.ndarray, per_kg: np.ndarray, t_min, t_max) -> np.ndarray:
-    """(n,) the largest mu >= 0 (kg) with S t = w + mu d for some t in [t_min, t_max]: the payload
-    of ``analysis=payload`` (``S`` (n, r, m), ``w`` and ``d`` (r,) or each pose's own (n, r): the
-    platform's load wrench and that of 1 kg of payload). The weight is linear in the mass, so this is one LP per pose;
-    inf where no tension bound is met below MAX_PAYLOAD_KG (the rows that carry the weight are
-    not the cables': a table), NaN where not even mu = 0 is held (the platform alone). Solved as
-    two block-diagonal LPs per group of poses: the least violation of the equality over any mu
-    (every block feasible), then, for the poses held exactly, the largest mu; a group HiGHS
-    cannot solve whole is solved pose by pose."""
+def payload_ranges(structure: np.ndarray, wrench: np.ndarray, per_kg: np.ndarray, t_min, t_max) -> np.ndarray:
+    """(n, 2) the least and the largest mu >= 0 (kg) with S t = w + mu d for some t in [t_min,
+    t_max]: the payloads of ``analysis=payload`` each pose holds (``S`` (n, r, m), ``w`` and
+    ``d`` (r,) or each pose's own (n, r): the platform's load wrench and that of 1 kg of
+    payload). The weight is linear in the mass and the tensions' box convex, so the payloads
+    held form one interval: a pose whose cables need more weight than the platform's to reach
+    t_min holds only from some mu > 0 on. The largest is inf where no tension bound is met below
+    MAX_PAYLOAD_KG (the rows that carry the weight are not the cables': a table); both NaN
+    where no payload is held. Three block-diagonal LPs per group of poses: the least violation
+    of the equality over mu >= 0 (every block feasible), then, for the poses held exactly, the
+    largest and the least mu; a group HiGHS cannot solve whole is solved pose by pose."""
     n = structure.shape[0]
-    out = np.full(n, np.nan)
+    out = np.full((n, 2), np.nan)
     upper = np.inf if t_max is None else t_max
     unit = float(np.max(upper)) if np.isfinite(upper).all() else max(1.0, float(np.abs(wrench).max()))
     wrench, per_kg = (np.broadcast_to(a, (n, structure.shape[1])) for a in (wrench, per_kg))
@@ -290,13 +292,13 @@ def _payload_group(structure, wrench, per_kg, t_min, t_max, unit) -> np.ndarray:
     count, r, m = structure.shape
     bounds_t = np.column_stack([np.broadcast_to(t_min, (m,)), np.broadcast_to(t_max, (m,))]) / unit
     size = 1.0 + np.abs(wrench).max(axis=1)  # (count,): each pose's own wrench
-    # phase 1: the least |S t - mu d - w| over t in its bounds and any mu
+    # phase 1: the least |S t - mu d - w| over t in its bounds and mu >= 0
     width = m + 1 + 2 * r
     blocks = np.concatenate([structure * unit, -per_kg[:, :, None],
                              np.broadcast_to(np.eye(r), (count, r, r)), np.broadcast_to(-np.eye(r), (count, r, r))],
                             axis=2)
     bounds = np.empty((count, width, 2))
-    bounds[:, :m], bounds[:, m] = bounds_t, (-MAX_PAYLOAD_KG, MAX_PAYLOAD_KG)
+    bounds[:, :m], bounds[:, m] = bounds_t, (0.0, MAX_PAYLOAD_KG)
     bounds[:, m + 1:] = (0.0, np.inf)
     cost = np.zeros((count, width))
     cost[:, m + 1:] = 1.0
@@ -305,28 +307,30 @@ def _payload_group(structure, wrench, per_kg, t_min, t_max, unit) -> np.ndarray:
     if first.status != 0:
         raise RuntimeError(f"payload LP (least violation) failed: {first.message}")
     held = first.x.reshape(count, width)[:, m + 1:].sum(axis=1) <= 1e-9 * size
-    out = np.full(count, np.nan)
+    out = np.full((count, 2), np.nan)
     poses = np.flatnonzero(held)
     if len(poses):
-        out[poses] = _largest_mu(structure[poses], wrench[poses], per_kg[poses], bounds_t, unit)
-    out[out < -1e-9] = np.nan  # held only by a negative payload: not the platform alone
+        for column, sense in ((1, -1.0), (0, 1.0)):  # the largest, then the least
+            out[poses, column] = _extreme_mu(structure[poses], wrench[poses], per_kg[poses], bounds_t, unit, sense)
     out = np.maximum(out, 0.0)  # keeps NaN
     out[out >= MAX_PAYLOAD_KG * (1 - 1e-12)] = np.inf
+    out[out[:, 0] > out[:, 1] * (1 + 1e-12) + 1e-9] = np.nan  # HiGHS disagreeing with itself: none held
     return out
 
 
-def _largest_mu(structure, wrench, per_kg, bounds_t, unit) -> np.ndarray:
-    """max mu with S t - mu d = w, t in bounds (phase 2), for poses that hold some mu; the
-    block LP first, pose by pose if HiGHS's tolerance makes it declare the whole infeasible."""
+def _extreme_mu(structure, wrench, per_kg, bounds_t, unit, sense: float) -> np.ndarray:
+    """max mu (``sense`` -1) or min mu (+1) with S t - mu d = w, t in bounds, mu >= 0, for poses
+    that hold some mu; the block LP first, pose by pose if HiGHS's tolerance makes it declare
+    the whole infeasible."""
     from scipy.optimize import linprog
 
     count, r, m = structure.shape
     width = m + 1
     blocks = np.concatenate([structure * unit, -per_kg[:, :, None]], axis=2)
     bounds = np.empty((count, width, 2))
-    bounds[:, :m], bounds[:, m] = bounds_t, (-MAX_PAYLOAD_KG, MAX_PAYLOAD_KG)
+    bounds[:, :m], bounds[:, m] = bounds_t, (0.0, MAX_PAYLOAD_KG)
     cost = np.zeros((count, width))
-    cost[:, m] = -1.0
+    cost[:, m] = sense
     done = linprog(cost.ravel(), A_eq=_block_matrix(blocks, width), b_eq=wrench.ravel(),
                    bounds=bounds.reshape(-1, 2), method="highs")
     if done.status == 0:
@@ -337,6 +341,69 @@ def _largest_mu(structure, wrench, per_kg, bounds_t, unit) -> np.ndarray:
         if single.status == 0:
             found[pose] = single.x[m]
     return found
+
+
+def wrench_reach(structure: np.ndarray, pinv: np.ndarray, rank: np.ndarray, wrench: np.ndarray, t_min,
+                 t_max) -> np.ndarray:
+    """(n, 2, r) the largest mu >= 0 with S t = w + mu e_j ([:, 0, j]) and S t = w - mu e_j
+    ([:, 1, j]), t in [t_min, t_max], for each row j of ``structure`` (n, r, m); ``pinv`` and
+    ``rank`` its S^+ and rank (n,), ``wrench`` (r,) or (n, r). Exact: where t is unique (rank
+    m) in closed form (:func:`unique_reach`); else from hyperplane shifting's inequalities
+    (``capacity.ray_reach``, in the range of S: a direction with a part outside it has mu = 0),
+    or, for a poorly conditioned S or too many normals, the payload's LPs with e_j in place of a
+    kilogram's weight (:func:`payload_ranges`). NaN where w is not held, inf where no limit binds."""
+    n, r, m = structure.shape
+    lower = np.broadcast_to(np.asarray(t_min, dtype=float), (m,))
+    upper = np.broadcast_to(np.asarray(np.inf if t_max is None else t_max, dtype=float), (m,))
+    w = np.broadcast_to(wrench, (n, r))
+    size = np.abs(w).max(axis=1) + np.abs(structure).max(axis=(1, 2)) * np.where(
+        np.isfinite(upper), np.abs(upper), np.abs(lower)).max()
+    tolerance = 1e-9 * size  # how far outside an inequality w may stand and count as held (round-off)
+    out = np.full((n, 2, r), np.nan)
+    unique = np.flatnonzero(rank == m)
+    if len(unique):
+        x = np.einsum("nmr,nr->nm", pinv[unique], w[unique])
+        held = ((x >= lower - tolerance[unique, None]) & (x <= upper + tolerance[unique, None])).all(axis=1)
+        for j in range(r):
+            for side, sign in ((0, 1.0), (1, -1.0)):
+                out[unique, side, j] = np.where(held, unique_reach(x, sign * pinv[unique][:, :, j], lower, upper), np.nan)
+    by_lp = np.zeros(n, dtype=bool)
+    for q in np.unique(rank[rank != m]):
+        poses = np.flatnonzero(rank == q)
+        if q == 0 or 2 * comb(m, int(q) - 1) > MAX_NORMALS:
+            by_lp[poses] = True
+            continue
+        basis = (np.broadcast_to(np.eye(r), (len(poses), r, r)) if q == r
+                 else np.linalg.svd(structure[poses], full_matrices=False)[0][:, :, :q])  # (n_q, r, q)
+        inside = np.swapaxes(basis, 1, 2) @ structure[poses]
+        coords = np.einsum("nr,nrq->nq", w[poses], basis)
+        outside = np.linalg.norm(w[poses] - np.einsum("nrq,nq->nr", basis, coords), axis=1) > tolerance[poses]
+        conditioned = gram_ratio(gram(inside)) >= HSM_MIN_GRAM
+        by_lp[poses[~conditioned]] = True
+        chosen = np.flatnonzero(conditioned)
+        found = ray_reach(inside[chosen], coords[chosen], basis[chosen], lower, upper, tolerance[poses[chosen]])
+        apart = (1.0 - (basis[chosen] ** 2).sum(axis=2)) > 1e-9  # (n_c, r): e_j leaves the range of S
+        found = np.where(apart[:, None, :] & ~np.isnan(found), 0.0, found)
+        found[outside[chosen]] = np.nan
+        out[poses[chosen]] = found
+    if by_lp.any():
+        for j in range(r):
+            for side, sign in ((0, 1.0), (1, -1.0)):
+                direction = np.zeros(r)
+                direction[j] = sign
+                ranges = payload_ranges(structure[by_lp], w[by_lp], direction, t_min, t_max)
+                out[by_lp, side, j] = np.where(ranges[:, 0] <= 1e-9, ranges[:, 1], np.nan)  # w itself held
+    return out
+
+
+def unique_reach(tensions: np.ndarray, rate: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """The largest mu >= 0 with lower <= t + mu rate <= upper for every cable (n,): each cable
+    whose tension grows with mu meets its upper limit, each one that falls its lower one (the
+    tensions of a wrench along a ray, when they are unique or minimum-norm)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        up = np.where(rate > 0, (upper - tensions) / rate, np.inf)
+        down = np.where(rate < 0, (lower - tensions) / rate, np.inf)
+    return np.maximum(np.minimum(up, down).min(axis=1), 0.0)
 
 
 QP_PAIRS = 64  # (pose, wrench) pairs per HiGHS QP: one block-diagonal problem each

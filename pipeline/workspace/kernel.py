@@ -81,6 +81,8 @@ def evaluate_chunk(problem: WorkspaceProblem, rows: np.ndarray) -> dict[str, np.
                 result[key] = np.where(worse[key], value, result[key])
             elif key.startswith("margin_") or key in ("jacobian_rank", "max_payload_kg", "limiting_wrench_margin"):
                 result[key] = np.minimum(result[key], value)
+            elif key == "min_payload_kg":  # the payload every orientation of the set needs
+                result[key] = np.maximum(result[key], value)
             elif key == "lp_poses":
                 result[key] = result[key] | value
     return result
