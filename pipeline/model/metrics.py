@@ -3,7 +3,8 @@ tensions the checked model uses (docs/model.md section 8):
 
 - ``tension_factor``: min_i t_i / max_i t_i of the pose's cable tensions (1: evenly loaded,
   0: a slack cable, negative: one pushes), the minimum-norm tensions of eq. (10) (``pinv``) or
-  the distribution the ``feasible`` model writes (``tension.distribution``);
+  the distribution the ``feasible`` model writes (``tension.distribution``, one LP a pose, at
+  the feasible poses only: elsewhere none is valid);
 - ``wrench_max_<w>`` and ``wrench_min_<w>`` for each freedom w of the robot (fx, fy, fz in N, mx,
   my, mz in N m): the largest external wrench along +w and -w the pose holds on top of its load
   within the tension limits (``wrench_min_`` as a negative number). Under ``pinv`` the tensions
@@ -27,9 +28,11 @@ NAMES = {"x": "fx", "y": "fy", "z": "fz", "rx": "mx", "ry": "my", "rz": "mz"}  #
 WORK = {"pinv": 0.3, "feasible": 3.5}  # a pose's metrics against its statics (the cost model's unit)
 
 
-def pose_metrics(state, limits, distribution) -> dict[str, np.ndarray]:
+def pose_metrics(state, limits, distribution, held: np.ndarray) -> dict[str, np.ndarray]:
     """The metrics (n,) of a chunk's ``PoseStatics`` (one wrench) and its ``StaticLimits``;
-    ``distribution``: the ``feasible`` model's written tensions (n, K, m) (its criteria module)."""
+    ``distribution``: the ``feasible`` model's written tensions (n, K, m) (its criteria module),
+    computed at the ``held`` poses only (every margin satisfied: elsewhere no distribution is
+    valid, and the tension factor is NaN)."""
     spec = state.spec
     t_min = np.broadcast_to(np.asarray(spec.tension.t_min, dtype=float), (state.robot.n_cables,))
     t_max = np.broadcast_to(np.asarray(limits.s_max, dtype=float), (state.robot.n_cables,))
@@ -41,7 +44,10 @@ def pose_metrics(state, limits, distribution) -> dict[str, np.ndarray]:
         held = ~state.singular & (tensions >= t_min - TOL * limits.scale).all(axis=1) & (
             tensions <= t_max + TOL * limits.scale).all(axis=1)
     else:
-        tensions = distribution(state, limits)[:, 0, :]
+        tensions = np.full(state.lengths.shape, np.nan)
+        if held.any():
+            turned = state.orientation[held] if isinstance(state.orientation, np.ndarray) else state.orientation
+            tensions[held] = distribution(spec.state(state.robot, state.positions[held], turned), limits)[:, 0, :]
         reach = wrench_reach(structure, pinv, rank, wrench, spec.tension.t_min, spec.tension.t_max)
     top = tensions.max(axis=1)
     with np.errstate(divide="ignore", invalid="ignore"):

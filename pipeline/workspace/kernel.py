@@ -98,10 +98,11 @@ def _criteria(problem: WorkspaceProblem, positions: np.ndarray, orientation, nom
     ``nominal`` one also the cable quantities and the metrics the problem asks for."""
     state = problem.spec.state(problem.robot, positions, orientation)
     result = cable_quantities(state, problem.limits) if problem.cables and nominal else {}
-    if problem.metrics and nominal:
-        result.update(pose_metrics(state, problem.limits, written_distribution))
     for name in problem.criteria:
         result[f"margin_{name}"] = REGISTRY[name].function(state, problem.limits)
+    if problem.metrics and nominal:
+        held = np.min([result[f"margin_{name}"] for name in problem.criteria], axis=0) >= -problem.margin_atol
+        result.update(pose_metrics(state, problem.limits, written_distribution, held))
     result.update(state.diagnostics())  # the Jacobian's rank, the poses the feasible model's LPs solved
     if problem.spec.kind == "statics" and len(problem.spec.wrench_set) > 1:
         result.update(_limiting_vertex(problem, positions, orientation, result))
