@@ -101,3 +101,18 @@ def test_the_obstacles_are_drawn_where_the_config_puts_them(make_cfg, catalogue)
     assert np.allclose((wall - [0, 0, -3]) @ normal, 0, atol=1e-12)
     anchors = problem.robot.anchors
     assert np.ptp(wall[:, 0]) >= np.ptp(anchors[:, 0]) - 1e-9
+
+
+def test_a_view_with_a_home_shows_the_connected_poses_apart_from_the_others(tmp_path):
+    import pandas as pd
+
+    grid = pd.DataFrame([(x, y, z) for x in range(3) for y in range(3) for z in range(2)], columns=list("xyz"), dtype=float)
+    feasible = (grid["x"] != 1).to_numpy()  # two slabs apart
+    grid = grid.assign(psi=0.0, theta=0.0, phi=0.0, feasible=feasible, connected=feasible & (grid["x"] == 0).to_numpy(),
+                       limiting=pd.Categorical(np.where(feasible, "slack", "tension_max")), margin_slack=1.0)
+    view = json.loads(write_view([(grid, "feasible", None)], "t", False, tmp_path / "v.json").read_text())
+    by_name = {t["name"]: t for t in view["data"]}
+    assert by_name["connected to home (6)"]["marker"]["symbol"] == "circle"
+    assert by_name["feasible, not connected (6)"]["marker"]["symbol"] == "circle-open"
+    assert "lost to tension_max (6)" in by_name
+    assert by_name["connected to home (6)"]["visible"] == "legendonly"  # the surface shows the feasible set

@@ -22,6 +22,7 @@ from pipeline.workspace.criteria import COLOURS, FEASIBLE_COLOUR
 from pipeline.app.results import write_text
 
 MAX_POINTS = 6000  # per panel: the page stays light with ~40 views
+FEASIBLE_GROUPS = ("feasible", "connected to home", "feasible, not connected")  # the traces of feasible poses
 
 
 def write_view(panels: list[tuple[pd.DataFrame, str, str | None]], title: str, invert_z: bool,
@@ -146,6 +147,10 @@ def _traces(points: pd.DataFrame, column: str, legend: bool, axes=("x", "y", "z"
     limiting = "limiting" + column[len("feasible"):]
     margins = [c for c in points.columns if c.startswith("margin_")]
     groups = [("feasible", points[feasible], FEASIBLE_COLOUR, "circle")]
+    if column == "feasible" and "connected" in points:  # workspace.home: its component, the rest hollow
+        connected = points["connected"].to_numpy(dtype=bool)
+        groups = [("connected to home", points[feasible & connected], FEASIBLE_COLOUR, "circle"),
+                  ("feasible, not connected", points[feasible & ~connected], FEASIBLE_COLOUR, "circle-open")]
     infeasible = points[~feasible]
     room = max(MAX_POINTS - int(feasible.sum()), 0)
     if len(infeasible) > room:
@@ -158,16 +163,16 @@ def _traces(points: pd.DataFrame, column: str, legend: bool, axes=("x", "y", "z"
     total = {name: int(count) for name, count in (
         points.loc[~feasible, limiting].astype(str).value_counts().items() if limiting in points
         else [("infeasible", int((~feasible).sum()))])}
-    total["feasible"] = int(feasible.sum())
+    total.update({name: len(group) for name, group, _, _ in groups[:2] if name in FEASIBLE_GROUPS})
     traces = []
     for name, group, colour, symbol in groups:
         shown = "" if len(group) == total.get(name, len(group)) else f", {len(group)} shown"
         traces.append({
             "type": "scatter3d", "x": group[axes[0]].round(4).to_numpy(), "y": group[axes[1]].round(4).to_numpy(),
             "z": group[axes[2]].round(4).to_numpy(), "mode": "markers",
-            "name": f"{'feasible' if name == 'feasible' else 'lost to ' + name} ({total.get(name, len(group))}{shown})",
+            "name": f"{name if name in FEASIBLE_GROUPS else 'lost to ' + name} ({total.get(name, len(group))}{shown})",
             "legendgroup": name, "showlegend": legend,
-            "marker": {"size": 2.5 if symbol == "circle" else 2, "color": colour, "symbol": symbol},
+            "marker": {"size": 2 if symbol == "diamond" else 2.5, "color": colour, "symbol": symbol},
             "customdata": group[margins].round(4).to_numpy(),
             "hovertemplate": (f"{axes[0]} %{{x}}, {axes[1]} %{{y}}, {axes[2]} %{{z}}" if axes[0] == "psi" else
                               "x %{x} m, y %{y} m, z %{z} m") + "<br>" + "<br>".join(
