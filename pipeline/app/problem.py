@@ -296,11 +296,21 @@ def wrench_set(value) -> np.ndarray:
 
 
 WRENCH_RULE = vector(6, "fx fy fz mx my mz, N and N m", MAX_FORCE)  # the rule of load.external
+POINT_RULE = vector(3, "x, y, z, m", MAX_FORCE)  # an obstacle's or a platform box's corner, point, normal
 
 
 def _wrench(value, key: str) -> np.ndarray:
+    return _checked(value, key, WRENCH_RULE, "must be a list of 6 numbers (fx fy fz mx my mz)")
+
+
+def _point(value, key: str) -> np.ndarray:
+    return _checked(value, key, POINT_RULE, "must be 3 numbers [x, y, z] (m)")
+
+
+def _checked(value, key: str, rule, shape: str) -> np.ndarray:
+    """``value`` (a list node) as an array, or ConfigError '<key>=<value>: <what rule says>'."""
     items = OmegaConf.to_container(value) if isinstance(value, ListConfig) else value
-    broken = WRENCH_RULE(items) if isinstance(items, list) else "must be a list of 6 numbers (fx fy fz mx my mz)"
+    broken = rule(items) if isinstance(items, list) else shape
     if broken:
         raise ConfigError(f"{key}={items}: {broken}")
     return np.asarray(items, dtype=float)
@@ -451,7 +461,7 @@ def platform_shape(value, robot: CableRobot) -> Polytope:
             raise ConfigError(f"{key}=hull: the attachment points span no volume (a plate, a line or a point), so no "
                               "cable can enter it; declare a box {lo: [x, y, z], hi: [x, y, z]} (m, platform frame)")
     elif isinstance(value, DictConfig) and set(value) == {"lo", "hi"}:
-        lo, hi = (_obstacle_vector(value[end], f"{key}.{end}") for end in ("lo", "hi"))
+        lo, hi = (_point(value[end], f"{key}.{end}") for end in ("lo", "hi"))
         if not (lo < hi).all():
             raise ConfigError(f"{key}.lo={lo.tolist()}: must be below {key}.hi={hi.tolist()} on every axis")
         shape = Polytope.box(lo, hi)
@@ -479,13 +489,13 @@ def obstacles(value, robot: CableRobot) -> tuple[Obstacle, ...]:
         fields_ = set(item) - {"name"} if isinstance(item, DictConfig) else None
         name = str(item.get("name", f"obstacle {number + 1}")) if fields_ is not None else ""
         if fields_ == {"lo", "hi"}:
-            lo, hi = (_obstacle_vector(item[end], f"{key}.{end}") for end in ("lo", "hi"))
+            lo, hi = (_point(item[end], f"{key}.{end}") for end in ("lo", "hi"))
             if not (lo < hi).all():
                 raise ConfigError(f"{key}.lo={lo.tolist()}: must be below {key}.hi={hi.tolist()} on every axis")
             obstacle = Obstacle(name, lo=lo, hi=hi)
             inside = ((robot.anchors > lo) & (robot.anchors < hi)).all(axis=1)
         elif fields_ == {"point", "normal"}:
-            point, normal = (_obstacle_vector(item[end], f"{key}.{end}") for end in ("point", "normal"))
+            point, normal = (_point(item[end], f"{key}.{end}") for end in ("point", "normal"))
             if not np.linalg.norm(normal) > 0:
                 raise ConfigError(f"{key}.normal={normal.tolist()}: must not be zero")
             obstacle = Obstacle(name, point=point, normal=normal / np.linalg.norm(normal))
@@ -500,13 +510,6 @@ def obstacles(value, robot: CableRobot) -> tuple[Obstacle, ...]:
         found.append(obstacle)
     return tuple(found)
 
-
-def _obstacle_vector(value, key: str) -> np.ndarray:
-    items = OmegaConf.to_container(value) if isinstance(value, ListConfig) else value
-    broken = vector(3, "x, y, z, m", MAX_FORCE)(items) if isinstance(items, list) else "must be 3 numbers [x, y, z] (m)"
-    if broken:
-        raise ConfigError(f"{key}={items}: {broken}")
-    return np.asarray(items, dtype=float)
 
 
 def build_grid(cfg: DictConfig, robot: CableRobot) -> Grid:
