@@ -17,7 +17,8 @@ import numpy as np
 import pandas as pd
 
 from pipeline.model.geometry import attached_points
-from pipeline.workspace.boundary import boundary_mesh
+from pipeline.model.clearance import Polytope
+from pipeline.workspace.boundary import boundary_mesh, verdict_field
 from pipeline.workspace.criteria import COLOURS, FEASIBLE_COLOUR
 from pipeline.app.results import write_text
 
@@ -75,8 +76,8 @@ def _surface(points: pd.DataFrame, column: str, axes, box: tuple | None) -> dict
     if min(counts) < 2 or int(np.prod(counts)) != len(points) or not feasible.any():
         return None
     margins = [name for name in points.columns if name.startswith("margin_")] if column == "feasible" else []
-    least = points[margins].min(axis=1).to_numpy() if margins else np.full(len(points), 0.5)
-    field = np.where(feasible, np.maximum(least, 0.0), np.minimum(-np.abs(least), -1e-30))
+    least = points[margins].min(axis=1).to_numpy() if margins else None
+    field = verdict_field(least, feasible) if margins else np.where(feasible, 0.5, -0.5)
     order = np.lexsort([points[a].to_numpy() for a in reversed(axes)])  # the grid's order: first axis slowest
     nodes = tuple(np.unique(points[a].to_numpy()) for a in axes)
     lo, hi = box if box is not None and axes[0] == "x" else ([n[0] for n in nodes], [n[-1] for n in nodes])
@@ -95,7 +96,7 @@ def robot_traces(robot, position: np.ndarray, rotation: np.ndarray) -> list[dict
     anchors = np.asarray(robot.anchors, float)
     attached = position + attached_points(robot, rotation)
     lo, hi = anchors.min(axis=0), anchors.max(axis=0)
-    traces = [_lines(_corners(lo, hi), BOX_EDGES, "frame", "#9a9a9a", 2),
+    traces = [_lines(Polytope.box(lo, hi).vertices, BOX_EDGES, "frame", "#9a9a9a", 2),
               {"type": "scatter3d", "mode": "markers", "name": "anchors", "legendgroup": "robot",
                "x": anchors[:, 0], "y": anchors[:, 1], "z": anchors[:, 2], "text": list(robot.cable_names),
                "marker": {"size": 3, "color": "#222222"}, "hovertemplate": "anchor %{text}<extra></extra>"},
@@ -112,10 +113,10 @@ def robot_traces(robot, position: np.ndarray, rotation: np.ndarray) -> list[dict
                              "platform", "#8c6d31", 4))
     for obstacle in robot.obstacles:
         if obstacle.normal is None:
-            traces.append(_lines(_corners(obstacle.lo, obstacle.hi), BOX_EDGES, obstacle.name, OBSTACLE_COLOUR, 3))
+            traces.append(_lines(Polytope.box(obstacle.lo, obstacle.hi).vertices, BOX_EDGES, obstacle.name, OBSTACLE_COLOUR, 3))
         else:  # the plane across the frame: its patch over the frame's corners seen along the normal
             basis = np.linalg.svd(obstacle.normal[None, :])[2][1:]  # two unit vectors in the plane
-            spread = (_corners(lo, hi) - obstacle.point) @ basis.T
+            spread = (Polytope.box(lo, hi).vertices - obstacle.point) @ basis.T
             low, high = spread.min(axis=0), spread.max(axis=0)
             patch = obstacle.point + np.array([[low[0], low[1]], [high[0], low[1]], [high[0], high[1]],
                                                [low[0], high[1]]]) @ basis
@@ -123,13 +124,9 @@ def robot_traces(robot, position: np.ndarray, rotation: np.ndarray) -> list[dict
     return traces
 
 
-BOX_EDGES = [(a, b) for a in range(8) for b in range(a + 1, 8) if bin(a ^ b).count("1") == 1]  # of _corners
+BOX_EDGES = [(a, b) for a in range(8) for b in range(a + 1, 8) if bin(a ^ b).count("1") == 1]  # of Polytope.box's corners
 OBSTACLE_COLOUR = COLOURS["cable_obstacle"]
 
-
-def _corners(lo, hi) -> np.ndarray:
-    """The eight corners of the box [lo, hi], corner k at bit i of k set: hi on axis 2 - i."""
-    return np.array([[(lo, hi)[i][0], (lo, hi)[j][1], (lo, hi)[k][2]] for i in (0, 1) for j in (0, 1) for k in (0, 1)])
 
 
 def _lines(points: np.ndarray, pairs: list[tuple[int, int]], name: str, colour: str, width: float) -> dict:

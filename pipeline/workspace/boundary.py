@@ -21,6 +21,12 @@ MIN_MARGIN = 1e-12  # a boundary node's margin of exactly 0: its face still gets
 FACE_SHARE = 1e-9  # a face on the outermost nodes: the surface closes within 1e-9 of a step beyond them
 
 
+def verdict_field(least: np.ndarray, feasible: np.ndarray) -> np.ndarray:
+    """The field the boundary is drawn from: each pose's least margin with the sign of its verdict
+    (a feasible pose's at least 0, an infeasible one's below 0 even where float32 rounds it)."""
+    return np.where(feasible, np.maximum(least, 0.0), np.minimum(least, -1e-30))
+
+
 def boundary_mesh(field: np.ndarray, axes: tuple[np.ndarray, np.ndarray, np.ndarray],
                   lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(vertices (k, 3) in m, triangles (t, 3) vertex indices, oriented outwards) of the zero

@@ -15,7 +15,7 @@ import numpy as np
 import pyarrow as pa
 
 from pipeline.workspace.arrow import values
-from pipeline.workspace.boundary import boundary_mesh, enclosed_volume, surface_area
+from pipeline.workspace.boundary import boundary_mesh, enclosed_volume, surface_area, verdict_field
 from pipeline.workspace.grid import Grid
 from pipeline.workspace.reach import connected_component, home_node
 
@@ -60,10 +60,10 @@ class GridShape:
             span = slice(self.filled, self.filled + table.num_rows)
             feasible = values(table.column("feasible"))
             self.feasible[span] = feasible
-            if self.field is not None:  # the least margin, its sign the verdict's even where float32 rounds it to 0
+            if self.field is not None:
                 least = np.min([values(table.column(name)) for name in table.column_names
                                 if name.startswith("margin_")], axis=0)
-                self.field[span] = np.where(feasible, np.maximum(least, 0.0), np.minimum(least, -1e-30))
+                self.field[span] = verdict_field(least, feasible)
             self.filled = span.stop
             if sink is not None:
                 sink(table)
