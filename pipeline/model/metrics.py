@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from pipeline.model.geometry import FREEDOMS
-from pipeline.model.tensions import unique_reach, wrench_reach
+from pipeline.model.tensions import ray_interval, wrench_reach
 
 NAMES = {"x": "fx", "y": "fy", "z": "fz", "rx": "mx", "ry": "my", "rz": "mz"}  # a freedom's wrench
 WORK = {"pinv": 0.3, "feasible": 3.5}  # a pose's metrics against its statics (the cost model's unit)
@@ -56,7 +56,8 @@ def pose_metrics(state, limits, distribution, held: np.ndarray) -> dict[str, np.
         name = NAMES[FREEDOMS[freedom]]
         for side, sign, key in ((0, 1.0, f"wrench_max_{name}"), (1, -1.0, f"wrench_min_{name}")):
             if spec.tension.model == "pinv":
-                mu = np.where(held, unique_reach(tensions, sign * pinv[:, :, row], t_min, t_max), np.nan)
+                largest = ray_interval(tensions, sign * pinv[:, :, row], t_min, t_max)[1]
+                mu = np.where(held, np.maximum(largest, 0.0), np.nan)
             else:
                 mu = reach[:, side, row]
             columns[key] = sign * mu

@@ -17,7 +17,7 @@ import numpy as np
 from pipeline.model.dynamics import Load, load_wrench_terms
 from pipeline.model.linalg import batched_pinv, gram, gram_ratio
 from pipeline.model.geometry import CableRobot, PoseGeometry, structure_matrix
-from pipeline.model.tensions import Family, TensionSpec, payload_ranges
+from pipeline.model.tensions import Family, TensionSpec, payload_ranges, ray_interval
 
 
 @dataclass(frozen=True)
@@ -274,11 +274,7 @@ class PosePayload(PoseStatics):
         pinv = self.wrench_pinv[0]
         slope = (np.einsum("nmk,k->nm", pinv, self.per_kg) if self.per_kg.ndim == 1
                  else np.einsum("nmk,nk->nm", pinv, self.per_kg))
-        with np.errstate(divide="ignore", invalid="ignore"):  # t0 + mu s within [t_min, upper], cable by cable
-            to_min, to_max = (t_min - start) / slope, (upper - start) / slope
-            lows = np.where(slope > 0, to_min, np.where(slope < 0, to_max, np.where(start >= t_min, -np.inf, np.inf)))
-            highs = np.where(slope > 0, to_max, np.where(slope < 0, to_min, np.where(start <= upper, np.inf, -np.inf)))
-        least, largest = np.maximum(lows.max(axis=1), 0.0), highs.min(axis=1)
+        least, largest = ray_interval(start, slope, t_min, upper)
         held = (least <= largest) & ~self.singular & ~collapsed
         return np.where(held[:, None], np.column_stack([least, largest]), np.nan)
 

@@ -348,7 +348,7 @@ def wrench_reach(structure: np.ndarray, pinv: np.ndarray, rank: np.ndarray, wren
     """(n, 2, r) the largest mu >= 0 with S t = w + mu e_j ([:, 0, j]) and S t = w - mu e_j
     ([:, 1, j]), t in [t_min, t_max], for each row j of ``structure`` (n, r, m); ``pinv`` and
     ``rank`` its S^+ and rank (n,), ``wrench`` (r,) or (n, r). Exact: where t is unique (rank
-    m) in closed form (:func:`unique_reach`); else from hyperplane shifting's inequalities
+    m) in closed form (:func:`ray_interval`); else from hyperplane shifting's inequalities
     (``capacity.ray_reach``, in the range of S: a direction with a part outside it has mu = 0),
     or, for a poorly conditioned S or too many normals, the payload's LPs with e_j in place of a
     kilogram's weight (:func:`payload_ranges`). NaN where w is not held, inf where no limit binds."""
@@ -366,7 +366,8 @@ def wrench_reach(structure: np.ndarray, pinv: np.ndarray, rank: np.ndarray, wren
         held = ((x >= lower - tolerance[unique, None]) & (x <= upper + tolerance[unique, None])).all(axis=1)
         for j in range(r):
             for side, sign in ((0, 1.0), (1, -1.0)):
-                out[unique, side, j] = np.where(held, unique_reach(x, sign * pinv[unique][:, :, j], lower, upper), np.nan)
+                largest = ray_interval(x, sign * pinv[unique][:, :, j], lower, upper)[1]
+                out[unique, side, j] = np.where(held, np.maximum(largest, 0.0), np.nan)
     by_lp = np.zeros(n, dtype=bool)
     for q in np.unique(rank[rank != m]):
         poses = np.flatnonzero(rank == q)
@@ -396,14 +397,17 @@ def wrench_reach(structure: np.ndarray, pinv: np.ndarray, rank: np.ndarray, wren
     return out
 
 
-def unique_reach(tensions: np.ndarray, rate: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
-    """The largest mu >= 0 with lower <= t + mu rate <= upper for every cable (n,): each cable
-    whose tension grows with mu meets its upper limit, each one that falls its lower one (the
-    tensions of a wrench along a ray, when they are unique or minimum-norm)."""
+def ray_interval(tensions: np.ndarray, rate: np.ndarray, lower, upper) -> tuple[np.ndarray, np.ndarray]:
+    """(least, largest) (n,) of the mu >= 0 with lower <= t + mu rate <= upper for every cable
+    (the tensions of a wrench along a ray, when they are unique or minimum-norm): each cable
+    bounds mu from below at one limit and from above at the other, by the sign of its rate; a
+    cable with rate 0 allows every mu or none. Empty where least > largest."""
     with np.errstate(divide="ignore", invalid="ignore"):
-        up = np.where(rate > 0, (upper - tensions) / rate, np.inf)
-        down = np.where(rate < 0, (lower - tensions) / rate, np.inf)
-    return np.maximum(np.minimum(up, down).min(axis=1), 0.0)
+        to_lower, to_upper = (lower - tensions) / rate, (upper - tensions) / rate
+        still = np.where((tensions >= lower) & (tensions <= upper), np.inf, -np.inf)  # rate 0
+        lows = np.where(rate > 0, to_lower, np.where(rate < 0, to_upper, -still))
+        highs = np.where(rate > 0, to_upper, np.where(rate < 0, to_lower, still))
+    return np.maximum(lows.max(axis=1), 0.0), highs.min(axis=1)
 
 
 QP_PAIRS = 64  # (pose, wrench) pairs per HiGHS QP: one block-diagonal problem each
