@@ -1,5 +1,6 @@
-"""What the interference criteria, the connected reach and the boundary mesh cost (issue 40), in
-whole processes against the wrench-feasibility job without them, in the same run.
+"""What the interference criteria, the connected reach, the per-pose metrics and the boundary
+mesh cost (issue 40), in whole processes against the wrench-feasibility job without them, in
+the same run.
 
     python benchmarks/bench_interference.py [--repeat 3] [--n 40]
 
@@ -33,6 +34,7 @@ FEATURES = {
         "obstacles=[{name: floor, point: [0, 0, -2.3], normal: [0, 0, 1]}, {name: table, lo: [1.2, 0.6, -3], "
         "hi: [2.2, 1.4, -1.5]}]"],
     "connected reach (workspace.home)": ["workspace.home=[1.6,1.1,-1.1]"],
+    "per-pose metrics (output.metrics=true)": ["output.metrics=true"],
 }
 
 

@@ -10,6 +10,10 @@ from scipy.optimize import linprog
 
 from conftest import SPREAD_ROBOT
 from pipeline.app.problem import build_problem, compute_workspace
+from pipeline.model import distribution
+from pipeline.model.distribution import face_distribution, min_norm_tensions, qp_distribution
+from pipeline.model.linalg import batched_pinv
+from pipeline.model.tensions import Family, feasible_tensions
 
 ROBOT = [*SPREAD_ROBOT, "robot.search.step=0.25",
          "robot.platform.mass=4", "robot.platform.com=[0.02,-0.01,-0.04]", "orientation.psi=0.05",
@@ -71,3 +75,61 @@ def test_the_certificate_rejects_a_valid_distribution_that_is_not_the_least(runs
     state = problem.spec.state(problem.robot, poses, problem.orientation)
     verdicts = [kkt_holds(a, t, 1.0, 250.0) for a, t in zip(state.structure_matrix, vertex.loc[larger, NAMES].to_numpy())]
     assert len(verdicts) > 0 and not any(verdicts)
+
+
+@pytest.mark.parametrize("m, r, dependent", [(4, 3, False), (5, 3, False), (6, 3, False), (8, 6, False), (9, 6, False),
+                                             (8, 6, True), (4, 2, False)])
+def test_the_enumeration_of_faces_is_the_qp_optimum_and_finds_a_distribution_where_the_lps_do(m, r, dependent):
+    """Random structure matrices with null spaces of 1 to 3 dimensions (3 where a dependent row
+    drops the rank), two wrenches a pose, some cables without a rating, non-unit weights (the
+    CPR-8's torques): the enumeration (pipeline.model.faces) against HiGHS's convex QP from the
+    LPs' start, and its verdict against the LPs' margins."""
+    rng = np.random.default_rng(m * 10 + r + dependent)
+    n = 200
+    structure = rng.normal(size=(n, r, m))
+    if dependent:
+        structure[:, -1] = structure[:, 0] - 2 * structure[:, 1]
+    inside = rng.uniform(1.2, 2.3, size=(n, 2, m))
+    wrenches = np.einsum("nrm,nkm->nkr", structure, inside) * rng.uniform(0.8, 1.6, size=(n, 2, 1))
+    lower, upper = np.ones((n, 2, m)), np.full((n, 2, m), 2.5)
+    upper[: n // 4] = np.inf
+    weights = rng.uniform(0.5, 2.0, size=m)
+    pinv, rank = batched_pinv(structure, 1e-9)
+    assert (rank == r - dependent).all()
+    x, found = face_distribution(structure, wrenches, lower, upper, weights, rank, 1e-6)
+    families = [Family("slack", lower, np.inf, 1.0), Family("tension_max", -np.inf, upper, 1.0)]
+    margins, start, _ = feasible_tensions(structure, pinv, rank, wrenches, families, 1e-6, distribution=True)
+    reference = qp_distribution(structure, wrenches, lower, upper, weights, start, 1e-6)
+    holds = np.all([margins[name] >= -1e-9 for name in ("slack", "tension_max", "unreachable")], axis=0)
+    assert 0.1 < found.all(axis=1).mean() < 0.9
+    assert (found.all(axis=1) == holds).all()
+    ours, theirs = (np.linalg.norm(t * weights, axis=2)[found] for t in (x, reference))
+    assert (ours <= theirs * (1 + 1e-9)).all()
+    assert np.abs(x - reference)[found].max() < 1e-6 * np.abs(reference[found]).max()
+    assert ((x >= lower) & (x <= upper))[found].all()
+    assert np.isnan(x[~found]).all()
+
+
+def test_a_pose_beyond_the_enumeration_gets_the_same_tensions_from_highs(monkeypatch):
+    """With no active set allowed, every pair goes the HiGHS route (the LPs' start, then the
+    QP): the same least-norm tensions; where the limits admit none, both write the LPs' x (of
+    those poses: an LP's optimal vertex is not unique, so it is compared on the same batch)."""
+    rng = np.random.default_rng(7)
+    n, r, m = 60, 3, 5
+    structure = rng.normal(size=(n, r, m))
+    wrenches = np.einsum("nrm,nm->nr", structure, rng.uniform(1.2, 2.3, size=(n, m)))[:, None] * rng.uniform(
+        0.8, 1.6, size=(n, 1, 1))
+    families = [Family("slack", 1.0, np.inf, 1.0), Family("tension_max", -np.inf, 2.5, 2.5)]
+    pinv, rank = batched_pinv(structure, 1e-9)
+    weights = np.ones(m)
+    enumerated = min_norm_tensions(structure, pinv, rank, wrenches, families, weights, 1e-6)
+    held = face_distribution(structure, wrenches, 1.0, 2.5, weights, rank, 1e-6)[1][:, 0]
+    monkeypatch.setattr(distribution, "MAX_ACTIVE_SETS", 0)
+    solved = min_norm_tensions(structure, pinv, rank, wrenches, families, weights, 1e-6)
+    rest = ~held
+    lps = feasible_tensions(structure, pinv, rank, wrenches, families, 1e-6, distribution=True)[1]
+    lps_rest = feasible_tensions(structure[rest], pinv[rest], rank[rest], wrenches[rest], families, 1e-6,
+                                 distribution=True)[1]
+    assert 0 < held.sum() < n
+    assert np.abs(enumerated - solved)[held].max() < 1e-6
+    assert np.array_equal(enumerated[rest], lps_rest) and np.array_equal(solved[rest], lps[rest])

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from pipeline.model import crossings, jit
+from pipeline.model import crossings, faces, jit
 from pipeline.workspace import fused_loops
 
 MODULE = """
@@ -72,7 +72,7 @@ SPECIALISATIONS = """
 import numba, sys
 sys.path.insert(0, sys.argv[1])
 from conftest import make_cfg
-from pipeline.model import crossings
+from pipeline.model import crossings, faces
 from pipeline.model.catalogue import load_catalogue
 from pipeline.workspace import fused_loops
 from pipeline.app.problem import compute_workspace
@@ -83,9 +83,11 @@ for overrides in (["compute.kernel=fused", "grid.n=4"], ["compute.kernel=fused",
                   ["compute.kernel=fused", "grid.n=4", "model.pinv_columns=translational"],
                   ["robot=irpm6", "compute.kernel=fused", "robot.search.step=2"],
                   ["robot=irpm6", "compute.kernel=fused", "robot.search.step=2", "tension.t_min=[1,1,1,1,1,1]"],
-                  ["tension=feasible", "grid.n=3"], ["robot=irpm6", "tension=feasible", "robot.search.step=2"]):
+                  ["tension=feasible", "grid.n=3"], ["robot=irpm6", "tension=feasible", "robot.search.step=2"],
+                  ["tension=feasible", "grid.n=3", "orientation.psi=0.3", "output.cables=true"],
+                  ["analysis=statics", "tension=feasible", "grid.n=3", "output.metrics=true"]):
     compute_workspace(make(*overrides), catalogue)
-for module in (fused_loops, crossings):
+for module in (fused_loops, crossings, faces):
     for name, value in sorted(vars(module).items()):
         if isinstance(value, numba.core.registry.CPUDispatcher):
             print(module.__name__, name, len(value.signatures))
@@ -102,7 +104,7 @@ def test_each_compiled_function_has_one_specialisation():
     assert done.returncode == 0, done.stderr[-2000:]
     counts = dict(line.rsplit(" ", 1) for line in done.stdout.splitlines())
     assert len(counts) >= 10 and set(counts.values()) <= {"0", "1"}, counts
-    for entry in ("fused_loops cpr_wwa", "fused_loops statics", "crossings least_margins"):
+    for entry in ("fused_loops cpr_wwa", "fused_loops statics", "crossings least_margins", "faces least_norm"):
         assert counts[f"pipeline.workspace.{entry}" if entry.startswith("fused") else f"pipeline.model.{entry}"] == "1"
     import numpy as np
 
@@ -128,7 +130,8 @@ def test_an_import_that_compiles_is_announced_while_it_runs(tmp_path, monkeypatc
 
 
 @pytest.mark.parametrize("module, exports", [(fused_loops, {"cpr_wwa", "statics"}),
-                                             (crossings, {"least_margins", "largest_wrenches"})])
+                                             (crossings, {"least_margins", "largest_wrenches"}),
+                                             (faces, {"least_norm"})])
 def test_the_compiled_loops_use_nothing_but_their_own_text(module, exports):
     """numba keys its cache of a module's functions by the module's file: the compiled code may use
     numpy, numba and the module's own names only (any other value is an argument), else a

@@ -363,7 +363,8 @@ class TensionConfig:
     of J^T (the CPR-8 at the zero orientation has rank 5 and misses up to 1.4 % of F; a robot
     that cannot hold its load misses most of it; docs/model.md section 1). ``distribution`` (read by the feasible
     model): the tensions written with ``output.cables=true``, ``min_norm`` (the least 2-norm within the
-    limits, a QP per pose) or ``lp`` (the vertex the LPs end on); the verdicts do not depend on it."""
+    limits, exact by enumeration of faces, docs/model.md section 8) or ``lp`` (the vertex the LPs end
+    on); the verdicts do not depend on it."""
 
     model: TensionModel = MISSING
     t_min: Any = MISSING

@@ -42,7 +42,7 @@ from types import ModuleType
 log = logging.getLogger(__name__)
 ANNOUNCE_AFTER_S = 1.0  # an import still running after this is numba compiling: say so
 # numba's first compile of each loops module on a machine (docs/performance.md; benchmarks/LOG.md, 2026-11-26)
-COMPILE_S = {"pipeline.workspace.fused_loops": 17.0, "pipeline.model.crossings": 9.0}
+COMPILE_S = {"pipeline.workspace.fused_loops": 17.0, "pipeline.model.crossings": 9.0, "pipeline.model.faces": 2.5}
 
 
 def compile_seconds(name: str) -> float:

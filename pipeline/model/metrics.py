@@ -3,8 +3,9 @@ tensions the checked model uses (docs/model.md section 8):
 
 - ``tension_factor``: min_i t_i / max_i t_i of the pose's cable tensions (1: evenly loaded,
   0: a slack cable, negative: one pushes), the minimum-norm tensions of eq. (10) (``pinv``) or
-  the distribution the ``feasible`` model writes (``tension.distribution``, one LP a pose, at
-  the feasible poses only: elsewhere none is valid);
+  the distribution the ``feasible`` model writes (``tension.distribution``: by default the
+  least-norm one, ``pipeline.model.distribution``), at the feasible poses only: elsewhere none
+  is valid;
 - ``wrench_max_<w>`` and ``wrench_min_<w>`` for each freedom w of the robot (fx, fy, fz in N, mx,
   my, mz in N m): the largest external wrench along +w and -w the pose holds on top of its load
   within the tension limits (``wrench_min_`` as a negative number). Under ``pinv`` the tensions
@@ -25,7 +26,7 @@ from pipeline.model.geometry import FREEDOMS
 from pipeline.model.tensions import ray_interval, wrench_reach
 
 NAMES = {"x": "fx", "y": "fy", "z": "fz", "rx": "mx", "ry": "my", "rz": "mz"}  # a freedom's wrench
-WORK = {"pinv": 0.3, "feasible": 3.5}  # a pose's metrics against its statics (the cost model's unit)
+WORK = {"pinv": 0.3, "feasible": 0.6}  # a pose's metrics against its statics (the cost model's unit)
 
 
 def pose_metrics(state, limits, distribution, held: np.ndarray) -> dict[str, np.ndarray]:

@@ -33,9 +33,6 @@ by HiGHS (scipy.optimize.linprog); maximising the sum of the independent s's max
 
 from __future__ import annotations
 
-import os
-import sys
-import threading
 from dataclasses import dataclass
 from math import comb
 
@@ -82,6 +79,14 @@ class Family:
     lower: np.ndarray
     upper: np.ndarray
     scale: np.ndarray
+
+    def at(self, poses: np.ndarray, n: int) -> Family:
+        """This family at ``poses`` of the n: arrays with a pose axis are indexed, others kept."""
+        def pick(values):
+            values = np.asarray(values, dtype=float)
+            return values[poses] if values.ndim == 3 and values.shape[0] == n else values
+
+        return Family(self.name, pick(self.lower), pick(self.upper), pick(self.scale))
 
 
 def feasible_tensions(
@@ -138,7 +143,7 @@ def capacity_margins(
             poses = np.flatnonzero(by_lp & (rank == q))
             structure_q, wrenches_q = range_coordinates(structure[poses], wrenches[poses], int(q))
             found, unsettled = shifted_margins(structure_q, wrenches_q,
-                                               [_select(f, poses, n) for f in families])
+                                               [f.at(poses, n) for f in families])
             for name, value in found.items():
                 margins[name][poses] = value
             shifted[poses[~unsettled]] = True
@@ -173,15 +178,6 @@ def _solved(structure, wrenches, full, poses, shifted):
                 return []
             raise
     return [part for pose in poses for part in _solved(structure, wrenches, full, [pose], shifted)]
-
-
-def _select(family: Family, poses: np.ndarray, n: int) -> Family:
-    """``family`` at ``poses`` of the n: arrays with a pose axis are indexed, others kept."""
-    def pick(values):
-        values = np.asarray(values, dtype=float)
-        return values[poses] if values.ndim == 3 and values.shape[0] == n else values
-
-    return Family(family.name, pick(family.lower), pick(family.upper), pick(family.scale))
 
 
 def _broadcast(family: Family, shape) -> tuple:
@@ -408,101 +404,3 @@ def ray_interval(tensions: np.ndarray, rate: np.ndarray, lower, upper) -> tuple[
         lows = np.where(rate > 0, to_lower, np.where(rate < 0, to_upper, -still))
         highs = np.where(rate > 0, to_upper, np.where(rate < 0, to_lower, still))
     return np.maximum(lows.max(axis=1), 0.0), highs.min(axis=1)
-
-
-QP_PAIRS = 64  # (pose, wrench) pairs per HiGHS QP: one block-diagonal problem each
-
-
-def min_norm_distribution(structure: np.ndarray, wrenches: np.ndarray, lower: np.ndarray, upper: np.ndarray,
-                          weights: np.ndarray, start: np.ndarray, rtol: float) -> np.ndarray:
-    """(n, K, m) the forces of least weighted 2-norm |weights x| with S x = w and lower <= x <=
-    upper (a convex QP per (pose, wrench) pair, HiGHS), for the pairs whose ``start`` (the LPs'
-    x, (n, K, m)) is a valid distribution (within the bounds and ``rtol`` of balancing w); the
-    rest keep ``start``. The result is clipped onto the bounds it meets to solver tolerance, and
-    kept only where it still balances w within ``rtol``. ``structure`` (n, r, m), ``wrenches``
-    (n, K, r), bounds broadcastable to (n, K, m)."""
-    n, k, m = start.shape
-    lower, upper = (np.broadcast_to(a, (n, k, m)) for a in (lower, upper))
-    size = np.maximum(np.linalg.norm(wrenches, axis=2), 1.0)
-    residual = lambda x: np.linalg.norm(np.einsum("nrm,nkm->nkr", structure, x) - wrenches, axis=2) / size  # noqa: E731
-    tolerance = 1e-9 * np.maximum(1.0, np.nan_to_num(np.maximum(np.abs(lower), np.abs(upper)), posinf=0.0))
-    valid = ((start >= lower - tolerance) & (start <= upper + tolerance)).all(axis=2) & (residual(start) <= rtol)
-    out = start.copy()
-    pairs = np.argwhere(valid)
-    for first in range(0, len(pairs), QP_PAIRS):
-        chunk = pairs[first:first + QP_PAIRS]
-        solved = _qp_block(structure[chunk[:, 0]], wrenches[chunk[:, 0], chunk[:, 1]],
-                           lower[chunk[:, 0], chunk[:, 1]], upper[chunk[:, 0], chunk[:, 1]], weights)
-        if solved is None:  # a pair HiGHS declares infeasible at its tolerance: each alone
-            solved = np.array([_qp_block(structure[[p]], wrenches[[p], [q]], lower[[p], [q]], upper[[p], [q]],
-                                         weights) for p, q in chunk], dtype=object)
-            solved = np.array([start[p, q] if x is None else x[0] for x, (p, q) in zip(solved, chunk)])
-        out[chunk[:, 0], chunk[:, 1]] = solved
-    clipped = np.clip(out, lower, upper)
-    keep = residual(clipped) <= rtol
-    return np.where(keep[..., None], clipped, start)
-
-
-def _qp_block(structure, wrenches, lower, upper, weights):
-    """min 1/2 |weights x|^2 with S_p x_p = w_p and bounds, block-diagonal over the pairs p
-    (structure (P, r, m), wrenches (P, r), bounds (P, m)); (P, m), or None if HiGHS finds it
-    infeasible."""
-    import highspy
-
-    count, r, m = structure.shape
-    unit = float(np.max(np.abs(wrenches))) or 1.0  # forces of the order of the wrench: conditioning
-    columns = count * m
-    matrix = np.zeros((count, r, m)) + structure  # column j of block p: rows p r .. p r + r - 1
-    start = np.arange(columns + 1) * r
-    index = (np.arange(count)[:, None, None] * r + np.arange(r)[None, :, None]).repeat(m, axis=2)
-    lp = highspy.HighsLp()
-    lp.num_col_, lp.num_row_ = columns, count * r
-    lp.col_cost_ = np.zeros(columns)
-    lp.col_lower_ = np.where(np.isfinite(lower), lower / unit, -highspy.kHighsInf).ravel()
-    lp.col_upper_ = np.where(np.isfinite(upper), upper / unit, highspy.kHighsInf).ravel()
-    lp.row_lower_ = lp.row_upper_ = (wrenches / unit).ravel()
-    lp.a_matrix_.format_ = highspy.MatrixFormat.kColwise
-    lp.a_matrix_.start_ = start
-    lp.a_matrix_.index_ = np.transpose(index, (0, 2, 1)).ravel()
-    lp.a_matrix_.value_ = np.transpose(matrix, (0, 2, 1)).ravel()
-    hessian = highspy.HighsHessian()
-    hessian.dim_ = columns
-    hessian.format_ = highspy.HessianFormat.kTriangular
-    hessian.start_ = np.arange(columns + 1)
-    hessian.index_ = np.arange(columns)
-    hessian.value_ = np.tile(np.broadcast_to(weights, (m,)) ** 2, count)
-    model = highspy.HighsModel()
-    model.lp_, model.hessian_ = lp, hessian
-    solver = _qp_solver()
-    solver.clearModel()
-    solver.passModel(model)
-    solver.run()
-    if solver.getModelStatus() != highspy.HighsModelStatus.kOptimal:
-        return None
-    return np.asarray(solver.getSolution().col_value).reshape(count, m) * unit
-
-
-_SOLVERS = threading.local()
-
-
-def _qp_solver():
-    """This thread's HiGHS instance, made once: HiGHS prints its banner on the process's stdout
-    when an instance is made (before any option can silence it), which would mix into a job's
-    output, so the descriptor is pointed at the null device for that moment only."""
-    solver = getattr(_SOLVERS, "solver", None)
-    if solver is None:
-        import highspy
-
-        sys.stdout.flush()
-        saved = os.dup(1)
-        try:
-            with open(os.devnull, "w") as null:
-                os.dup2(null.fileno(), 1)
-                solver = highspy.Highs()
-        finally:
-            os.dup2(saved, 1)
-            os.close(saved)
-        solver.setOptionValue("output_flag", False)
-        _SOLVERS.solver = solver
-    return solver
-

@@ -240,11 +240,16 @@ def announce_cost(cfg: DictConfig, problem: WorkspaceProblem, n_points: int, wor
 
 def first_compile_seconds(problem: WorkspaceProblem) -> float:
     """numba's compile of the loops this job runs, where this machine has not cached them yet:
-    the fused kernels', the feasible model's search (``pipeline.model.jit``)."""
+    the fused kernels', the feasible model's search and its least-norm tensions
+    (``pipeline.model.jit``)."""
     from pipeline.model.jit import compile_seconds
 
+    tension = problem.spec.tension
+    feasible = tension.model == "feasible"
     needed = (["pipeline.workspace.fused_loops"] if problem.fused else []) + (
-        ["pipeline.model.crossings"] if problem.spec.tension.model == "feasible" else [])
+        ["pipeline.model.crossings"] if feasible else []) + (
+        ["pipeline.model.faces"] if feasible and tension.distribution == "min_norm" and (problem.cables or problem.metrics)
+        else [])
     return sum(compile_seconds(name) for name in needed)
 
 

@@ -7,7 +7,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipeline.model.tensions import feasible_tensions, min_norm_distribution
+from pipeline.model.distribution import min_norm_tensions
+from pipeline.model.tensions import feasible_tensions
 
 
 def feasible_margins(state, limits) -> dict[str, np.ndarray]:
@@ -41,18 +42,12 @@ def feasible_distribution(state, limits) -> np.ndarray:
 def written_distribution(state, limits) -> np.ndarray:
     """The cable forces x (n, K, m) the ``feasible`` model writes (``output.cables``): with
     ``tension.distribution=min_norm`` the least 2-norm tensions within every family's bounds
-    where the LPs found a valid distribution (:func:`pipeline.model.tensions.min_norm_distribution`),
-    else :func:`feasible_distribution`."""
-    chosen = feasible_distribution(state, limits)
+    where they admit one (:mod:`pipeline.model.distribution`), else :func:`feasible_distribution`."""
     if state.tension.distribution != "min_norm":
-        return chosen
-    families = state.force_families(limits)
-    shape = chosen.shape
-    lower = np.max([np.broadcast_to(f.lower, shape) for f in families], axis=0)
-    upper = np.min([np.broadcast_to(f.upper, shape) for f in families], axis=0)
-    wrenches = np.broadcast_to(state.required_wrenches, (shape[0], *np.shape(state.required_wrenches)[-2:]))
-    weights = state.forces_of(np.ones(shape[2]))  # tensions per unit of the variables
-    return min_norm_distribution(state.structure, wrenches, lower, upper, weights, chosen, state.tension.residual_rtol)
+        return feasible_distribution(state, limits)
+    weights = state.forces_of(np.ones(state.structure.shape[2]))  # tensions per unit of the variables
+    return min_norm_tensions(state.structure, *state.wrench_pinv, state.required_wrenches,
+                             state.force_families(limits), weights, state.tension.residual_rtol)
 
 
 def feasible_model(state) -> bool:
