@@ -4,7 +4,8 @@ Each figure kind is a function ``(spec, results, out_dir) -> [paths]`` registere
 a study declares its figures as :class:`FigureSpec` entries (``studies/*.yaml``). Every figure
 uses the shipped style ``pipeline.styles.paper`` and is drawn on a bare matplotlib ``Figure``
 (Agg when saved), so reruns give identical PNG files and importing this module leaves a
-notebook's pyplot backend alone.
+notebook's pyplot backend alone. matplotlib is imported when a figure is drawn, not with this
+module: a study's checks and its errors do not wait for it.
 """
 
 from __future__ import annotations
@@ -14,11 +15,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Optional
 
-import matplotlib
-import matplotlib.style
 import numpy as np
 import pandas as pd
-from matplotlib.figure import Figure
 
 from pipeline.workspace.criteria import COLOURS, FEASIBLE_COLOUR
 from pipeline.errors import ConfigError, one_line
@@ -76,6 +74,8 @@ class FigureSpec:
 
 def render(spec: FigureSpec, results: StudyResults, out_dir: Path) -> list[Path]:
     """Draw one declared figure (one file per ``per`` value) into ``out_dir``; returns the files."""
+    import matplotlib.style
+
     out_dir.mkdir(parents=True, exist_ok=True)
     table = _select(results.summary if spec.table is None else results.table(spec.table), spec.select)
     groups = table.groupby(spec.per, sort=True) if spec.per else [(None, table)]
@@ -90,8 +90,10 @@ def choice_bar(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out
     """Fig. 9: feasible share per actuator, accepted ones shaded as in Table 2, x % as a line."""
     choice = results.table("choice").sort_values("actuator")
     many = len(choice) > MANY_BARS  # a user catalogue: upright labels would overlap
+    import matplotlib
+
     width, height = matplotlib.rcParams["figure.figsize"]
-    fig = Figure(figsize=(max(width, 0.42 * len(choice)), height + (0.8 if many else 0.0)))
+    fig = _figure(figsize=(max(width, 0.42 * len(choice)), height + (0.8 if many else 0.0)))
     ax = fig.subplots()
     colours = ["0.45" if ok else "0.82" for ok in choice["accepted"]]
     separator = " " if many else "\n"
@@ -113,7 +115,7 @@ def limiting_bar(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, o
     """Share of the grid that is feasible and lost to each constraint, stacked per actuator."""
     choice = results.table("choice").sort_values("actuator")
     lost = [c for c in choice.columns if c.startswith("lost_") and c.endswith("_pct")]
-    fig = Figure()
+    fig = _figure()
     ax = fig.subplots()
     labels = np.arange(len(choice))
     ax.set_xticks(labels, choice["actuator"].astype(str))
@@ -174,7 +176,7 @@ def _robot_at_a_feasible_pose(results: StudyResults, job: pd.Series, points: pd.
 
 
 def _cloud_figure(spec: FigureSpec, panels: list, job: pd.Series, out_dir: Path, results: StudyResults) -> Path:
-    fig = Figure(figsize=(5.6 * len(panels), 4.6))
+    fig = _figure(figsize=(5.6 * len(panels), 4.6))
     robot = _robot_at_a_feasible_pose(results, job, *panels[0][:2])
     for i, (points, column, title) in enumerate(panels, start=1):
         ax = fig.add_subplot(1, len(panels), i, projection="3d")
@@ -249,7 +251,7 @@ def value_map(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_
         points = results.points(job["job"])
         values = points[spec.value].to_numpy(dtype=float)
         positive, unbounded = values > 0, np.isinf(values)  # NaN compares False
-        fig = Figure(figsize=(6.4, 4.8))
+        fig = _figure(figsize=(6.4, 4.8))
         ax = fig.add_subplot(1, 1, 1, projection="3d")
         finite = positive & ~unbounded
         top = float(values[finite].max()) if finite.any() else 1.0
@@ -279,6 +281,8 @@ def value_map(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_
 def timeseries(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
     """Fig. 6: shaft speed, load torque and control voltage of every cable along simulated line
     ``line`` (line 0 is O''-F''), with the actuator limits of eqs. (30), (32), (34) dashed."""
+    import matplotlib
+
     written = []
     rows = [("theta_dot", "limit_speed", "shaft speed (rad/s)"),
             ("torque", "limit_torque", "load torque (N m)"),
@@ -290,7 +294,7 @@ def timeseries(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out
             raise ConfigError(f"{job['job']}: no samples of line {spec.line} (only line 0 is "
                              "written unless lines.samples=all)")
         cables = sum(c.startswith("theta_dot_") for c in samples.columns)
-        fig = Figure(figsize=(6.4, 7.0))
+        fig = _figure(figsize=(6.4, 7.0))
         axes = fig.subplots(3, 1, sharex=True)
         for ax, (quantity, limit, label) in zip(axes, rows):
             for cable in range(1, cables + 1):
@@ -312,7 +316,7 @@ def survival_bar(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, o
     labelled with the share of the former that survives; one panel per case and wrench rows."""
     data = results.table("survival")
     cases, rows = data["case_label"].unique(), sorted(data["wrench_rows"].unique(), reverse=True)
-    fig = Figure(figsize=(4.2 * len(cases), 3.3 * len(rows)), layout="constrained")
+    fig = _figure(figsize=(4.2 * len(cases), 3.3 * len(rows)), layout="constrained")
     axes = fig.subplots(len(rows), len(cases), squeeze=False, sharey=True)
     for (row, col), ax in np.ndenumerate(axes):
         part = data[(data["wrench_rows"] == rows[row]) & (data["case_label"] == cases[col])]
@@ -341,7 +345,7 @@ def curve(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir:
     import seaborn as sns  # with scipy.stats, 0.7 s of a study's start: only where a figure needs it
 
     data = pd.DataFrame({"x": _column(table, spec.x), "y": _column(table, spec.y)})
-    fig = Figure()
+    fig = _figure()
     ax = fig.subplots()
     if spec.bars:  # categories on x (actuator ids): grouped bars, no line between them
         if spec.hue:
@@ -395,7 +399,7 @@ def heatmap(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_di
     import seaborn as sns  # as in curve
 
     facets = sorted(table[spec.facet].unique()) if spec.facet else [None]
-    fig = Figure(figsize=(2.6 * len(facets) + 0.8, 3.1), layout="constrained")  # no title overlap
+    fig = _figure(figsize=(2.6 * len(facets) + 0.8, 3.1), layout="constrained")  # no title overlap
     axes = fig.subplots(1, len(facets), squeeze=False, sharey=True)
     values = _column(table, spec.value)
     vmin, vmax = float(values.min()), float(values.max())
@@ -422,7 +426,7 @@ def heatmap(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_di
 def pareto(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
     """An optimise study's trials (``x``, ``y`` objectives): those that meet the requirement
     coloured by ``hue`` (the actuator), the others as grey crosses, the Pareto front joined."""
-    fig = Figure()
+    fig = _figure()
     ax = fig.subplots()
     missed = table[~table["meets"]]
     ax.scatter(missed[spec.x], missed[spec.y], marker="x", s=14, color="0.75", lw=0.8,
@@ -451,7 +455,7 @@ def slices(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir
         least = points.filter(like="margin_").min(axis=1).clip(-1.0, 1.0)
         levels = np.sort(points[spec.axis].unique())
         picked = levels[np.unique(np.linspace(0, len(levels) - 1, min(spec.layers, len(levels))).round().astype(int))]
-        fig = Figure(figsize=(3.0 * len(picked) + 1.2, 3.3), layout="constrained")
+        fig = _figure(figsize=(3.0 * len(picked) + 1.2, 3.3), layout="constrained")
         axes = fig.subplots(1, len(picked), squeeze=False, sharey=True)[0]
         rows = []
         for ax, level in zip(axes, picked):
@@ -495,6 +499,13 @@ LABELS = {"robot.gamma_deg": "γ (deg)", "robot.r_end": "r_end (m)", "robot.r_ba
           "load.mass": "payload (kg)", "robot.platform.mass": "carried mass m (kg)", "motion.v_max": "V_cmax (m/s)",
           "drive.winch_radius": "winch radius R_i (m)", "drive.gear_ratio": "gear ratio N_V",
           "tension.model": "tension model", "max_payload_kg": "largest payload (kg)"}
+
+
+def _figure(**options):
+    """A bare matplotlib ``Figure`` (no pyplot)."""
+    from matplotlib.figure import Figure
+
+    return Figure(**options)
 
 
 def label(key: str) -> str:
