@@ -55,7 +55,8 @@ OUTPUT_DIR = Path("outputs") / "studies"
 ALWAYS_EXCLUDED = ["compute.n_jobs", "compute.backend", "compute.chunk_size", "compute.scheduler",
                    "compute.max_poses", "compute.kernel"]
 # Studies are many small jobs: by default two at a time on two worker processes kept for every
-# sweep of the command, each job on one core (one level of parallelism); "serial": one after
+# sweep of the command, where they pay for their start (pipeline.app.problem.workers_pay, else
+# in this process), each job on one core (one level of parallelism); "serial": one after
 # another in this process, each with its own compute.n_jobs (large grids, Dask); "one_core": one
 # after another, each job on one core (what each of the concurrent studies of --all uses)
 LAUNCHERS = {
@@ -297,8 +298,9 @@ def _run_study(study: StudySpec, extra: list[str], out: Path, figures_only: bool
                 write_csv(searched, out / "search.csv")
         else:
             _start_or_resume(out / "jobs", commands)
+            every_job = [job for _, planned in checked for job in planned.jobs]  # one pool serves them all
             for _, planned in checked:
-                run_jobs(planned)
+                run_jobs(planned, sharing=every_job)
                 _log_to_console()  # the jobs had Hydra's logging
             summary = _gather(out / "jobs", cases, study.case_labels)
         write_parquet(summary, out / "summary.parquet", provenance)
@@ -626,7 +628,8 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--force", action="store_true",
                         help="replace a study folder that holds another configuration's results")
     parser.add_argument("--launcher", choices=sorted(LAUNCHERS), default="pool",
-                        help="pool (default): one study's jobs 2 at a time on worker processes, "
+                        help="pool (default): one study's jobs 2 at a time on worker processes where they "
+                             "pay for their start (cost model), "
                              "several studies 2 at a time, each with its jobs on one core; "
                              "serial: one after another in this process, each job with its "
                              "compute.n_jobs; one_core: one after another, each job on one core")

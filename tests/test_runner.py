@@ -2,6 +2,7 @@
 of config files, jobs derived from it) writes exactly what Hydra's own application writes with its
 basic launcher (``hydra/launcher=basic`` hands the command to Hydra: ``pipeline.app.cli.main``)."""
 
+import logging
 import subprocess
 import sys
 from pathlib import Path
@@ -10,8 +11,10 @@ import yaml
 from hydra import compose, initialize_config_dir
 from omegaconf import OmegaConf
 
-from pipeline.app.problem import validate
+import pipeline.app.run
+from pipeline.app.problem import validate, workers_pay
 from pipeline.app.plan import parse, plan, sweep_jobs
+from pipeline.app.run import run
 from pipeline.app.resources import CONF_DIR
 
 # group choices (composed per set of files), plain values (derived), and a dict value (merged
@@ -51,17 +54,39 @@ def job_files(folder: Path) -> dict[str, bytes]:
     return files
 
 
-def test_the_runner_writes_what_hydras_basic_launcher_writes(tmp_path):
+def test_the_runner_writes_what_hydras_basic_launcher_writes(tmp_path, monkeypatch, caplog):
+    """In this process, one job after another, and on two worker processes (which the cost model
+    keeps for jobs that pay for their start: forced here, these eight are too short)."""
     basic = job_files(sweep(tmp_path / "basic", "hydra/launcher=basic"))
     assert len([n for n in basic if n.endswith("points.parquet")]) == 8
-    for name, launcher in (("serial", ["hydra/launcher=cdpr"]), ("pool", ["hydra.launcher.n_jobs=2"])):
-        ours = job_files(sweep(tmp_path / name, *launcher))
-        assert ours.keys() == basic.keys()
-        differing = [name for name in basic if ours[name] != basic[name]]
-        assert differing == [], launcher
+    assert job_files(sweep(tmp_path / "serial", "hydra/launcher=cdpr")) == basic
+    pooled = plan(["-m", *SWEEP, f"hydra.sweep.dir={tmp_path / 'pool'}", "hydra.launcher.n_jobs=2"])
+    assert not workers_pay([(job.cfg, job.problem) for job in pooled.jobs], 2)
+    monkeypatch.setattr(pipeline.app.run, "workers_pay", lambda jobs, workers: True)
+    with caplog.at_level(logging.INFO, logger="pipeline"):
+        run(pooled, hydra_logging=False)
+    assert "Launching 8 jobs on 2 worker processes" in caplog.text
+    assert job_files(tmp_path / "pool") == basic
     theta = next(n for n in basic if "theta" in n and n.endswith("config.yaml"))
     orientation = yaml.safe_load(basic[theta])["orientation"]
     assert orientation["theta"] == 0.1 and orientation["psi"] == 0.0
+
+
+def test_jobs_too_short_for_workers_run_in_this_process_and_long_ones_get_them(tmp_path, caplog):
+    """The cost model of hydra.launcher.n_jobs: eight jobs of 64 poses do not pay for starting
+    two workers (about a second each); five of 1.2 million poses, or the straight lines of 40
+    CPR-8 jobs, do."""
+    small = plan(["-m", *SWEEP, f"hydra.sweep.dir={tmp_path / 'small'}", "hydra.launcher.n_jobs=2"])
+    with caplog.at_level(logging.INFO, logger="pipeline"):
+        run(small, hydra_logging=False)
+    assert "hydra.launcher.n_jobs=2: 8 jobs too short to pay for starting worker processes" in caplog.text
+    assert "Launching 8 jobs locally" in caplog.text
+    large = plan(["-m", "actuator=1,2,3,4,5", "grid.n=106", "hydra.launcher.n_jobs=2"])
+    assert workers_pay([(job.cfg, job.problem) for job in large.jobs], 2)
+    lines = plan(["-m", "analysis=lines", "actuator=1,2,3,4,5", "load.mass=1,1.5,2,2.5,3,3.5,4,4.5",
+                  "hydra.launcher.n_jobs=2"])
+    assert len(lines.jobs) == 40 and workers_pay([(job.cfg, job.problem) for job in lines.jobs], 2)
+    assert not workers_pay([(job.cfg, job.problem) for job in lines.jobs[:5]], 2)
 
 
 def test_planned_configs_are_those_a_job_would_type_itself():

@@ -23,6 +23,7 @@ from omegaconf import DictConfig, ListConfig, OmegaConf, open_dict
 from pipeline.app.callbacks import gather
 from pipeline.app.job import execute
 from pipeline.app.plan import Job, Plan
+from pipeline.app.problem import workers_pay
 from pipeline.app.yamltext import to_yaml
 
 log = logging.getLogger("pipeline")
@@ -41,17 +42,24 @@ class Setting:
     chdir: bool
 
 
-def run(plan: Plan, hydra_logging: bool = True) -> list[dict]:
+def run(plan: Plan, hydra_logging: bool = True, sharing: list[Job] | None = None) -> list[dict]:
     """Every job of ``plan`` (with Hydra's records and logs; ``hydra_logging=False``: the
     caller's logging as it is, no log file) and, for a sweep, its summary; returns the jobs'
     summaries in plan order. A job's error stops the run (the jobs already finished are reused
-    by a rerun)."""
+    by a rerun). Worker processes are started only where they pay (cost model:
+    :func:`pipeline.app.problem.workers_pay`) for the plan's jobs, or for ``sharing``: every job
+    of the process's plans, which share the workers once started (a study's cases)."""
     first = plan.record(plan.jobs[0])
     if hydra_logging:
         configure_log(first.hydra.hydra_logging, first.hydra.verbose)
     workers = min(plan.workers, os.cpu_count() or 1, len(plan.jobs))  # more would only thrash memory
     if workers < plan.workers and len(plan.jobs) > plan.workers:
         log.warning("hydra.launcher.n_jobs=%d: capped at the %d cores of this machine", plan.workers, workers)
+    shared = plan.jobs if sharing is None else sharing
+    if workers > 1 and not workers_pay(((job.cfg, job.problem) for job in shared), workers):
+        log.info("hydra.launcher.n_jobs=%d: %d jobs too short to pay for starting worker processes "
+                 "(cost model); they run in this process", plan.workers, len(shared))
+        workers = 1
     if plan.multirun:
         plan.sweep_dir.mkdir(parents=True, exist_ok=True)
         (plan.sweep_dir / "multirun.yaml").write_text(to_yaml(plan.sweep_record()), encoding="utf-8")

@@ -145,6 +145,14 @@ FUSED_START_S = 0.4
 # Fused chunks are computed several times faster than the parent classifies and writes them, so
 # workers pay only for long fused jobs (benchmarks/LOG.md, 2026-11-24: about 1.5 x 10^6 poses).
 FUSED_WORKERS_FROM_S = 1.5  # the fused kernel's time (cost model) from which workers are used
+# Jobs at a time (hydra.launcher.n_jobs, a study's pool): a job worker imports the whole job's
+# code (Hydra, pandas, pyarrow) and loads numba's cache, about JOB_WORKER_START_S of wall each
+# before its first job, and a job also writes its files (JOB_S each, a 216-pose study job in a
+# warm process); the straight lines of ``analysis=lines`` cost LINE_SAMPLES kernel poses per
+# line, 2 N^2 lines (benchmarks/LOG.md, 2026-11-26: the CPR-8's 72 lines, 26 388 samples).
+JOB_WORKER_START_S = 1.0
+JOB_S = 0.012
+LINE_SAMPLES = 370
 # A paper pose per second on one core, whole process (benchmarks/LOG.md, 2026-11-26): the numpy
 # kernel 82 000 at the zero orientation (rank 5: every pose takes the SVD) and about 190 000 at
 # 0.5 rad, so 150 000 keeps both within 2x (the IRPM's statics run 476 000); the feasible model
