@@ -1,5 +1,6 @@
 """compute.backend=dask: the same chunks on a local Dask distributed cluster, the same results."""
 
+import dataclasses
 import subprocess
 import sys
 
@@ -23,7 +24,7 @@ def test_kernel_chunks_on_a_local_dask_cluster_equal_the_local_result(make_cfg, 
 
 def test_small_study_on_dask_equals_the_local_study(tmp_path):
     """The study command with every job's chunks on a Dask cluster (a catalogue of two of
-    Table 1's actuators: one cluster per job) gives the choice the same jobs give computed here
+    Table 1's actuators: one cluster for both) gives the choice the same jobs give computed here
     (the API, one process)."""
     from pipeline import api
     from pipeline.model.catalogue import TABLE1
@@ -41,8 +42,10 @@ def test_small_study_on_dask_equals_the_local_study(tmp_path):
     assert {"actuator", "feasible_pct", "accepted"} <= set(shared)
     pd.testing.assert_frame_equal(dask[shared].reset_index(drop=True), local[shared].reset_index(drop=True))
     assert dask["actuator"].tolist() == [2, 3] and dask["accepted"].tolist() == [True, False]
-    log = (tmp_path / "dask" / "actuator_choice" / "jobs" / "actuator=2" / "pipeline.log").read_text()
-    assert "chunks on the Dask cluster tcp://" in log
+    clusters = {line.rsplit(" ", 1)[1] for number in (2, 3) for line in (
+        tmp_path / "dask" / "actuator_choice" / "jobs" / f"actuator={number}" / "pipeline.log").read_text().splitlines()
+        if "chunks on the Dask cluster tcp://" in line}
+    assert len(clusters) == 1, clusters
 
 
 def test_a_local_dask_cluster_is_capped_at_the_cores_like_loky(make_cfg, catalogue, monkeypatch, caplog):
@@ -67,3 +70,89 @@ def test_a_local_dask_cluster_is_capped_at_the_cores_like_loky(make_cfg, catalog
         compute_workspace(cfg, catalogue)
     assert started == [min(8, os.cpu_count())]
     assert any("capped at the" in r.getMessage() for r in caplog.records) == (os.cpu_count() < 8)
+
+
+def test_a_sweep_starts_one_cluster_and_only_for_jobs_of_several_chunks(tmp_path):
+    """Five jobs each split into chunks share one local cluster (a cluster per job cost 1.8 s
+    each); five that fit in one chunk each (a chunk on Dask is at least 0.2 s of kernel by the
+    cost model: 27 000 fused poses) start none. The tables are those of loky."""
+    def sweep(name, *overrides):
+        done = subprocess.run([sys.executable, "-m", "pipeline", "-m", "actuator=1,2,3,4,5", "grid.n=30",
+                               f"hydra.sweep.dir={tmp_path / name}", *overrides],
+                              capture_output=True, text=True, timeout=600)
+        assert done.returncode == 0, done.stderr
+        return done.stdout + done.stderr, pd.read_parquet(tmp_path / name / "summary.parquet")
+
+    numpy = ["compute.kernel=numpy", "compute.chunk_size=5000"]
+    log, shared = sweep("shared", "compute.backend=dask", *numpy)
+    clusters = [line.rsplit(" ", 1)[1] for line in log.splitlines() if "chunks on the Dask cluster" in line]
+    assert len(clusters) == 5 and len(set(clusters)) == 1, log
+    log, small = sweep("small", "compute.backend=dask")
+    assert "Dask cluster" not in log
+    _, loky = sweep("loky", *numpy)
+    columns = ["actuator", "n_points", "n_feasible", "feasible_pct"]
+    pd.testing.assert_frame_equal(shared[columns], loky[columns])
+    pd.testing.assert_frame_equal(small[columns], loky[columns])
+
+
+def test_a_dask_chunk_holds_at_least_a_fifth_of_a_second_of_kernel(make_cfg, catalogue):
+    """By default (compute.chunk_size=null): 20 000 poses, on Dask at least 0.2 s of kernel by
+    the cost model (a task's round trip through the scheduler costs milliseconds); a number is
+    used as given, and the memory budget bounds both."""
+    from pipeline.app.problem import build_problem
+    from pipeline.workspace.compute import DASK_CHUNK_S, bounded_chunk_size, estimated_seconds
+
+    problem, _ = build_problem(make_cfg("orientation.psi=0.5"), catalogue)
+    fused = dataclasses.replace(problem, fused=True)
+    assert bounded_chunk_size(fused, None) == 20_000  # compute.chunk_size=null: the cost model's
+    size = bounded_chunk_size(fused, None, "dask")
+    assert size == 200_000 and estimated_seconds(fused, size) == pytest.approx(DASK_CHUNK_S)
+    assert bounded_chunk_size(fused, 500, "dask") == 500  # a number is taken as given
+    assert bounded_chunk_size(problem, None, "dask") == 30_000  # 0.2 s of the numpy kernel, within its budget
+    dense, _ = build_problem(make_cfg("orientation.psi=0.5", "grid.n_vel=60"), catalogue)
+    assert bounded_chunk_size(dense, None, "dask") == bounded_chunk_size(dense, 10**9) < 1_000  # memory bounds
+
+
+def test_a_scheduler_started_as_the_docs_say_gets_the_chunks_and_gives_the_loky_tables(tmp_path):
+    """docs/reproduce.md's recipe: `dask scheduler`, `dask worker ADDRESS` (here on this
+    machine, two single-threaded workers), then compute.backend=dask compute.scheduler=ADDRESS:
+    the job's chunks go there and its points are those of loky."""
+    import json
+    import time
+
+    from dask.distributed import Client
+
+    info = tmp_path / "scheduler.json"
+    cli = [sys.executable, "-m", "distributed.cli.dask_scheduler", "--port", "0", "--no-dashboard",
+           "--scheduler-file", str(info)]
+    scheduler = subprocess.Popen(cli, cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    worker = None
+    try:
+        for _ in range(600):
+            if info.exists() and info.read_text().strip():
+                break
+            time.sleep(0.05)
+        address = json.loads(info.read_text())["address"]
+        worker = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", address, "--nworkers", "2",
+                                   "--nthreads", "1", "--no-dashboard"], cwd=tmp_path,
+                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        with Client(address, timeout=60) as client:
+            client.wait_for_workers(2, timeout=60)
+
+        def job(name, *overrides):
+            done = subprocess.run([sys.executable, "-m", "pipeline", "grid.n=20", "compute.kernel=numpy",
+                                   "compute.chunk_size=2000", "orientation.psi=0.3", "actuator=3", f"hydra.run.dir={name}",
+                                   *overrides], cwd=tmp_path, capture_output=True, text=True, timeout=600)
+            assert done.returncode == 0, done.stderr
+            return done.stdout + done.stderr, pd.read_parquet(tmp_path / name / "points.parquet")
+
+        log, remote = job("remote", "compute.backend=dask", f"compute.scheduler={address}")
+        assert f"chunks on the Dask cluster {address}" in log
+        _, local = job("local")
+        pd.testing.assert_frame_equal(remote, local)
+        assert 0 < remote["feasible"].sum() < len(remote)
+    finally:
+        for process in (worker, scheduler):
+            if process is not None:
+                process.terminate()
+                process.wait(timeout=60)

@@ -216,3 +216,24 @@ def test_numba_is_loaded_only_by_the_jobs_that_use_the_compiled_loops(tmp_path):
     assert "numba imported: True" in job_imports(tmp_path, "compute.kernel=fused", "grid.n=10",
                                                  "hydra.run.dir=cpr8")
     assert pq.read_table(tmp_path / "cpr8" / "summary.parquet")["kernel"].to_pylist() == ["fused"]
+
+
+@pytest.mark.parametrize("robot", [[], ["robot=irpm6", "robot.search.step=2"]])
+def test_chunks_joblib_hands_workers_as_read_only_maps_give_the_in_process_margins(robot, make_cfg, catalogue):
+    """joblib passes a worker any argument above 1 MB as a read-only memory map: a chunk of
+    70 000 poses (1.7 MB) once reached the compiled loops as a type their signature refuses
+    (a TypeError that stopped every fused job on workers with compute.chunk_size of 50 000 or
+    more). The same margins as each chunk in this process, bit for bit."""
+    from pipeline.workspace.parallel import iter_chunks
+
+    problem, _ = build_problem(make_cfg(*robot, "compute.kernel=fused"), catalogue)
+    problem = dataclasses.replace(problem, fused=True)
+    positions = np.random.default_rng(3).uniform(-1.5, 1.5, size=(140_000, 3)) + [1.6, 1.1, -1.1]
+    if robot:
+        positions = positions + [-1.6, -1.1, 3.1]
+    parts = list(iter_chunks(evaluate_chunk, problem, positions, n_jobs=2, chunk_size=70_000))
+    assert [s for s, _ in parts] == [slice(0, 70_000), slice(70_000, 140_000)]
+    here = [evaluate_chunk(problem, positions[s]) for s, _ in parts]  # a chunk's first pose starts cold
+    for key in here[0]:
+        np.testing.assert_array_equal(np.concatenate([part[key] for _, part in parts]),
+                                      np.concatenate([part[key] for part in here]), err_msg=key)

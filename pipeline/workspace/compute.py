@@ -32,6 +32,12 @@ log = logging.getLogger("pipeline")
 
 CHUNK_BUDGET_FLOATS = 4_000_000  # largest (poses x cables x set size) array of one chunk: 32 MB
 FEASIBLE_CHUNK_POSES = 4096  # tension.model=feasible: about 1 s per chunk, so progress is visible
+CHUNK_POSES = 20_000  # compute.chunk_size=null: a chunk's poses, between 2 000 and 20 000 barely matter
+# On Dask a chunk carries at least DASK_CHUNK_S of kernel by the cost model: a task's round
+# trip through the scheduler costs milliseconds, and the default 20 000 poses are 20 ms of the
+# fused kernel (benchmarks/LOG.md, 2026-11-26: 10^7 fused poses on a 2-worker local cluster
+# x1.26 loky's wall with 20 000-pose chunks, x1.16 with 200 000; 500 000 and 10^6 no better)
+DASK_CHUNK_S = 0.2
 
 
 def grid_workspace(
@@ -57,7 +63,7 @@ def grid_workspace(
         evaluate_chunk, problem, grid,
         n_jobs=workers,
         backend=cfg.compute.backend,
-        chunk_size=bounded_chunk_size(problem, cfg.compute.chunk_size),
+        chunk_size=bounded_chunk_size(problem, cfg.compute.chunk_size, cfg.compute.backend),
         scheduler=cfg.compute.scheduler,
     )
     parts, n_feasible, by_lp = [], 0, 0
@@ -261,11 +267,23 @@ def first_compile_seconds(problem: WorkspaceProblem) -> float:
     return sum(compile_seconds(name) for name in needed)
 
 
-def bounded_chunk_size(problem: WorkspaceProblem, requested: int) -> int:
-    """Poses per chunk: the requested size, lowered so that a chunk's largest intermediate
-    array (poses x cables x velocity or acceleration set) stays within CHUNK_BUDGET_FLOATS
-    (the fused kernel holds no such array), and to FEASIBLE_CHUNK_POSES under the feasible
-    tension model."""
+def several_chunks(cfg: DictConfig, problem: WorkspaceProblem, n_points: int, sweep_pays: bool = False) -> bool:
+    """Whether :func:`grid_workspace` splits this job's ``n_points`` poses into several chunks
+    (with the kernel it will choose)."""
+    chosen = replace(problem, fused=use_fused(cfg, problem, n_points, sweep_pays))
+    return n_points > bounded_chunk_size(chosen, cfg.compute.chunk_size, cfg.compute.backend)
+
+
+def bounded_chunk_size(problem: WorkspaceProblem, requested: int | None, backend: str = "loky") -> int:
+    """Poses per chunk: the requested size, or for None (``compute.chunk_size=null``) the cost
+    model's, CHUNK_POSES and on Dask at least DASK_CHUNK_S of kernel; lowered so that a chunk's
+    largest intermediate array (poses x cables x velocity or acceleration set) stays within
+    CHUNK_BUDGET_FLOATS (the fused kernel holds no such array), and to FEASIBLE_CHUNK_POSES
+    under the feasible tension model."""
+    if requested is None:
+        requested = CHUNK_POSES
+        if backend == "dask":
+            requested = max(requested, int(DASK_CHUNK_S / estimated_seconds(problem, 1)))
     per_pose = problem.robot.n_cables * (1 if problem.fused else problem.spec.set_size())
     if problem.spec.tension.model == "feasible":
         requested = min(requested, FEASIBLE_CHUNK_POSES)

@@ -72,7 +72,7 @@ def _statics_margins(problem, positions: np.ndarray, orientation):
     out = np.empty((n, len(STATICS_CRITERIA)))
     unsettled = np.zeros(n, dtype=np.bool_)
     compiled_loops(LOOPS).statics(
-        np.ascontiguousarray(positions, dtype=float), np.ascontiguousarray(robot.anchors, dtype=float),
+        _writable(positions), np.ascontiguousarray(robot.anchors, dtype=float),
         np.ascontiguousarray(robot.attachments @ rotation.T), spec.cable_direction == "centre",
         spec.moment_arm == "base", np.ascontiguousarray(wrench[:, None]), float(spec.rank_rtol),
         float(lim.rank_rtol), np.array(np.broadcast_to(spec.tension.t_min, (m,)), dtype=float),  # writable copies
@@ -99,7 +99,7 @@ def _cpr_wwa_margins(problem, positions: np.ndarray, orientation):
     rank = np.zeros(n, dtype=np.int8)
     unsettled = np.zeros(n, dtype=np.bool_)
     compiled_loops(LOOPS).cpr_wwa(
-        np.ascontiguousarray(positions, dtype=float), np.ascontiguousarray(robot.anchors, dtype=float),
+        _writable(positions), np.ascontiguousarray(robot.anchors, dtype=float),
         np.ascontiguousarray(robot.attachments @ rotation.T), np.ascontiguousarray(euler_rate_axes(*orientation)),
         np.ascontiguousarray(spec.winch_radius, dtype=float), rows,
         np.ascontiguousarray(spec.velocity_extremes, dtype=float), centre, half, loads, float(spec.rank_rtol),
@@ -110,6 +110,13 @@ def _cpr_wwa_margins(problem, positions: np.ndarray, orientation):
     result = {f"margin_{name}": out[:, CRITERIA.index(name)] for name in problem.criteria if name in CRITERIA}
     result["jacobian_rank"] = rank
     return result, unsettled
+
+
+def _writable(positions: np.ndarray) -> np.ndarray:
+    """A C-contiguous, writable float array: joblib hands a worker a chunk above 1 MB as a
+    read-only memory map, which the loops' signature refuses (a read-only array is another type
+    to numba); copied only then."""
+    return np.require(positions, dtype=float, requirements=["C_CONTIGUOUS", "WRITEABLE"])
 
 
 MARGINS = {"cpr_wwa": _cpr_wwa_margins, "statics": _statics_margins}  # by the spec's kind

@@ -45,11 +45,8 @@ def iter_chunks(
     """(slice, ``function(problem, positions[slice])``) for every chunk, in order, as each
     finishes: a caller can write results out chunk by chunk (bounded memory). ``positions``: an
     (n, 3) array or a ``Grid``, whose chunks are made as they are dispatched."""
-    workers = n_jobs if n_jobs > 0 else max((os.cpu_count() or 1) + 1 + n_jobs, 1)  # joblib's rule
     here = backend != "dask" or not scheduler  # loky, or a Dask cluster started on this machine
-    if here and workers > (os.cpu_count() or 1):  # more would only thrash memory
-        log.warning("compute.n_jobs=%d: capped at the %d cores of this machine", n_jobs, os.cpu_count())
-        workers = os.cpu_count() or 1
+    workers = local_workers(n_jobs) if here else n_jobs if n_jobs > 0 else 1
     slices = chunk_slices(len(positions), workers, chunk_size)
     progress = Progress("chunks", len(slices), log, every=CHUNK_REPORT_S)
     if len(slices) <= 1 or workers == 1:
@@ -67,6 +64,42 @@ def iter_chunks(
             progress.step()
 
 
+def local_workers(n_jobs: int) -> int:
+    """Worker processes on this machine for ``compute.n_jobs`` (joblib's rule for a negative
+    count), capped at its cores, with a warning: more would only thrash memory."""
+    workers = n_jobs if n_jobs > 0 else max((os.cpu_count() or 1) + 1 + n_jobs, 1)
+    if workers > (os.cpu_count() or 1):
+        log.warning("compute.n_jobs=%d: capped at the %d cores of this machine", n_jobs, os.cpu_count())
+        workers = os.cpu_count() or 1
+    return workers
+
+
+@contextlib.contextmanager
+def local_cluster(workers: int):
+    """A Dask cluster of ``workers`` single-threaded worker processes on this machine while the
+    block runs, its client the process's current one: the chunks of every job run meanwhile
+    with ``compute.backend=dask`` and no scheduler go to it (:func:`_engine`), so a sweep
+    starts one cluster (``pipeline.app.run``), not one per job."""
+    verbose = _verbose("distributed")  # before Dask's import sets its loggers' levels
+    from dask.distributed import Client, LocalCluster
+
+    if not verbose:  # dozens of INFO lines per cluster otherwise
+        logging.getLogger("distributed").setLevel(logging.WARNING)
+    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
+            Client(cluster) as client:
+        yield client
+
+
+def _current_client():
+    """The process's current Dask client (a sweep's cluster, :func:`local_cluster`), or None."""
+    from dask.distributed import Client
+
+    try:
+        return Client.current()
+    except ValueError:  # none
+        return None
+
+
 def _verbose(name: str) -> bool:
     """Whether the run asked for ``name``'s debug lines (``hydra.verbose=true`` or ``=[name]``
     set its logger, or the root's, to DEBUG)."""
@@ -80,21 +113,18 @@ def _engine(backend: str, workers: int, scheduler: str | None):
     if backend != "dask":
         yield backend
         return
-    verbose = _verbose("distributed")  # before Dask's import sets its loggers' levels
-    from dask.distributed import Client, LocalCluster
     from joblib import parallel_config
 
-    if not verbose:  # dozens of INFO lines per cluster otherwise
-        logging.getLogger("distributed").setLevel(logging.WARNING)
-
     if scheduler:
-        client = Client(scheduler)
-    else:
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                               dashboard_address=None)
-        client = Client(cluster)
-    with client, parallel_config(backend="dask"):
+        verbose = _verbose("distributed")
+        from dask.distributed import Client
+
+        if not verbose:
+            logging.getLogger("distributed").setLevel(logging.WARNING)
+        context = Client(scheduler)
+    else:  # the sweep's cluster, else one for this job
+        current = _current_client()
+        context = contextlib.nullcontext(current) if current is not None else local_cluster(workers)
+    with context as client, parallel_config(backend="dask"):
         log.info("chunks on the Dask cluster %s", client.scheduler.address)
         yield None
-    if not scheduler:
-        cluster.close()
