@@ -67,17 +67,28 @@ def test_sorted_by_is_pandas_stable_sort_with_missing_values_last():
     a = rng.integers(0, 4, n).astype(float)
     a[rng.random(n) < 0.1] = np.nan
     b = [None if r < 0.1 else f"v{k}" for r, k in zip(rng.random(n), rng.integers(0, 3, n))]
-    table = pa.table({"job": texts([f"{i:03d}" for i in range(n)]), "a": numbers(a), "b": texts(b)})
+    table = pa.table({"job": texts([f"{i:03d}" for i in range(n)]), "a": numbers(a), "b": texts(b),
+                      "flag": numbers(rng.random(n) < 0.5), "count": numbers(rng.integers(-5, 5, n)),
+                      "unset": pa.nulls(n)}).replace_schema_metadata({"note": "kept"})
     for keys in (["a"], ["b"], ["a", "b"], ["b", "a"]):
         expected = table.to_pandas().sort_values(keys, kind="stable", na_position="last")
-        assert sorted_by(table, keys)["job"].to_pylist() == expected["job"].tolist(), keys
+        ours = sorted_by(table, keys)
+        assert ours["job"].to_pylist() == expected["job"].tolist(), keys
+        assert parquet_bytes(ours) == parquet_bytes(table.take(expected.index.to_numpy()))  # every column, its type
+
+
+def parquet_bytes(table: pa.Table) -> bytes:
+    sink = pa.BufferOutputStream()
+    pq.write_table(table, sink)
+    return sink.getvalue().to_pybytes()
 
 
 def test_the_main_job_and_a_grid_job_never_import_pandas(tmp_path):
     """pandas costs 0.25 s of CPU to import: a job that writes points and summaries, a sweep
     with its summary table, and a rerun that reuses the finished job do without it."""
     sweep = ["-m", "actuator=1,2,3", "grid.n=4", "hydra.sweep.dir=sweep"]
-    assert "pandas imported: False" in job_imports(tmp_path, *sweep)
+    first = job_imports(tmp_path, *sweep, modules=("pandas", "pyarrow.compute"))
+    assert "pandas imported: False" in first and "pyarrow.compute imported: False" in first
     again = job_imports(tmp_path, *sweep)  # each job's summary read back, not recomputed
     assert "reused the finished job" in again and "pandas imported: False" in again
     irpm = ["robot=irpm6", "robot.search.step=1", "hydra.run.dir=irpm"]
