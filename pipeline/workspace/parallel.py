@@ -80,30 +80,30 @@ def local_cluster(workers: int):
     block runs, its client the process's current one: the chunks of every job run meanwhile
     with ``compute.backend=dask`` and no scheduler go to it (:func:`_engine`), so a sweep
     starts one cluster (``pipeline.app.run``), not one per job."""
-    verbose = _verbose("distributed")  # before Dask's import sets its loggers' levels
-    from dask.distributed import Client, LocalCluster
-
-    if not verbose:  # dozens of INFO lines per cluster otherwise
-        logging.getLogger("distributed").setLevel(logging.WARNING)
-    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
-            Client(cluster) as client:
+    distributed = _distributed()
+    with distributed.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
         yield client
 
 
 def _current_client():
     """The process's current Dask client (a sweep's cluster, :func:`local_cluster`), or None."""
-    from dask.distributed import Client
-
     try:
-        return Client.current()
+        return _distributed().Client.current()
     except ValueError:  # none
         return None
 
 
-def _verbose(name: str) -> bool:
-    """Whether the run asked for ``name``'s debug lines (``hydra.verbose=true`` or ``=[name]``
-    set its logger, or the root's, to DEBUG)."""
-    return logging.getLogger(name).isEnabledFor(logging.DEBUG)
+def _distributed():
+    """``dask.distributed``, its loggers at WARNING (dozens of INFO lines per cluster otherwise)
+    unless the run asked for their debug lines (``hydra.verbose=true`` or ``=[distributed]`` set
+    its logger, or the root's, to DEBUG: read before Dask's import sets its loggers' levels)."""
+    verbose = logging.getLogger("distributed").isEnabledFor(logging.DEBUG)
+    import dask.distributed
+
+    if not verbose:
+        logging.getLogger("distributed").setLevel(logging.WARNING)
+    return dask.distributed
 
 
 @contextlib.contextmanager
@@ -116,12 +116,7 @@ def _engine(backend: str, workers: int, scheduler: str | None):
     from joblib import parallel_config
 
     if scheduler:
-        verbose = _verbose("distributed")
-        from dask.distributed import Client
-
-        if not verbose:
-            logging.getLogger("distributed").setLevel(logging.WARNING)
-        context = Client(scheduler)
+        context = _distributed().Client(scheduler)
     else:  # the sweep's cluster, else one for this job
         current = _current_client()
         context = contextlib.nullcontext(current) if current is not None else local_cluster(workers)
