@@ -24,7 +24,7 @@ from pipeline.app.callbacks import gather
 from pipeline.app.job import execute
 from pipeline.app.plan import Job, Plan
 from pipeline.app.problem import grid_size, workers_pay
-from pipeline.workspace.compute import several_chunks
+from pipeline.workspace.compute import chunking
 from pipeline.app.yamltext import to_yaml
 
 log = logging.getLogger("pipeline")
@@ -102,7 +102,7 @@ def _shared_cluster(jobs: list[Job]):
     one costs about 1.8 s here); nothing when fewer than two would, or their ``compute.n_jobs``
     differ."""
     local = [job for job in jobs if job.cfg.compute.backend == "dask" and not job.cfg.compute.scheduler
-             and several_chunks(job.cfg, job.problem, grid_size(job.cfg), job.fused)]
+             and grid_size(job.cfg) > chunking(job.cfg, job.problem, grid_size(job.cfg), job.fused)[1]]
     sizes = {job.cfg.compute.n_jobs for job in local}
     if len(local) < 2 or len(sizes) != 1:
         return nullcontext()

@@ -24,6 +24,7 @@ distribution HiGHS's convex QP the least norm (:func:`qp_distribution`); otherwi
 
 from __future__ import annotations
 
+import functools
 import itertools
 import os
 import sys
@@ -35,7 +36,7 @@ import numpy as np
 from pipeline.model.tensions import Family, feasible_tensions
 
 MAX_ACTIVE_SETS = 1024  # active sets per pair beyond which HiGHS's QP solves it
-FEASIBLE_RTOL = 1e-9  # a candidate this far outside a bound (times the bounds' scale) is on it
+FEASIBLE_RTOL = 1e-9  # a value this far outside a bound (times the bounds' scale) is on it
 
 
 def face_distribution(structure: np.ndarray, wrenches: np.ndarray, lower: np.ndarray, upper: np.ndarray,
@@ -80,6 +81,7 @@ def _count(m: int, d: int) -> int:
     return sum(comb(m, j) * 2**j for j in range(d + 1))
 
 
+@functools.cache
 def _active_sets(m: int, d: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Every active set of at most d bounds, no cable twice: cables (A, d) of which the first
     sizes (A,) count, and sides (A, d), True at an upper bound."""
@@ -126,7 +128,7 @@ def qp_distribution(structure: np.ndarray, wrenches: np.ndarray, lower: np.ndarr
     lower, upper = (np.broadcast_to(a, (n, k, m)) for a in (lower, upper))
     size = np.maximum(np.linalg.norm(wrenches, axis=2), 1.0)
     residual = lambda x: np.linalg.norm(np.einsum("nrm,nkm->nkr", structure, x) - wrenches, axis=2) / size  # noqa: E731
-    tolerance = 1e-9 * np.maximum(1.0, np.nan_to_num(np.maximum(np.abs(lower), np.abs(upper)), posinf=0.0))
+    tolerance = FEASIBLE_RTOL * np.maximum(1.0, np.nan_to_num(np.maximum(np.abs(lower), np.abs(upper)), posinf=0.0))
     valid = ((start >= lower - tolerance) & (start <= upper + tolerance)).all(axis=2) & (residual(start) <= rtol)
     out = start.copy()
     pairs = np.argwhere(valid)

@@ -52,7 +52,7 @@ def grid_workspace(
     the grid size, and pandas is not imported (``docs/performance.md``, "What a process
     imports"). Without, the points come back as one pandas DataFrame. ``sweep_pays``: the job's
     sweep pays, as a whole, for the compiled kernels (``pipeline.app.problem.fused_pays``)."""
-    problem = replace(problem, fused=use_fused(cfg, problem, grid.n_points, sweep_pays))
+    problem, chunk_size = chunking(cfg, problem, grid.n_points, sweep_pays)
     workers = worth_workers(problem, grid.n_points, cfg.compute.n_jobs, cfg.compute.backend)
     announce_cost(cfg, problem, grid.n_points, workers, keeps_points=sink is None)
     if problem.fused or problem.spec.tension.model == "feasible":
@@ -63,7 +63,7 @@ def grid_workspace(
         evaluate_chunk, problem, grid,
         n_jobs=workers,
         backend=cfg.compute.backend,
-        chunk_size=bounded_chunk_size(problem, cfg.compute.chunk_size, cfg.compute.backend),
+        chunk_size=chunk_size,
         scheduler=cfg.compute.scheduler,
     )
     parts, n_feasible, by_lp = [], 0, 0
@@ -267,11 +267,12 @@ def first_compile_seconds(problem: WorkspaceProblem) -> float:
     return sum(compile_seconds(name) for name in needed)
 
 
-def several_chunks(cfg: DictConfig, problem: WorkspaceProblem, n_points: int, sweep_pays: bool = False) -> bool:
-    """Whether :func:`grid_workspace` splits this job's ``n_points`` poses into several chunks
-    (with the kernel it will choose)."""
-    chosen = replace(problem, fused=use_fused(cfg, problem, n_points, sweep_pays))
-    return n_points > bounded_chunk_size(chosen, cfg.compute.chunk_size, cfg.compute.backend)
+def chunking(cfg: DictConfig, problem: WorkspaceProblem, n_points: int,
+             sweep_pays: bool = False) -> tuple[WorkspaceProblem, int]:
+    """The problem with the kernel :func:`grid_workspace` chooses for ``n_points`` poses, and
+    its poses per chunk (a job of more than one chunk uses workers or a Dask cluster)."""
+    problem = replace(problem, fused=use_fused(cfg, problem, n_points, sweep_pays))
+    return problem, bounded_chunk_size(problem, cfg.compute.chunk_size, cfg.compute.backend)
 
 
 def bounded_chunk_size(problem: WorkspaceProblem, requested: int | None, backend: str = "loky") -> int:
