@@ -157,3 +157,49 @@ def test_copies_equal_deep_copies_also_of_a_config_pickle_cannot_write():
         cfg.load.mass = 2.0
     with pytest.raises(ValidationError):
         second.load.mass = "heavy"
+
+
+ROBOT = ("defaults: [points, _self_]\n"
+         "anchors: [[-2, 1.5, 2], [2, 1.5, 2], [2, -1.5, 2], [-2, -1.5, 2], [-2, 1.5, 0], [2, 1.5, 0], [2, -1.5, 0], "
+         "[-2, -1.5, 0]]\n"
+         "attachments: [[0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0]]\n"
+         "search: {lo: [-1, -1, 0.5], hi: [1, 1, 1.5], step: 0.5}\n"
+         "platform: {mass: 3.0}\n")
+
+
+def test_a_process_composes_a_set_of_files_once_while_they_and_its_folder_stay_the_same(tmp_path, monkeypatch):
+    """Plans over the same config files share Hydra's composition (a notebook's or a study's
+    commands); a robot file edited in place, even to the same size and modification time, a
+    new file of the folder, or another working folder (Hydra's node records it) compose again."""
+    import os
+
+    from hydra import compose
+
+    import pipeline.app.plan as planning
+
+    calls = []
+    monkeypatch.setattr(planning, "compose", lambda **kw: calls.append(kw) or compose(**kw))
+    robots = tmp_path / "mine" / "robot"
+    robots.mkdir(parents=True)
+    robot = robots / "box.yaml"
+    robot.write_text(ROBOT)
+    monkeypatch.chdir(tmp_path)
+    argv = ["--config-dir", "mine", "robot=box", "hydra.run.dir=out"]
+
+    def mass(*extra):
+        (job,) = plan([*argv, *extra]).jobs
+        return job.cfg.robot.platform.mass
+
+    assert (mass(), mass("load.mass=2"), len(calls)) == (3.0, 3.0, 1)
+    stat = robot.stat()
+    robot.write_text(ROBOT.replace("mass: 3.0", "mass: 5.0"))  # the same size
+    os.utime(robot, ns=(stat.st_atime_ns, stat.st_mtime_ns))  # and time
+    assert (mass(), len(calls)) == (5.0, 2)
+    (robots / "other.yaml").write_text(ROBOT)
+    assert (mass(), len(calls)) == (5.0, 3)
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)
+    argv[1] = str(tmp_path / "mine")
+    planned = plan(argv)
+    assert len(calls) == 4 and planned.record(planned.jobs[0]).hydra.runtime.cwd == str(elsewhere)

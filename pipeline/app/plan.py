@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import copy
 import functools
+import hashlib
 import itertools
 import math
 import os
@@ -24,6 +25,7 @@ import pickle
 import re
 import shutil
 import threading
+from collections import OrderedDict
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -137,13 +139,7 @@ def plan(argv: list[str], reuse: Reuse | None = None) -> Plan | None:
     def composition(job_parsed: list[Override]) -> tuple[tuple[str, ...], Composition]:
         files = (*search_path, *(o.input_line for o in job_parsed if structural(o)), mode)
         if files not in reuse.compositions:
-            try:
-                composed = compose(config_name="config", overrides=list(files), return_hydra_config=True)
-            except MissingConfigException as exc:  # a group option with no file
-                raise ConfigError(_missing_option(exc, job_parsed)) from exc
-            except Exception as exc:  # composition errors come as Hydra and OmegaConf types
-                raise ConfigError(one_line(exc)) from exc
-            reuse.compositions[files] = Composition(composed)
+            reuse.compositions[files] = _composition(files, job_parsed)
         return files, reuse.compositions[files]
 
     with HYDRA_STATE, initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3", job_name="pipeline"):
@@ -177,6 +173,55 @@ def plan(argv: list[str], reuse: Reuse | None = None) -> Plan | None:
     gather = "sweep_summary" in (OmegaConf.select(hydra, "hydra.callbacks") or {})
     return Plan(planned, multirun, sweep_dir, 1 if by_hydra else hydra.hydra.launcher.n_jobs, tuple(overrides),
                 base_files, gather, reuse.compositions, by_hydra)
+
+
+COMPOSITIONS_KEPT = 32  # compositions a process keeps for later plans (a notebook's, a study's cases)
+_kept: OrderedDict[tuple, Composition] = OrderedDict()
+
+
+def _composition(files: tuple[str, ...], parsed: list[Override]) -> Composition:
+    """Hydra's composition of ``files`` (the overrides that choose files, and the mode),
+    composed once a process while what it reads is unchanged: the bytes of every YAML file of
+    the search path's folders (conf/, ``--config-dir``) and the working folder (which Hydra's
+    node records). The last COMPOSITIONS_KEPT are kept."""
+    key = (files, os.getcwd(), _files_digest(files))
+    if key in _kept:
+        _kept.move_to_end(key)
+        return _kept[key]
+    try:
+        composed = compose(config_name="config", overrides=list(files), return_hydra_config=True)
+    except MissingConfigException as exc:  # a group option with no file
+        raise ConfigError(_missing_option(exc, parsed)) from exc
+    except Exception as exc:  # composition errors come as Hydra and OmegaConf types
+        raise ConfigError(one_line(exc)) from exc
+    made = Composition(composed)
+    if key[2] is None:
+        return made
+    _kept[key] = made
+    while len(_kept) > COMPOSITIONS_KEPT:
+        _kept.popitem(last=False)
+    return made
+
+
+def _files_digest(files: tuple[str, ...]) -> str | None:
+    """A digest of the YAML files a composition of ``files`` can read: conf/ and each
+    ``file://`` folder of a ``hydra.searchpath`` override (Hydra's own files are its package's);
+    None when one cannot be read (not kept: Hydra reports it, or reads it next time)."""
+    folders = [CONF_DIR]
+    for override in parse([f for f in files if f.startswith("hydra.searchpath=")]):
+        value = override.value()
+        entries = value if isinstance(value, list) else [value]
+        folders += [Path(str(e)[len("file://"):]).absolute() for e in entries if str(e).startswith("file://")]
+    digest = hashlib.blake2b(digest_size=16)
+    for folder in folders:
+        digest.update(os.fsencode(folder) + b"\0")
+        for path in sorted(folder.rglob("*.yaml")) if folder.is_dir() else ():
+            digest.update(os.fsencode(path.relative_to(folder)) + b"\0")
+            try:
+                digest.update(hashlib.blake2b(path.read_bytes(), digest_size=16).digest())
+            except OSError:
+                return None
+    return digest.hexdigest()
 
 
 def _check_launcher(hydra: DictConfig, parsed: list[Override]) -> None:
