@@ -54,35 +54,28 @@ def simulate_lines(cfg: DictConfig, problem: WorkspaceProblem, grid: Grid,
     as :func:`pipeline.workspace.compute.grid_workspace`."""
     points, summary = grid_workspace(cfg, problem, grid, sweep_pays=sweep_pays)
     lines = _lines(grid[:])
-    parts = []
-    for number, (axis, start, end) in enumerate(lines):
-        profile = trapezoid(float(np.linalg.norm(end - start)), cfg.motion.v_max,
-                            cfg.motion.t_acc, cfg.motion.t_dec, DT)
-        direction = (end - start) / np.linalg.norm(end - start)
-        parts.append(pd.DataFrame({
-            "line": number, "axis": axis, "t": profile.t, "s": profile.s, "v": profile.v,
-            "a": profile.a, **{c: start[i] + profile.s * direction[i] for i, c in enumerate("xyz")},
-            **{f"{c}_dot": profile.v * direction[i] for i, c in enumerate("xyz")},
-            **{f"{c}_ddot": profile.a * direction[i] for i, c in enumerate("xyz")},
-        }))
-    samples = pd.concat(parts, ignore_index=True)
+    v_max, t_acc, t_dec = cfg.motion.v_max, cfg.motion.t_acc, cfg.motion.t_dec
+    profiles = [trapezoid(float(np.linalg.norm(end - start)), v_max, t_acc, t_dec, DT) for _, start, end in lines]
+    counts = [len(profile.t) for profile in profiles]
+    start = np.repeat([start for _, start, _ in lines], counts, axis=0)
+    direction = np.repeat([(end - start) / np.linalg.norm(end - start) for _, start, end in lines], counts, axis=0)
+    s, v, a = (np.concatenate([getattr(profile, name) for profile in profiles]) for name in "sva")
+    position, velocity, acceleration = start + s[:, None] * direction, v[:, None] * direction, a[:, None] * direction
     act = problem.limits
-    quantities = inverse_dynamics(
-        problem.robot, samples[["x", "y", "z"]].to_numpy(),
-        samples[["x_dot", "y_dot", "z_dot"]].to_numpy(),
-        samples[["x_ddot", "y_ddot", "z_ddot"]].to_numpy(),
-        problem.orientation, problem.spec, act,
-    )
-    for name in QUANTITIES:
-        for cable in range(problem.robot.n_cables):
-            samples[f"{name}_{cable + 1}"] = quantities[name][:, cable]
-    for key in ("wrench_residual", "power_cables", "power_load"):
-        samples[key] = quantities[key]
+    quantities = inverse_dynamics(problem.robot, position, velocity, acceleration, problem.orientation,
+                                  problem.spec, act)
     raw = sample_margins(quantities, act)
-    margins, samples["ok"], _ = classify({name: raw[name] for name in problem.criteria},
-                                         problem.margin_atol)
-    for name in problem.criteria:
-        samples[f"margin_{name}"] = margins[name]
+    margins, ok, _ = classify({name: raw[name] for name in problem.criteria}, problem.margin_atol)
+    samples = pd.DataFrame({
+        "line": np.repeat(np.arange(len(lines)), counts), "axis": np.repeat([axis for axis, _, _ in lines], counts),
+        "t": np.concatenate([profile.t for profile in profiles]), "s": s, "v": v, "a": a,
+        **{c: position[:, i] for i, c in enumerate("xyz")}, **{f"{c}_dot": velocity[:, i] for i, c in enumerate("xyz")},
+        **{f"{c}_ddot": acceleration[:, i] for i, c in enumerate("xyz")},
+        **{f"{name}_{cable + 1}": quantities[name][:, cable]
+           for name in QUANTITIES for cable in range(problem.robot.n_cables)},
+        **{key: quantities[key] for key in ("wrench_residual", "power_cables", "power_load")},
+        "ok": ok, **{f"margin_{name}": margins[name] for name in problem.criteria},
+    })
 
     points = points.rename(columns={"feasible": "feasible_grid", "limiting": "limiting_grid"})
     worst = _point_margins(samples, points, problem.criteria)
