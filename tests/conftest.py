@@ -2,6 +2,11 @@
 
 from __future__ import annotations
 
+import contextlib
+import importlib
+import io
+import logging
+import os
 import subprocess
 import sys
 
@@ -45,6 +50,44 @@ def make_cfg(*overrides: str):
 def make_cfg_fixture():
     """:func:`make_cfg` as a fixture."""
     return make_cfg
+
+
+MAINS = {"pipeline": ("pipeline.app.cli", "cli"), "pipeline.study": ("pipeline.study", "main"),
+         "pipeline.caspr": ("pipeline.caspr", "main"), "pipeline.report": ("pipeline.report", "main")}
+
+
+def command(cwd, module: str, *args: str) -> subprocess.CompletedProcess:
+    """``python -m MODULE ARGS`` in ``cwd``, run in this test process (its entry point with
+    ``sys.argv``, stdout and stderr as the process would have them): the exit status, stdout and
+    stderr as ``subprocess.run`` gives them, without a process start's imports. The working
+    folder, ``sys.argv`` and the root logger are restored after it. Tests of what only a process
+    shows (its imports, signals, two at once, the console script) start one."""
+    where, name = MAINS[module]
+    entry = getattr(importlib.import_module(where), name)
+    root = logging.getLogger()
+    handlers, level, before, argv = root.handlers[:], root.level, os.getcwd(), sys.argv
+    out, err = io.StringIO(), io.StringIO()
+    status = 0
+    try:
+        os.chdir(cwd)
+        sys.argv = [module, *args]
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+            try:
+                entry(list(args)) if module != "pipeline" else entry()
+            except SystemExit as exc:
+                status = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
+    finally:
+        os.chdir(before)
+        sys.argv = argv
+        for handler in root.handlers[:]:
+            if handler not in handlers:
+                root.removeHandler(handler)
+                handler.close()
+        for handler in handlers:
+            if handler not in root.handlers:
+                root.addHandler(handler)
+        root.setLevel(level)
+    return subprocess.CompletedProcess([module, *args], status, out.getvalue(), err.getvalue())
 
 
 def job_imports(cwd, *args: str, modules=("pandas", "numba", "scipy")) -> str:

@@ -9,6 +9,8 @@ import sys
 import pandas as pd
 import pytest
 
+from conftest import command
+
 from pipeline import api
 from pipeline.app.results import file_digest
 
@@ -31,8 +33,7 @@ def test_workspace_gives_table_2_and_the_command_line_points(tmp_path, monkeypat
     assert (ws.summary["n_feasible"], ws.summary["n_points"]) == (184, 216)  # Table 2: 85.19 %
     assert ws.points["feasible"].sum() == 184 and len(ws.points) == 216
     assert "actuator: 3" in ws.config and ws.version.startswith("0.")
-    cli = subprocess.run([sys.executable, "-m", "pipeline", "actuator=3", "hydra.run.dir=cli"],
-                         capture_output=True, text=True, timeout=300)
+    cli = command(tmp_path, "pipeline", "actuator=3", "hydra.run.dir=cli")
     assert cli.returncode == 0, cli.stderr
     pd.testing.assert_frame_equal(pd.read_parquet("cli/points.parquet"), ws.points)
     before = file_digest(pathlib.Path("a3/points.parquet")), (tmp_path / "a3/points.parquet").stat().st_mtime_ns

@@ -10,6 +10,7 @@ from pathlib import Path
 import pytest
 from omegaconf import OmegaConf
 
+from conftest import command
 from pipeline.app.plan import plan
 from pipeline.errors import ConfigError
 from pipeline.model.catalogue import load_catalogue
@@ -47,8 +48,7 @@ def workdir(tmp_path_factory):
     of whose Parquet files is then truncated."""
     root = tmp_path_factory.mktemp("bad")
     _catalogue_files(root)
-    done = subprocess.run([sys.executable, "-m", "pipeline.study", "actuator_choice"], cwd=root,
-                          capture_output=True, text=True, timeout=300)
+    done = command(root, "pipeline.study", "actuator_choice")
     assert done.returncode == 0, done.stderr
     shutil.copytree(root / "outputs" / "studies" / "actuator_choice",
                     root / "outputs" / "studies" / "design_mass")

@@ -1,13 +1,13 @@
 """Import of CASPR model files (``pipeline.caspr``): the XML pair written here in CASPR's format
 becomes a robot file, whose static workspace is computed with the body's mass (issue 15)."""
 
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
+
+from conftest import command
 import yaml
 from scipy.optimize import linprog
 
@@ -54,8 +54,8 @@ GOOD = CABLES
 
 
 def run(cwd, module, *args):
-    return subprocess.run([sys.executable, "-m", module, *args], cwd=cwd, capture_output=True,
-                          text=True, timeout=300)
+    """``python -m MODULE ARGS`` in ``cwd``, in this process (tests/conftest.py)."""
+    return command(cwd, module, *args)
 
 
 @pytest.fixture(scope="module")

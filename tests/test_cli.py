@@ -6,7 +6,7 @@ import sys
 import pandas as pd
 import pytest
 
-from conftest import job_at_exit
+from conftest import command, job_at_exit
 from golden import values
 from pipeline.app.results import read_metadata
 
@@ -14,12 +14,13 @@ pytestmark = pytest.mark.slow
 
 
 def run(cwd, *args):
-    return subprocess.run([sys.executable, "-m", "pipeline", *args], cwd=cwd,
-                          capture_output=True, text=True, timeout=300)
+    """``python -m pipeline ARGS`` in ``cwd``, in this process (tests/conftest.py)."""
+    return command(cwd, "pipeline", *args)
 
 
 def test_main_job_writes_points_summaries_and_sweep_summary(tmp_path):
-    proc = run(tmp_path, "-m", "actuator=1,2,3,4,5")
+    proc = subprocess.run([sys.executable, "-m", "pipeline", "-m", "actuator=1,2,3,4,5"], cwd=tmp_path,
+                          capture_output=True, text=True, timeout=300)  # the main job, a process of its own
     assert proc.returncode == 0, proc.stderr
     (sweep,) = (tmp_path / "outputs" / "sweeps").iterdir()
     summary = pd.read_parquet(sweep / "summary.parquet")

@@ -7,8 +7,6 @@ from __future__ import annotations
 
 import itertools
 import logging
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -16,7 +14,7 @@ import pytest
 from pipeline.app.problem import build_problem, compute_workspace
 from pipeline.workspace.degeneracy import Degeneracy
 
-from conftest import SPREAD_ANCHORS, eq9_rotation
+from conftest import SPREAD_ANCHORS, command, eq9_rotation
 
 # Six anchors on one horizontal line, every cable on one platform point: the cables span the
 # plane through that line and the point, so no tension distribution holds the platform off it.
@@ -250,8 +248,7 @@ def test_the_cpr8_names_the_yaw_it_cannot_hold_at_the_zero_orientation(make_cfg,
 def test_a_job_with_no_feasible_pose_says_what_to_try_next(tmp_path, overrides, limit, remedy):
     """A 0 % result named only its counts; now it names what limited it and the next thing to try
     (each criterion's remedy in the registry)."""
-    done = subprocess.run([sys.executable, "-m", "pipeline", *overrides, f"hydra.run.dir={tmp_path / 'run'}"],
-                          capture_output=True, text=True, timeout=120)
+    done = command(tmp_path, "pipeline", *overrides, f"hydra.run.dir={tmp_path / 'run'}")
     assert done.returncode == 0, done.stderr
     (line,) = [line for line in (done.stdout + done.stderr).splitlines() if "no pose is feasible" in line]
     assert f"are lost to {limit} first; to try next: {remedy}" in line

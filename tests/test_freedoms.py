@@ -3,15 +3,13 @@ platform's freedoms, a joint or a plane takes the others. Each workspace is chec
 against a plain LP written here from the points (no code of the model), on platforms that are
 tilted, loaded off centre, or held by fewer cables than a free body has freedoms."""
 
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 from scipy.optimize import linprog
 
-from conftest import eq9_rotation
+from conftest import command, eq9_rotation
 from pipeline.app.problem import build_problem, compute_workspace
 from pipeline.errors import ConfigError
 
@@ -143,18 +141,16 @@ def test_a_planar_caspr_model_imports_with_its_freedoms_and_its_plane(tmp_path):
     x, y limits in the plane z = 0; on a horizontal table (which holds the 3 kg) and pushed in
     its plane, the verdicts are the LP's on the rows x, y, rz."""
     data = Path(__file__).parent / "data" / "caspr"
-    done = subprocess.run([sys.executable, "-m", "pipeline.caspr", str(data / "Quad_planar_cables.xml"), "--bodies",
-                           str(data / "Quad_planar_bodies.xml"), "--out", "mine/robot/quad.yaml"],
-                          cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    done = command(tmp_path, "pipeline.caspr", str(data / "Quad_planar_cables.xml"), "--bodies",
+                   str(data / "Quad_planar_bodies.xml"), "--out", "mine/robot/quad.yaml")
     assert done.returncode == 0, done.stderr
     assert "search box x [-0.9, 0.9], y [-0.7, 0.7], z [0, 0] m from the joint's q_min/q_max" in done.stdout
     import yaml
 
     robot = yaml.safe_load((tmp_path / "mine" / "robot" / "quad.yaml").read_text())["robot"]
     assert robot["dofs"] == ["x", "y", "rz"] and robot["search"]["spacing"] == "faces"
-    ran = subprocess.run([sys.executable, "-m", "pipeline", "--config-dir", "mine", "robot=quad",
-                          "load.external=[12,-8,0,0,0,0.5]", "orientation.phi=0.2", "hydra.run.dir=out"],
-                         cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    ran = command(tmp_path, "pipeline", "--config-dir", "mine", "robot=quad",
+                  "load.external=[12,-8,0,0,0,0.5]", "orientation.phi=0.2", "hydra.run.dir=out")
     assert ran.returncode == 0, ran.stderr
     import pandas as pd
 

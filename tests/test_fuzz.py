@@ -8,8 +8,6 @@ from __future__ import annotations
 
 import random
 import re
-import subprocess
-import sys
 from pathlib import Path
 from xml.etree import ElementTree
 
@@ -24,7 +22,7 @@ from pipeline.errors import ConfigError
 from pipeline.study import load_study, sweep_command
 from pipeline.workspace.verdict import snap
 
-from conftest import SPREAD_ANCHORS, SPREAD_PLATFORM
+from conftest import SPREAD_ANCHORS, SPREAD_PLATFORM, command
 
 CASPR_DATA = Path(__file__).parent / "data" / "caspr"
 JUNK = [None, "", "abc", "a\nb: c", -1, 0, 1e308, -1e308, ".nan", ".inf", [], [[]], [1, 2], [[1, 2, 3]],
@@ -143,8 +141,7 @@ def test_fuzzed_robot_files_end_to_end_exit_2_and_write_nothing(tmp_path):
             tried += 1
         run = tmp_path / "run"
         run.mkdir(exist_ok=True)
-        done = subprocess.run([sys.executable, "-m", "pipeline", "--config-dir", str(tmp_path / "conf"), "robot=fz"],
-                              cwd=run, capture_output=True, text=True, timeout=120)
+        done = command(run, "pipeline", "--config-dir", str(tmp_path / "conf"), "robot=fz")
         assert done.returncode == 2 and done.stderr.count("\n") == 1 and done.stderr.startswith("error: "), done.stderr
         assert list(run.iterdir()) == []
 

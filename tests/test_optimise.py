@@ -2,13 +2,13 @@
 Optuna's seeded sampler, each trial an ordinary job; bad input refused before anything runs."""
 
 import re
-import subprocess
-import sys
 from dataclasses import replace
 
 import numpy as np
 import pandas as pd
 import pytest
+
+from conftest import command
 
 import pipeline.study
 from pipeline.model.catalogue import load_catalogue
@@ -62,8 +62,7 @@ def test_an_actuator_id_outside_the_catalogue_is_refused():
 
 
 def test_bad_extra_overrides_stop_the_study_before_anything_is_written(tmp_path):
-    proc = subprocess.run([sys.executable, "-m", "pipeline.study", "drive_pareto", "catalogue=missing.csv"],
-                          cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    proc = command(tmp_path, "pipeline.study", "drive_pareto", "catalogue=missing.csv")
     assert proc.returncode == 2 and proc.stderr.startswith("error: catalogue=missing.csv")
     assert list(tmp_path.iterdir()) == []
 

@@ -2,16 +2,17 @@
 temporary file left, whether found before the job (the plan) or while it writes."""
 
 import subprocess
-import sys
 
 import pytest
+
+from conftest import command
 
 pytestmark = pytest.mark.slow
 
 
 def run(cwd, *args):
-    return subprocess.run([sys.executable, "-m", "pipeline", *args], cwd=cwd,
-                          capture_output=True, text=True, timeout=300)
+    """``python -m pipeline ARGS`` in ``cwd``, in this process (tests/conftest.py)."""
+    return command(cwd, "pipeline", *args)
 
 
 def one_line_exit_2(proc, needle):

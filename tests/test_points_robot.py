@@ -2,12 +2,12 @@
 (frame anchors at x = +-2, y = +-1.5, z = 0 and 2 m, a 0.12 m square platform; the geometry
 public in CASPR), run through the command line with no Python."""
 
-import subprocess
-import sys
 
 import numpy as np
 import pandas as pd
 import pytest
+
+from conftest import command
 from scipy.optimize import linprog
 
 from pipeline.model.geometry import rotation_matrix, structure_matrix
@@ -27,8 +27,8 @@ WRENCH_FEASIBLE = ["tension.model=feasible", "tension.t_min=1", "tension.t_max=1
 
 
 def run(cwd, *args):
-    return subprocess.run([sys.executable, "-m", "pipeline", "--config-dir", str(cwd / "conf"), *args],
-                          cwd=cwd, capture_output=True, text=True, timeout=300)
+    """``python -m pipeline --config-dir CWD/conf ARGS`` in ``cwd``, in this process (tests/conftest.py)."""
+    return command(cwd, "pipeline", "--config-dir", str(cwd / "conf"), *args)
 
 
 @pytest.fixture(scope="module")

@@ -11,12 +11,14 @@ import pandas as pd
 import pyarrow.parquet as pq
 import pytest
 
+from conftest import command
+
 pytestmark = pytest.mark.slow
 
 
-def study(cwd, *args, **kwargs):
-    return subprocess.run([sys.executable, "-m", "pipeline.study", *args], cwd=cwd,
-                          capture_output=True, text=True, timeout=600, **kwargs)
+def study(cwd, *args):
+    """``python -m pipeline.study ARGS`` in ``cwd``, in this process (tests/conftest.py)."""
+    return command(cwd, "pipeline.study", *args)
 
 
 def files(root: Path) -> dict[str, bytes]:
@@ -40,8 +42,8 @@ def test_killed_sweep_resumes_with_only_the_missing_jobs(tmp_path):
     reference = study(tmp_path, "design_mass", "--out", "reference")
     assert reference.returncode == 0, reference.stderr
 
-    command = [sys.executable, "-m", "pipeline.study", "design_mass", "--out", "killed"]
-    proc = subprocess.Popen(command, cwd=tmp_path, stdout=subprocess.DEVNULL,
+    argv = [sys.executable, "-m", "pipeline.study", "design_mass", "--out", "killed"]  # a process, to kill
+    proc = subprocess.Popen(argv, cwd=tmp_path, stdout=subprocess.DEVNULL,
                             stderr=subprocess.DEVNULL, start_new_session=True)
     jobs = tmp_path / "killed" / "design_mass" / "jobs"
     deadline = time.monotonic() + 120

@@ -9,6 +9,7 @@ import pandas as pd
 import pytest
 import yaml
 
+from conftest import command
 from pipeline.model.catalogue import load_catalogue
 from pipeline.errors import ConfigError
 from pipeline.app.results import read_metadata, write_parquet
@@ -18,6 +19,12 @@ pytestmark = pytest.mark.slow
 
 
 def study(cwd, *args):
+    """``python -m pipeline.study ARGS`` in ``cwd``, in this process (tests/conftest.py)."""
+    return command(cwd, "pipeline.study", *args)
+
+
+def study_process(cwd, *args):
+    """The same in a process of its own: what only a process shows (studies run two at a time)."""
     return subprocess.run([sys.executable, "-m", "pipeline.study", *args], cwd=cwd,
                           capture_output=True, text=True, timeout=600)
 
@@ -25,7 +32,7 @@ def study(cwd, *args):
 @pytest.fixture(scope="module")
 def choice_run(tmp_path_factory):
     cwd = tmp_path_factory.mktemp("choice")
-    proc = study(cwd, "actuator_choice")
+    proc = study_process(cwd, "actuator_choice")  # the study command end to end, once
     assert proc.returncode == 0, proc.stderr
     return cwd / "outputs" / "studies" / "actuator_choice"
 
@@ -287,8 +294,7 @@ def test_a_robot_name_set_on_the_command_line_is_checked_like_a_robot_file(tmp_p
         plan([f"robot.name={value}"])
     with pytest.raises(ConfigError, match=rf"^robot.name={value}: "):
         checked_commands("actuator_choice", [f"robot.name={value}"])
-    done = subprocess.run([sys.executable, "-m", "pipeline", f"robot.name={value}"], cwd=tmp_path,
-                          capture_output=True, text=True)
+    done = command(tmp_path, "pipeline", f"robot.name={value}")
     assert done.returncode == 2 and done.stderr.startswith(f"error: robot.name={value}: ")
     assert list(tmp_path.iterdir()) == []
 

@@ -1,8 +1,6 @@
 """The ``feasible`` tension model (issue 8): analytic cases, agreement with the papers' own
 criterion where it must agree, independent checks of the LPs, and the comparison study."""
 
-import subprocess
-import sys
 from dataclasses import replace
 
 import numpy as np
@@ -12,7 +10,7 @@ from scipy.optimize import nnls
 
 from pipeline.model.actuators import ActuatorModel
 from pipeline.workspace.criteria import REGISTRY
-from conftest import shaft_torque
+from conftest import command, shaft_torque
 from pipeline.model.dynamics import Load, MotionSpec, load_wrenches
 from pipeline.analyses.figures import caption
 from pipeline.model.geometry import CableRobot
@@ -184,8 +182,7 @@ def test_lines_use_the_lp_torques_and_agree_with_the_grid(make_cfg, catalogue):
 
 @pytest.mark.slow
 def test_comparison_study_reports_the_surviving_share_per_actuator_and_orientation(tmp_path):
-    proc = subprocess.run([sys.executable, "-m", "pipeline.study", "tension_comparison"],
-                          cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    proc = command(tmp_path, "pipeline.study", "tension_comparison")
     assert proc.returncode == 0, proc.stderr
     out = tmp_path / "outputs" / "studies" / "tension_comparison"
     table = pd.read_parquet(out / "survival.parquet").set_index(["wrench_rows", "case", "actuator"])

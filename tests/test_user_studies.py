@@ -7,10 +7,11 @@ from __future__ import annotations
 
 import shutil
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
+
+from conftest import command
 
 from pipeline.app.plan import plan
 from pipeline.app.problem import compute_workspace
@@ -23,8 +24,8 @@ EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "my_robot"
 
 
 def run(cwd, module: str, *args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", module, *args], cwd=cwd, capture_output=True, text=True,
-                          timeout=600)
+    """``python -m MODULE ARGS`` in ``cwd``, in this process (tests/conftest.py)."""
+    return command(cwd, module, *args)
 
 
 @pytest.mark.slow

@@ -11,6 +11,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
+from conftest import command
 from pipeline.app.job import folder_lock
 from pipeline.app.results import read_metadata
 
@@ -18,8 +19,14 @@ pytestmark = pytest.mark.slow
 
 
 def start(cwd, *args):
+    """``python -m pipeline ARGS`` started in a process of its own (writers at once)."""
     return subprocess.Popen([sys.executable, "-m", "pipeline", *args], cwd=cwd,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def run(cwd, *args):
+    """``python -m pipeline ARGS`` in ``cwd``, in this process (tests/conftest.py)."""
+    return command(cwd, "pipeline", *args)
 
 
 def test_a_second_writer_of_the_same_folder_stops_and_the_first_result_is_intact(tmp_path):
@@ -56,8 +63,8 @@ def edit_value(path: Path, column: str, value) -> None:
 
 @pytest.mark.parametrize("damage", ["truncate_summary", "flip_points", "delete_points", "edit_summary"])
 def test_a_damaged_finished_job_is_recomputed_not_reused(tmp_path, damage):
-    run = ["grid.n=4", "hydra.run.dir=job"]
-    assert start(tmp_path, *run).wait(timeout=300) == 0
+    args = ["grid.n=4", "hydra.run.dir=job"]
+    assert run(tmp_path, *args).returncode == 0
     job = tmp_path / "job"
     good = pd.read_parquet(job / "points.parquet")
     if damage == "truncate_summary":
@@ -70,9 +77,8 @@ def test_a_damaged_finished_job_is_recomputed_not_reused(tmp_path, damage):
         edit_value(job / "summary.parquet", "n_feasible", 1)
     else:
         (job / "points.parquet").unlink()
-    proc = start(tmp_path, *run)
-    _, err = proc.communicate(timeout=300)
-    assert proc.returncode == 0, err
+    proc = run(tmp_path, *args)
+    assert proc.returncode == 0, proc.stderr
     assert "recomputing" in (job / "pipeline.log").read_text()
     pd.testing.assert_frame_equal(pd.read_parquet(job / "points.parquet"), good)
     assert pd.read_parquet(job / "summary.parquet")["n_points"].tolist() == [64]
@@ -83,8 +89,7 @@ def test_a_damaged_finished_job_is_recomputed_not_reused(tmp_path, damage):
 def finished_study(tmp_path_factory):
     """A finished run of the study design_v_max (copied by each test that damages it)."""
     root = tmp_path_factory.mktemp("finished")
-    first = subprocess.run([sys.executable, "-m", "pipeline.study", "design_v_max", "--out", "out"],
-                           cwd=root, capture_output=True, text=True, timeout=600)
+    first = command(root, "pipeline.study", "design_v_max", "--out", "out")
     assert first.returncode == 0, first.stderr
     return root / "out"
 
@@ -95,7 +100,7 @@ def test_figures_only_refuses_a_damaged_job_and_keeps_the_old_figures(tmp_path, 
     finished is named (one line, exit 2) before any old figure is removed; a full rerun then
     recomputes it (run for one damage: that each damage is recomputed is
     test_a_damaged_finished_job_is_recomputed_not_reused's, per job)."""
-    study = [sys.executable, "-m", "pipeline.study", "design_v_max", "--out", "out"]
+    study = ["design_v_max", "--out", "out"]
     shutil.copytree(finished_study, tmp_path / "out")
     out = tmp_path / "out" / "design_v_max"
     figures = {p.name: p.read_bytes() for p in (out / "figures").iterdir()}
@@ -108,7 +113,7 @@ def test_figures_only_refuses_a_damaged_job_and_keeps_the_old_figures(tmp_path, 
         edit_value(job / name, "feasible_pct", 100.0)
     else:
         (job / name).write_bytes(bytes(data if damage == "flip_points" else data[:300]))
-    redraw = subprocess.run([*study, "--figures-only"], cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    redraw = command(tmp_path, "pipeline.study", *study, "--figures-only")
     assert redraw.returncode == 2
     (line,) = redraw.stderr.strip().splitlines()
     assert line.startswith(f"error: out/design_v_max/jobs/actuator=2,motion.v_max=0.8: {name}")
@@ -116,7 +121,7 @@ def test_figures_only_refuses_a_damaged_job_and_keeps_the_old_figures(tmp_path, 
     assert {p.name: p.read_bytes() for p in (out / "figures").iterdir()} == figures
     if damage != "flip_points":
         return
-    again = subprocess.run(study, cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    again = command(tmp_path, "pipeline.study", *study)
     assert again.returncode == 0, again.stderr
     assert {p.name: p.read_bytes() for p in (out / "figures").iterdir()} == figures
 
@@ -124,21 +129,19 @@ def test_figures_only_refuses_a_damaged_job_and_keeps_the_old_figures(tmp_path, 
 def test_a_summary_only_job_writes_no_points_and_is_reused(tmp_path):
     """output.points=false: the summary only (the same counts), recorded as such, so a rerun
     reuses it instead of recomputing; output.cables needs the points table."""
-    run = ["robot=irpm6", "robot.search.step=1", "hydra.run.dir=job"]
-    assert start(tmp_path, *run, "hydra.run.dir=full").wait(timeout=300) == 0
-    assert start(tmp_path, *run, "output.points=false").wait(timeout=300) == 0
+    args = ["robot=irpm6", "robot.search.step=1", "hydra.run.dir=job"]
+    assert run(tmp_path, *args, "hydra.run.dir=full").returncode == 0
+    assert run(tmp_path, *args, "output.points=false").returncode == 0
     job = tmp_path / "job"
     assert not (job / "points.parquet").exists() and (job / "summary.parquet").exists()
     full = pd.read_parquet(tmp_path / "full" / "summary.parquet").iloc[0]
     lean = pd.read_parquet(job / "summary.parquet").iloc[0]
     assert (lean["n_feasible"], lean["n_points"]) == (full["n_feasible"], full["n_points"])
     assert read_metadata(job / "summary.parquet")["cdpr.digests"] == "{}"
-    again = start(tmp_path, *run, "output.points=false")
-    assert again.wait(timeout=300) == 0
+    assert run(tmp_path, *args, "output.points=false").returncode == 0
     assert "reused the finished job" in (job / "pipeline.log").read_text()
-    refused = start(tmp_path, "output.points=false", "output.cables=true", "hydra.run.dir=c")
-    _, err = refused.communicate(timeout=300)
-    assert refused.returncode == 2 and err.strip().splitlines() == [
+    refused = run(tmp_path, "output.points=false", "output.cables=true", "hydra.run.dir=c")
+    assert refused.returncode == 2 and refused.stderr.strip().splitlines() == [
         "error: output.cables=true: the cables go into points.parquet, which output.points=false "
         "does not write"]
     assert not (tmp_path / "c").exists()
