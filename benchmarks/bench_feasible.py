@@ -11,7 +11,9 @@ platform). For each: poses/s of the tension margins (each criterion's least over
 acceleration vertices) by hyperplane shifting with its LP fallback (second call, so neither
 numba's cached search nor scipy's import is counted), of the LPs alone (on every 10th pose:
 they are slow), their ratio, and the share of poses the fast path sent to the LP; then poses/s
-of the whole kernel (every criterion, chunks of 4 096 poses) under that model.
+of the whole kernel (every criterion, chunks of 4 096 poses) under that model, the share of the
+kernel's time in the compiled crossing search (a profile of one pass) and the kernel's poses/s
+without it (``rest/s``: the ceiling a free search would leave, set by the numpy around it).
 """
 
 from __future__ import annotations
@@ -21,6 +23,8 @@ import os
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")  # honest per-core figures: set before numpy is imported
 
+import cProfile  # noqa: E402
+import pstats  # noqa: E402
 import time  # noqa: E402
 
 import numpy as np  # noqa: E402
@@ -91,15 +95,31 @@ def kernel_rate(problem, grid) -> float:
     return grid.n_points / (time.perf_counter() - start)
 
 
+def search_share(problem, grid) -> float:
+    """The share of the whole kernel's time spent in the compiled crossing search
+    (``crossings.least_margins``), from a profile of one pass: what bounds the kernel when the
+    search is fast, 1 / (1 - share) the most that a free search would gain."""
+    profile = cProfile.Profile()
+    size = bounded_chunk_size(problem, 20_000)
+    profile.enable()
+    for begin in range(0, grid.n_points, size):
+        evaluate_chunk(problem, grid[:][begin:begin + size])
+    profile.disable()
+    stats = pstats.Stats(profile).stats
+    total = sum(row[2] for row in stats.values())  # every function's own time
+    return sum(row[2] for key, row in stats.items() if key[2] == "least_margins") / total
+
+
 def main() -> None:
     register()
     print(f"{'case':45s} {'poses':>6s} {'shifting/s':>11s} {'LP/s':>7s} {'ratio':>6s} "
-          f"{'to LP':>6s} {'kernel/s':>9s}")
+          f"{'to LP':>6s} {'kernel/s':>9s} {'search':>7s} {'rest/s':>9s}")
     for name, overrides in CASES.items():
         problem, grid = composed(*overrides)
         fast, lp, share = margins_rates(problem, grid)
+        kernel, search = kernel_rate(problem, grid), search_share(problem, grid)
         print(f"{name:45s} {grid.n_points:6d} {fast:11,.0f} {lp:7,.0f} {fast / lp:6.1f} "
-              f"{share:6.1%} {kernel_rate(problem, grid):9,.0f}")
+              f"{share:6.1%} {kernel:9,.0f} {search:7.1%} {kernel / (1 - search):9,.0f}")
 
 
 if __name__ == "__main__":
