@@ -21,26 +21,6 @@ from pipeline.app.plan import Composition, parse, structural
 from pipeline.app.resources import CONF_DIR
 
 register()
-BUILDS = pytest.StashKey[list]()  # the processes building numba's loops for this test run
-
-
-def pytest_configure(config):
-    """numba builds its loops once per machine (``pipeline.model.jit``, tens of seconds in a fresh
-    clone): the process that starts the test run (xdist's controller) starts that build at
-    once, each loops module in a process of its own, before its workers need them; a worker that
-    needs a module still being built waits on the build's lock and loads what it writes."""
-    if hasattr(config, "workerinput"):
-        return
-    from pipeline.model.jit import COMPILE_S, compile_seconds
-
-    config.stash[BUILDS] = [subprocess.Popen(
-        [sys.executable, "-c", f"from pipeline.model.jit import compiled_loops; compiled_loops({name!r})"],
-        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL) for name in COMPILE_S if compile_seconds(name)]
-
-
-def pytest_unconfigure(config):
-    for build in config.stash.get(BUILDS, []):
-        build.wait()
 
 
 @pytest.fixture(scope="session")
