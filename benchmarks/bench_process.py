@@ -36,17 +36,20 @@ HERE = Path(__file__).resolve().parent
 
 def timed(argv: list[str], cwd: Path) -> tuple[float, float, float]:
     """(wall s, CPU s of the process and its children, peak MiB of the process tree) of one
-    command that must succeed."""
-    start = time.perf_counter()
-    proc = subprocess.Popen(argv, cwd=cwd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
-    peak = [0.0]
-    sampler = threading.Thread(target=_sample_tree, args=(proc.pid, peak), daemon=True)
-    sampler.start()
-    _, status, usage = os.wait4(proc.pid, 0)
-    wall = time.perf_counter() - start
-    sampler.join()
-    if os.waitstatus_to_exitcode(status) != 0:
-        raise SystemExit(f"{' '.join(argv)} failed: {proc.stderr.read().decode()[-2000:]}")
+    command that must succeed. Its stderr goes to a file: a pipe nobody reads while waiting
+    fills at 64 KiB and stops a talkative command (``study --all``) for good."""
+    with tempfile.TemporaryFile() as errors:
+        start = time.perf_counter()
+        proc = subprocess.Popen(argv, cwd=cwd, stdout=subprocess.DEVNULL, stderr=errors)
+        peak = [0.0]
+        sampler = threading.Thread(target=_sample_tree, args=(proc.pid, peak), daemon=True)
+        sampler.start()
+        _, status, usage = os.wait4(proc.pid, 0)
+        wall = time.perf_counter() - start
+        sampler.join()
+        if os.waitstatus_to_exitcode(status) != 0:
+            errors.seek(0)
+            raise SystemExit(f"{' '.join(argv)} failed: {errors.read().decode()[-2000:]}")
     return wall, usage.ru_utime + usage.ru_stime, peak[0]
 
 
