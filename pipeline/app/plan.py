@@ -208,7 +208,9 @@ def _files_digest(files: tuple[str, ...]) -> str | None:
     ``file://`` folder of a ``hydra.searchpath`` override (Hydra's own files are its package's);
     None when one cannot be read (not kept: Hydra reports it, or reads it next time)."""
     folders = [CONF_DIR]
-    for override in parse([f for f in files if f.startswith("hydra.searchpath=")]):
+    for override in parse(list(files)):
+        if override.key_or_group != "hydra.searchpath" or override.is_delete():
+            continue
         value = override.value()
         entries = value if isinstance(value, list) else [value]
         folders += [Path(str(e)[len("file://"):]).absolute() for e in entries if str(e).startswith("file://")]
