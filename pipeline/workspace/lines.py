@@ -57,10 +57,10 @@ def simulate_lines(cfg: DictConfig, problem: WorkspaceProblem, grid: Grid,
     v_max, t_acc, t_dec = cfg.motion.v_max, cfg.motion.t_acc, cfg.motion.t_dec
     profiles = [trapezoid(float(np.linalg.norm(end - start)), v_max, t_acc, t_dec, DT) for _, start, end in lines]
     counts = [len(profile.t) for profile in profiles]
-    start = np.repeat([start for _, start, _ in lines], counts, axis=0)
-    direction = np.repeat([(end - start) / np.linalg.norm(end - start) for _, start, end in lines], counts, axis=0)
+    origins = np.repeat([start for _, start, _ in lines], counts, axis=0)  # each sample's line: start, direction
+    directions = np.repeat([(end - start) / np.linalg.norm(end - start) for _, start, end in lines], counts, axis=0)
     s, v, a = (np.concatenate([getattr(profile, name) for profile in profiles]) for name in "sva")
-    position, velocity, acceleration = start + s[:, None] * direction, v[:, None] * direction, a[:, None] * direction
+    position, velocity, acceleration = origins + s[:, None] * directions, v[:, None] * directions, a[:, None] * directions
     act = problem.limits
     quantities = inverse_dynamics(problem.robot, position, velocity, acceleration, problem.orientation,
                                   problem.spec, act)
