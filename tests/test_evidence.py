@@ -17,7 +17,8 @@ from pipeline.analyses.evidence import FACTS, MARGIN, POINTS, evidence, scores, 
 from pipeline.app.readings import reading_name
 from pipeline.workspace.lines import simulate_lines
 from pipeline.study import checked_commands, load_study, sweep_command
-from pipeline.app.problem import build_problem, compute_workspace
+from pipeline.app.problem import build_problem, fused_pays
+from pipeline.workspace.compute import grid_workspace
 
 
 def study_summary(name, make_cfg, catalogue, readings=None) -> pd.DataFrame:
@@ -33,14 +34,18 @@ def study_summary(name, make_cfg, catalogue, readings=None) -> pd.DataFrame:
         swept += [(key, "1,2,3,4,5" if values == "catalogue" else values) for key, values in spec.sweep.items()]
         base = make_cfg(*spec.overrides, *fixed)
         keys = [key for key, _ in swept]
+        jobs = []
         for setting in itertools.product(*(v.split(",") for _, v in swept)):
             cfg = copy.deepcopy(base)
             for key, value in zip(keys, setting):
                 OmegaConf.update(cfg, key, float(value) if "." in value or key.startswith("robot.") else int(value))
+            jobs.append((cfg, *build_problem(cfg, catalogue)))
+        pays = fused_pays((cfg, problem) for cfg, problem, _ in jobs)  # the case's sweep, as its plan decides
+        for cfg, problem, grid in jobs:
             if cfg.analysis == "lines":
-                summary = simulate_lines(cfg, *build_problem(cfg, catalogue))[2]
+                summary = simulate_lines(cfg, problem, grid, pays)[2]
             else:
-                summary = compute_workspace(cfg, catalogue)[1]
+                summary = grid_workspace(cfg, problem, grid, sweep_pays=pays)[1]
             rows.append({"case": case, **summary})
     return pd.DataFrame(rows)
 
