@@ -95,10 +95,10 @@ def kernel_rate(problem, grid) -> float:
     return grid.n_points / (time.perf_counter() - start)
 
 
-def search_share(problem, grid) -> float:
-    """The share of the whole kernel's time spent in the compiled crossing search
-    (``crossings.least_margins``), from a profile of one pass: what bounds the kernel when the
-    search is fast, 1 / (1 - share) the most that a free search would gain."""
+def profiled_share(problem, grid, names: tuple[str, ...]) -> float:
+    """The share of the whole kernel's time spent in the functions ``names`` (their own time,
+    e.g. a compiled loop), from a profile of one pass over the grid in chunks: what bounds the
+    kernel when they are fast, 1 / (1 - share) the most that making them free would gain."""
     profile = cProfile.Profile()
     size = bounded_chunk_size(problem, 20_000)
     profile.enable()
@@ -107,7 +107,7 @@ def search_share(problem, grid) -> float:
     profile.disable()
     stats = pstats.Stats(profile).stats
     total = sum(row[2] for row in stats.values())  # every function's own time
-    return sum(row[2] for key, row in stats.items() if key[2] == "least_margins") / total
+    return sum(row[2] for key, row in stats.items() if key[2] in names) / total
 
 
 def main() -> None:
@@ -117,7 +117,7 @@ def main() -> None:
     for name, overrides in CASES.items():
         problem, grid = composed(*overrides)
         fast, lp, share = margins_rates(problem, grid)
-        kernel, search = kernel_rate(problem, grid), search_share(problem, grid)
+        kernel, search = kernel_rate(problem, grid), profiled_share(problem, grid, ("least_margins",))
         print(f"{name:45s} {grid.n_points:6d} {fast:11,.0f} {lp:7,.0f} {fast / lp:6.1f} "
               f"{share:6.1%} {kernel:9,.0f} {search:7.1%} {kernel / (1 - search):9,.0f}")
 

@@ -10,8 +10,10 @@ orientation, where every J^T is one rank short (numpy: an SVD per pose; the fuse
 deflated route). "fused": the compiled kernel of ``pipeline.workspace.fused``, compiled
 before timing. IRPM: statics on the paper's box
 (31 x 31 x 26 points), gamma = 15 deg. "1 core" rows run with one BLAS thread. Ratios are against
-the reference's poses/s measured here, in the same process. Peak memory is this process's
-maximum resident set size (workers not included).
+the reference's poses/s measured here, in the same process. After the table, for each fused
+row, the share of its time in the compiled loop (a profile of one pass) and the kernel's rate
+without it: what bounds it. Peak memory is this process's maximum resident set size (workers
+not included).
 """
 
 from __future__ import annotations
@@ -37,6 +39,7 @@ from pipeline.app.resources import CONF_DIR  # noqa: E402
 from pipeline.workspace.reference import literal_margins  # noqa: E402
 from pipeline.workspace.compute import bounded_chunk_size  # noqa: E402
 from pipeline.app.problem import build_problem  # noqa: E402
+from bench_feasible import profiled_share  # noqa: E402
 
 
 def problem_for(n: int, *extra: str, angle: float = 0.5):
@@ -74,6 +77,7 @@ def main() -> None:
     args = parser.parse_args()
     register()
     rows = []
+    loops = []  # the fused rows, with what their compiled loop is called
 
     problem, grid = problem_for(6)
     seconds = timed(lambda: literal_margins(problem.robot, grid[:], problem.orientation,
@@ -90,6 +94,7 @@ def main() -> None:
             rows.append((f"CPR-WWA kernel 40^3{label}, 1 core", grid.n_points, serial_rate(problem, grid)))
         fused = dataclasses.replace(problem, fused=True)
         rows.append((f"CPR-WWA fused 40^3{label}, 1 core", grid.n_points, serial_rate(fused, grid)))
+        loops.append((rows[-1], fused, grid, "cpr_wwa"))
     for n in (6, 20):  # cables only pull: 8 acceleration vertices x 3 nested LPs per pose
         problem, grid = problem_for(n, "tension.model=feasible")
         rows.append((f"CPR-WWA feasible tensions {n}^3, 1 core", grid.n_points, serial_rate(problem, grid)))
@@ -97,6 +102,7 @@ def main() -> None:
     rows.append(("IRPM statics 31x31x26, 1 core", grid.n_points, serial_rate(problem, grid)))
     fused = dataclasses.replace(problem, fused=True)
     rows.append(("IRPM statics fused 31x31x26, 1 core", grid.n_points, serial_rate(fused, grid)))
+    loops.append((rows[-1], fused, grid, "statics"))
     problem, grid = composed("robot=irpm6", "robot.gamma_deg=15", "tension.model=feasible")
     rows.append(("IRPM feasible tensions, 1 core", grid.n_points, serial_rate(problem, grid)))
     for i, n in enumerate((40, 100) if args.full else (40,)):
@@ -115,6 +121,9 @@ def main() -> None:
     for name, poses, secs in rows:
         rate = poses / secs
         print(f"{name:46s} {poses:9d} {secs:9.3f} {rate:11,.0f} {rate / reference:12,.0f}")
+    for (name, poses, secs), problem, grid, loop in loops:  # what bounds a fused kernel (a profile)
+        share = profiled_share(problem, grid, (loop,))
+        print(f"{name}: the compiled loop {share:.0%} of the time, the rest alone {poses / secs / (1 - share):,.0f} poses/s")
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(f"peak resident memory of this process: {peak:.0f} MiB")
 
