@@ -72,10 +72,11 @@ def test_a_local_dask_cluster_is_capped_at_the_cores_like_loky(make_cfg, catalog
     assert any("capped at the" in r.getMessage() for r in caplog.records) == (os.cpu_count() < 8)
 
 
-def test_a_sweep_starts_one_cluster_and_only_for_jobs_of_several_chunks(tmp_path):
+def test_a_sweep_starts_one_cluster_and_only_for_jobs_of_several_chunks(tmp_path, make_cfg, catalogue):
     """Five jobs each split into chunks share one local cluster (a cluster per job cost 1.8 s
     each); five that fit in one chunk each (a chunk on Dask is at least 0.2 s of kernel by the
-    cost model: 27 000 fused poses) start none. The tables are those of loky."""
+    cost model: 27 000 fused poses) start none. The tables are those of the same jobs computed
+    here, in one process."""
     def sweep(name, *overrides):
         done = subprocess.run([sys.executable, "-m", "pipeline", "-m", "actuator=1,2,3,4,5", "grid.n=30",
                                f"hydra.sweep.dir={tmp_path / name}", *overrides],
@@ -89,10 +90,11 @@ def test_a_sweep_starts_one_cluster_and_only_for_jobs_of_several_chunks(tmp_path
     assert len(clusters) == 5 and len(set(clusters)) == 1, log
     log, small = sweep("small", "compute.backend=dask")
     assert "Dask cluster" not in log
-    _, loky = sweep("loky", *numpy)
+    here = pd.DataFrame([compute_workspace(make_cfg(f"actuator={a}", "grid.n=30"), catalogue)[1]
+                         for a in range(1, 6)])
     columns = ["actuator", "n_points", "n_feasible", "feasible_pct"]
-    pd.testing.assert_frame_equal(shared[columns], loky[columns])
-    pd.testing.assert_frame_equal(small[columns], loky[columns])
+    pd.testing.assert_frame_equal(shared[columns], here[columns])
+    pd.testing.assert_frame_equal(small[columns], here[columns])
 
 
 def test_a_dask_chunk_holds_at_least_a_fifth_of_a_second_of_kernel(make_cfg, catalogue):
