@@ -11,15 +11,13 @@ away). Margins are compared within MARGIN_RTOL relative plus MARGIN_ATOL, verdic
 that band around zero."""
 
 import dataclasses
-import subprocess
-import sys
 
 import numpy as np
 import pandas as pd
 import pyarrow.parquet as pq
 import pytest
 
-from conftest import job_imports
+from conftest import command, job_imports
 from pipeline.workspace import fused
 from pipeline.workspace.compute import fused_unfit, use_fused
 from pipeline.app.problem import build_problem, compute_workspace, fused_pays
@@ -197,9 +195,7 @@ def test_a_sweep_loads_the_compiled_kernel_that_one_small_job_does_not(tmp_path)
     """End to end: one IRPM job runs the numpy kernel, a sweep of four the compiled one (the
     summary's ``kernel`` says which), with the same counts."""
     def summaries(folder, *args):
-        done = subprocess.run([sys.executable, "-m", "pipeline", *args, f"hydra.sweep.dir={tmp_path}/sweep",
-                               f"hydra.run.dir={tmp_path}/run"], cwd=tmp_path, capture_output=True, text=True,
-                              timeout=300)
+        done = command(tmp_path, "pipeline", *args, f"hydra.sweep.dir={tmp_path}/sweep", f"hydra.run.dir={tmp_path}/run")
         assert done.returncode == 0, done.stderr
         return [pd.read_parquet(path).iloc[0] for path in sorted((tmp_path / folder).glob("*/summary.parquet"))]
 
