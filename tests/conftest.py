@@ -113,7 +113,7 @@ def job_at_exit(cwd, *args: str, report: str, status: int = 0) -> str:
 def shaft_torque(dyn) -> np.ndarray:
     """(n, m, k_a) the load torques M = (J^T)^+ F of eq. (20) at every acceleration of the set,
     enumerated (the reference of ``PoseDynamics.torque_affine``'s ranges)."""
-    wrenches = load_wrenches(dyn.motion, dyn.motion.accelerations, dyn.robot.up, dyn.rotation)
+    wrenches = load_wrenches(dyn.motion, dyn.motion.accelerations, dyn.robot.up, dyn.orientation)
     pinv = dyn.wrench_pinv[0]
     return np.einsum("nmc,ac->nma", pinv, wrenches[:, :pinv.shape[2]])
 
@@ -125,7 +125,7 @@ def shaft_accel_from_acceleration(dyn) -> np.ndarray:
 
 def wrenches(dyn) -> np.ndarray:
     """(k_a, 6) F of eq. (31) at every acceleration of the set."""
-    return load_wrenches(dyn.motion, dyn.motion.accelerations, dyn.robot.up, dyn.rotation)
+    return load_wrenches(dyn.motion, dyn.motion.accelerations, dyn.robot.up, dyn.orientation)
 
 
 # An 8-cable frame of IPAnema 1's size with a platform 0.2 x 0.2 x 0.1 m (attachments apart in

@@ -70,9 +70,9 @@ def test_line_simulation_job_writes_samples(tmp_path):
     assert {"line", "t", "x", "y", "z", "theta_dot_8", "torque_1", "voltage_5", "margin_torque",
             "ok"} <= set(samples.columns)
     summary = pd.read_parquet(job / "summary.parquet").iloc[0]
-    assert [summary["n_feasible"], summary["n_feasible_grid"]] == [values("lines_full_paper_zero", key)[1]
+    assert [summary["n_feasible"], summary["n_feasible_grid"]] == [values("lines_full_zero", key)[1]
                                                                    for key in ("n_feasible", "n_feasible_grid")]
-    assert f"agreement {values('lines_full_paper_zero', 'agreement_pct')[1]:.1f}%" in (job / "pipeline.log").read_text()
+    assert f"agreement {values('lines_full_zero', 'agreement_pct')[1]:.1f}%" in (job / "pipeline.log").read_text()
     assert samples["line"].unique().tolist() == [0]  # lines.samples=first: line O''-F'' (Fig. 6)
     assert summary["n_lines"] == 72 and summary["lines.samples"] == "first"
     every = run(tmp_path, "analysis=lines", "actuator=2", "lines.samples=all", "hydra.run.dir=all")

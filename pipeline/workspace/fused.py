@@ -45,7 +45,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipeline.model.dynamics import acceleration_box, inertia_sign, load_wrench_terms
+from pipeline.model.dynamics import acceleration_box, generalized_load_terms, load_wrench_terms
 from pipeline.model.geometry import euler_rate_axes, rotation_matrix
 from pipeline.model.jit import compiled_loops
 from pipeline.workspace.criteria.geometry import zero_length_margin
@@ -66,7 +66,7 @@ def margins(problem, positions: np.ndarray, orientation) -> tuple[dict[str, np.n
 def _statics_margins(problem, positions: np.ndarray, orientation):
     spec, lim, robot = problem.spec, problem.limits, problem.robot
     rotation = rotation_matrix(*orientation)
-    wrench = load_wrench_terms(spec.load, 0.0, robot.up, rotation)[1]
+    wrench = load_wrench_terms(spec.load, robot.up, rotation)[1]
     m = robot.n_cables
     n = len(positions)
     out = np.empty((n, len(STATICS_CRITERIA)))
@@ -87,7 +87,7 @@ def _cpr_wwa_margins(problem, positions: np.ndarray, orientation):
     spec, act, robot = problem.spec, problem.limits, problem.robot
     rotation = rotation_matrix(*orientation)
     rows = 3 if spec.pinv_columns == "translational" else 6
-    slope, at_rest = load_wrench_terms(spec.load, inertia_sign(spec), robot.up, rotation)
+    slope, at_rest = generalized_load_terms(spec.load, robot.up, orientation)
     loads = np.ascontiguousarray(np.column_stack([slope[:rows], at_rest[:rows]]))
     centre, half = acceleration_box(spec.accelerations)
     m = robot.n_cables

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from pipeline.model.actuators import ActuatorModel
-from pipeline.model.dynamics import MotionSpec, load_wrenches
+from pipeline.model.dynamics import MotionSpec, load_wrench_terms
 from pipeline.model.geometry import CableRobot, rotation_matrix, rotation_partials
 
 
@@ -41,7 +41,12 @@ def literal_margins(
         pinv = np.linalg.pinv(jac[:, :columns].T, rtol=motion.rank_rtol)
         per_acceleration = []
         for a in motion.accelerations:
-            wrench = load_wrenches(motion, a[None, :], robot.up, rot)[0]  # eq. (31)
+            wrench = load_wrench_terms(motion.load, robot.up, rot)  # eq. (31): w = L a + F_0
+            wrench = wrench[0] @ a + wrench[1]
+            # the generalized force of Euler angle q: the moment along the angular velocity
+            # per unit rate of q, the axial vector of dR/dq R^T (virtual work)
+            rates = [d_rot[q] @ rot.T for q in range(3)]
+            wrench[3:] = [wrench[3:] @ np.array([r[2, 1], r[0, 2], r[1, 0]]) for r in rates]
             per_acceleration.append((pinv @ wrench[:columns], jac[:, :3] @ a))  # eq. (20), J a
         worst = [0.0, 0.0, 0.0, 0.0]
         for v in motion.velocities:

@@ -64,8 +64,9 @@ def inverse_dynamics(
 ) -> dict[str, np.ndarray]:
     """Per-sample actuator quantities (n, m) for poses (n, 3) with their own velocity and
     acceleration (constant orientation): shaft speed theta_dot = J p_dot (eq. 19), shaft
-    acceleration J p_ddot (+ J-dot p_dot when ``motion.jdot``), load torque M = (J^T)^+ F with
-    F = m (p_ddot - g e_z) (eqs. 20, 31), voltage u = G_v theta_ddot + L_v theta_dot - S_v M (eq. 21). Also the wrench residual
+    acceleration J p_ddot (+ J-dot p_dot when ``motion.jdot``), load torque M = (J^T)^+ w with
+    w = m g (-up) - m p_ddot the weight and inertial force the cables balance (eqs. 20, 31 read
+    by Newton's law, :func:`pipeline.model.dynamics.load_wrench_terms`), voltage u = G_v theta_ddot + L_v theta_dot - S_v M (eq. 21). Also the wrench residual
     |J^T M - F| and both sides of the power balance, sum_i M_i theta_dot_i and F . p_dot (n,).
     Under ``tension.model=feasible`` M is the LP's choice (``pipeline.model.tensions``) for each
     sample's own wrench, speed and acceleration, and ``margins`` holds that model's margins;
@@ -79,7 +80,7 @@ def inverse_dynamics(
         along = np.einsum("nmj,nj->nm", state.unit, velocities)
         speed2 = np.einsum("nj,nj->n", velocities, velocities)[:, None]
         theta_ddot = theta_ddot + centripetal(speed2, along, state.lengths, motion.winch_radius)
-    wrench = load_wrenches(motion, accelerations, robot.up, state.rotation)[:, : state.structure.shape[1]]
+    wrench = load_wrenches(motion, accelerations, robot.up, orientation)[:, : state.structure.shape[1]]
     pinv = remembered_pinv(state.structure, motion.rank_rtol)  # the same for every actuator
     margins = {}
     if motion.tension.model == "feasible":
