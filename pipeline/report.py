@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import shutil
+import secrets
 import sys
 from pathlib import Path
 from urllib.parse import quote
@@ -41,15 +42,67 @@ def build(studies_dir: Path = OUTPUT_DIR, out: Path = REPORT_DIR, config_dir: Pa
     if missing:
         raise FileNotFoundError(f"no results for stud{'y' if len(missing) == 1 else 'ies'} "
                                 f"{', '.join(missing)} in {studies_dir}")
-    tmp = out.with_name(f".{out.name}.tmp")
-    shutil.rmtree(tmp, ignore_errors=True)
+    _check_destination(out, studies_dir)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = _new_folder(out.parent, f".{out.name}.")
     try:
         _write(studies_dir, tmp, config_dir)
-        shutil.rmtree(out, ignore_errors=True)
-        tmp.rename(out)
+        _mark(tmp)
+        if out.exists():  # a report this command wrote (checked above): swapped, then removed
+            old = _new_folder(out.parent, f".{out.name}.old.")
+            out.rename(old / out.name)
+            tmp.rename(out)
+            shutil.rmtree(old)
+        else:
+            tmp.rename(out)
     finally:  # a failed report (a full disk, a changed result) leaves no half-written folder
         shutil.rmtree(tmp, ignore_errors=True)
     return out / "index.md"
+
+
+MARKER = ".cdpr-report"  # in every report folder: the files it holds, one relative path a line
+
+
+def _check_destination(out: Path, studies_dir: Path) -> None:
+    """ConfigError unless ``out`` is new, an empty folder, or a report this command wrote that
+    holds only the files its marker lists: the report never deletes what it did not write (a
+    user's folder, or the study results it reads)."""
+    inside = [a for a, b in ((out, studies_dir), (studies_dir, out)) if a.resolve().is_relative_to(b.resolve())]
+    if inside:
+        raise ConfigError(f"--out={out}: overlaps --studies={studies_dir}; write the report to a folder of its own")
+    if not out.exists() and not out.is_symlink():
+        return
+    if out.is_symlink() or not out.is_dir():
+        raise ConfigError(f"--out={out}: not a folder; name a new folder or a report folder")
+    if out.is_dir() and not any(out.iterdir()):
+        out.rmdir()  # empty: nothing of anyone's is lost
+        return
+    marker = out / MARKER
+    if not marker.is_file():
+        raise ConfigError(f"--out={out}: holds files this command did not write (no {MARKER}); "
+                          "name a new or empty folder, or a report folder")
+    listed = set(marker.read_text(encoding="utf-8", errors="replace").splitlines()) | {MARKER}
+    for path in sorted(out.rglob("*")):
+        if path.is_symlink() or (path.is_file() and path.relative_to(out).as_posix() not in listed):
+            raise ConfigError(f"--out={out}: {path.relative_to(out)} is not a file of the report; "
+                              "move it out, or name another folder")
+
+
+def _new_folder(parent: Path, prefix: str) -> Path:
+    """A folder this call creates (never one that existed), with the umask's permissions."""
+    while True:
+        folder = parent / f"{prefix}{secrets.token_hex(4)}"
+        try:
+            folder.mkdir()
+            return folder
+        except FileExistsError:
+            continue
+
+
+def _mark(folder: Path) -> None:
+    """The marker of a report folder: every file the report wrote, one relative path a line."""
+    files = sorted(p.relative_to(folder).as_posix() for p in folder.rglob("*") if p.is_file())
+    (folder / MARKER).write_text("".join(f"{name}\n" for name in files), encoding="utf-8")
 
 
 def _answer(directory: Path) -> list[str]:

@@ -125,8 +125,13 @@ class StudySpec:
         return self.optimise is not None or self.search is not None
 
 
+STUDY_NAME = re.compile(r"[A-Za-z0-9][\w-]*")  # a study's name is its folder's name under --out
+
+
 def available(directory: Path = STUDIES_DIR) -> list[str]:
-    return sorted(path.stem for path in directory.glob("*.yaml"))
+    """The studies of ``directory``: its ``NAME.yaml`` files whose NAME is letters, digits, ``_``
+    and ``-`` (a name like ``..`` would name another folder)."""
+    return sorted(path.stem for path in directory.glob("*.yaml") if STUDY_NAME.fullmatch(path.stem))
 
 
 def studies_folder(config_dir: Path | str | None) -> Path:
@@ -144,12 +149,13 @@ def load_study(name: str, directory: Path | None = None, config_dir: Path | str 
     """Read and check ``studies/NAME.yaml`` of ``directory``, by default the package's or, given
     a user's ``config_dir``, that folder's ``studies/``; unknown keys, analyses or figure kinds
     fail here."""
-    from pipeline.analyses.figures import KINDS
+    from pipeline.analyses.figures import KINDS, file_error, template_error
 
     directory = directory or studies_folder(config_dir)
     path = directory / f"{name}.yaml"
     if name not in available(directory):  # a declared name, never a path to another file
-        raise ConfigError(f"study {name!r} not found (available: {', '.join(available(directory))})")
+        rule = "" if STUDY_NAME.fullmatch(name) else "; a study's name is letters, digits, _ and -"
+        raise ConfigError(f"study {name!r} not found (available: {', '.join(available(directory))}){rule}")
     try:
         refuse_aliases(path.read_text(encoding="utf-8"), str(path))
         spec = OmegaConf.merge(OmegaConf.structured(StudySpec), OmegaConf.load(path))
@@ -193,6 +199,10 @@ def load_study(name: str, directory: Path | None = None, config_dir: Path | str 
     for figure in study.figures:
         if figure.kind not in KINDS:
             raise ConfigError(f"{path}: figures: unknown kind {figure.kind!r} (known: {', '.join(KINDS)})")
+        for key, problem in (("file", file_error(figure.file)), ("title", template_error(figure.title or "")),
+                             ("caption", template_error(figure.caption or ""))):
+            if problem:
+                raise ConfigError(f"{path}: figures: {key}={getattr(figure, key)!r}: {problem}")
         for key in ("x", "y", "value"):
             problem = getattr(figure, key) and expression_error(getattr(figure, key))
             if problem:

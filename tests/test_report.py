@@ -281,3 +281,47 @@ def test_the_report_refuses_an_edited_result_and_a_full_disk_leaves_no_folder(st
     assert raised.value.code == 2 and err == [
         f"error: cannot write the report ({tmp_path / '.report.tmp' / 'index.html'}: No space left on device)"]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["studies"]
+
+
+def test_the_report_never_deletes_what_it_did_not_write(studies, tmp_path, monkeypatch, capsys):
+    """--out is a new folder, an empty one, or a report folder this command wrote (its marker
+    lists its files): a folder of the user's, a report folder the user added a file to, the
+    study results themselves and a plain file are each one line and exit 2, every byte kept.
+    A report folder is replaced whole on a rerun."""
+    monkeypatch.setattr(pipeline.report, "available", lambda folder: STUDIES)
+
+    def report(out):
+        with pytest.raises(SystemExit) as raised:
+            pipeline.report.main(["--studies", str(studies), "--out", str(out)])
+        return raised.value.code, capsys.readouterr().err.strip().splitlines()
+
+    thesis = tmp_path / "thesis"
+    (thesis / "chapter").mkdir(parents=True)
+    (thesis / "chapter" / "notes.md").write_text("three years of work")
+    assert report(thesis) == (2, [f"error: --out={thesis}: holds files this command did not write (no .cdpr-report); "
+                                  "name a new or empty folder, or a report folder"])
+    assert (thesis / "chapter" / "notes.md").read_text() == "three years of work"
+    before = sorted(p.relative_to(studies) for p in studies.rglob("*"))
+    for out in (studies, studies / "actuator_choice", tmp_path):  # the results, inside them, around them
+        code, err = report(out)
+        assert code == 2 and len(err) == 1 and "overlaps --studies" in err[0], out
+    assert sorted(p.relative_to(studies) for p in studies.rglob("*")) == before
+    plain = tmp_path / "report.txt"
+    plain.write_text("mine")
+    assert report(plain) == (2, [f"error: --out={plain}: not a folder; name a new folder or a report folder"])
+    assert plain.read_text() == "mine"
+
+    out = tmp_path / "report"
+    out.mkdir()  # empty: taken
+    pipeline.report.main(["--studies", str(studies), "--out", str(out)])
+    listed = (out / ".cdpr-report").read_text().splitlines()
+    assert "index.md" in listed and "figures/actuator_choice/fig9.png" in listed
+    (out / "figures" / "actuator_choice" / "fig9.png").unlink()  # a file of its own may go missing
+    pipeline.report.main(["--studies", str(studies), "--out", str(out)])  # rerun: replaced whole
+    assert (out / "figures" / "actuator_choice" / "fig9.png").is_file()
+    (out / "my_notes.md").write_text("mine")
+    code, err = report(out)
+    assert code == 2 and err == [f"error: --out={out}: my_notes.md is not a file of the report; move it out, "
+                                 "or name another folder"]
+    assert (out / "my_notes.md").read_text() == "mine"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["report", "report.txt", "studies", "thesis"]

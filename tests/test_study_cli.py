@@ -3,6 +3,7 @@
 import re
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -361,3 +362,51 @@ def test_a_bad_params_file_is_one_line_and_nothing_runs(tmp_path, text, message)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["params.yaml"]
     missing = study(tmp_path, "design_mass", "--params", "nosuch.yaml")
     assert missing.returncode == 2 and missing.stderr.strip() == "error: --params nosuch.yaml: No such file or directory"
+
+
+@pytest.mark.parametrize("file, why", [
+    ("../../x.png", "a file name ending in .png"), ("/tmp/x.png", "a file name ending in .png"),
+    ("sub/x.png", "a file name ending in .png"), ("fig.svg", "a file name ending in .png"),
+    (".hidden.png", "a file name ending in .png"),
+    ("{load_mass.__class__}.png", "fields are {column} or {column:format}"),
+    ("{load_mass[0]}.png", "fields are {column} or {column:format}"),
+])
+def test_a_figure_file_is_a_png_name_in_the_figures_folder(tmp_path, file, why):
+    """A figure's ``file`` wrote outside the study folder (``..``, absolute paths) and was a
+    ``str.format`` template with attribute access: each is refused when the study is read,
+    before any job runs."""
+    (tmp_path / "mine.yaml").write_text(
+        f"title: t\nsource: s\nsweep: {{load.mass: '1,2'}}\nfigures:\n  - {{kind: curve, file: '{file}', "
+        "x: load.mass, y: volume_m3}\n")
+    with pytest.raises(ConfigError, match=rf"mine.yaml: figures: file='{re.escape(file)}': {re.escape(why)}"):
+        load_study("mine", tmp_path)
+    (tmp_path / "mine.yaml").write_text(
+        "title: t\nsource: s\nsweep: {load.mass: '1,2'}\nfigures:\n  - {kind: curve, file: f.png, x: load.mass, "
+        "y: volume_m3, title: 'mass {load_mass.real}'}\n")
+    with pytest.raises(ConfigError, match=r"figures: title='mass \{load_mass.real\}': fields are"):
+        load_study("mine", tmp_path)
+
+
+def test_figure_fields_are_filled_from_the_row_only():
+    """``{column}`` and ``{column:format}`` from the row; a missing column is a ConfigError
+    naming the columns; a value that would put a separator in the file name is refused."""
+    from matplotlib.figure import Figure
+
+    from pipeline.analyses.figures import FigureSpec, _fill, _save
+
+    row = pd.Series({"load.mass": 2.5, "case_label": "a/b", "volume_m3": 1.2345})
+    assert _fill("m {load_mass:g}, {{literal}}, {volume_m3:.2f}", row) == "m 2.5, {literal}, 1.23"
+    with pytest.raises(ConfigError, match=r"figure field \{load_mas\}: no such column \(there are: load_mass, "):
+        _fill("{load_mas}", row)
+    with pytest.raises(ConfigError, match=r"fills to 'fig_a/b.png', not a file name"):
+        _save(Figure(), FigureSpec(kind="curve", file="fig_{case_label}.png"), Path("/nonexistent"), row)
+
+
+def test_a_study_file_whose_name_is_not_a_plain_name_is_no_study(tmp_path):
+    """``...yaml`` is study ``..``, whose results would land above --out: not a study."""
+    (tmp_path / "...yaml").write_text("title: t\nsource: s\n")
+    (tmp_path / "ok-1.yaml").write_text("title: t\nsource: s\n")
+    from pipeline.study import available
+    assert available(tmp_path) == ["ok-1"]
+    with pytest.raises(ConfigError, match=r"study '\.\.' not found \(available: ok-1\); a study's name is letters"):
+        load_study("..", tmp_path)

@@ -542,8 +542,41 @@ def _select(table: pd.DataFrame, select: dict[str, Any]) -> pd.DataFrame:
     return table[keep]
 
 
+# {{, }}, or a field {name} / {name:spec}
+FIELD = re.compile(r"\{\{|\}\}|\{(\w+)(?::([<>^=]?[+\- ]?#?0?\d*[,_]?(?:\.\d+)?[bcdeEfFgGnosxX%]?))?\}")
+PLAIN_FILE = re.compile(r"[\w+=,()-][\w.+=,() -]*\.png")  # one file name in the figures folder
+
+
+def template_error(text: str) -> str | None:
+    """Why ``text`` is not a figure template, None when it is: its only fields are ``{column}``
+    and ``{column:format}`` (no attribute, index or nested field); ``{{`` and ``}}`` are braces."""
+    rest = FIELD.sub("", text)
+    if "{" in rest or "}" in rest:
+        return "fields are {column} or {column:format} (e.g. {volume_m3:.1f}); write {{ and }} for braces"
+    return None
+
+
+def file_error(template: str) -> str | None:
+    """Why a figure's ``file`` template cannot name a PNG in the figures folder, None when it can."""
+    return template_error(template) or (None if PLAIN_FILE.fullmatch(FIELD.sub("x", template)) else (
+        "a file name ending in .png, with no folder, no leading dot and no '..'"))
+
+
 def _fill(pattern: str, row: pd.Series) -> str:
-    return pattern.format(**{str(k).replace(".", "_"): v for k, v in row.items()})
+    """``pattern`` with each ``{column}`` field replaced by the row's value (dots in a column's
+    name written as ``_``); a name the row lacks is a ConfigError naming the columns there are."""
+    values = {str(k).replace(".", "_"): v for k, v in row.items()}
+
+    def value(field: re.Match) -> str:
+        if field[1] is None:  # {{ or }}
+            return field[0][0]
+        if field[1] not in values:
+            raise ConfigError(f"figure field {{{field[1]}}}: no such column (there are: {', '.join(values)})")
+        try:
+            return format(values[field[1]], field[2] or "")
+        except (TypeError, ValueError) as exc:
+            raise ConfigError(f"figure field {field[0]}: {one_line(exc)} (value {values[field[1]]!r})") from None
+    return FIELD.sub(value, pattern)
 
 
 def _labels(ax, spec: FigureSpec, xlabel: str | None, ylabel: str | None, row=None) -> None:
@@ -570,7 +603,10 @@ def _save(fig, spec: FigureSpec, out_dir: Path, row: pd.Series | None = None) ->
     """Save as ``spec.file`` (its fields filled from ``row``), with the filled caption as the
     PNG's Description (the report prints it under the figure: :func:`caption`)."""
     fill = (lambda text: text) if row is None else (lambda text: _fill(text, row))
-    path = out_dir / fill(spec.file)
+    name = fill(spec.file)
+    if not PLAIN_FILE.fullmatch(name):  # a value from the results may hold a separator
+        raise ConfigError(f"figures: {spec.file}: fills to {name!r}, not a file name in the figures folder")
+    path = out_dir / name
     path.parent.mkdir(parents=True, exist_ok=True)
     meta = {"Software": None}
     if spec.caption:
