@@ -64,9 +64,10 @@ def inverse_dynamics(
 ) -> dict[str, np.ndarray]:
     """Per-sample actuator quantities (n, m) for poses (n, 3) with their own velocity and
     acceleration (constant orientation): shaft speed theta_dot = J p_dot (eq. 19), shaft
-    acceleration J p_ddot (+ J-dot p_dot when ``motion.jdot``), load torque M = (J^T)^+ w with
-    w = m g (-up) - m p_ddot the weight and inertial force the cables balance (eqs. 20, 31 read
-    by Newton's law, :func:`pipeline.model.dynamics.load_wrench_terms`), voltage u = G_v theta_ddot + L_v theta_dot - S_v M (eq. 21). Also the wrench residual
+    acceleration J p_ddot (+ J-dot p_dot when ``motion.jdot``), load torque M = (J^T)^+ F with F
+    the generalized force of w = m g (-up) - m p_ddot, the weight and inertial force the cables
+    balance (eqs. 20, 31 read by Newton's law, :func:`pipeline.model.dynamics.load_wrenches`),
+    voltage u = G_v theta_ddot + L_v theta_dot - S_v M (eq. 21). Also the wrench residual
     |J^T M - F| and both sides of the power balance, sum_i M_i theta_dot_i and F . p_dot (n,).
     Under ``tension.model=feasible`` M is the LP's choice (``pipeline.model.tensions``) for each
     sample's own wrench, speed and acceleration, and ``margins`` holds that model's margins;
