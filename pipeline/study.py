@@ -47,7 +47,7 @@ from pipeline.analyses.optimise import (OptimiseSpec, best_drive, check_catalogu
 from pipeline.app.plan import Job, Plan, Reuse, parse, plan, quoted, refuse_aliases
 from pipeline.app.run import run as run_jobs
 from pipeline.app.resources import STUDIES_DIR
-from pipeline.app.results import code_version, read_verified, write_csv, write_parquet, write_text
+from pipeline.app.results import READ_ERRORS, code_version, read_verified, write_csv, write_parquet, write_text
 from pipeline.analyses.search import SearchSpec, exact_drive, search
 from pipeline.analyses.survival import survival
 
@@ -249,14 +249,21 @@ def study_dir(name: str, extra: list[str], out_root: Path | None = None) -> Path
     return OUTPUT_DIR / f"{name}+{slug}"
 
 
+RECORD_BYTES = 1 << 20  # a study's record is a few lines; a larger file is not one
+
+
 def claim_study_dir(out: Path, name: str, extra: list[str], force: bool) -> str:
     """The provenance record of ``out`` (``study.yaml``: study and extra overrides). A folder
     that holds another configuration's results is refused unless ``force``."""
     record = out / "study.yaml"
     wanted = OmegaConf.to_yaml({"study": name, "extra_overrides": extra})
     if record.exists() and record.read_text(errors="replace") != wanted and not force:
-        try:
-            held = OmegaConf.load(record)
+        try:  # a file read back from an output folder is outside data too
+            if record.stat().st_size > RECORD_BYTES:
+                raise ValueError(f"{record.stat().st_size} bytes, a record is a few lines")
+            text = record.read_text(encoding="utf-8")
+            refuse_aliases(text, "study.yaml")
+            held = OmegaConf.create(text)
             if not isinstance(held, DictConfig) or not isinstance(held.get("study"), str):
                 raise ValueError("not a mapping with the key study")
             what = f"study {held.study} with overrides {list(held.get('extra_overrides') or [])}"
@@ -322,7 +329,7 @@ def _run_study(study: StudySpec, extra: list[str], out: Path, figures_only: bool
         except FileNotFoundError:
             raise ConfigError(f"study {name}: no results in {out} ({table}.parquet); run it without "
                               "--figures-only") from None
-        except (OSError, ValueError, KeyError) as exc:  # pyarrow's ArrowInvalid is a ValueError
+        except READ_ERRORS as exc:  # a corrupt file: pyarrow's errors, a missing column
             raise ConfigError(f"{out / f'{table}.parquet'}: not a readable Parquet file of this "
                               f"study ({one_line(exc)}); rerun the study") from exc
         if figures_only:  # redraw from intact results only, before any old figure is removed
@@ -353,7 +360,7 @@ def _check_jobs(jobs_dir: Path, jobs) -> None:
         try:
             read_verified(jobs_dir / job / "summary.parquet")
             changed = changed_files(jobs_dir / job)
-        except (OSError, ValueError) as exc:  # a missing, corrupt or edited summary.parquet
+        except READ_ERRORS as exc:  # a missing, corrupt or edited summary.parquet
             changed = [f"summary.parquet ({one_line(exc)})"]
         if changed:
             raise ConfigError(f"{jobs_dir / job}: {', '.join(changed)} changed since the job "
@@ -570,7 +577,9 @@ def params_overrides(path: Path) -> list[str]:
     ``dotted.key=value`` in Hydra's grammar, in the file's order; an empty file or ``{}``: none.
     A file that is not a mapping of names to plain values is refused in one line."""
     try:
-        data = yaml.safe_load(Path(path).read_text())
+        text = Path(path).read_text()
+        refuse_aliases(text, f"--params {path}")
+        data = yaml.safe_load(text)
     except OSError as exc:
         raise ConfigError(f"--params {path}: {exc.strerror or exc}") from None
     except yaml.YAMLError as exc:

@@ -345,6 +345,28 @@ def test_a_yaml_alias_bomb_in_a_robot_or_study_file_is_one_line_at_once(tmp_path
     assert time.perf_counter() - started < 30  # (expanded, either would take minutes and gigabytes)
 
 
+def test_an_alias_bomb_left_in_a_results_folder_or_a_params_file_is_one_line_at_once(tmp_path):
+    """Files read back from an output folder are outside data too: a ``study.yaml`` record
+    holding the billion laughs hung a rerun for 9 minutes at 899 MB; a ``--params`` file too."""
+    import time
+
+    from pipeline.study import claim_study_dir, params_overrides
+
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "study.yaml").write_text("study: x\n" + BOMB)
+    started = time.perf_counter()
+    with pytest.raises(ConfigError, match=r"out: holds an unreadable study record \(study.yaml: line 3: a YAML alias"):
+        claim_study_dir(out, "actuator_choice", [], force=False)
+    (tmp_path / "params.yaml").write_text(BOMB)
+    with pytest.raises(ConfigError, match=r"--params .*params.yaml: line 2: a YAML alias"):
+        params_overrides(tmp_path / "params.yaml")
+    assert time.perf_counter() - started < 30
+    (out / "study.yaml").write_bytes(b"study: x\n" + b"#" * (2 << 20))  # a record is a few lines
+    with pytest.raises(ConfigError, match=r"unreadable study record \(\d+ bytes, a record is a few lines\)"):
+        claim_study_dir(out, "actuator_choice", [], force=False)
+
+
 def test_an_unreadable_study_record_is_one_line_and_force_replaces_it(tmp_path, monkeypatch):
     from pipeline.study import claim_study_dir
 
@@ -356,3 +378,37 @@ def test_an_unreadable_study_record_is_one_line_and_force_replaces_it(tmp_path, 
         with pytest.raises(ConfigError, match="holds an unreadable study record"):
             claim_study_dir(out, "actuator_choice", [], force=False)
         assert "actuator_choice" in claim_study_dir(out, "actuator_choice", [], force=True)
+
+
+def test_every_bit_flip_in_a_jobs_summary_footer_is_recomputed_not_a_traceback(tmp_path, caplog):
+    """A job's summary.parquet read back for reuse is outside data: of the single-bit flips of
+    its footer (schema, types, metadata), some make pyarrow raise NotImplementedError ("Integers
+    with less than 8 bits"), which the reuse check did not catch (a 43-line traceback). Every
+    flip now means "recompute" (None), with a log line."""
+    import numpy as np
+    import pandas as pd
+
+    from pipeline.app.job import finished_summary
+    from pipeline.app.results import read_metadata, read_verified, write_parquet
+
+    path = tmp_path / "summary.parquet"
+    frame = pd.DataFrame({"n_feasible": [np.int64(3)], "feasible_pct": [1.5], "limiting": ["torque"],
+                          "ok": [True], "rank": [np.int8(5)]})
+    write_parquet(frame, path, "config: x\n", {"cdpr.digests": "{}"})
+    good = path.read_bytes()
+    assert finished_summary(tmp_path, "config: x\n") is not None  # the intact file is reused
+    uncaught_before = 0
+    for bit in range(8 * (len(good) - 512), 8 * len(good)):
+        flipped = bytearray(good)
+        flipped[bit // 8] ^= 1 << (bit % 8)
+        path.write_bytes(bytes(flipped))
+        try:
+            read_metadata(path)
+            read_verified(path)
+        except NotImplementedError:
+            uncaught_before += 1
+        except (OSError, ValueError):
+            pass
+        summary = finished_summary(tmp_path, "config: x\n")
+        assert summary is None or summary == frame.iloc[0].to_dict(), bit  # a flip in padding may change nothing
+    assert uncaught_before > 10  # the flips that reached the user as a traceback are among them

@@ -11,7 +11,7 @@ import pandas as pd
 from omegaconf import DictConfig, OmegaConf
 
 from pipeline.app.job import changed_files
-from pipeline.app.results import CONFIG_KEY, read_metadata, read_verified
+from pipeline.app.results import CONFIG_KEY, READ_ERRORS, read_metadata, read_verified
 
 
 class StudyResults:
@@ -39,7 +39,10 @@ class StudyResults:
 
     def _data(self, job: str, name: str) -> pd.DataFrame:
         folder = self.directory / "jobs" / job
-        changed = changed_files(folder)
+        try:
+            changed = changed_files(folder)
+        except READ_ERRORS as exc:  # its summary unreadable: outside data
+            raise ValueError(f"{folder}: unreadable summary.parquet ({exc})") from None
         if changed:
             raise ValueError(f"{folder}: {', '.join(changed)} changed since the job finished")
         return pd.read_parquet(folder / name)
@@ -52,5 +55,5 @@ def table(path: Path) -> pd.DataFrame:
         return read_verified(path).to_pandas()
     except FileNotFoundError:
         raise
-    except (OSError, ValueError) as exc:  # pyarrow's read errors derive from these
+    except READ_ERRORS as exc:  # a corrupt file: pyarrow's errors
         raise ValueError(f"{path}: {exc}") from None

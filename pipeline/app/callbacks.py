@@ -14,7 +14,7 @@ import pyarrow as pa
 from hydra.experimental.callback import Callback
 from omegaconf import DictConfig, OmegaConf
 
-from pipeline.app.results import read_verified, varying_settings, write_parquet
+from pipeline.app.results import READ_ERRORS, read_verified, varying_settings, write_parquet
 from pipeline.errors import ConfigError, one_line
 from pipeline.workspace.arrow import sorted_by, texts
 
@@ -35,7 +35,7 @@ def gather(sweep_dir: Path, job_dirs: list[Path], overrides: list[str]) -> None:
         if (job_dir / "summary.parquet").exists():
             try:
                 row = read_verified(job_dir / "summary.parquet").replace_schema_metadata(None)
-            except (OSError, ValueError) as exc:  # pyarrow's read errors derive from these
+            except READ_ERRORS as exc:  # a corrupt file: pyarrow's errors
                 raise ConfigError(f"{job_dir / 'summary.parquet'}: {one_line(exc)}; rerun the sweep") from None
             rows.append(row.add_column(0, "job", texts([job_dir.name])))
     if not rows:

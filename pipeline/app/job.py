@@ -30,7 +30,7 @@ from pipeline.errors import ConfigError
 from pipeline.app.readings import describe_reading
 from pipeline.app.yamltext import to_yaml
 from pipeline.app.results import (
-    CONFIG_KEY, DIGESTS_KEY, VERSION_KEY, ParquetSink, code_version, digests_json, file_digest,
+    CONFIG_KEY, DIGESTS_KEY, READ_ERRORS, VERSION_KEY, ParquetSink, code_version, digests_json, file_digest,
     read_metadata, read_verified, replacing, write_parquet,
 )
 from pipeline.workspace.arrow import one_row
@@ -184,6 +184,6 @@ def finished_summary(out: Path, config_yaml: str) -> dict | None:
             log.warning("recomputing %s: %s changed since the job finished", out, ", ".join(changed))
             return None
         return read_verified(path).to_pylist()[0]
-    except (OSError, ValueError) as exc:  # pyarrow's errors derive from these
+    except READ_ERRORS as exc:  # a corrupt file: pyarrow's errors
         log.warning("recomputing %s: unreadable summary.parquet (%s)", out, exc)
         return None

@@ -69,6 +69,12 @@ def content_digest(table: pa.Table) -> str:
     return hashlib.sha256(text.encode()).hexdigest()
 
 
+# What reading a file from outside (an output folder, a user's results) may raise: pyarrow's
+# errors on a corrupt file are OSError and ValueError, and also NotImplementedError ("Integers
+# with less than 8 bits", a flipped bit in a type), TypeError, KeyError and IndexError.
+READ_ERRORS = (OSError, ValueError, LookupError, TypeError, NotImplementedError, pa.ArrowException)
+
+
 def read_verified(path: Path) -> pa.Table:
     """A table written by :func:`write_parquet`, whose rows still have the digest it recorded;
     else ValueError naming what is wrong (pyarrow's read errors are OSError or ValueError)."""
