@@ -74,3 +74,26 @@ def test_a_jobs_mesh_files_are_closed_and_hold_the_summarys_volume(tmp_path):
         assert mesh.is_watertight and mesh.is_winding_consistent
         assert mesh.volume == pytest.approx(summary["mesh_volume_m3"], rel=1e-5)  # STL: float32 vertices
         assert mesh.area == pytest.approx(summary["mesh_surface_m2"], rel=1e-5)
+
+
+def test_feasible_poses_whose_least_margin_is_exactly_zero_still_have_a_boundary(tmp_path):
+    """Every feasible pose on a bound (a cable at t_min under ``tension=feasible``: least margin
+    exactly 0) left marching cubes no surface ("No surface found"), exit 1 after the verdicts
+    were computed. The verdict field is strictly positive inside: the surface closes around
+    the feasible nodes."""
+    from pipeline.workspace.boundary import verdict_field
+
+    import trimesh  # a test extra
+
+    axes, (x, y, z) = _grid(11)  # step 0.3: the feasible nodes span [-0.6, 0.6] on each axis
+    inside = (np.abs(x) <= 0.61) & (np.abs(y) <= 0.61) & (np.abs(z) <= 0.61)
+    least = np.where(inside, 0.0, -0.3)
+    vertices, triangles = boundary_mesh(verdict_field(least, inside), axes, *BOX)
+    assert enclosed_volume(vertices, triangles) == pytest.approx(1.2 ** 3, rel=1e-5)  # through the nodes on the bound
+    assert trimesh.Trimesh(vertices, triangles, process=False).is_watertight
+    crane = ["robot=points", "robot.anchors=[[-2,-2,3],[2,-2,3],[0,2,3]]", "robot.attachments=[[0,0,0],[0,0,0],[0,0,0]]",
+             "robot.dofs=[x,y,z]", "robot.search.lo=[-1,-1,0.5]", "robot.search.hi=[1,1,2]", "robot.search.step=0.25",
+             "tension=feasible", "load.mass=10", "output.mesh=true"]
+    done = workspace(crane, tmp_path)
+    assert 0 < done.summary["n_feasible"] and done.summary["least_margin_slack"] == 0.0  # every pose on a bound
+    assert done.summary["mesh_volume_m3"] > 0 and (tmp_path / "boundary.stl").stat().st_size > 84

@@ -22,9 +22,11 @@ FACE_SHARE = 1e-9  # a face on the outermost nodes: the surface closes within 1e
 
 
 def verdict_field(least: np.ndarray, feasible: np.ndarray) -> np.ndarray:
-    """The field the boundary is drawn from: each pose's least margin with the sign of its verdict
-    (a feasible pose's at least 0, an infeasible one's below 0 even where float32 rounds it)."""
-    return np.where(feasible, np.maximum(least, 0.0), np.minimum(least, -1e-30))
+    """The field the boundary is drawn from: each pose's least margin with the sign of its verdict,
+    strictly: a feasible pose's at least MIN_MARGIN (a margin of exactly 0 is common, a cable at
+    its bound under ``tension=feasible``: a field of zeros has no zero crossing to draw), an
+    infeasible one's below 0 even where float32 rounds it."""
+    return np.where(feasible, np.maximum(least, MIN_MARGIN), np.minimum(least, -1e-30))
 
 
 def boundary_mesh(field: np.ndarray, axes: tuple[np.ndarray, np.ndarray, np.ndarray],
