@@ -201,3 +201,19 @@ def test_remembered_pinv_is_batched_pinv_and_never_serves_another_stack(monkeypa
     monkeypatch.setattr(linalg, "REMEMBERED_BYTES", stack.nbytes)  # less than input + result
     fresh = rng.normal(size=(500, 6, 8))
     assert linalg.remembered_pinv(fresh, 1e-9)[0] is not linalg.remembered_pinv(fresh, 1e-9)[0]
+
+
+@pytest.mark.parametrize("rows", [1, 2])
+def test_one_and_two_freedom_platforms_give_the_lp_margins(rows):
+    """A platform of one freedom (robot.dofs=[z] or [rz]: one row, the normals are +-1 from the
+    empty subset of columns) crashed the search ("cannot reshape array of size 0"); one and two
+    rows against the LPs on random robots of 2 to 5 cables."""
+    rng = np.random.default_rng(41 + rows)
+    verdicts = []
+    for cables in range(2, 6):
+        structure, wrenches, families = random_problems(rng, rows, cables, 60)
+        fast, exact, by_lp = both_ways(structure, wrenches, families)
+        assert_same(fast, exact)
+        assert by_lp.mean() < 0.05
+        verdicts.append(np.all([v >= 0 for v in exact.values()], axis=0))
+    assert 0.05 < np.concatenate(verdicts).mean() < 0.95

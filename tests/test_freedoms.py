@@ -160,3 +160,20 @@ def test_a_planar_caspr_model_imports_with_its_freedoms_and_its_plane(tmp_path):
                            external=(12, -8, 0, 0, 0, 0.5))
     assert points["feasible"].tolist() == expected.tolist()
     assert 0 < points["feasible"].sum() < len(points)
+
+
+@pytest.mark.parametrize("t_max, holds", [(20.0, True), (10.0, False)])
+def test_a_one_freedom_hoist_holds_its_load_where_newton_says(make_cfg, catalogue, t_max, holds):
+    """robot.dofs=[z]: one cable above and one below a 1 kg slider, t in [1, t_max] N. Newton:
+    t_up - t_down = 9.81 N with t_down >= 1 needs t_up >= 10.81 N: within 20 N, beyond 10 N.
+    (One freedom crashed the feasible model's search, issue 51.) And [rz], two cables on
+    a turntable: two parallel cables on either side of its axis twist it opposite ways, 0.1 m
+    each: t_1 0.1 = t_2 0.1 holds with equal tensions; both on one side cannot balance."""
+    hoist = points_robot("[[0,0,3],[0,0,-3]]", "[[0,0,0],[0,0,0]]", ["z"], "[0,0,-1]", "[0,0,1]", 0.25,
+                         "tension=feasible", "tension.t_min=1", f"tension.t_max={t_max}", "load.mass=1")
+    points, summary = compute_workspace(make_cfg(*hoist), catalogue)
+    assert summary["n_points"] == 9 and summary["n_feasible"] == (9 if holds else 0)
+    for attachments, balanced in (("[[0,0.1,0],[0,-0.1,0]]", True), ("[[0,0.1,0],[0,0.1,0]]", False)):
+        turntable = points_robot("[[1,0.1,0],[1,-0.1,0]]", attachments, ["rz"], "[0,0,0]", "[0,0,0]", 0.25,
+                                 "tension=feasible", "tension.t_min=1", "tension.t_max=5")
+        assert compute_workspace(make_cfg(*turntable), catalogue)[1]["n_feasible"] == balanced

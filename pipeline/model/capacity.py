@@ -59,7 +59,8 @@ def _candidates(structure: np.ndarray):
     the (q - 1)-subsets of columns and the other columns of each, and, where it is the cheaper
     route, (S^+)^T and an orthonormal basis of the null space of S per pose ((n, 0, 0) else)."""
     n, q, m = structure.shape
-    subsets = np.array(list(combinations(range(m), q - 1)), dtype=np.int64).reshape(-1, q - 1)
+    chosen = list(combinations(range(m), q - 1))  # one empty subset for q = 1: the normal is +-1
+    subsets = np.array(chosen, dtype=np.int64).reshape(len(chosen), q - 1)
     others = np.array([[i for i in range(m) if i not in chosen] for chosen in subsets],
                       dtype=np.int64).reshape(len(subsets), m - q + 1)
     spread = null = np.empty((n, 0, 0))
