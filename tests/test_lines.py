@@ -115,3 +115,18 @@ def test_agreement_with_the_grid_per_actuator_and_orientation(lines, reading, or
         assert count == ((points["limiting"] == name[5:]) & ~points["feasible"]).sum()
 
 
+
+
+def test_interference_criteria_are_evaluated_on_the_lines_as_on_the_grid(lines):
+    """The lines evaluate the registry's pose-only criteria (cable_cable, cable_platform,
+    cable_obstacle) at every sample: at each line's first sample, a grid point, the margins
+    equal the grid's there (they ended in KeyError: 'cable_cable' before, issue 51)."""
+    samples, points, summary = lines("grid.n=5", "robot.cable_diameter=0.02", "robot.platform.shape=hull",
+                                     "obstacles=[{name: block, lo: [1, 0.5, -2.2], hi: [1.4, 0.9, -1.4]}]")
+    starts = samples[samples["s"] == 0].round({c: 9 for c in "xyz"}).drop_duplicates(["x", "y", "z"])
+    grid = points.round({c: 9 for c in "xyz"}).set_index(["x", "y", "z"])
+    for name in ("cable_cable", "cable_platform", "cable_obstacle"):
+        at = grid.loc[list(zip(starts["x"], starts["y"], starts["z"])), f"margin_{name}"].to_numpy()
+        np.testing.assert_allclose(starts[f"margin_{name}"].to_numpy(), at, rtol=0, atol=1e-12, err_msg=name)
+    assert (samples["margin_cable_obstacle"] < 0).any() and (samples["margin_cable_obstacle"] > 0).any()
+    assert summary["lost_cable_obstacle"] > 0

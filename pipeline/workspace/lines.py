@@ -18,6 +18,7 @@ import numpy as np
 import pandas as pd
 from omegaconf import DictConfig
 
+from pipeline.workspace.criteria import GEOMETRY, REGISTRY
 from pipeline.workspace.grid import Grid
 from pipeline.workspace.kernel import WorkspaceProblem
 from pipeline.workspace.trajectory import inverse_dynamics, sample_margins, trapezoid
@@ -62,8 +63,9 @@ def simulate_lines(cfg: DictConfig, problem: WorkspaceProblem, grid: Grid,
     s, v, a = (np.concatenate([getattr(profile, name) for profile in profiles]) for name in "sva")
     position, velocity, acceleration = origins + s[:, None] * directions, v[:, None] * directions, a[:, None] * directions
     act = problem.limits
+    geometric = tuple(name for name in problem.criteria if REGISTRY[name].reads == GEOMETRY)
     quantities = inverse_dynamics(problem.robot, position, velocity, acceleration, problem.orientation,
-                                  problem.spec, act)
+                                  problem.spec, act, geometric)
     raw = sample_margins(quantities, act)
     margins, ok, _ = classify({name: raw[name] for name in problem.criteria}, problem.margin_atol)
     samples = pd.DataFrame({

@@ -17,6 +17,7 @@ from pipeline.model.dynamics import MotionSpec, PoseDynamics, centripetal, load_
 from pipeline.model.geometry import CableRobot
 from pipeline.model.linalg import remembered_pinv
 from pipeline.model.tensions import feasible_tensions
+from pipeline.workspace.criteria import REGISTRY
 from pipeline.workspace.criteria.geometry import zero_length
 
 
@@ -60,7 +61,7 @@ def trapezoid(distance: float, v_max: float, t_acc: float, t_dec: float, dt: flo
 
 def inverse_dynamics(
     robot: CableRobot, positions: np.ndarray, velocities: np.ndarray, accelerations: np.ndarray,
-    orientation, motion: MotionSpec, actuator: ActuatorModel,
+    orientation, motion: MotionSpec, actuator: ActuatorModel, geometric: tuple[str, ...] = (),
 ) -> dict[str, np.ndarray]:
     """Per-sample actuator quantities (n, m) for poses (n, 3) with their own velocity and
     acceleration (constant orientation): shaft speed theta_dot = J p_dot (eq. 19), shaft
@@ -72,7 +73,8 @@ def inverse_dynamics(
     Under ``tension.model=feasible`` M is the LP's choice (``pipeline.model.tensions``) for each
     sample's own wrench, speed and acceleration, and ``margins`` holds that model's margins;
     under ``pinv`` ``margins`` has the share of the wrench M misses (``unreachable``), and
-    always the ``zero_length`` gate's margin."""
+    always the ``zero_length`` gate's margin; ``geometric``: criteria of the registry that read
+    the pose alone (interference), evaluated at every sample as the grid evaluates them."""
     state = PoseDynamics(robot, positions, orientation, motion)
     jt = state.jacobian[:, :, :3]
     theta_dot = np.einsum("nmj,nj->nm", jt, velocities)
@@ -97,6 +99,8 @@ def inverse_dynamics(
     if robot.l_max is not None:
         margins["length"] = 1.0 - (state.lengths / robot.l_max).max(axis=1)
     margins["zero_length"] = zero_length(state, None)
+    for name in geometric:
+        margins[name] = REGISTRY[name].function(state, actuator)
     reached = np.einsum("ncm,nm->nc", state.structure, torque)
     if "unreachable" not in margins:  # pinv: the share of each sample's wrench M misses
         size = np.linalg.norm(wrench, axis=1)

@@ -1,0 +1,50 @@
+"""Every analysis against every optional key: a result, or one line and exit 2 (issue 51).
+
+``analysis=lines`` computed its own margins beside the registry and ended in
+``KeyError: 'cable_cable'`` with ``robot.cable_diameter``, ``robot.platform.shape`` or
+``obstacles``. Each cell runs the command line in this process on a small grid of the
+CPR-8 and checks the outcome: a job that ran wrote its summary with a margin column for each
+key's criterion; a refusal is one line naming the key, with nothing written."""
+
+import pandas as pd
+import pytest
+
+from conftest import command
+
+ANALYSES = {"cpr_wwa": ["analysis=cpr_wwa", "grid.n=4"], "statics": ["analysis=statics", "grid.n=4"],
+            "payload": ["analysis=payload", "grid.n=4"], "lines": ["analysis=lines", "grid.n=4"]}
+KEYS = {  # key -> (overrides, the criterion or column it adds when the job runs)
+    "cable_diameter": (["robot.cable_diameter=0.01"], "margin_cable_cable"),
+    "platform.shape": (["robot.platform.shape=hull"], "margin_cable_platform"),
+    "obstacles": (["obstacles=[{name: block, lo: [1, 0.5, -2.2], hi: [1.4, 0.9, -1.9]}]"], "margin_cable_obstacle"),
+    "workspace.home": (["workspace.home=[1.6,1.1,-1.1]"], "connected"),
+    "output.cables": (["output.cables=true"], "length_k"),  # the CPR-8 names its cables k, h, m, n and primes
+    "output.mesh": (["output.mesh=true"], None),
+    "output.metrics": (["output.metrics=true"], None),
+    "output.points": (["output.points=false"], None),
+}
+# the cells that are refused, with the key the one line names
+REFUSED = {("lines", "workspace.home"): "workspace.home", ("lines", "output.mesh"): "output.mesh",
+           ("cpr_wwa", "output.metrics"): "output.metrics", ("lines", "output.metrics"): "output.metrics",
+           ("payload", "output.metrics"): "output.metrics"}
+
+
+@pytest.mark.parametrize("key", sorted(KEYS))
+@pytest.mark.parametrize("analysis", sorted(ANALYSES))
+def test_every_analysis_with_every_optional_key_gives_a_result_or_one_line(tmp_path, analysis, key):
+    overrides, column = KEYS[key]
+    run = tmp_path / "run"
+    done = command(tmp_path, "pipeline", *ANALYSES[analysis], *overrides, f"hydra.run.dir={run}")
+    if (analysis, key) in REFUSED:
+        assert done.returncode == 2, done.stderr[-2000:]
+        lines = done.stderr.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("error: ") and REFUSED[analysis, key] in lines[0], lines
+        assert not run.exists()
+        return
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert (run / "summary.parquet").is_file()
+    if column is not None and key != "output.points":
+        table = pd.read_parquet(run / "points.parquet")
+        assert column in table.columns, sorted(table.columns)
+        if column.startswith("margin_"):
+            assert table[column].notna().all()
