@@ -158,6 +158,10 @@ CASES = [
     ("pipeline", ["robot.cable_diameter=nan"], "robot.cable_diameter=nan: must be a number > 0"),
     ("pipeline", ["robot.cable_diameter=abc"], "robot.cable_diameter=abc: must be a number > 0"),
     ("pipeline", ["robot.cable_diameter=[0.01,0.02]"], "robot.cable_diameter=[0.01, 0.02]: 2 values for 8 cables"),
+    ("pipeline", ["robot.cable_diameter=1e9"], "robot.cable_diameter=1000000000.0: must be at most a tenth of the robot's size "
+     "(0.32 m"),
+    ("pipeline", ["obstacles=[" + ",".join(f"{{lo:[{i},-9,-9],hi:[{i + 0.5},-8,-8]}}" for i in range(101)) + "]"],
+     "obstacles: 101 of them; at most 100"),
     ("pipeline", ["--config-dir", "robots", "robot=square", "robot.cable_diameter=0.01"],
      "robot.cable_diameter=0.01: every two cables share an anchor or an attachment point"),
     # a ZeroDivisionError after the run folder existed; a sweep of 10^8 jobs hung while it was listed
@@ -412,3 +416,26 @@ def test_every_bit_flip_in_a_jobs_summary_footer_is_recomputed_not_a_traceback(t
         summary = finished_summary(tmp_path, "config: x\n")
         assert summary is None or summary == frame.iloc[0].to_dict(), bit  # a flip in padding may change nothing
     assert uncaught_before > 10  # the flips that reached the user as a traceback are among them
+
+
+def test_obstacles_and_a_fine_search_step_are_counted_before_any_work(make_cfg, catalogue, caplog, tmp_path):
+    """Unbounded work with no output (issue 51): 100 obstacle boxes on a 40^3 grid are announced
+    with their share of the time before the job starts; a study search of step 1e-12 is refused
+    when the study is read."""
+    import logging
+
+    from pipeline.app.problem import build_problem
+    from pipeline.study import load_study
+    from pipeline.workspace.compute import announce_cost
+
+    boxes = "[" + ",".join(f"{{lo:[{0.1 + 0.03 * i},0.1,-2.25],hi:[{0.11 + 0.03 * i},0.2,-2.21]}}" for i in range(100)) + "]"
+    cfg = make_cfg("grid.n=40", f"obstacles={boxes}")
+    problem, grid = build_problem(cfg, catalogue)
+    with caplog.at_level(logging.WARNING):
+        announce_cost(cfg, problem, grid.n_points, 1)
+    assert "this job evaluates 64000 poses" in caplog.text and "its 100 obstacles take about" in caplog.text
+    (tmp_path / "fine.yaml").write_text("title: t\nsource: s\noptimise: null\nsearch:\n  variables:\n"
+                                        "    drive.gear_ratio: {low: 5, high: 60, step: 1e-12}\n")
+    with pytest.raises(ConfigError, match=r"search.variables.drive.gear_ratio: step=1e-12 gives 5.5e\+13 values "
+                                          r"from 5 to 60; at most 10000"):
+        load_study("fine", tmp_path)

@@ -104,3 +104,18 @@ def test_each_failing_pose_names_a_vertex_it_cannot_hold(make_cfg, catalogue, mo
     alone = compute_workspace(make_cfg(*ROBOT, f"tension={model}"), catalogue)[0]
     by_set = named[alone["feasible"].to_numpy() & ~points["feasible"].to_numpy()]  # lost to the set itself
     assert len(set(by_set)) > 1
+
+
+def test_repeated_vertices_are_solved_once_and_named_as_the_user_numbered_them(make_cfg, catalogue):
+    """A list of 2 000 vertices that repeats the box's 8 (issue 51: unbounded work with no
+    output) is the box's 8 wrenches, the same verdicts, and ``limiting_wrench`` numbers each
+    vertex by its first place in the user's list (here the list is the box's, reversed, 250 times)."""
+    vertices = vertices_of(BOX)[::-1]
+    listed = "wrench.set=[" + ",".join("[" + ",".join(f"{x:g}" for x in v) + "]" for v in vertices * 250) + "]"
+    repeated, summary = compute_workspace(make_cfg(*ROBOT, "tension=feasible", listed), catalogue)
+    box = compute_workspace(make_cfg(*ROBOT, "tension=feasible", BOX_OVERRIDE), catalogue)[0]
+    assert summary["n_wrenches"] == 8
+    assert repeated["feasible"].tolist() == box["feasible"].tolist()
+    named = repeated["limiting_wrench"].to_numpy()
+    in_box = box["limiting_wrench"].to_numpy()
+    assert (named[in_box > 0] == 9 - in_box[in_box > 0]).all() and (named[in_box == 0] == 0).all()

@@ -67,8 +67,10 @@ class SearchSpec:
         """ConfigError naming the first field that cannot be used."""
         if not self.variables:
             raise ConfigError(f"{where}: search.variables: none given (known: {', '.join(VARIABLES)})")
-        for key, domain in self.variables.items():
-            grid_values(key, domain, where)
+        sizes = [len(grid_values(key, domain, where)) for key, domain in self.variables.items()]
+        if math.prod(sizes) > MAX_CANDIDATES:
+            raise ConfigError(f"{where}: search.variables: {' x '.join(map(str, sizes))} = {math.prod(sizes):.3g} "
+                              f"designs; at most {MAX_CANDIDATES} (coarser steps)")
         if self.objective not in OBJECTIVES:
             raise ConfigError(f"{where}: search.objective={self.objective!r}: unknown (known: "
                               f"{', '.join(OBJECTIVES)})")
@@ -88,6 +90,10 @@ class SearchSpec:
         return ids
 
 
+MAX_VALUES = 10_000  # a variable's grid: values it lists
+MAX_CANDIDATES = 1_000_000  # designs of all variables together (one row each before the ratios merge)
+
+
 def grid_values(key: str, domain: Any, where: str) -> list[float]:
     """A variable's sorted grid: the listed values, or low, low + step, ... <= high."""
     if key not in VARIABLES:
@@ -101,7 +107,10 @@ def grid_values(key: str, domain: Any, where: str) -> list[float]:
         low, high, step = values
         if step is None:
             raise ConfigError(f"{where}: search.variables.{key}: give a step (the search is exact to a grid)")
-        count = int(math.floor((high - low) / step + 1e-9)) + 1
+        count = math.floor((high - low) / step + 1e-9) + 1
+        if count > MAX_VALUES:
+            raise ConfigError(f"{where}: search.variables.{key}: step={step:g} gives {count:.3g} values from {low:g} "
+                              f"to {high:g}; at most {MAX_VALUES} (a coarser step)")
         values = [round(low + k * step, 9) for k in range(count)]
     if min(values) <= 0:
         raise ConfigError(f"{where}: search.variables.{key}: {min(values)}: must be positive")

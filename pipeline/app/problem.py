@@ -184,7 +184,7 @@ def _statics(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
         rank_rtol=cfg.model.rank_rtol,
         tension=tension_spec(cfg, robot),
         load=load,
-        wrench_set=wrench_set(cfg.wrench.set),
+        **dict(zip(("wrench_set", "vertex_numbers"), wrench_set(cfg.wrench.set))),
     )
     rating = spec.tension.t_max
     force = spec.load.external[:3] - spec.load.mass * spec.load.gravity * robot.up
@@ -272,11 +272,12 @@ ANALYSES = {
 MAX_SET_VERTICES = 4096  # wrenches of a wrench.set: each is an LP block or a solve per pose
 
 
-def wrench_set(value) -> np.ndarray:
+def wrench_set(value) -> tuple[np.ndarray, tuple[int, ...]]:
     """(K, 6) the vertices of ``wrench.set``: a box's (every combination of each coordinate's min
-    and max, once where they are equal) or the listed ones; (0, 6) for null."""
+    and max, once where they are equal) or the listed ones, each once; (0, 6) for null. And
+    each vertex's number in the set as given (1 = its first), which ``limiting_wrench`` reports."""
     if value is None:
-        return np.zeros((0, 6))
+        return np.zeros((0, 6)), ()
     shown_value = OmegaConf.to_container(value) if isinstance(value, (DictConfig, ListConfig)) else value
     if isinstance(value, DictConfig):
         if set(value) != {"min", "max"}:
@@ -284,7 +285,8 @@ def wrench_set(value) -> np.ndarray:
         low, high = (_wrench(value[key], f"wrench.set.{key}") for key in ("min", "max"))
         if not (low <= high).all():
             raise ConfigError(f"wrench.set.min={low.tolist()}: must be <= wrench.set.max={high.tolist()}")
-        return np.array(list(itertools.product(*(sorted({a, b}) for a, b in zip(low, high)))), dtype=float)
+        box = np.array(list(itertools.product(*(sorted({a, b}) for a, b in zip(low, high)))), dtype=float)
+        return box, tuple(range(1, len(box) + 1))
     if not isinstance(value, ListConfig):
         raise ConfigError(f"wrench.set={shown_value}: a box {{min: [6], max: [6]}} or a list of "
                           "[fx, fy, fz, mx, my, mz] (N, N m)")
@@ -292,7 +294,10 @@ def wrench_set(value) -> np.ndarray:
         raise ConfigError("wrench.set=[]: no vertices (null: the one wrench)")
     if len(value) > MAX_SET_VERTICES:
         raise ConfigError(f"wrench.set: {len(value)} vertices; at most {MAX_SET_VERTICES}")
-    return np.array([_wrench(v, f"wrench.set: vertex {i}") for i, v in enumerate(value, start=1)])
+    vertices = np.array([_wrench(v, f"wrench.set: vertex {i}") for i, v in enumerate(value, start=1)])
+    _, first = np.unique(vertices, axis=0, return_index=True)  # a repeated vertex is one more solve for nothing
+    first = np.sort(first)
+    return vertices[first], tuple(int(i) + 1 for i in first)
 
 
 WRENCH_RULE = vector(6, "fx fy fz mx my mz, N and N m", MAX_FORCE)  # the rule of load.external
@@ -435,6 +440,9 @@ def surroundings(cfg: DictConfig, robot: CableRobot) -> tuple[CableRobot, tuple[
             raise ConfigError(f"robot.cable_diameter={shown(diameter)}: must be a number > 0 (m) or a list of one per cable")
         if len(items) not in (1, robot.n_cables):
             raise ConfigError(f"robot.cable_diameter={shown(diameter)}: {len(items)} values for {robot.n_cables} cables")
+        if max(items) > robot.extent / 10:
+            raise ConfigError(f"robot.cable_diameter={shown(diameter)}: must be at most a tenth of the robot's size "
+                              f"({robot.extent / 10:.3g} m: its farthest anchor or attachment coordinate / 10)")
         robot = replace(robot, cable_radii=np.broadcast_to(np.asarray(items, dtype=float) / 2, (robot.n_cables,)).copy())
         if not len(robot.cable_pairs[0]):
             raise ConfigError(f"robot.cable_diameter={shown(diameter)}: every two cables share an anchor or an attachment "
@@ -476,6 +484,9 @@ def platform_shape(value, robot: CableRobot) -> Polytope:
     return shape
 
 
+MAX_OBSTACLES = 100
+
+
 def obstacles(value, robot: CableRobot) -> tuple[Obstacle, ...]:
     """The obstacles of ``obstacles``: boxes {lo, hi} and planes {point, normal} (m, fixed frame,
     each with an optional name); refuses one that holds an anchor (every cable from it would
@@ -483,6 +494,9 @@ def obstacles(value, robot: CableRobot) -> tuple[Obstacle, ...]:
     if not isinstance(value, ListConfig):
         raise ConfigError(f"obstacles={shown(value)}: a list of boxes {{lo: [3], hi: [3]}} and planes "
                           "{point: [3], normal: [3]} (m)")
+    if len(value) > MAX_OBSTACLES:
+        raise ConfigError(f"obstacles: {len(value)} of them; at most {MAX_OBSTACLES} (each costs about the work of "
+                          "a pose's whole statics: merge neighbouring boxes into one)")
     found = []
     for number, item in enumerate(value):
         key = f"obstacles[{number}]"

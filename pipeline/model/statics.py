@@ -35,7 +35,8 @@ class StaticsSpec:
     volume do not either (the IRPM paper's conclusions 1, 4 and 5; docs/model.md section 5).
     ``rank_rtol``: a pose is singular when the gram ratio of A (``PoseStatics.gram_ratio``)
     falls below it. ``wrench_set`` (K, 6): wrenches each added to the load's and every one
-    required (``wrench.set``'s vertices; none: the load's wrench alone). ``tension``:
+    required (``wrench.set``'s vertices, each once; none: the load's wrench alone), and
+    ``vertex_numbers`` each one's number in the set as given (1 = its first). ``tension``:
     minimum-norm tensions (``pinv``, eq. 10) or pulling cables only (``feasible``,
     ``pipeline.model.tensions``; for six cables the same verdict).
     """
@@ -46,6 +47,7 @@ class StaticsSpec:
     tension: TensionSpec = field(default_factory=TensionSpec)
     load: Load = field(default_factory=Load)
     wrench_set: np.ndarray = field(default_factory=lambda: np.zeros((0, 6)))
+    vertex_numbers: tuple[int, ...] = ()
     kind: ClassVar[str] = "statics"  # which compiled kernel evaluates it (pipeline.workspace.fused)
     summarised: ClassVar[tuple[str, ...]] = ()  # per-pose columns the summary gives min, median, max of
 

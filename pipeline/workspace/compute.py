@@ -164,6 +164,9 @@ LINE_SAMPLES = 370
 # 0.5 rad, so 150 000 keeps both within 2x (the IRPM's statics run 476 000); the feasible model
 # 23 000; the fused kernel 1 000 000.
 POSES_PER_SECOND = {"pinv": 150_000, "feasible": 20_000, "fused": 1_000_000}
+# each obstacle's cable_obstacle test, numpy in either kernel: 3.1e-5 s per pose (CPR-8, 4 000
+# poses: 0.21 s without, 1.9 s with 10 boxes, 12.6 s with 100; 2026-11-27)
+OBSTACLE_SECONDS = 3.1e-5
 LONG_JOB_S = 30.0
 # Memory: a job holds the chunks in flight (each array within CHUNK_BUDGET_FLOATS), never the
 # grid (pipeline.workspace.grid), so its peak is about PROCESS_BYTES whatever the grid's size
@@ -179,7 +182,7 @@ def estimated_seconds(problem: WorkspaceProblem, n_points: int) -> float:
     evaluations = n_points * len(problem.orientations)
     per_pose = problem.spec.work() + (METRICS_WORK[problem.spec.tension.model] if problem.metrics else 0.0)
     speed = POSES_PER_SECOND["fused" if problem.fused else problem.spec.tension.model]
-    return evaluations * per_pose / speed
+    return evaluations * (per_pose / speed + OBSTACLE_SECONDS * len(problem.robot.obstacles))
 
 
 def fused_unfit(problem: WorkspaceProblem) -> str | None:
@@ -244,6 +247,9 @@ def announce_cost(cfg: DictConfig, problem: WorkspaceProblem, n_points: int, wor
     if "n_vel" in cfg.get("grid", {}) and cfg.grid.n_vel is None and problem.spec.set_size() > REFERENCE_SET:
         hint = (f"; grid.n_vel is null (grid.n's), so each pose tests {problem.spec.set_size()} velocities "
                 f"(grid.n_vel=6 tests {REFERENCE_SET}, as the paper's grid)")
+    if problem.robot.obstacles:
+        share = OBSTACLE_SECONDS * len(problem.robot.obstacles) * n_points * len(problem.orientations) / cores
+        hint += f"; its {len(problem.robot.obstacles)} obstacles take about {clock_text(share)} of it"
     size = f"{memory / 2**30:.1f} GiB" if memory >= 2**30 else f"{memory / 2**20:.0f} MiB"
     if compiling:
         hint += f"; this includes numba's first compile of the loops it needs, about {compiling:.0f} s, once per machine"

@@ -120,7 +120,8 @@ def _limiting_vertex(problem: WorkspaceProblem, positions: np.ndarray, orientati
     vertex, worst = np.zeros(len(positions), dtype=np.int64), np.zeros(len(positions))
     if len(failing):
         worst[failing] = np.inf
-        for number, wrench in enumerate(problem.spec.wrench_set, start=1):
+        numbers = problem.spec.vertex_numbers or range(1, len(problem.spec.wrench_set) + 1)
+        for number, wrench in zip(numbers, problem.spec.wrench_set):
             alone = replace(problem.spec, wrench_set=wrench[None, :])
             turned = orientation[failing] if np.ndim(orientation) == 3 else orientation  # one rotation per pose
             state = alone.state(problem.robot, positions[failing], turned)
