@@ -150,6 +150,8 @@ def test_a_scheduler_started_as_the_docs_say_gets_the_chunks_and_gives_the_loky_
 
         log, remote = job("remote", "compute.backend=dask", f"compute.scheduler={address}")
         assert f"chunks on the Dask cluster {address}" in log
+        log, _ = job("one_chunk", "grid.n=4", "compute.backend=dask", f"compute.scheduler={address}")
+        assert f"chunks on the Dask cluster {address}" in log  # a named scheduler gets even one chunk
         _, local = job("local")
         pd.testing.assert_frame_equal(remote, local)
         assert 0 < remote["feasible"].sum() < len(remote)
@@ -158,3 +160,18 @@ def test_a_scheduler_started_as_the_docs_say_gets_the_chunks_and_gives_the_loky_
             if process is not None:
                 process.terminate()
                 process.wait(timeout=60)
+
+
+def test_a_named_scheduler_that_does_not_answer_is_one_line_and_nothing_is_written(tmp_path, monkeypatch):
+    """It computed here instead, exit 0, with no word (issue 51): nothing listens on the
+    loopback's port 9."""
+    from conftest import command
+    from pipeline.workspace import parallel
+
+    monkeypatch.setattr(parallel, "SCHEDULER_TIMEOUT_S", 1)
+    done = command(tmp_path, "pipeline", "compute.backend=dask", "compute.scheduler=tcp://127.0.0.1:9",
+                   f"hydra.run.dir={tmp_path / 'run'}")
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 2 and len(lines) == 1, done.stderr
+    assert lines[0].startswith("error: compute.scheduler=tcp://127.0.0.1:9: no Dask scheduler answers there")
+    assert not (tmp_path / "run").exists()

@@ -50,6 +50,11 @@ def run(plan: Plan, hydra_logging: bool = True, sharing: list[Job] | None = None
     by a rerun). Worker processes are started only where they pay (cost model:
     :func:`pipeline.app.problem.workers_pay`) for the plan's jobs, or for ``sharing``: every job
     of the process's plans, which share the workers once started (a study's cases)."""
+    for address in sorted({str(job.cfg.compute.scheduler) for job in plan.jobs
+                           if job.cfg.compute.backend == "dask" and job.cfg.compute.scheduler}):
+        from pipeline.workspace.parallel import check_scheduler
+
+        check_scheduler(address)  # before any folder: a scheduler that does not answer is an error
     first = plan.record(plan.jobs[0])
     if hydra_logging:
         configure_log(first.hydra.hydra_logging, first.hydra.verbose)

@@ -18,9 +18,11 @@ from typing import Callable, Iterator
 
 import numpy as np
 
+from pipeline.errors import ConfigError, one_line
 from pipeline.workspace.progress import Progress
 
 log = logging.getLogger(__name__)
+SCHEDULER_TIMEOUT_S = 10  # a named Dask scheduler that has not answered by then is not there
 CHUNK_REPORT_S = 10.0  # a line about the chunks at most this often (and at the end)
 
 
@@ -49,7 +51,7 @@ def iter_chunks(
     workers = local_workers(n_jobs) if here else n_jobs if n_jobs > 0 else 1
     slices = chunk_slices(len(positions), workers, chunk_size)
     progress = Progress("chunks", len(slices), log, every=CHUNK_REPORT_S)
-    if len(slices) <= 1 or workers == 1:
+    if (len(slices) <= 1 or workers == 1) and here:  # a named scheduler gets the work it was named for
         for s in slices:
             yield s, function(problem, positions[s])
             progress.step()
@@ -106,6 +108,21 @@ def _distributed():
     return dask.distributed
 
 
+def _client(scheduler: str):
+    """A client of the Dask scheduler at ``scheduler``; ConfigError when none answers there
+    within SCHEDULER_TIMEOUT_S (the work is never done here instead, without a word)."""
+    try:
+        return _distributed().Client(scheduler, timeout=SCHEDULER_TIMEOUT_S)
+    except (OSError, ValueError, TypeError) as exc:  # refused, no answer, or not an address
+        raise ConfigError(f"compute.scheduler={scheduler}: no Dask scheduler answers there ({one_line(exc)}); "
+                          "start one (dask scheduler) or set compute.scheduler=null for a local cluster") from None
+
+
+def check_scheduler(scheduler: str) -> None:
+    """ConfigError unless a Dask scheduler answers at ``scheduler`` (a job's pre-flight)."""
+    _client(scheduler).close()
+
+
 @contextlib.contextmanager
 def _engine(backend: str, workers: int, scheduler: str | None):
     """The joblib backend to pass to Parallel; for Dask, None (the backend set by
@@ -116,7 +133,7 @@ def _engine(backend: str, workers: int, scheduler: str | None):
     from joblib import parallel_config
 
     if scheduler:
-        context = _distributed().Client(scheduler)
+        context = _client(scheduler)
     else:  # the sweep's cluster, else one for this job
         current = _current_client()
         context = contextlib.nullcontext(current) if current is not None else local_cluster(workers)
