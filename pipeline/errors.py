@@ -26,3 +26,16 @@ def one_line(exc: BaseException) -> str:
                 parts.append(line)
         exc = exc.__cause__
     return ": ".join(parts)
+
+
+def text_number(values) -> str:
+    """'' or why a value that looks like a number is not one: YAML 1.1 (OmegaConf, PyYAML) reads
+    ``-.5``, ``.5e3`` and ``1e3`` as text; the hint says how to write it."""
+    for value in values if isinstance(values, (list, tuple)) else [values]:
+        if isinstance(value, str):
+            try:
+                number = float(value)
+            except ValueError:
+                continue
+            return f" ({value!r} is text to YAML: write {number!r})"
+    return ""

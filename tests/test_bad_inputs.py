@@ -7,6 +7,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 from omegaconf import OmegaConf
 
@@ -40,6 +41,12 @@ def _catalogue_files(folder: Path) -> None:
         "[-2, 1.5, 0], [2, 1.5, 0], [2, -1.5, 0], [-2, -1.5, 0]]\nattachments: [[0, 0, 0], [0, 0, 0], [0, 0, 0], "
         "[0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0]]\nsearch: {lo: [-1, -1, 0.5], hi: [1, 1, 1.5], step: 0.5}\n")
     (robots / "list.yaml").write_text("- 1\n- 2\n")
+    (robots / "textnumber.yaml").write_text(  # YAML 1.1 reads -.5 as text
+        "defaults: [points, _self_]\nanchors: [[-2, 1.5, 2], [2, 1.5, 2], [2, -1.5, 2]]\n"
+        "attachments: [[-.5, 0, 0], [0, 0, 0], [0, 0, 0]]\nsearch: {lo: [-1, -1, 0.5], hi: [1, 1, 1.5], step: 0.5}\n")
+    (robots / "nobox.yaml").write_text(
+        "defaults: [points, _self_]\nanchors: [[-2, 1.5, 2], [2, 1.5, 2], [2, -1.5, 2]]\n"
+        "attachments: [[0, 0, 0], [0, 0, 0], [0, 0, 0]]\ndofs: [x, y, z]\n")
 
 
 @pytest.fixture(scope="module")
@@ -129,6 +136,12 @@ CASES = [
     ("pipeline", ["robot=irpm6", "actuator=3"], "no such key for robot=irpm6 with analysis=statics"),
     # a traceback of OmegaConf's, a misleading "robot.name=None", a limit blamed on the grid, a crash in the job
     ("pipeline", ["--config-dir", "robots", "robot=noanchors"], "robot.anchors: no value given"),
+    ("pipeline", ["--config-dir", "robots", "robot=textnumber"],
+     "robot.attachments[0]=['-.5', 0, 0]: must be 3 finite numbers [x, y, z] (m) ('-.5' is text to YAML: write -0.5)"),
+    ("pipeline", ["--config-dir", "robots", "robot=nobox"],
+     "robot.search.lo: no value given (the box searched needs lo, hi and step; or list the poses to check"),
+    ("pipeline", ["--config-dir", "robots", "robot=nobox", "robot.search.lo=[0,0,0]", "robot.search.step=1"],
+     "robot.search.hi: no value given"),
     ("pipeline", ["--config-dir", "robots", "robot=empty"], "robot: the robot file gives no robot keys"),
     ("pipeline", ["--config-dir", "robots", "robot=list"], "robot: the robot file gives no robot keys"),
     ("pipeline", ["compute.max_poses=-1"], "compute.max_poses=-1: must be >= 1"),
@@ -439,3 +452,29 @@ def test_obstacles_and_a_fine_search_step_are_counted_before_any_work(make_cfg, 
     with pytest.raises(ConfigError, match=r"search.variables.drive.gear_ratio: step=1e-12 gives 5.5e\+13 values "
                                           r"from 5 to 60; at most 10000"):
         load_study("fine", tmp_path)
+
+
+@pytest.mark.parametrize("name", ["boundary.stl", "points.parquet", "summary.parquet"])
+def test_a_folder_where_a_job_writes_a_file_is_one_line_before_the_work(tmp_path, name):
+    """A folder named boundary.stl in the job's folder failed the job after its computation."""
+    from conftest import command
+
+    (tmp_path / "run" / name).mkdir(parents=True)
+    done = command(tmp_path, "pipeline", "output.mesh=true", f"hydra.run.dir={tmp_path / 'run'}")
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 2 and len(lines) == 1, done.stderr
+    assert lines[0] == (f"error: {tmp_path / 'run' / name}: not a file, where the job writes its {name}; move it "
+                        "or choose another folder (hydra.run.dir=...)")
+    assert "feasible" not in done.stdout  # refused before the verdicts
+
+
+def test_listed_poses_need_no_search_box(workdir, monkeypatch):
+    """poses=[...] checks those poses: a robot file without a search box runs (the summary's box
+    is NaN); it demanded robot.search.lo, which it does not use (issue 51)."""
+    from pipeline.api import workspace
+
+    monkeypatch.chdir(workdir)
+    done = workspace(["robot=nobox", "poses=[[0,0,1],[0.5,0,1],[0,0,3]]", "load.mass=1", "tension=feasible"],
+                     workdir / "poses_run", config_dir=workdir / "robots")
+    assert done.summary["n_points"] == 3 and np.isnan(done.summary["box.x_min"])
+    assert done.points["feasible"].tolist()[:2] == [True, True]

@@ -21,7 +21,7 @@ from typing import Any, Optional
 from omegaconf import MISSING, DictConfig, ListConfig, OmegaConf
 from omegaconf.errors import MissingMandatoryValue, OmegaConfBaseException
 
-from pipeline.errors import ConfigError, one_line
+from pipeline.errors import ConfigError, one_line, text_number
 
 INF = float("inf")
 JOBLIB_BACKENDS = ("loky", "threading", "multiprocessing", "sequential", "dask")
@@ -73,7 +73,7 @@ def vector(size: int, meaning: str, bound: float = INF):
     def check(values):
         values = list(values)
         if not all(isinstance(v, (int, float)) and abs(v) < INF for v in values):
-            return "every value must be a finite number"
+            return "every value must be a finite number" + text_number(values)
         if not all(abs(v) <= bound for v in values):
             return f"every value must be at most {bound:g} in magnitude"
         return None if len(values) == size else f"needs {size} values ({meaning})"
@@ -262,10 +262,19 @@ class Irpm6Config:
 
 @dataclass
 class PointsSearchConfig(SearchConfig):
-    """Searched box and step (m); ``spacing``: ``faces`` (lo + k step up to hi, as the IRPM) or
-    ``centres`` (lo + (k + 1/2) step, the centres of the cells of side step inside the box)."""
+    """Searched box and step (m), required unless the job lists its poses (``poses``);
+    ``spacing``: ``faces`` (lo + k step up to hi, as the IRPM) or ``centres`` (lo + (k + 1/2)
+    step, the centres of the cells of side step inside the box)."""
 
+    lo: Optional[list[float]] = rule(vector(3, "x, y, z"))
+    hi: Optional[list[float]] = rule(vector(3, "x, y, z"))
+    step: Optional[float] = rule(positive)
     spacing: str = MISSING
+
+    @staticmethod
+    def check_fields(search: DictConfig) -> None:
+        if search.lo is not None and search.hi is not None:
+            SearchConfig.check_fields(search)
 
 
 @dataclass

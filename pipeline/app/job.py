@@ -74,12 +74,19 @@ def folder_lock(out: Path, busy: str = "another run is writing this folder; wait
             fcntl.flock(handle, fcntl.LOCK_UN)
 
 
+JOB_FILES = ("summary.parquet", "points.parquet", "samples.parquet", "boundary.stl", "boundary.ply")  # what a job writes
+
+
 def _run_locked(cfg: DictConfig, problem: WorkspaceProblem, out: Path, sweep_pays: bool) -> dict:
     config_yaml = to_yaml(cfg, resolve=True)
     done = finished_summary(out, config_yaml)
     if done is not None:
         log.info("reused the finished job in %s (same config and code version)", out)
         return done
+    for name in JOB_FILES:  # found only when the file is written, after the computation
+        if (out / name).exists() and not (out / name).is_file():
+            raise ConfigError(f"{out / name}: not a file, where the job writes its {name}; move it or "
+                              "choose another folder (hydra.run.dir=...)")
     log.info("reading: %s (docs/model.md, sections 4-5)", describe_reading(cfg.model))
     log.info("tension model: %s (%s)", cfg.tension.model.value, TENSION_MODELS[cfg.tension.model.value])
     files = JobFiles(out, config_yaml)

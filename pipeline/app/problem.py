@@ -384,6 +384,11 @@ def validate(cfg: DictConfig, catalogue: Catalogue | None,
         raise ConfigError("compute.backend=dask: needs Dask, pip install 'cdpr-studies[dask]'")
     if cfg.poses is not None:
         point_list("poses", cfg.poses)
+    elif cfg.robot.name == "points":
+        missing = [key for key in ("lo", "hi", "step") if cfg.robot.search[key] is None]
+        if missing:
+            raise ConfigError(f"robot.search.{missing[0]}: no value given (the box searched needs lo, hi and step; "
+                              "or list the poses to check: poses=[[x, y, z], ...])")
     _validate_size(cfg)  # before anything the size would make large is built
     problem = build(cfg, catalogue)
     for key, asked in (("workspace.home", cfg.workspace.home is not None), ("output.mesh=true", cfg.output.mesh)):

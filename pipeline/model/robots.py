@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pipeline.errors import ConfigError
+from pipeline.errors import ConfigError, text_number
 from pipeline.model.geometry import FREEDOMS, CableRobot
 
 
@@ -128,12 +128,19 @@ class PointsRobot:
             raise ConfigError(f"robot.up={list(robot.up)}: must be a non-zero vector (gravity acts along -up)")
         if robot.l_max is not None and not 0 < robot.l_max < np.inf:
             raise ConfigError(f"robot.l_max={robot.l_max}: must be > 0 and finite (or null)")
-        lo, hi = _vector("robot.search.lo", search.lo), _vector("robot.search.hi", search.hi)
-        for axis, a, b in zip("xyz", lo, hi):
-            if not a <= b:
-                raise ConfigError(f"robot.search: {axis} from {a} to {b}: lo must be <= hi")
-        if not 0 < search.step < np.inf:
-            raise ConfigError(f"robot.search.step={search.step}: must be > 0 and finite")
+        given = [key for key in ("lo", "hi", "step") if search.get(key) is not None]
+        if not given:  # a job that lists its poses (``poses``) searches no box
+            lo = hi = np.full(3, np.nan)
+        else:
+            missing = [key for key in ("lo", "hi", "step") if key not in given]
+            if missing:
+                raise ConfigError(f"robot.search.{missing[0]}: no value given (the searched box needs lo, hi and step)")
+            lo, hi = _vector("robot.search.lo", search.lo), _vector("robot.search.hi", search.hi)
+            for axis, a, b in zip("xyz", lo, hi):
+                if not a <= b:
+                    raise ConfigError(f"robot.search: {axis} from {a} to {b}: lo must be <= hi")
+            if not 0 < search.step < np.inf:
+                raise ConfigError(f"robot.search.step={search.step}: must be > 0 and finite")
         if search.spacing not in ("faces", "centres"):
             raise ConfigError(f"robot.search.spacing={search.spacing}: must be faces or centres")
         dofs = [str(d) for d in robot.dofs]
@@ -141,7 +148,7 @@ class PointsRobot:
             raise ConfigError(f"robot.dofs={dofs}: must be distinct freedoms among {', '.join(FREEDOMS)}")
         return cls(anchors, attachments, tuple(str(n) for n in names), up / np.linalg.norm(up),
                    None if robot.l_max is None else float(robot.l_max), lo, hi,
-                   float(search.step), str(search.spacing), tuple(sorted(FREEDOMS.index(d) for d in dofs)))
+                   float(search.step) if given else np.nan, str(search.spacing), tuple(sorted(FREEDOMS.index(d) for d in dofs)))
 
     def build(self) -> CableRobot:
         return CableRobot(name="points", anchors=self.anchors, attachments=self.attachments,
@@ -172,5 +179,5 @@ def _vector(key: str, value) -> np.ndarray:
     if items is None or len(items) != 3 or not all(
             isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v) for v in items):
         shown = items if items is not None else value
-        raise ConfigError(f"{key}={shown}: must be 3 finite numbers [x, y, z] (m)")
+        raise ConfigError(f"{key}={shown}: must be 3 finite numbers [x, y, z] (m){text_number(items or [])}")
     return np.array(items, dtype=float)
