@@ -495,9 +495,10 @@ class OutputConfig:
     ``points``: write the per-pose table points.parquet (false: the summary only, for sweeps
     whose figures read summaries; a study that draws clouds or compares poses refuses it).
     ``mesh``: write the boundary of the feasible set, boundary.stl and boundary.ply (m, fixed
-    frame; ``pipeline.workspace.boundary``). ``metrics``: add per-pose ``tension_factor`` and
-    ``wrench_max_<w>``, ``wrench_min_<w>`` (the largest external wrench along each freedom the
-    pose holds on top of its load; ``pipeline.model.metrics``), ``analysis=statics``."""
+    frame; ``pipeline.workspace.boundary``). ``metrics``: add per-pose ``tension_factor`` (Pham et al.'s),
+    ``tension_ratio``, ``capacity_margin`` (Guay et al.'s) and ``wrench_max_<w>``,
+    ``wrench_min_<w>`` (the largest external wrench along each freedom the pose holds on top of
+    its load; ``pipeline.model.metrics``), ``analysis=statics``."""
 
     cables: bool = MISSING
     points: bool = MISSING

@@ -193,7 +193,7 @@ def _nested_lps(structure, wrenches, families) -> tuple[dict[str, np.ndarray], n
     k = wrenches.shape[1]
     blocks, width = n * k, m + 1  # variables per block: x (scaled by ``unit``) and s
     unit = float(np.median(families[0][3]))
-    equality = _block_matrix(np.repeat(structure, k, axis=0) * unit, width)
+    equality = block_matrix(np.repeat(structure, k, axis=0) * unit, width)
     b_eq = wrenches.reshape(blocks * r)
     lower, upper = np.full((blocks, m), -np.inf), np.full((blocks, m), np.inf)
     margins, x = {}, None
@@ -224,7 +224,7 @@ def _nested_lps(structure, wrenches, families) -> tuple[dict[str, np.ndarray], n
     return margins, x.reshape(n, k, m)
 
 
-def _block_matrix(blocks: np.ndarray, width: int):
+def block_matrix(blocks: np.ndarray, width: int):
     """Block-diagonal (B r, B width) sparse matrix with blocks (B, r, m) in the first m columns."""
     import scipy.sparse as sparse
 
@@ -298,7 +298,7 @@ def _payload_group(structure, wrench, per_kg, t_min, t_max, unit) -> np.ndarray:
     bounds[:, m + 1:] = (0.0, np.inf)
     cost = np.zeros((count, width))
     cost[:, m + 1:] = 1.0
-    first = linprog(cost.ravel(), A_eq=_block_matrix(blocks, width), b_eq=wrench.ravel(),
+    first = linprog(cost.ravel(), A_eq=block_matrix(blocks, width), b_eq=wrench.ravel(),
                     bounds=bounds.reshape(-1, 2), method="highs")
     if first.status != 0:
         raise RuntimeError(f"payload LP (least violation) failed: {first.message}")
@@ -327,7 +327,7 @@ def _extreme_mu(structure, wrench, per_kg, bounds_t, unit, sense: float) -> np.n
     bounds[:, :m], bounds[:, m] = bounds_t, (0.0, MAX_PAYLOAD_KG)
     cost = np.zeros((count, width))
     cost[:, m] = sense
-    done = linprog(cost.ravel(), A_eq=_block_matrix(blocks, width), b_eq=wrench.ravel(),
+    done = linprog(cost.ravel(), A_eq=block_matrix(blocks, width), b_eq=wrench.ravel(),
                    bounds=bounds.reshape(-1, 2), method="highs")
     if done.status == 0:
         return done.x.reshape(count, width)[:, m]
