@@ -53,7 +53,7 @@ from pipeline.workspace.compute import (
 from pipeline.workspace.grid import Grid, box_grid, listed_grid, step_grid
 from pipeline.workspace.kernel import WorkspaceProblem
 from pipeline.workspace.reach import home_node
-from pipeline.workspace.shape import MESH_MAX_POSES, GridShape, meshable
+from pipeline.workspace.shape import MESH_MAX_POSES, GridShape, meshable, volume_spread
 
 CPR_WWA_CRITERIA = ("speed", "torque", "acceleration", "voltage")  # eqs. (30), (32), (33), (34)
 FEASIBLE_GATES = ("unreachable", "slack")  # tension=feasible (pipeline.model.tensions)
@@ -229,7 +229,7 @@ def _grid_files(cfg: DictConfig, problem: WorkspaceProblem, grid: Grid, files, s
         else:
             with files.stream("points") as sink:
                 summary = grid_workspace(cfg, problem, grid, sink.write, sweep_pays)[1]
-        return {**summary, "mesh_volume_m3": float("nan"), "mesh_surface_m2": float("nan")}
+        return {**summary, "mesh_volume_m3": float("nan"), "mesh_surface_m2": float("nan"), "volume_spread_m3": float("nan")}
     robot = problem.robot
     shape = GridShape(grid, (robot.box_lo, robot.box_hi) if mesh else None, home, cfg.workspace.neighbourhood)
     if not cfg.output.points:
@@ -240,7 +240,7 @@ def _grid_files(cfg: DictConfig, problem: WorkspaceProblem, grid: Grid, files, s
                        **shape.summary()}
     if cfg.output.mesh:
         files.mesh("boundary", shape.vertices, shape.triangles, f"cdpr-studies feasible set of {problem.robot.name}, m")
-    return summary
+    return {**summary, **volume_spread(summary["volume_m3"], summary["mesh_volume_m3"])}
 
 
 def _line_files(cfg: DictConfig, problem: WorkspaceProblem, grid: Grid, files, sweep_pays: bool) -> dict:

@@ -187,7 +187,7 @@ def digests_json(paths: list[Path]) -> str:
 # A job summary's result columns (summarize, and simulate_lines' additions); the rest is config
 RESULT_COLUMNS = {"analysis", "actuator_name", "actuator_power_W", "n_orientations", "n_points",
                   "n_feasible", "feasible_pct", "volume_m3", "n_lines", "n_samples",
-                  "n_feasible_grid", "agreement_pct", "mesh_volume_m3", "mesh_surface_m2", "n_connected",
+                  "n_feasible_grid", "agreement_pct", "mesh_volume_m3", "mesh_surface_m2", "volume_spread_m3", "n_connected",
                   "connected_pct", "connected_volume_m3"}
 RESULT_PREFIXES = ("box.", "lost_", "least_margin_", "limit_", "line0_margin_", "home_")
 
