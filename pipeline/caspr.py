@@ -84,9 +84,10 @@ ORIENTING = {
 DEFAULT_ANGLE_LIMIT = np.pi  # CASPR's own q_lb/q_ub of its angle joints, without q_min/q_max
 
 
-def read_cables(path: Path, cable_set: str | None = None) -> dict:
+def read_cables(path: Path, cable_set: str | None = None, number: bool = False) -> dict:
     """Anchors, attachments (link 1, as given), names, force limits and the attachment
-    reference of every cable of one cable set (the file's default set unless named)."""
+    reference of every cable of one cable set (the file's default set unless named); ``number``:
+    name the cables 1, 2, ... in the file's order instead (a file that names two alike)."""
     root = _parse(path)
     if root.tag != "cables":
         raise ConfigError(f"{path}: root element <{root.tag}>, a CASPR cables file has <cables>")
@@ -101,15 +102,16 @@ def read_cables(path: Path, cable_set: str | None = None) -> dict:
         raise ConfigError(f"{path}: cable_set {wanted!r} has no cables")
     out = {"set": chosen[0].get("id"), "names": [], "anchors": [], "attachments": [], "force_min": [],
            "force_max": [], "reference": []}
-    for number, cable in enumerate(cables, start=1):
-        where = f"{path}: cable {cable.get('name') or number}"
+    for index, cable in enumerate(cables, start=1):
+        where = f"{path}: cable {cable.get('name') or index}"
         if cable.tag != "cable_ideal":
             raise ConfigError(f"{where}: <{cable.tag}> is not an ideal cable (springs and variable-stiffness "
                               "cables are not supported, only <cable_ideal>)")
-        name = cable.get("name") or str(number)
+        name = str(index) if number else cable.get("name") or str(index)
         if name in out["names"]:
-            raise ConfigError(f"{path}: cables {out['names'].index(name) + 1} and {number} are both named "
-                              f"{name!r} (each cable names its own columns)")
+            raise ConfigError(f"{path}: cables {out['names'].index(name) + 1} and {index} are both named "
+                              f"{name!r} (each cable names its own columns); --number-cables names them "
+                              "1, 2, ... in the file's order")
         out["names"].append(name)
         out["reference"].append(cable.get("attachment_reference", "joint"))
         if out["reference"][-1] not in ("joint", "com"):
@@ -334,6 +336,8 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--force", action="store_true", help="replace an existing --out file")
     parser.add_argument("--lo", type=float, nargs=3, help="search box corner x y z, m")
     parser.add_argument("--hi", type=float, nargs=3, help="search box corner x y z, m")
+    parser.add_argument("--number-cables", action="store_true",
+                        help="name the cables 1, 2, ... in the file's order (for a file that names two alike)")
     args = parser.parse_args(argv)
     try:
         if not 0 < args.step < np.inf:
@@ -345,7 +349,7 @@ def main(argv: list[str] | None = None) -> None:
             box = np.array(args.lo), np.array(args.hi)
             if not (np.isfinite(box).all() and (box[0] <= box[1]).all()):
                 raise ConfigError(f"--lo={args.lo} --hi={args.hi}: must be finite with lo <= hi")
-        cables = read_cables(args.cables, args.cable_set)
+        cables = read_cables(args.cables, args.cable_set, args.number_cables)
         body = read_body(args.bodies) if args.bodies is not None else None
         if body is None and "com" in cables["reference"]:
             raise ConfigError(f"{args.cables}: attachments relative to the centre of mass need --bodies")

@@ -316,3 +316,21 @@ def test_a_spherical_joint_imports_as_an_orientation_grid_that_runs(tmp_path, jo
     assert typed.returncode == 0, typed.stderr
     by_hand = pd.read_parquet(tmp_path / "typed" / "points.parquet")
     assert by_hand["feasible"].tolist() == points["feasible"].tolist() and 0 < points["feasible"].mean() <= 1
+
+
+def test_a_file_that_names_two_cables_alike_imports_with_numbered_cables(tmp_path):
+    """CASPR's own MACARM file names two cables "1": refused with the option that imports it,
+    --number-cables, which names them 1, 2, ... in the file's order; the robot is otherwise the
+    same (its anchors and attachments in the same order)."""
+    (tmp_path / "twice_cables.xml").write_text(GOOD.replace('name="cable 3"', 'name="cable 1"', 1))
+    (tmp_path / "good_cables.xml").write_text(GOOD)
+    refused = run(tmp_path, "pipeline.caspr", "twice_cables.xml")
+    assert refused.returncode == 2 and "--number-cables names them 1, 2, ... in the file's order" in refused.stderr
+    done = run(tmp_path, "pipeline.caspr", "twice_cables.xml", "--number-cables", "--out", "mine/robot/twice.yaml")
+    assert done.returncode == 0, done.stderr
+    good = run(tmp_path, "pipeline.caspr", "good_cables.xml", "--out", "mine/robot/good.yaml")
+    assert good.returncode == 0, good.stderr
+    twice, plain = (yaml.safe_load((tmp_path / "mine" / "robot" / f"{n}.yaml").read_text())["robot"]
+                    for n in ("twice", "good"))
+    assert twice["cable_names"] == [str(i) for i in range(1, len(plain["anchors"]) + 1)]
+    assert twice["anchors"] == plain["anchors"] and twice["attachments"] == plain["attachments"]
