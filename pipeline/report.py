@@ -27,7 +27,7 @@ from pipeline.analyses.paper import TABLE2_ACCEPTED, TABLE2_FEASIBLE_PCT
 from pipeline.analyses.results import table as read_table
 from pipeline.errors import ConfigError, one_line
 from pipeline.app.results import code_version
-from pipeline.study import OUTPUT_DIR, available, load_study, studies_folder
+from pipeline.study import OUTPUT_DIR, available, load_study, studies_folder, verified_figures
 from pipeline.analyses.webpage import View, write_page
 
 REPORT_DIR = Path("outputs") / "report"
@@ -366,7 +366,7 @@ def _write(studies_dir: Path, tmp: Path, config_dir: Path | None) -> None:
     lines = [*papers, "## Figures", ""]
     for name in available(studies_folder(config_dir)):
         study = load_study(name, config_dir=config_dir)
-        figures = sorted((studies_dir / name / "figures").glob("*.png"))
+        figures = [f for f in verified_figures(studies_dir / name) if f.parent == studies_dir / name / "figures"]
         lines += [f"### {md(study.title)}", "", f"`{name}`: {md(study.source)}.", "",
                   *_answer(studies_dir / name)]
         for figure in figures:

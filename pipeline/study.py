@@ -47,7 +47,7 @@ from pipeline.analyses.optimise import (OptimiseSpec, best_drive, check_catalogu
 from pipeline.app.plan import Job, Plan, Reuse, parse, plan, quoted, refuse_aliases
 from pipeline.app.run import run as run_jobs
 from pipeline.app.resources import STUDIES_DIR
-from pipeline.app.results import READ_ERRORS, code_version, read_verified, write_csv, write_parquet, write_text
+from pipeline.app.results import READ_ERRORS, code_version, file_digest, read_verified, write_csv, write_parquet, write_text
 from pipeline.analyses.search import SearchSpec, exact_drive, search
 from pipeline.analyses.survival import survival
 
@@ -350,7 +350,46 @@ def _run_study(study: StudySpec, extra: list[str], out: Path, figures_only: bool
         shutil.rmtree(out / folder, ignore_errors=True)
     for figure in study.figures:
         written.extend(render(figure, results, out / "figures"))
+    written.append(record_figures(out))
     return written
+
+
+FIGURES_RECORD = "figures.json"  # in a study's folder: each file of figures/ and its sha256
+
+
+def record_figures(out: Path) -> Path:
+    """The record of the files a study drew into ``out/figures`` (relative path -> sha256), which
+    the report checks before it shows them, as the tables' digests guard the tables."""
+    folder = out / "figures"
+    files = sorted(p for p in folder.rglob("*") if p.is_file()) if folder.is_dir() else []
+    record = {p.relative_to(out).as_posix(): file_digest(p) for p in files}
+    write_text(out / FIGURES_RECORD, json.dumps(record, indent=1, sort_keys=True) + "\n")
+    return out / FIGURES_RECORD
+
+
+def verified_figures(out: Path) -> list[Path]:
+    """The PNG figures of the study in ``out``, each as the study drew it; ValueError naming the
+    first that is missing, changed or not the study's (a figure is outside data too)."""
+    record_path = out / FIGURES_RECORD
+    try:
+        record = json.loads(record_path.read_text(encoding="utf-8"))
+        if not isinstance(record, dict) or not all(isinstance(v, str) for v in record.values()):
+            raise ValueError("not a record of figures")
+    except FileNotFoundError:
+        raise ValueError(f"{record_path}: missing (the figures are not recorded); rerun the study") from None
+    except (OSError, ValueError) as exc:
+        raise ValueError(f"{record_path}: unreadable ({one_line(exc)}); rerun the study") from None
+    drawn = sorted(p for p in (out / "figures").rglob("*") if p.is_file()) if (out / "figures").is_dir() else []
+    for path in drawn:
+        name = path.relative_to(out).as_posix()
+        if name not in record:
+            raise ValueError(f"{path}: not a figure the study drew; rerun the study")
+        if file_digest(path) != record[name]:
+            raise ValueError(f"{path}: changed since the study drew it; rerun the study (--figures-only)")
+    missing = [name for name in record if not (out / name).is_file()]
+    if missing:
+        raise ValueError(f"{out / missing[0]}: missing; rerun the study (--figures-only)")
+    return [p for p in drawn if p.suffix == ".png"]
 
 
 def _check_jobs(jobs_dir: Path, jobs) -> None:

@@ -19,7 +19,7 @@ from pipeline.analyses.survival import survival
 from pipeline.analyses.views import robot_traces, write_view
 from pipeline.app.results import DIGESTS_KEY, digests_json, write_parquet
 from pipeline.workspace.lines import simulate_lines
-from pipeline.study import available
+from pipeline.study import available, record_figures
 from pipeline.app.problem import build_problem, compute_workspace
 
 STUDIES = ["actuator_choice", "actuator_choice_pulling", "line_simulation", "irpm_fig13_end_ratio",
@@ -89,6 +89,8 @@ def built_studies(tmp_path_factory, make_cfg, catalogue):
                                                                 ("jdot=true", "212 of 216", False, 4.0))
                       ]), root / name / "evidence.parquet")
         save(pd.DataFrame({"job": ["x"]}), root / name / "summary.parquet")
+    for name in STUDIES:  # what a study records of the figures it drew
+        record_figures(root / name)
     return root
 
 
@@ -141,6 +143,8 @@ def test_the_report_gives_each_studys_answer_and_the_figures_captions(studies, t
                              "job": f"{a}-{m}"} for a in (1, 3) for m in (0.5, 4.0)])
     save(summary, design / "summary.parquet")
     save(acceptance(summary), design / "acceptance.parquet")
+    record_figures(studies / "actuator_choice")
+    record_figures(design)
     monkeypatch.setattr(pipeline.report, "available", lambda folder: [*STUDIES, "design_mass"])
     text = pipeline.report.build(studies, tmp_path / "report").read_text()
     assert ("Actuator choice at x &gt;= 90 %: accept 1, 2; reject 3 85.19 % (lost to torque 32); "
@@ -325,3 +329,29 @@ def test_the_report_never_deletes_what_it_did_not_write(studies, tmp_path, monke
                                  "or name another folder"]
     assert (out / "my_notes.md").read_text() == "mine"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["report", "report.txt", "studies", "thesis"]
+
+
+def test_a_figure_changed_added_or_lost_since_the_study_drew_it_is_one_line(studies, tmp_path, monkeypatch, capsys):
+    """Figures are guarded like the tables: the study records each file of figures/ with its
+    digest, and the report refuses a figure edited, added or missing since (it copied any PNG
+    it found into the report)."""
+    monkeypatch.setattr(pipeline.report, "available", lambda folder: STUDIES)
+    figure = studies / "actuator_choice" / "figures" / "fig9.png"
+    good = figure.read_bytes()
+
+    def report():
+        with pytest.raises(SystemExit) as raised:
+            pipeline.report.main(["--studies", str(studies), "--out", str(tmp_path / "report")])
+        err = capsys.readouterr().err.strip().splitlines()
+        assert raised.value.code == 2 and len(err) == 1, err
+        return err[0]
+
+    figure.write_bytes(good[:-10] + b"0123456789")
+    assert f"{figure}: changed since the study drew it" in report()
+    figure.write_bytes(good)
+    (figure.parent / "extra.png").write_bytes(good)
+    assert f"{figure.parent / 'extra.png'}: not a figure the study drew" in report()
+    (figure.parent / "extra.png").unlink()
+    figure.unlink()
+    assert f"{figure}: missing" in report()
+    assert not (tmp_path / "report").exists()
