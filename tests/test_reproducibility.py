@@ -33,8 +33,9 @@ def test_rerun_gives_byte_identical_parquet_and_figures(tmp_path):
         proc = study(tmp_path, "actuator_choice", "--out", out)
         assert proc.returncode == 0, proc.stderr
     first, second = files(tmp_path / "a"), files(tmp_path / "b")
-    # jobs, sweep summary, study summary + choice (+ CSV), 9 figures, 5 views, 2 slices' series, metrics.json
-    assert len(first) == 5 * 2 + 1 + 2 + 1 + 9 + 5 + 2 + 1
+    # jobs, sweep summary, study summary + choice (+ CSV), 9 figures, 5 views, 2 slices' series, metrics.json,
+    # the figures' record (figures.json)
+    assert len(first) == 5 * 2 + 1 + 2 + 1 + 9 + 5 + 2 + 1 + 1
     assert first == second
 
 
