@@ -6,9 +6,9 @@ from hydra import compose, initialize_config_dir
 
 from pipeline.model.catalogue import load_catalogue
 from pipeline.app.config import register
-from pipeline.app.problem import typed_config
+from pipeline.app.problem import build_problem, typed_config
 from pipeline.app.resources import CONF_DIR
-from pipeline.app.problem import compute_workspace
+from pipeline.workspace.compute import grid_workspace
 
 register()
 catalogue = load_catalogue()
@@ -16,5 +16,6 @@ with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
     base = compose("config")
 for actuator in catalogue.ids:
     base.actuator = int(actuator)
-    _, summary = compute_workspace(typed_config(base), catalogue)
+    cfg = typed_config(base)
+    _, summary = grid_workspace(cfg, *build_problem(cfg, catalogue))
     print(actuator, f"{summary['feasible_pct']:.2f}")

@@ -15,7 +15,7 @@ from hydra import compose, initialize_config_dir
 from pipeline.model.catalogue import load_catalogue
 from pipeline.app.config import register
 from pipeline.app.resources import CONF_DIR
-from pipeline.app.problem import compute_workspace
+from conftest import compute_workspace
 
 CASES = [
     ["robot=irpm6", "robot.r_base=4"],  # 50 poses with a cable at exactly zero tension

@@ -18,9 +18,18 @@ from pipeline.model.catalogue import load_catalogue
 from pipeline.model.dynamics import load_wrenches
 from pipeline.app.config import register
 from pipeline.app.plan import Composition, parse, structural
+from pipeline.app.problem import build_problem
 from pipeline.app.resources import CONF_DIR
+from pipeline.workspace.compute import grid_workspace
 
 register()
+
+
+def compute_workspace(cfg, catalogue, sink=None, sweep_pays: bool = False):
+    """The points and the summary of a typed config's workspace, computed in this process: the
+    grid analysis of :func:`pipeline.app.problem.build_problem`'s problem (the job's own path
+    without its files)."""
+    return grid_workspace(cfg, *build_problem(cfg, catalogue), sink, sweep_pays)
 
 
 @pytest.fixture(scope="session")

@@ -79,7 +79,7 @@ CASES = [
      "a Hydra plugin adds its own, e.g. pip install hydra-submitit-launcher)"),
     ("pipeline", ["-m", "actuator=1,2", "hydra.launcher.backend=dask"], "reads hydra.launcher.n_jobs only"),
     ("pipeline", ["robot=irpm6", "robot.r_end=0"], "robot.r_end=0"),
-    ("pipeline", ["-m", "robot=irpm6", "limits.s_max=55000,-1"], "limits.s_max=-1"),
+    ("pipeline", ["-m", "robot=irpm6", "tension.t_max=55000,-1"], "tension.t_max=-1"),
     ("pipeline", ["robot=irpm6", "robot.gamma_deg=130"], "robot.gamma_deg=130"),
     ("pipeline", ["robot=irpm6", "robot.search.step=0"], "robot.search.step=0"),
     ("pipeline", ["grid.n=1"], "grid.n=1"),

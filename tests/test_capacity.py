@@ -15,7 +15,8 @@ from pipeline.model.capacity import shifted_margins
 from pipeline.model.geometry import structure_matrix
 from pipeline.model.linalg import batched_pinv
 from pipeline.model.tensions import Family, capacity_margins, reachability
-from pipeline.app.problem import build_problem, compute_workspace
+from pipeline.app.problem import build_problem
+from conftest import compute_workspace
 
 MARGIN_ATOL = 1e-6
 

@@ -4,7 +4,7 @@ import pandas as pd
 import pytest
 
 from pipeline.analyses.choice import acceptance, choose
-from pipeline.app.problem import compute_workspace
+from conftest import compute_workspace
 
 
 @pytest.fixture(scope="module")

@@ -102,7 +102,7 @@ def test_line_simulation_job_writes_samples(tmp_path):
         (("no_such_key=1",), "no_such_key"),
         (("model.acceleration_set=sphere",), "model.acceleration_set=sphere"),
         (("robot=irpm6", "robot.r_end=0"), "robot.r_end=0"),
-        (("-m", "robot=irpm6", "limits.s_max=55000,-1"), "limits.s_max=-1"),
+        (("-m", "robot=irpm6", "tension.t_max=55000,-1"), "tension.t_max=-1"),
         (("robot=irpm7",), "irpm7"),
     ],
 )

@@ -5,7 +5,8 @@ reports the angles as given. Rotations written out here, not taken from the mode
 import numpy as np
 import pytest
 
-from pipeline.app.problem import build_problem, compute_workspace
+from pipeline.app.problem import build_problem
+from conftest import compute_workspace
 
 
 def rx(a):

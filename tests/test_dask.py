@@ -7,7 +7,7 @@ import sys
 import pandas as pd
 import pytest
 
-from pipeline.app.problem import compute_workspace
+from conftest import compute_workspace
 
 pytestmark = pytest.mark.slow
 

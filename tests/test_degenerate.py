@@ -11,10 +11,10 @@ import logging
 import numpy as np
 import pytest
 
-from pipeline.app.problem import build_problem, compute_workspace
+from pipeline.app.problem import build_problem
+from conftest import compute_workspace, SPREAD_ANCHORS, command, eq9_rotation
 from pipeline.workspace.degeneracy import Degeneracy
 
-from conftest import SPREAD_ANCHORS, command, eq9_rotation
 
 # Six anchors on one horizontal line, every cable on one platform point: the cables span the
 # plane through that line and the point, so no tension distribution holds the platform off it.

@@ -5,7 +5,7 @@ import pytest
 from omegaconf import OmegaConf
 
 from pipeline.app.resources import STUDIES_DIR
-from pipeline.app.problem import compute_workspace
+from conftest import compute_workspace
 
 ACCEPTED = {  # study -> {actuator: accepted values}
     "design_winch_radius": {1: [0.075, 0.08, 0.09, 0.1, 0.12], 2: [0.08], 3: [], 4: [], 5: []},

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from scipy.optimize import linprog
 
-from conftest import SPREAD_ROBOT
-from pipeline.app.problem import build_problem, compute_workspace
+from conftest import SPREAD_ROBOT, compute_workspace
+from pipeline.app.problem import build_problem
 from pipeline.model import distribution
 from pipeline.model.distribution import face_distribution, min_norm_tensions, qp_distribution
 from pipeline.model.linalg import batched_pinv

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from scipy.optimize import linprog
 
-from conftest import command, eq9_rotation
-from pipeline.app.problem import build_problem, compute_workspace
+from conftest import command, eq9_rotation, compute_workspace
+from pipeline.app.problem import build_problem
 from pipeline.errors import ConfigError
 
 ROWS = {"x": 0, "y": 1, "z": 2, "rx": 3, "ry": 4, "rz": 5}

@@ -17,10 +17,10 @@ import pandas as pd
 import pyarrow.parquet as pq
 import pytest
 
-from conftest import command, job_imports
+from conftest import command, job_imports, compute_workspace
 from pipeline.workspace import fused
 from pipeline.workspace.compute import fused_unfit, use_fused
-from pipeline.app.problem import build_problem, compute_workspace, fused_pays
+from pipeline.app.problem import build_problem, fused_pays
 from pipeline.workspace.kernel import evaluate_chunk
 from pipeline.workspace.verdict import classify
 
@@ -165,7 +165,7 @@ def test_a_sweep_of_many_small_jobs_pays_for_the_compiled_kernel_together(make_c
 
 
 @pytest.mark.parametrize("overrides", [
-    ["robot.gamma_deg=0"], ["robot.gamma_deg=30", "tension.t_min=100", "limits.s_max=60000"],
+    ["robot.gamma_deg=0"], ["robot.gamma_deg=30", "tension.t_min=100", "tension.t_max=60000"],
     ["model.moment_arm=base", "load.mass=0", "wrench.mx=20000"],
     ["model.cable_direction=centre", "orientation.psi=0.2", "wrench.fx=50000"],
 ])

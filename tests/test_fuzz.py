@@ -17,12 +17,12 @@ import yaml
 
 from pipeline import caspr
 from pipeline.app.plan import plan
-from pipeline.app.problem import compute_workspace, grid_size
+from pipeline.app.problem import grid_size
+from conftest import compute_workspace, SPREAD_ANCHORS, SPREAD_PLATFORM, command
 from pipeline.errors import ConfigError
 from pipeline.study import load_study, sweep_command
 from pipeline.workspace.verdict import snap
 
-from conftest import SPREAD_ANCHORS, SPREAD_PLATFORM, command
 
 CASPR_DATA = Path(__file__).parent / "data" / "caspr"
 JUNK = [None, "", "abc", "a\nb: c", -1, 0, 1e308, -1e308, ".nan", ".inf", [], [[]], [1, 2], [[1, 2, 3]],

@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 from pipeline.api import workspace
-from pipeline.app.problem import build_problem, compute_workspace, validate
+from pipeline.app.problem import build_problem, validate
+from conftest import compute_workspace
 from pipeline.model.clearance import segment_distance
 from pipeline.model.geometry import CableRobot, PoseGeometry
 from pipeline.workspace.criteria.interference import cable_cable

@@ -7,7 +7,8 @@ import pytest
 from pipeline.errors import ConfigError
 from pipeline.app.problem import validate
 from pipeline.workspace.kernel import evaluate_chunk
-from pipeline.app.problem import build_problem, compute_workspace
+from pipeline.app.problem import build_problem
+from conftest import compute_workspace
 
 
 @pytest.fixture(scope="module")
@@ -87,7 +88,7 @@ def test_workspace_is_mirror_symmetric_about_the_xz_plane(irpm):
 
 
 def test_volume_grows_with_the_tension_limit(irpm):
-    volumes = [volume(irpm, f"limits.s_max={s}") for s in (40e3, 55e3, 80e3)]
+    volumes = [volume(irpm, f"tension.t_max={s}") for s in (40e3, 55e3, 80e3)]
     assert volumes[0] < volumes[1] < volumes[2]
 
 
@@ -203,7 +204,7 @@ def test_short_cables_make_everything_infeasible(irpm):
 
 @pytest.mark.parametrize("override, message", [
     ("robot.r_end=0", "robot.r_end=0"),
-    ("limits.s_max=-55000", "limits.s_max=-55000"),
+    ("tension.t_max=-55000", "tension.t_max=-55000"),
     ("robot.gamma_deg=130", "robot.gamma_deg=130"),
     ("robot.search.step=0", "robot.search.step=0"),
     ("robot.search.lo=[7,-6,0]", "x from 7"),

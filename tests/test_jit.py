@@ -71,11 +71,10 @@ def test_a_truncated_or_empty_cache_is_compiled_again_with_a_warning(tmp_path):
 SPECIALISATIONS = """
 import numba, sys
 sys.path.insert(0, sys.argv[1])
-from conftest import make_cfg
+from conftest import make_cfg, compute_workspace
 from pipeline.model import crossings, faces
 from pipeline.model.catalogue import load_catalogue
 from pipeline.workspace import fused_loops
-from pipeline.app.problem import compute_workspace
 
 make, catalogue = make_cfg, load_catalogue()
 for overrides in (["compute.kernel=fused", "grid.n=4"], ["compute.kernel=fused", "grid.n=4", "orientation.psi=0.5"],

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 from scipy.optimize import linprog
 
-from pipeline.app.problem import compute_workspace, validate
+from pipeline.app.problem import validate
+from conftest import compute_workspace
 from pipeline.errors import ConfigError
 
 ANCHORS = np.array([[-2, 1.5, 2], [2, 1.5, 2], [2, -1.5, 2], [-2, -1.5, 2], [-2, 1.5, 0], [2, 1.5, 0], [2, -1.5, 0],

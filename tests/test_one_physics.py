@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 from pipeline.model.geometry import euler_rate_axes, rotation_matrix, rotation_partials
-from pipeline.app.problem import build_problem, compute_workspace
+from pipeline.app.problem import build_problem
+from conftest import compute_workspace
 from pipeline.workspace.kernel import evaluate_chunk
 
 
@@ -71,7 +72,7 @@ def test_one_weak_cable_only_removes_poses_and_is_what_limits_them(make_cfg, cat
     it, and the square IRPM gives the same verdicts under both tension models (36 poses)."""
     strong, _ = compute_workspace(make_cfg("robot=irpm6"), catalogue)
     weak, summary = compute_workspace(make_cfg("robot=irpm6", f"tension.model={model}",
-                                               "limits.s_max=[55000,55000,55000,55000,55000,1000]"), catalogue)
+                                               "tension.t_max=[55000,55000,55000,55000,55000,1000]"), catalogue)
     assert summary["n_feasible"] == 36
     assert not (weak["feasible"] & ~strong["feasible"]).any()
     assert (weak.loc[strong["feasible"] & ~weak["feasible"], "limiting"] == "tension_max").all()

@@ -114,7 +114,7 @@ def test_a_seeded_rerun_proposes_the_same_trials_and_reuses_their_jobs(small_run
 def test_each_trial_is_the_job_its_variables_name(small_run, make_cfg, catalogue):
     """The objectives from the trial's own job: the peak motor torque is the largest share of
     eq. (32)'s limit over the feasible poses times the rated torque."""
-    from pipeline.app.problem import compute_workspace
+    from conftest import compute_workspace
 
     out, trials, _ = small_run
     meeting = trials[trials["feasible_pct"] > 0].iloc[0]

@@ -7,7 +7,7 @@ import pytest
 from golden import values
 
 from pipeline.analyses.paper import TABLE2_FEASIBLE_PCT
-from pipeline.app.problem import compute_workspace
+from conftest import compute_workspace
 
 PAPER = TABLE2_FEASIBLE_PCT
 OURS = dict(zip(PAPER, values("full_default_zero")))  # feasible grid points of 216 (tests/golden.yaml)

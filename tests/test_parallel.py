@@ -6,7 +6,8 @@ import pandas as pd
 
 from pipeline.workspace import compute as workspace
 from pipeline.workspace.compute import worth_workers
-from pipeline.app.problem import build_problem, compute_workspace
+from pipeline.app.problem import build_problem
+from conftest import compute_workspace
 
 
 def test_workers_only_when_the_kernel_outlasts_their_start(make_cfg, catalogue):

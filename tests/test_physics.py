@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from pipeline.model.dynamics import PoseDynamics
-from conftest import shaft_accel_from_acceleration, shaft_torque, wrenches
-from pipeline.app.problem import build_problem, compute_workspace
+from conftest import shaft_accel_from_acceleration, shaft_torque, wrenches, compute_workspace
+from pipeline.app.problem import build_problem
 
 
 def _dyn(make_cfg, catalogue, *overrides):

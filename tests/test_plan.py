@@ -78,7 +78,7 @@ POINTS = ["robot=points", "robot.anchors=[[2,0,3],[1,2,3],[-1,2,3],[-2,0,3],[-1,
 @pytest.mark.parametrize("argv", [
     ["-m", "actuator=1,3", "load.mass=2,7.5", "compute.kernel=numpy,fused", "model.rank_rtol=1e-6"],
     ["-m", "tension=feasible", "orientation.psi=0,0.1", "load.com=[0,0,0.1],[0.01,0,0]", "poses=[[0.1,0.2,0.3]]"],
-    ["-m", "robot=irpm6", "robot.gamma_deg=0,15", "wrench.fx=0,50000", "robot.r_end=4.8", "limits.s_max=null,1e5"],
+    ["-m", "robot=irpm6", "robot.gamma_deg=0,15", "wrench.fx=0,50000", "robot.r_end=4.8", "tension.t_max=null,1e5"],
     ["-m", *POINTS, "robot.l_max=null,3", "load.mass=1,2"],
     ["-m", "--config-dir", "{user}", "robot=hexa", "robot.l_max=null,3", "robot.search.step=0.25,0.5",
      "robot.up=[0,0,1],[0,0.1,1]"],

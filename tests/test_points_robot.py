@@ -91,7 +91,7 @@ def test_bad_robot_input_is_one_line_exit_2_and_writes_nothing(ipanema, args, me
 def test_the_points_robot_studies_give_the_numbers_their_docs_state(make_cfg, catalogue, study, bound, feasible):
     """docs/studies.md and the README quote these: IPAnema 1's wrench-closure workspace (88.67 %)
     and its total-orientation workspace at +-0.1 rad (2.80 %), from the studies' own overrides."""
-    from pipeline.app.problem import compute_workspace
+    from conftest import compute_workspace
     from pipeline.study import load_study
 
     overrides = [o.strip('"') for o in load_study(study).overrides]

@@ -12,7 +12,8 @@ from pipeline.app.plan import plan
 from pipeline.workspace import fused, parallel
 from pipeline.workspace.progress import Progress, clock_text
 from pipeline.workspace.compute import announce_cost, estimated_seconds
-from pipeline.app.problem import build_problem, compute_workspace
+from pipeline.app.problem import build_problem
+from conftest import compute_workspace
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "my_robot"
 

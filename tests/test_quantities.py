@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 from pipeline.model.geometry import structure_matrix
-from pipeline.app.problem import build_problem, compute_workspace
+from pipeline.app.problem import build_problem
+from conftest import compute_workspace
 
 
 def test_irpm_at_the_centre_holds_the_weight_with_six_equal_tensions(make_cfg, catalogue):

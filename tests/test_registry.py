@@ -7,7 +7,8 @@ from omegaconf import OmegaConf
 
 from pipeline.workspace.criteria import DYNAMICS, GATES, REGISTRY, STATICS
 from pipeline.workspace.verdict import classify
-from pipeline.app.problem import build_problem, compute_workspace
+from pipeline.app.problem import build_problem
+from conftest import compute_workspace
 
 SMALL_POINTS = ["robot=points",  # six cables: the fewest a wrench with moments needs
                 "robot.anchors=[[-1,-1,2],[1,-1,2],[1,1,2],[-1,1,2],[0,-1.5,2],[0,1.5,2]]",

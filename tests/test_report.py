@@ -20,7 +20,8 @@ from pipeline.analyses.views import robot_traces, write_view
 from pipeline.app.results import DIGESTS_KEY, digests_json, write_parquet
 from pipeline.workspace.lines import simulate_lines
 from pipeline.study import available, record_figures
-from pipeline.app.problem import build_problem, compute_workspace
+from pipeline.app.problem import build_problem
+from conftest import compute_workspace
 
 STUDIES = ["actuator_choice", "actuator_choice_pulling", "line_simulation", "irpm_fig13_end_ratio",
            "tension_comparison", "evidence_cpr8", "evidence_irpm"]

@@ -6,7 +6,7 @@ import pyarrow.parquet as pq
 import pytest
 
 from pipeline.app.results import ParquetSink, read_metadata, write_parquet
-from pipeline.app.problem import compute_workspace
+from conftest import compute_workspace
 
 
 def test_points_streamed_chunk_by_chunk_equal_the_in_memory_table(tmp_path, make_cfg, catalogue):

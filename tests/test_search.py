@@ -14,7 +14,7 @@ from pipeline.errors import ConfigError
 from pipeline.analyses.optimise import OBJECTIVES, optimise
 from pipeline.analyses.search import Evaluation, SearchSpec, branch_and_bound, candidates, exact_drive, search
 from pipeline.study import checked_commands, load_study
-from pipeline.app.problem import compute_workspace
+from conftest import compute_workspace
 
 STUDY = "title: t\nsource: s\nsearch:\n{body}\n"
 

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 from scipy.optimize import linprog
 
-from conftest import eq9_rotation
-from pipeline.app.problem import build_problem, compute_workspace
+from conftest import eq9_rotation, compute_workspace
+from pipeline.app.problem import build_problem
 from pipeline.errors import ConfigError
 
 ANCHORS = [[1, 0, 0.5], [-0.5, 0.87, 0.5], [-0.5, -0.87, 0.5], [1, 0, -0.5], [-0.5, 0.87, -0.5], [-0.5, -0.87, -0.5]]

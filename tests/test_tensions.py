@@ -10,14 +10,14 @@ from scipy.optimize import nnls
 
 from pipeline.model.actuators import ActuatorModel
 from pipeline.workspace.criteria import REGISTRY
-from conftest import command, shaft_torque
+from conftest import command, shaft_torque, compute_workspace
 from pipeline.model.dynamics import Load, MotionSpec, load_wrenches
 from pipeline.analyses.figures import caption
 from pipeline.model.geometry import CableRobot
 from pipeline.workspace.kernel import WorkspaceProblem, evaluate_chunk
 from pipeline.workspace.verdict import classify
 from pipeline.model.tensions import TensionSpec, feasible_tensions
-from pipeline.app.problem import build_problem, compute_workspace
+from pipeline.app.problem import build_problem
 
 FORCES = "model.pinv_columns=translational"  # forces only: the paper's reading of eq. (20) for Table 2
 

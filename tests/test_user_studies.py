@@ -11,10 +11,9 @@ from pathlib import Path
 
 import pytest
 
-from conftest import command
+from conftest import command, compute_workspace
 
 from pipeline.app.plan import plan
-from pipeline.app.problem import compute_workspace
 from pipeline.app.resources import STUDIES_DIR
 from pipeline.app.results import read_verified
 from pipeline.errors import ConfigError

@@ -7,12 +7,12 @@ import json
 
 import numpy as np
 
-from conftest import eq9_rotation
+from conftest import eq9_rotation, compute_workspace
 from pipeline.analyses.views import pose_axes, robot_traces, write_view
 import pytest
 
 from pipeline.api import workspace
-from pipeline.app.problem import build_problem, compute_workspace
+from pipeline.app.problem import build_problem
 from pipeline.workspace.boundary import enclosed_volume
 
 

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from scipy.optimize import linprog
 
-from conftest import SPREAD_ANCHORS, SPREAD_PLATFORM, SPREAD_ROBOT, eq9_rotation
-from pipeline.app.problem import compute_workspace, validate
+from conftest import SPREAD_ANCHORS, SPREAD_PLATFORM, SPREAD_ROBOT, eq9_rotation, compute_workspace
+from pipeline.app.problem import validate
 from pipeline.errors import ConfigError
 
 ROBOT = [*SPREAD_ROBOT, "robot.search.step=0.5",

@@ -344,21 +344,13 @@ class WrenchConfig:
 
 
 @dataclass
-class LimitsConfig:
-    """``s_max``: the IRPM paper's name (eq. 10) for ``tension.t_max``, kept as an alias: when
-    given it replaces ``tension.t_max``."""
-
-    s_max: Any = MISSING
-
-
-@dataclass
 class TensionConfig:
     """The config group ``tension=pinv|feasible`` and its keys. ``model``: pinv (the papers'
     minimum-norm forces, any sign) or feasible (cables only pull: hyperplane shifting, LPs where
     it cannot settle). ``t_min``: smallest tension (N; pinv checks it in statics only).
     ``t_max``: cable rating (N) in every analysis; each a number or one per cable, null = none
-    (CPR-WWA: the motor torque limit / R_i only; ``robot=irpm6`` sets the paper's 55 kN);
-    ``limits.s_max`` is an alias. ``residual_rtol``: a required wrench is unreachable when the
+    (CPR-WWA: the motor torque limit / R_i only; ``robot=irpm6`` sets the paper's 55 kN, its
+    s_max of eq. 10). ``residual_rtol``: a required wrench is unreachable when the
     equilibrium residual exceeds this fraction of it (feasible model). ``pinv_residual``: the
     same for the minimum-norm forces of CPR-WWA, which balance only the part of F in the range
     of J^T (the CPR-8 at the zero orientation has rank 5 and misses up to 1.4 % of F; a robot
@@ -543,7 +535,6 @@ class Config:
     motion: MotionConfig = field(default_factory=MotionConfig)
     load: LoadConfig = field(default_factory=LoadConfig)
     wrench: WrenchConfig = field(default_factory=WrenchConfig)
-    limits: LimitsConfig = field(default_factory=LimitsConfig)
     tension: TensionConfig = field(default_factory=TensionConfig)
     drive: DriveConfig = field(default_factory=DriveConfig)
     choice: ChoiceConfig = field(default_factory=ChoiceConfig)

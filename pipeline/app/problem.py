@@ -545,12 +545,6 @@ def build_problem(cfg: DictConfig, catalogue: Catalogue | None) -> tuple[Workspa
     return problem, build_grid(cfg, problem.robot)
 
 
-def compute_workspace(cfg: DictConfig, catalogue: Catalogue | None, sink=None, sweep_pays: bool = False):
-    """The points and the summary of a typed config's workspace
-    (:func:`pipeline.workspace.compute.grid_workspace` of :func:`build_problem`)."""
-    return grid_workspace(cfg, *build_problem(cfg, catalogue), sink, sweep_pays)
-
-
 def grid_size(cfg: DictConfig) -> int:
     """Poses a job checks, counted without building the grid (``compute.max_poses`` bounds it)."""
     return len(cfg.poses) if cfg.poses is not None else ROBOTS[cfg.robot.name].size(cfg)
@@ -600,17 +594,15 @@ def load_spec(cfg: DictConfig) -> Load:
 
 
 def tension_spec(cfg: DictConfig, robot: CableRobot) -> TensionSpec:
-    """The cable tension model and limits, each limit one number or one per cable of ``robot``:
-    ``tension.t_max`` is replaced by its alias ``limits.s_max`` (the IRPM paper's name) when
-    that is given; null = no rating. Refuses a negative ``t_min`` and a rating not above it."""
+    """The cable tension model and limits, each limit one number or one per cable of ``robot``
+    (``tension.t_max`` null = no rating). Refuses a negative ``t_min`` and a rating not above it."""
     t = cfg.tension
     t_min = _limit_values("tension.t_min", t.t_min, robot.n_cables)
     if not (t_min >= 0).all():
         raise ConfigError(f"tension.t_min={shown(t.t_min)}: must be >= 0 (a cable cannot push)")
-    key, rating = ("limits.s_max", cfg.limits.s_max) if cfg.limits.s_max is not None else ("tension.t_max", t.t_max)
-    if rating is not None and not (t_min < _limit_values(key, rating, robot.n_cables)).all():
-        raise ConfigError(f"{key}={shown(rating)}: must be > tension.t_min={shown(t.t_min)}")
-    return TensionSpec(name_of(t.model), _per_cable(t.t_min), _per_cable(rating), t.residual_rtol,
+    if t.t_max is not None and not (t_min < _limit_values("tension.t_max", t.t_max, robot.n_cables)).all():
+        raise ConfigError(f"tension.t_max={shown(t.t_max)}: must be > tension.t_min={shown(t.t_min)}")
+    return TensionSpec(name_of(t.model), _per_cable(t.t_min), _per_cable(t.t_max), t.residual_rtol,
                        name_of(t.distribution), t.pinv_residual)
 
 

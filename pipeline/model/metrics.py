@@ -56,7 +56,7 @@ def pose_metrics(state, limits, distribution, held: np.ndarray) -> dict[str, np.
     valid, and the tension factor is NaN)."""
     spec = state.spec
     t_min = np.broadcast_to(np.asarray(spec.tension.t_min, dtype=float), (state.robot.n_cables,))
-    t_max = np.broadcast_to(np.asarray(limits.s_max, dtype=float), (state.robot.n_cables,))
+    t_max = np.broadcast_to(np.asarray(limits.t_max, dtype=float), (state.robot.n_cables,))
     structure = state.structure
     wrench = np.broadcast_to(state.wrench, (len(structure), structure.shape[1]))
     pinv, rank = state.wrench_pinv

@@ -73,14 +73,14 @@ class StaticsSpec:
 
 @dataclass(frozen=True)
 class StaticLimits:
-    """Eq. (10) of the IRPM paper: tensions in [t_min, s_max] (N; s_max = ``tension.t_max``,
-    inf = no rating, a scalar or one per cable); a pose is singular when the gram ratio of the
+    """Eq. (10) of the IRPM paper: tensions in [t_min, t_max] (N; the paper's s_max is
+    ``tension.t_max``, inf = no rating, a scalar or one per cable); a pose is singular when the gram ratio of the
     structure matrix is below ``rank_rtol``. ``scale`` (N) is the unit of the slack margin:
     the largest rating, or without one the magnitude of the force the cables balance (at least
     1 N). Cable lengths are limited by the robot's own ``l_max``. ``n_wrenches``: the vertices of
     a required wrench set (0: none)."""
 
-    s_max: float | np.ndarray
+    t_max: float | np.ndarray
     rank_rtol: float
     scale: float
     n_wrenches: int = 0
@@ -121,12 +121,12 @@ class PoseStatics(PoseGeometry):
         return tensions
 
     def force_families(self, limits: StaticLimits) -> list[Family]:
-        """The intervals on s: slack s >= t_min and s <= s_max (eq. 10), in units of
-        ``StaticLimits.scale`` and s_max."""
+        """The intervals on s: slack s >= t_min and s <= t_max (eq. 10's s_max), in units of
+        ``StaticLimits.scale`` and t_max."""
         slack = Family("slack", self.tension.t_min, np.inf, limits.scale)
-        if not np.isfinite(limits.s_max).all():
+        if not np.isfinite(limits.t_max).all():
             return [slack]
-        return [slack, Family("tension_max", -np.inf, limits.s_max, limits.s_max)]
+        return [slack, Family("tension_max", -np.inf, limits.t_max, limits.t_max)]
 
     @cached_property
     def vectors(self) -> np.ndarray:

@@ -76,7 +76,7 @@ def _statics_margins(problem, positions: np.ndarray, orientation):
         np.ascontiguousarray(robot.attachments @ rotation.T), spec.cable_direction == "centre",
         spec.moment_arm == "base", np.ascontiguousarray(wrench[:, None]), float(spec.rank_rtol),
         float(lim.rank_rtol), np.array(np.broadcast_to(spec.tension.t_min, (m,)), dtype=float),  # writable copies
-        np.array(np.broadcast_to(lim.s_max, (m,)), dtype=float), float(lim.scale),
+        np.array(np.broadcast_to(lim.t_max, (m,)), dtype=float), float(lim.scale),
         np.inf if robot.l_max is None else float(robot.l_max), out, unsettled)
     out[:, 4] = zero_length_margin(out[:, 4], robot.shortest_cable)
     return {f"margin_{name}": out[:, STATICS_CRITERIA.index(name)]

@@ -15,17 +15,10 @@ from pipeline.workspace.criteria.forces import feasible_margins, feasible_model
 from pipeline.model.dynamics import PoseDynamics
 
 
-def max_abs_sum(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """max over (j, k) of |a[..., j] + b[..., k]| without forming the j x k product.
-
-    Identity: max_{j,k} |a_j + b_k| = max(max_j a_j + max_k b_k, -(min_j a_j + min_k b_k)),
-    because |x| = max(x, -x) and a maximum of a sum of independent terms is the sum of maxima.
-    """
-    return max_abs_sum_of_ranges((a.max(axis=-1), a.min(axis=-1)), (b.max(axis=-1), b.min(axis=-1)))
-
-
 def max_abs_sum_of_ranges(a: tuple, b: tuple) -> np.ndarray:
-    """:func:`max_abs_sum` from the (max, min) of each term over its own set."""
+    """max over (j, k) of |a_j + b_k| from the (max, min) of each term over its own set, without
+    forming the j x k product: max(max_j a_j + max_k b_k, -(min_j a_j + min_k b_k)), because
+    |x| = max(x, -x) and a maximum of a sum of independent terms is the sum of maxima."""
     return np.maximum(a[0] + b[0], -(a[1] + b[1]))
 
 
