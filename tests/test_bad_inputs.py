@@ -93,6 +93,10 @@ CASES = [
     ("pipeline", ["analysis=dynamics"], "dynamics"),
     ("pipeline", ["analysis=lines", "lines.samples=some"], "lines.samples=some"),
     ("pipeline", ["lines.samples=all"], "lines.samples=all: no such key"),
+    ("pipeline", ["load.mas=1"], "load.mas=1: no such key for robot=cpr8 with analysis=cpr_wwa; did you mean load.mass?"),
+    ("pipeline", ["robot=irpm6", "limits.s_max=60000"], "limits.s_max=60000: no such key for robot=irpm6 with "
+     "analysis=statics; did you mean tension.t_max?"),
+    ("pipeline", ["zzz.top=1"], "zzz.top=1: no such key for robot=cpr8 with analysis=cpr_wwa (a key of another"),
     ("pipeline", ["tension.model=lp"], "tension.model"),
     ("pipeline", ["load.external=[0,0,-5]"], "load.external"),
     ("pipeline", ["tension.model=feasible", "tension.t_min=-5"], "tension.t_min=-5"),

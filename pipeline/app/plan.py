@@ -16,6 +16,7 @@ value: nothing is written.
 from __future__ import annotations
 
 import copy
+import difflib
 import functools
 import hashlib
 import itertools
@@ -608,12 +609,28 @@ def structural(override: Override) -> bool:
     )
 
 
+RENAMED = {"limits.s_max": "tension.t_max"}  # keys that went, and the one that took their place
+
+
+def _leaf_keys(tree, prefix: str = ""):
+    """The dotted keys of a config's values and mappings (``load.mass``, ``robot.search``)."""
+    if isinstance(tree, DictConfig):
+        tree = OmegaConf.to_container(tree, resolve=False, throw_on_missing=False)
+    for key, value in tree.items():
+        yield f"{prefix}{key}"
+        if isinstance(value, dict):
+            yield from _leaf_keys(value, f"{prefix}{key}.")
+
+
 def _apply(cfg: DictConfig, override: Override) -> None:
     """``key=value`` merged into the typed config, as Hydra's own override does."""
     try:
         OmegaConf.update(cfg, override.key_or_group, override.value(), merge=True)
     except (ConfigAttributeError, ConfigKeyError):  # not a key of this job's robot and analysis
+        close = [RENAMED[override.key_or_group]] if override.key_or_group in RENAMED else difflib.get_close_matches(
+            override.key_or_group, list(_leaf_keys(cfg)), n=1, cutoff=0.8)
+        hint = f"; did you mean {close[0]}?" if close else " (a key of another analysis or robot, or a typo)"
         raise ConfigError(f"{override.input_line}: no such key for robot={cfg.robot.name} with "
-                          f"analysis={cfg.analysis} (a key of another analysis or robot, or a typo)") from None
+                          f"analysis={cfg.analysis}{hint}") from None
     except Exception as exc:  # OmegaConf raises key, type and validation errors
         raise ConfigError(f"{override.input_line}: {one_line(exc)}") from exc
