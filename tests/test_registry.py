@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from omegaconf import OmegaConf
 
-from pipeline.workspace.criteria import DYNAMICS, GATES, REGISTRY, STATICS
+from pipeline.workspace.criteria import COLOURS, DYNAMICS, GEOMETRY, REGISTRY, STATICS, Criterion, gates, register
 from pipeline.workspace.verdict import classify
 from pipeline.app.problem import build_problem
 from conftest import compute_workspace
@@ -32,7 +32,7 @@ def test_every_robot_runs_every_analysis_with_criteria_it_can_read(make_cfg, cat
 
 
 def test_gates_come_from_the_registry_in_priority_order():
-    assert GATES == ("zero_length", "singular", "unreachable", "slack")
+    assert gates() == ("zero_length", "singular", "unreachable", "slack")
     margins = {"voltage": np.array([-5.0]), "slack": np.array([-0.1]), "unreachable": np.array([-0.2])}
     assert [list(margins)[code] for code in classify(margins, 1e-9)[2]] == ["unreachable"]  # a gate wins
 
@@ -136,3 +136,74 @@ def test_a_job_builds_its_robot_once_from_its_kind_and_runs_that_problem(tmp_pat
     (tmp_path / "conf" / "robot" / "odd.yaml").write_text("# @package _global_\ndefaults: [cpr8, _self_]\nanalysis: dynamics\n")
     with pytest.raises(ConfigError, match=r"^analysis=dynamics: unknown analysis \(cpr_wwa, statics, lines, payload\)$"):
         plan(["--config-dir", str(tmp_path / "conf"), "robot=odd"])
+
+
+FLOOR_DEG = 10.0  # the floor-angle criterion below: every cable at least this steep
+
+
+def floor_angle(state, limits) -> np.ndarray:
+    """A criterion written as a user would, outside the package: the smallest angle of a cable to
+    the floor plane, relative to FLOOR_DEG (>= 0: every cable steep enough)."""
+    steep = np.degrees(np.arcsin(np.clip(np.abs(state.unit[..., 2]), 0.0, 1.0))).min(axis=1)
+    return steep / FLOOR_DEG - 1.0
+
+
+def law_floor_margin(robot, positions, orientation) -> np.ndarray:
+    """The same margin from the points: the cables from each anchor to its attachment point."""
+    from pipeline.model.geometry import rotation_matrix
+
+    ends = positions[:, None, :] + robot.attachments @ rotation_matrix(*orientation).T
+    cables = ends - robot.anchors
+    slope = np.abs(cables[..., 2]) / np.linalg.norm(cables, axis=2)
+    return np.degrees(np.arcsin(slope)).min(axis=1) / FLOOR_DEG - 1.0
+
+
+@pytest.fixture
+def floor_registered():
+    """The floor-angle criterion registered from outside for one test (the registry is the
+    process's: taken out again after it)."""
+    register(Criterion("floor_angle", floor_angle, GEOMETRY, None, "#117733",
+                       "anchors higher above the workspace", lambda analysis, spec, robot: True))
+    try:
+        yield
+    finally:
+        del REGISTRY["floor_angle"], COLOURS["floor_angle"]
+
+
+@pytest.mark.parametrize("robot, analysis, kernel", [
+    (["robot=cpr8", "orientation.psi=0.2"], "cpr_wwa", "numpy"), (["robot=cpr8", "orientation.psi=0.2"], "cpr_wwa", "fused"),
+    (["robot=cpr8"], "lines", "auto"), (["robot=irpm6", "robot.search.step=1"], "statics", "fused"),
+    (SMALL_POINTS, "statics", "numpy"), (SMALL_POINTS, "payload", "numpy")])
+def test_a_criterion_registered_from_outside_is_evaluated_by_every_analysis(
+        make_cfg, catalogue, floor_registered, robot, analysis, kernel):
+    """Issue 52's extension API: one function and one register() call, and the grid (numpy and
+    compiled kernels), the lines, the statics and the payload map all check it, with margins
+    equal to the law computed here from the points, and poses lost to it counted."""
+    from pipeline.workspace.lines import simulate_lines
+
+    cfg = make_cfg(*robot, f"analysis={analysis}", f"compute.kernel={kernel}")
+    problem, grid = build_problem(cfg, catalogue)
+    assert problem.criteria[-1] == "floor_angle"
+    if analysis == "lines":
+        samples, points, summary = simulate_lines(cfg, problem, grid)
+        at = samples[["x", "y", "z"]].to_numpy()
+        np.testing.assert_allclose(samples["margin_floor_angle"], law_floor_margin(problem.robot, at, problem.orientation),
+                                   rtol=0, atol=1e-9)
+    else:
+        points, summary = compute_workspace(cfg, catalogue)
+        assert summary["kernel"] == ("fused" if kernel == "fused" else "numpy")
+        at = points[["x", "y", "z"]].to_numpy()
+        np.testing.assert_allclose(points["margin_floor_angle"], law_floor_margin(problem.robot, at, problem.orientation),
+                                   rtol=0, atol=1e-9)
+    assert "lost_floor_angle" in summary
+    assert summary["n_points"] == summary["n_feasible"] + sum(summary[f"lost_{name}"] for name in problem.criteria)
+
+
+def test_the_floor_angle_decides_poses_on_the_cpr8(make_cfg, catalogue, floor_registered):
+    """Its verdict is the law's: the CPR-8's upper cables are nearly level near the top of the
+    frame, so the poses there are lost to the floor angle, and only there."""
+    points, summary = compute_workspace(make_cfg("actuator=1"), catalogue)
+    problem, _ = build_problem(make_cfg("actuator=1"), catalogue)
+    steep = law_floor_margin(problem.robot, points[["x", "y", "z"]].to_numpy(), (0, 0, 0)) >= 0
+    assert 0 < summary["lost_floor_angle"] and (points["feasible"].to_numpy() <= steep).all()
+    assert (points.loc[~steep, "limiting"] == "floor_angle").all()

@@ -166,7 +166,7 @@ def _robot_at_a_feasible_pose(results: StudyResults, job: pd.Series, points: pd.
     if pose_axes(points)[0] != "x":
         return []
     cfg = results.config(job["job"])
-    robot = surroundings(cfg, ROBOTS[cfg.robot.name].build(cfg.robot))[0]  # with its obstacles
+    robot = surroundings(cfg, ROBOTS[cfg.robot.name].build(cfg.robot))  # with its obstacles
     chosen = points[points[column].to_numpy(dtype=bool)] if points[column].any() else points
     xyz = chosen[["x", "y", "z"]].to_numpy()
     row = chosen.iloc[int(np.argmin(np.linalg.norm(xyz - xyz.mean(axis=0), axis=1)))]

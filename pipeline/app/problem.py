@@ -50,14 +50,12 @@ from pipeline.workspace.compute import (
     JOB_S, JOB_WORKER_START_S, LINE_SAMPLES, POSES_PER_SECOND, FUSED_START_S, estimated_seconds, fused_unfit,
     grid_workspace, name_of,
 )
+from pipeline.workspace.criteria import selected
 from pipeline.workspace.grid import Grid, box_grid, listed_grid, step_grid
 from pipeline.workspace.kernel import WorkspaceProblem
 from pipeline.workspace.reach import home_node
 from pipeline.workspace.shape import MESH_MAX_POSES, GridShape, meshable, volume_spread
 
-CPR_WWA_CRITERIA = ("speed", "torque", "acceleration", "voltage")  # eqs. (30), (32), (33), (34)
-FEASIBLE_GATES = ("unreachable", "slack")  # tension=feasible (pipeline.model.tensions)
-GEOMETRY_GATES = ("zero_length",)  # every analysis: a collapsed cable has no direction
 DEFAULT_N_VEL = 6  # velocity grid of robots without an N x N x N position grid (section 3.1's N)
 MAX_VELOCITY_CANDIDATES = 10_000_000  # (n_vel + 1)^3 grid velocities of eq. (23), built in memory
 
@@ -162,8 +160,7 @@ def _cpr_wwa(cfg: DictConfig, catalogue: Catalogue, robot: CableRobot):
         jdot=model.jdot,
         tension=tension,
     )
-    gates = FEASIBLE_GATES if tension.model == "feasible" else ("unreachable",)  # pinv: the wrench (J^T)^+ misses
-    return motion, actuator, (*GEOMETRY_GATES, *gates, *cable_limits(tension, robot), *CPR_WWA_CRITERIA)
+    return motion, actuator
 
 
 def _statics(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
@@ -190,8 +187,7 @@ def _statics(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
     force = spec.load.external[:3] - spec.load.mass * spec.load.gravity * robot.up
     scale = float(np.max(rating)) if rating is not None else max(float(np.linalg.norm(force)), 1.0)
     limits = StaticLimits(np.inf if rating is None else rating, cfg.model.rank_rtol, scale, len(spec.wrench_set))
-    gates = ("singular", "slack") if spec.tension.model == "pinv" else FEASIBLE_GATES
-    return spec, limits, (*GEOMETRY_GATES, *gates, *cable_limits(spec.tension, robot))
+    return spec, limits
 
 
 def _payload(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
@@ -203,14 +199,13 @@ def _payload(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
     if cfg.wrench.set is not None:
         raise ConfigError("wrench.set: analysis=payload finds the largest payload under one wrench; a required "
                           "wrench set is for analysis=statics")
-    spec, limits, _ = _statics(cfg, catalogue, robot)
+    spec, limits = _statics(cfg, catalogue, robot)
     platform = cfg.robot.platform
     applied = spec.load.external  # load.external + wrench.*, as the statics has it
     load = Load(float(platform.mass), float(cfg.load.gravity), np.asarray(platform.com, dtype=float), applied)
     spec = PayloadSpec(spec.moment_arm, spec.cable_direction, spec.rank_rtol, spec.tension, load,
                        payload=float(cfg.load.mass), payload_com=np.asarray(cfg.load.com, dtype=float))
-    gates = ("singular",) if spec.tension.model == "pinv" else ()
-    return spec, limits, (*GEOMETRY_GATES, *gates, "payload", *(("length",) if robot.l_max is not None else ()))
+    return spec, limits
 
 
 def _grid_files(cfg: DictConfig, problem: WorkspaceProblem, grid: Grid, files, sweep_pays: bool) -> dict:
@@ -251,8 +246,9 @@ def _line_files(cfg: DictConfig, problem: WorkspaceProblem, grid: Grid, files, s
 
 @dataclass(frozen=True)
 class AnalysisKind:
-    """An analysis a config can name: the spec, limits and criteria of its workspace from the
-    typed config, its catalogue (or None) and the robot (``build``), and the files a job of it
+    """An analysis a config can name: the spec and limits of its workspace from the typed config,
+    its catalogue (or None) and the robot (``build``; its criteria are the registry's that apply
+    to it, ``pipeline.workspace.criteria.selected``), and the files a job of it
     writes (``files``: (typed config, problem, grid, the job's files, whether its sweep pays for
     the compiled kernels) -> the summary; the job's files (``pipeline.app.job.JobFiles``) take
     tables whole or streamed chunk by chunk)."""
@@ -411,9 +407,9 @@ def validate(cfg: DictConfig, catalogue: Catalogue | None,
 def build(cfg: DictConfig, catalogue: Catalogue | None) -> WorkspaceProblem:
     """The workspace problem of a typed config: its robot kind's robot, its analysis kind's
     spec, limits and criteria, the orientation set."""
-    robot, interference = surroundings(cfg, ROBOTS[cfg.robot.name].build(cfg.robot))
-    spec, limits, criteria = ANALYSES[cfg.analysis].build(cfg, catalogue, robot)
-    criteria = (*criteria, *interference)
+    robot = surroundings(cfg, ROBOTS[cfg.robot.name].build(cfg.robot))
+    spec, limits = ANALYSES[cfg.analysis].build(cfg, catalogue, robot)
+    criteria = selected(cfg.analysis, spec, robot)  # the registry's, by what each applies to
     given = cfg.orientation
     if robot.fixed_point and (orientation_count(given) > 1 or any(given[a] != 0 for a in ("psi", "theta", "phi"))):
         freedoms = ", ".join(FREEDOMS[i] for i in robot.dofs)
@@ -430,14 +426,13 @@ def build(cfg: DictConfig, catalogue: Catalogue | None) -> WorkspaceProblem:
                             metrics=bool(cfg.output.metrics))
 
 
-def surroundings(cfg: DictConfig, robot: CableRobot) -> tuple[CableRobot, tuple[str, ...]]:
-    """The robot with what its cables could touch, and the interference criteria that check it
-    (docs/model.md section 8): ``robot.cable_diameter`` (one or one per cable, m) gives the
-    cables' radii and ``cable_cable``, ``robot.platform.shape`` the platform's body and
-    ``cable_platform``, ``obstacles`` the cell's obstacles and ``cable_obstacle``. Each is refused
+def surroundings(cfg: DictConfig, robot: CableRobot) -> CableRobot:
+    """The robot with what its cables could touch (docs/model.md section 8; the interference
+    criteria apply to what it has): ``robot.cable_diameter`` (one or one per cable, m) gives the
+    cables' radii (``cable_cable``), ``robot.platform.shape`` the platform's body
+    (``cable_platform``), ``obstacles`` the cell's obstacles (``cable_obstacle``). Each is refused
     where it cannot mean anything: no two cables that can meet along their length, a body with
     no inside or an attachment off its surface, an obstacle that holds an anchor."""
-    criteria = []
     diameter = cfg.robot.cable_diameter
     if diameter is not None:
         items = OmegaConf.to_container(diameter) if isinstance(diameter, ListConfig) else [diameter]
@@ -452,14 +447,11 @@ def surroundings(cfg: DictConfig, robot: CableRobot) -> tuple[CableRobot, tuple[
         if not len(robot.cable_pairs[0]):
             raise ConfigError(f"robot.cable_diameter={shown(diameter)}: every two cables share an anchor or an attachment "
                               "point (a point platform), so none can touch another along its length; set it null")
-        criteria.append("cable_cable")
     if cfg.robot.platform.shape is not None:
         robot = replace(robot, platform_shape=platform_shape(cfg.robot.platform.shape, robot))
-        criteria.append("cable_platform")
     if cfg.obstacles is not None and not (isinstance(cfg.obstacles, ListConfig) and not len(cfg.obstacles)):
         robot = replace(robot, obstacles=obstacles(cfg.obstacles, robot))
-        criteria.append("cable_obstacle")
-    return robot, tuple(criteria)
+    return robot
 
 
 def platform_shape(value, robot: CableRobot) -> Polytope:
@@ -570,13 +562,6 @@ def orientation_set(orientation: DictConfig) -> np.ndarray:
     if name_of(orientation.convention) == "xyz":
         return np.array([eq9_angles(*row) for row in angles])
     return angles
-
-
-def cable_limits(tension: TensionSpec, robot: CableRobot) -> tuple[str, ...]:
-    """The cable criteria every analysis checks when their limit is given: the rating
-    (``tension.t_max``) and the longest cable (the robot's ``l_max``)."""
-    return (("tension_max",) if tension.t_max is not None else ()) + (
-        ("length",) if robot.l_max is not None else ())
 
 
 def load_spec(cfg: DictConfig) -> Load:

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipeline.workspace.criteria import GATES  # violated, they decide the verdict (first listed wins)
+from pipeline.workspace.criteria import gates  # violated, they decide the verdict (first listed wins)
 
 
 def snap(margin: np.ndarray, atol: float) -> np.ndarray:
@@ -32,7 +32,7 @@ def classify(
     ``list(margins)``, as ``pandas.Categorical.from_codes`` takes them, no string per pose)
     points at the criterion with the smallest margin: the most violated one for an infeasible
     pose, the tightest for a feasible one (ties: the first criterion listed); a violated gate
-    (``GATES``) takes precedence. Each infeasible pose is therefore attributed to exactly one
+    (``gates()``) takes precedence. Each infeasible pose is therefore attributed to exactly one
     criterion.
     """
     names = list(margins)
@@ -43,7 +43,7 @@ def classify(
         raise FloatingPointError(f"non-finite margin at pose index {row}: {stacked[row]}")
     feasible = (stacked >= 0).all(axis=1)
     limiting = stacked.argmin(axis=1).astype(np.int8)
-    for gate in reversed(GATES):  # the first gate listed wins
+    for gate in reversed(gates()):  # the first gate listed wins
         if gate in snapped:
             limiting[snapped[gate] < 0] = names.index(gate)
     return snapped, feasible, limiting

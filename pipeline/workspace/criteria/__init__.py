@@ -8,7 +8,12 @@ margins say; gates in priority order) and its colour in every figure. One module
 rating), ``geometry`` (zero_length, singular, cable length), ``interference`` (cable_cable,
 cable_platform, cable_obstacle),
 ``payload`` (the largest payload); ``forces``
-holds the ``feasible`` tension model they share. A new criterion is one function in its family's module and one entry here.
+holds the ``feasible`` tension model they share. A criterion also says when it applies
+(``applies``: a predicate on the analysis, its spec and the robot), and :func:`selected` gives a
+problem its criteria from the registry, in registry order (gates first). A new criterion is one
+function in its family's module and one entry here, or, from outside the package, one
+:func:`register` call: every analysis it applies to evaluates it (a ``geometry`` criterion in
+every kernel and on the lines; ``tests/test_registry.py`` registers one).
 """
 
 from __future__ import annotations
@@ -29,7 +34,9 @@ class Criterion:
     ``PoseDynamics`` and an ``ActuatorModel``), ``statics`` (a ``PoseStatics`` and
     ``StaticLimits``) or ``geometry`` (the pose alone: any ``PoseGeometry``, one code in
     every kernel); ``gate``: priority among gates (0 first) or None; ``colour``: figures;
-    ``remedy``: what to try next when it limits every pose (a job with none feasible says it)."""
+    ``remedy``: what to try next when it limits every pose (a job with none feasible says it);
+    ``applies(analysis, spec, robot)``: whether a problem of ``analysis`` (cpr_wwa, lines,
+    statics, payload) with that per-chunk spec and robot checks it."""
 
     name: str
     function: Callable[[Any, Any], np.ndarray]
@@ -37,43 +44,83 @@ class Criterion:
     gate: int | None
     colour: str
     remedy: str
+    applies: Callable[[str, Any, Any], bool]
+
+
+def _dynamics(analysis: str) -> bool:
+    return analysis in ("cpr_wwa", "lines")
+
+
+def _feasible(spec) -> bool:
+    return spec.tension.model == "feasible"
 
 
 REGISTRY: dict[str, Criterion] = {c.name: c for c in (
     Criterion("zero_length", geometry.zero_length, ANY, 0, "#999933",
-              "a search box that does not reach the anchors (robot.search.lo, hi)"),
+              "a search box that does not reach the anchors (robot.search.lo, hi)",
+              lambda analysis, spec, robot: True),
     Criterion("singular", geometry.singular, STATICS, 1, "#000000",
               "robot.dofs=[x,y,z] for a point platform (every attachment at one point), else anchors and "
               "attachments that give the cables independent directions (the log names the wrench they cannot "
-              "produce), or tension=feasible"),
+              "produce), or tension=feasible",
+              lambda analysis, spec, robot: analysis in ("statics", "payload") and not _feasible(spec)),
     Criterion("unreachable", tension.unreachable, ANY, 2, "#777777",
               "anchors and attachments that give the cables independent directions (the log names the "
-              "wrench they cannot produce), or more cables"),
+              "wrench they cannot produce), or more cables",
+              lambda analysis, spec, robot: _dynamics(analysis) or (analysis == "statics" and _feasible(spec))),
     Criterion("slack", tension.slack, ANY, 3, "#882255",
               "tension=feasible if the cables may not push (tension=pinv's minimum-norm forces often do), "
-              "else a lower tension.t_min, more cables or anchors around the load"),
+              "else a lower tension.t_min, more cables or anchors around the load",
+              lambda analysis, spec, robot: analysis == "statics" or (_dynamics(analysis) and _feasible(spec))),
     Criterion("tension_max", tension.tension_max, ANY, None, "#0072B2",
-              "stronger cables (a higher tension.t_max) or a lighter load"),
-    Criterion("length", geometry.length, ANY, None, "#CC79A7", "longer cables (robot.l_max) or a smaller box"),
+              "stronger cables (a higher tension.t_max) or a lighter load",
+              lambda analysis, spec, robot: analysis != "payload" and spec.tension.t_max is not None),
+    Criterion("payload", payload.payload, STATICS, None, "#56B4E9", "a lighter payload (load.mass) or stronger cables",
+              lambda analysis, spec, robot: analysis == "payload"),
+    Criterion("length", geometry.length, ANY, None, "#CC79A7", "longer cables (robot.l_max) or a smaller box",
+              lambda analysis, spec, robot: robot.l_max is not None),
+    Criterion("speed", actuator.speed, DYNAMICS, None, "#0072B2",
+              "a lower motion.v_max, a larger drive.winch_radius or a smaller drive.gear_ratio",
+              lambda analysis, spec, robot: _dynamics(analysis)),
+    Criterion("torque", actuator.torque, DYNAMICS, None, "#D55E00",
+              "a stronger actuator, a higher drive.gear_ratio or a smaller drive.winch_radius",
+              lambda analysis, spec, robot: _dynamics(analysis)),
+    Criterion("acceleration", actuator.acceleration, DYNAMICS, None, "#CC79A7",
+              "longer motion.t_acc and motion.t_dec, or a larger drive.winch_radius",
+              lambda analysis, spec, robot: _dynamics(analysis)),
+    Criterion("voltage", actuator.voltage, DYNAMICS, None, "#E69F00",
+              "a lower motion.v_max or another actuator (its voltage and speed constants)",
+              lambda analysis, spec, robot: _dynamics(analysis)),
     Criterion("cable_cable", interference.cable_cable, GEOMETRY, None, "#DDCC77",
               "thinner cables (robot.cable_diameter), anchors and attachments that keep the cables apart, "
-              "or a smaller box"),
+              "or a smaller box",
+              lambda analysis, spec, robot: robot.cable_radii is not None),
     Criterion("cable_platform", interference.cable_platform, GEOMETRY, None, "#332288",
               "attachments on the platform's outer corners or edges, a platform shape that holds them on its "
-              "surface (robot.platform.shape), or a smaller box"),
+              "surface (robot.platform.shape), or a smaller box",
+              lambda analysis, spec, robot: robot.platform_shape is not None),
     Criterion("cable_obstacle", interference.cable_obstacle, GEOMETRY, None, "#994F00",
-              "anchors that route the cables around the obstacles, a smaller box, or obstacles moved"),
-    Criterion("payload", payload.payload, STATICS, None, "#56B4E9", "a lighter payload (load.mass) or stronger cables"),
-    Criterion("speed", actuator.speed, DYNAMICS, None, "#0072B2",
-              "a lower motion.v_max, a larger drive.winch_radius or a smaller drive.gear_ratio"),
-    Criterion("torque", actuator.torque, DYNAMICS, None, "#D55E00",
-              "a stronger actuator, a higher drive.gear_ratio or a smaller drive.winch_radius"),
-    Criterion("acceleration", actuator.acceleration, DYNAMICS, None, "#CC79A7",
-              "longer motion.t_acc and motion.t_dec, or a larger drive.winch_radius"),
-    Criterion("voltage", actuator.voltage, DYNAMICS, None, "#E69F00",
-              "a lower motion.v_max or another actuator (its voltage and speed constants)"),
+              "anchors that route the cables around the obstacles, a smaller box, or obstacles moved",
+              lambda analysis, spec, robot: bool(robot.obstacles)),
 )}
-GATES = tuple(sorted((c.name for c in REGISTRY.values() if c.gate is not None),
-                     key=lambda name: REGISTRY[name].gate))
 COLOURS = {c.name: c.colour for c in REGISTRY.values()}
+
+
+def gates() -> tuple[str, ...]:
+    """The gates in priority order: a violated gate decides the verdict (the first listed wins)."""
+    return tuple(sorted((c.name for c in REGISTRY.values() if c.gate is not None), key=lambda name: REGISTRY[name].gate))
+
+
+def selected(analysis: str, spec, robot) -> tuple[str, ...]:
+    """The criteria a problem of ``analysis`` with ``spec`` and ``robot`` checks, in registry order."""
+    return tuple(c.name for c in REGISTRY.values() if c.applies(analysis, spec, robot))
+
+
+def register(criterion: Criterion) -> None:
+    """Add ``criterion`` to the registry (after the package's own, a name of its own): from then
+    on every problem it applies to checks it, every kernel evaluates it, figures colour it."""
+    if criterion.name in REGISTRY:
+        raise ValueError(f"criterion {criterion.name!r} is already registered")
+    REGISTRY[criterion.name] = criterion
+    COLOURS[criterion.name] = criterion.colour
 FEASIBLE_COLOUR = "#009E73"  # feasible points and shares, in every figure and view

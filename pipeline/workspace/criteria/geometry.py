@@ -28,7 +28,7 @@ def singular(st: PoseStatics, lim: StaticLimits) -> np.ndarray:
     (g - rtol) / (1 - rtol) in [0, 1] for a regular pose and g / rtol - 1 in [-1, 0) for a
     singular one (continuous and increasing in g, -1 for an exactly singular pose, so the
     verdict tolerance of ``pipeline.workspace.verdict`` never reaches it). A singular pose has no tensions
-    to check (``verdict.GATES``)."""
+    to check (``criteria.gates()``)."""
     g, rtol = st.gram_ratio, lim.rank_rtol
     return np.where(g >= rtol, (g - rtol) / (1.0 - rtol), g / rtol - 1.0)
 
