@@ -320,7 +320,8 @@ def main(argv: list[str] | None = None) -> None:
                         help="your own folder: the report of the studies in its studies/")
     args = parser.parse_args(argv)
     try:
-        print(f"wrote {build(args.studies, args.out, args.config_dir)}")
+        index = build(args.studies, args.out, args.config_dir)
+        print(f"wrote {index.with_suffix('.html')} (open it in a browser) and {index}")
     except FileNotFoundError as exc:
         where = f" --config-dir {args.config_dir}" if args.config_dir else ""
         print(f"error: {exc}; run `python -m pipeline.study{where} --all` first", file=sys.stderr)

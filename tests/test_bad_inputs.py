@@ -140,6 +140,8 @@ CASES = [
     ("pipeline", ["robot=irpm6", "actuator=3"], "no such key for robot=irpm6 with analysis=statics"),
     # a traceback of OmegaConf's, a misleading "robot.name=None", a limit blamed on the grid, a crash in the job
     ("pipeline", ["--config-dir", "robots", "robot=noanchors"], "robot.anchors: no value given"),
+    ("pipeline", ["--config-dir", "robots", "robot=frame9"], "robot=frame9: no such option of the robot group "
+     "(options: cpr8, empty, irpm6, list, noanchors, nobox, points, square, textnumber)"),
     ("pipeline", ["--config-dir", "robots", "robot=textnumber"],
      "robot.attachments[0]=['-.5', 0, 0]: must be 3 finite numbers [x, y, z] (m) ('-.5' is text to YAML: write -0.5)"),
     ("pipeline", ["--config-dir", "robots", "robot=nobox"],

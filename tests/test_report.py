@@ -319,6 +319,7 @@ def test_the_report_never_deletes_what_it_did_not_write(studies, tmp_path, monke
     out = tmp_path / "report"
     out.mkdir()  # empty: taken
     pipeline.report.main(["--studies", str(studies), "--out", str(out)])
+    assert capsys.readouterr().out == f"wrote {out / 'index.html'} (open it in a browser) and {out / 'index.md'}\n"
     listed = (out / ".cdpr-report").read_text().splitlines()
     assert "index.md" in listed and "figures/actuator_choice/fig9.png" in listed
     (out / "figures" / "actuator_choice" / "fig9.png").unlink()  # a file of its own may go missing

@@ -192,7 +192,7 @@ def _composition(files: tuple[str, ...], parsed: list[Override]) -> Composition:
     try:
         composed = compose(config_name="config", overrides=list(files), return_hydra_config=True)
     except MissingConfigException as exc:  # a group option with no file
-        raise ConfigError(_missing_option(exc, parsed)) from exc
+        raise ConfigError(_missing_option(exc, parsed, _search_folders(files))) from exc
     except Exception as exc:  # composition errors come as Hydra and OmegaConf types
         raise ConfigError(one_line(exc)) from exc
     made = Composition(composed)
@@ -204,10 +204,9 @@ def _composition(files: tuple[str, ...], parsed: list[Override]) -> Composition:
     return made
 
 
-def _files_digest(files: tuple[str, ...]) -> str | None:
-    """A digest of the YAML files a composition of ``files`` can read: conf/ and each
-    ``file://`` folder of a ``hydra.searchpath`` override (Hydra's own files are its package's);
-    None when one cannot be read (not kept: Hydra reports it, or reads it next time)."""
+def _search_folders(files: tuple[str, ...]) -> list[Path]:
+    """The config folders a composition of ``files`` reads: conf/ and each ``file://`` folder of
+    a ``hydra.searchpath`` override (``--config-dir``)."""
     folders = [CONF_DIR]
     for override in parse(list(files)):
         if override.key_or_group != "hydra.searchpath" or override.is_delete():
@@ -215,8 +214,15 @@ def _files_digest(files: tuple[str, ...]) -> str | None:
         value = override.value()
         entries = value if isinstance(value, list) else [value]
         folders += [Path(str(e)[len("file://"):]).absolute() for e in entries if str(e).startswith("file://")]
+    return folders
+
+
+def _files_digest(files: tuple[str, ...]) -> str | None:
+    """A digest of the YAML files a composition of ``files`` can read: conf/ and each
+    ``file://`` folder of a ``hydra.searchpath`` override (Hydra's own files are its package's);
+    None when one cannot be read (not kept: Hydra reports it, or reads it next time)."""
     digest = hashlib.blake2b(digest_size=16)
-    for folder in folders:
+    for folder in _search_folders(files):
         digest.update(os.fsencode(folder) + b"\0")
         for path in sorted(folder.rglob("*.yaml")) if folder.is_dir() else ():
             digest.update(os.fsencode(path.relative_to(folder)) + b"\0")
@@ -579,8 +585,9 @@ def refuse_aliases(text: str, where: str) -> None:
                               "write the values out (aliases are refused: a few can expand to billions)")
 
 
-def _missing_option(exc: MissingConfigException, parsed: list[Override]) -> str:
-    """'group=option: no such option (options: ...)' for the override that named it."""
+def _missing_option(exc: MissingConfigException, parsed: list[Override], folders: list[Path]) -> str:
+    """'group=option: no such option (options: ...)' for the override that named it; the
+    options of every config folder searched (``folders``: conf/ and the user's)."""
     for override in parsed:
         group = override.key_or_group
         if group.startswith("hydra/") and f"{group}/{override.value()}" in str(exc):  # a Hydra plugin's group
@@ -590,9 +597,9 @@ def _missing_option(exc: MissingConfigException, parsed: list[Override]) -> str:
             return (f"{override.input_line}: no such option of Hydra's {group} group (options: {options}; a "
                     f"Hydra plugin adds its own, e.g. pip install {plugin.get(group, 'the plugin')})")
         if (CONF_DIR / group).is_dir() and not group.startswith("hydra") and f"{group}/{override.value()}" in str(exc):
-            options = sorted(f.stem for f in (CONF_DIR / group).glob("*.yaml"))
-            return (f"{override.input_line}: no such option of the {group} group "
-                    f"(options: {', '.join(options)}; your own: --config-dir DIR with DIR/{group}/NAME.yaml)")
+            options = sorted({f.stem for folder in folders for f in (folder / group).glob("*.yaml")})
+            own = "" if len(folders) > 1 else f"; your own: --config-dir DIR with DIR/{group}/NAME.yaml"
+            return f"{override.input_line}: no such option of the {group} group (options: {', '.join(options)}{own})"
     return one_line(exc)
 
 
