@@ -47,7 +47,9 @@ class Criterion:
     applies: Callable[[str, Any, Any], bool]
 
 
-def _dynamics(analysis: str) -> bool:
+def _dynamics(analysis: str, spec=None, robot=None) -> bool:
+    """Whether the analysis moves the carrier (CPR-WWA, on the grid or on lines): the actuator's
+    criteria apply to exactly these."""
     return analysis in ("cpr_wwa", "lines")
 
 
@@ -81,16 +83,16 @@ REGISTRY: dict[str, Criterion] = {c.name: c for c in (
               lambda analysis, spec, robot: robot.l_max is not None),
     Criterion("speed", actuator.speed, DYNAMICS, None, "#0072B2",
               "a lower motion.v_max, a larger drive.winch_radius or a smaller drive.gear_ratio",
-              lambda analysis, spec, robot: _dynamics(analysis)),
+              _dynamics),
     Criterion("torque", actuator.torque, DYNAMICS, None, "#D55E00",
               "a stronger actuator, a higher drive.gear_ratio or a smaller drive.winch_radius",
-              lambda analysis, spec, robot: _dynamics(analysis)),
+              _dynamics),
     Criterion("acceleration", actuator.acceleration, DYNAMICS, None, "#CC79A7",
               "longer motion.t_acc and motion.t_dec, or a larger drive.winch_radius",
-              lambda analysis, spec, robot: _dynamics(analysis)),
+              _dynamics),
     Criterion("voltage", actuator.voltage, DYNAMICS, None, "#E69F00",
               "a lower motion.v_max or another actuator (its voltage and speed constants)",
-              lambda analysis, spec, robot: _dynamics(analysis)),
+              _dynamics),
     Criterion("cable_cable", interference.cable_cable, GEOMETRY, None, "#DDCC77",
               "thinner cables (robot.cable_diameter), anchors and attachments that keep the cables apart, "
               "or a smaller box",
