@@ -22,6 +22,7 @@ from conftest import shaft_torque
 from pipeline.app.problem import build_problem
 from pipeline.model.dynamics import PoseDynamics
 from pipeline.model.geometry import rotation_matrix
+from pipeline.model.dynamics import SampleDynamics
 from pipeline.workspace.trajectory import inverse_dynamics
 
 G_VEC = np.array([0.0, 0.0, -9.81])
@@ -96,8 +97,8 @@ def test_the_lines_inverse_dynamics_obey_newton_while_hoisting_and_lowering(make
     positions = np.array([[1.1, 0.9, z] for z in np.linspace(-1.5, -0.6, 5)])
     velocities = np.tile([0.1, 0.0, 0.4 * np.sign(a_z)], (len(positions), 1))
     accelerations = np.tile([0.3, -0.2, a_z], (len(positions), 1))
-    out = inverse_dynamics(problem.robot, positions, velocities, accelerations, problem.orientation,
-                           problem.spec, problem.limits)
+    out = inverse_dynamics(SampleDynamics(problem.robot, positions, problem.orientation, problem.spec,
+                                          velocities, accelerations), problem.limits)
     mass = problem.spec.load.mass
     for position, a, torque in zip(positions, accelerations, out["torque"]):
         force, moment = newton_residual(problem.robot, mass, problem.spec.load.com, position, problem.orientation,

@@ -130,3 +130,29 @@ def test_interference_criteria_are_evaluated_on_the_lines_as_on_the_grid(lines):
         np.testing.assert_allclose(starts[f"margin_{name}"].to_numpy(), at, rtol=0, atol=1e-12, err_msg=name)
     assert (samples["margin_cable_obstacle"] < 0).any() and (samples["margin_cable_obstacle"] > 0).any()
     assert summary["lost_cable_obstacle"] > 0
+
+
+@pytest.mark.parametrize("extra", [[], ["model.jdot=true", "model.pinv_columns=translational"]])
+def test_the_samples_margins_are_the_literal_criteria_at_each_samples_own_motion(make_cfg, catalogue, extra):
+    """The lines evaluate the registry's criteria on a state of samples (one velocity and one
+    acceleration each); the literal reference of section 3 (``pipeline.workspace.reference``, no
+    shared array code), given each sample's velocity and acceleration as a set of one, gives the
+    same four margins, on a tilted carrier with an off-centre load moving asymmetrically."""
+    from dataclasses import replace
+
+    from pipeline.model.dynamics import SampleDynamics
+    from pipeline.workspace.criteria import margins
+    from pipeline.workspace.reference import literal_margins
+
+    cfg = make_cfg("analysis=lines", "actuator=2", *ROT, "load.mass=1.5", "load.com=[0.04,-0.03,0.02]", *extra)
+    problem, _ = build_problem(cfg, catalogue)
+    rng = np.random.default_rng(52)
+    positions = np.column_stack([rng.uniform(0.9, 1.6, 7), rng.uniform(0.8, 1.4, 7), rng.uniform(-1.4, -0.6, 7)])
+    velocities, accelerations = rng.normal(0, 0.6, (7, 3)), rng.normal(0, 0.8, (7, 3))
+    state = SampleDynamics(problem.robot, positions, problem.orientation, problem.spec, velocities, accelerations)
+    found = margins(problem.criteria, state, problem.limits)
+    for n in range(7):
+        one = replace(problem.spec, velocities=velocities[n:n + 1], accelerations=accelerations[n:n + 1])
+        literal = literal_margins(problem.robot, positions[n:n + 1], problem.orientation, one, problem.limits)
+        for name, value in literal.items():
+            assert found[name][n] == pytest.approx(value[0], abs=1e-9), (name, n)

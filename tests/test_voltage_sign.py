@@ -20,6 +20,7 @@ from pipeline.model.geometry import rotation_matrix
 from pipeline.app.problem import build_problem
 from pipeline.model.actuators import actuator_families
 from pipeline.workspace.kernel import evaluate_chunk
+from pipeline.model.dynamics import SampleDynamics
 from pipeline.workspace.trajectory import inverse_dynamics
 
 ASYMMETRIC = ("motion.t_dec=0.91",)  # braking twice as hard as accelerating (t_acc = 1.82 s)
@@ -110,8 +111,8 @@ def lowering_and_hoisting(make_cfg, catalogue, speed):
     problem, _ = build_problem(cfg, catalogue)
     positions = np.array([[1.1, 0.9, z] for z in np.linspace(-1.6, -0.5, 12)])
     velocities = np.tile([0.0, 0.0, speed], (len(positions), 1))
-    out = inverse_dynamics(problem.robot, positions, velocities, np.zeros_like(positions),
-                           problem.orientation, problem.spec, problem.limits)
+    out = inverse_dynamics(SampleDynamics(problem.robot, positions, problem.orientation, problem.spec,
+                                          velocities, np.zeros_like(positions)), problem.limits)
     d = drive(catalogue.row(1))
     current, voltage = current_and_voltage(d, out["theta_dot"], out["theta_ddot"], out["torque"])
     return out, d, current, voltage

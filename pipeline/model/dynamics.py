@@ -126,7 +126,8 @@ class PoseDynamics(PoseGeometry):
         (:func:`pipeline.model.actuators.actuator_families`): the voltage must hold for every
         velocity of the set, |G_v J a_k + L_v theta_dot - S_v M| <= U (eqs. 21, 34)."""
         high, low = self.voltage_from_velocity(act)  # (n, m)
-        accel = act.G_v * np.einsum("nmj,kj->nkm", self.jacobian[:, :, :3], self.wrench_accelerations)
+        accelerations = np.broadcast_to(self.wrench_accelerations, (len(high), *self.wrench_accelerations.shape[-2:]))
+        accel = act.G_v * np.einsum("nmj,nkj->nkm", self.jacobian[:, :, :3], accelerations)
         return actuator_families(self.tension, self.motion.winch_radius, act,
                                  accel + high[:, None, :], accel + low[:, None, :])
 
@@ -243,6 +244,51 @@ class PoseDynamics(PoseGeometry):
         """(n,) numerical rank of the J^T used in eq. (20)."""
         return self.wrench_pinv[1]
 
+
+
+class SampleDynamics(PoseDynamics):
+    """The CPR-WWA quantities of a trajectory's samples: each pose with its own velocity and
+    acceleration (n, 3), a set of one, so every criterion of the registry reads a sample as it
+    reads a grid pose over its sets (section 3.1.3's straight lines, ``pipeline.workspace.lines``)."""
+
+    def __init__(self, robot: CableRobot, positions: np.ndarray, orientation, motion: MotionSpec,
+                 velocities: np.ndarray, accelerations: np.ndarray):
+        super().__init__(robot, positions, orientation, motion)
+        self.velocities, self.accelerations = np.asarray(velocities, float), np.asarray(accelerations, float)
+
+    @cached_property
+    def shaft_speed(self) -> np.ndarray:
+        """(n, m, 1) theta_dot = J p_dot of each sample's own velocity (eq. 19)."""
+        return np.einsum("nmj,nj->nm", self.jacobian[:, :, :3], self.velocities)[..., None]
+
+    @cached_property
+    def shaft_speed_range(self) -> tuple[np.ndarray, np.ndarray]:
+        return self.shaft_speed[..., 0], self.shaft_speed[..., 0]
+
+    def acceleration_range(self, coefficients: np.ndarray, offset) -> tuple[np.ndarray, np.ndarray]:
+        """``coefficients . a + offset`` at each sample's own acceleration (its largest and smallest)."""
+        values = np.einsum("nmj,nj->nm", coefficients, self.accelerations) + offset
+        return values, values
+
+    @cached_property
+    def shaft_accel_from_velocity(self) -> np.ndarray:
+        """(n, m, 1) J-dot p_dot of each sample's velocity; zeros unless ``motion.jdot``."""
+        if not self.motion.jdot:
+            return np.zeros(self.shaft_speed.shape)
+        along = np.einsum("nmj,nj->nm", self.unit, self.velocities)
+        speed2 = np.einsum("nj,nj->n", self.velocities, self.velocities)[:, None]
+        return centripetal(speed2, along, self.lengths, self.motion.winch_radius)[..., None]
+
+    @cached_property
+    def wrench_accelerations(self) -> np.ndarray:
+        """(n, 1, 3) each sample's acceleration."""
+        return self.accelerations[:, None, :]
+
+    @cached_property
+    def required_wrenches(self) -> np.ndarray:
+        """(n, 1, c) F of eq. (31) at each sample's acceleration."""
+        wrenches = load_wrenches(self.motion, self.accelerations, self.robot.up, self.orientation)
+        return wrenches[:, None, : self.structure.shape[1]]
 
 
 def load_wrench_terms(load: Load, up: np.ndarray, rotation: np.ndarray):

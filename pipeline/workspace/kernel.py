@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from pipeline.workspace.criteria import GEOMETRY, REGISTRY
+from pipeline.workspace.criteria import GEOMETRY, REGISTRY, margins
 from pipeline.model.geometry import CableRobot, PoseGeometry, rotation_matrices
 from pipeline.model.metrics import pose_metrics
 from pipeline.workspace.criteria.forces import written_distribution
@@ -98,8 +98,7 @@ def _criteria(problem: WorkspaceProblem, positions: np.ndarray, orientation, nom
     ``nominal`` one also the cable quantities and the metrics the problem asks for."""
     state = problem.spec.state(problem.robot, positions, orientation)
     result = cable_quantities(state, problem.limits) if problem.cables and nominal else {}
-    for name in problem.criteria:
-        result[f"margin_{name}"] = REGISTRY[name].function(state, problem.limits)
+    result.update({f"margin_{name}": value for name, value in margins(problem.criteria, state, problem.limits).items()})
     if problem.metrics and nominal:
         held = np.min([result[f"margin_{name}"] for name in problem.criteria], axis=0) >= -problem.margin_atol
         result.update(pose_metrics(state, problem.limits, written_distribution, held))
@@ -109,13 +108,13 @@ def _criteria(problem: WorkspaceProblem, positions: np.ndarray, orientation, nom
     return result
 
 
-def _limiting_vertex(problem: WorkspaceProblem, positions: np.ndarray, orientation, margins: dict) -> dict:
+def _limiting_vertex(problem: WorkspaceProblem, positions: np.ndarray, orientation, found: dict) -> dict:
     """``limiting_wrench`` (n,): for each pose a required wrench set (``wrench.set``) fails,
     the vertex (1 = the first of the set) whose own least margin is the lowest, each vertex
     evaluated alone by the same criteria on those poses only; 0 where the pose holds the whole
     set. ``limiting_wrench_margin`` (n,): that margin (0 where it holds), to pick the worst
     orientation."""
-    least = np.min([margins[f"margin_{name}"] for name in problem.criteria], axis=0)
+    least = np.min([found[f"margin_{name}"] for name in problem.criteria], axis=0)
     failing = np.flatnonzero(least < -problem.margin_atol)
     vertex, worst = np.zeros(len(positions), dtype=np.int64), np.zeros(len(positions))
     if len(failing):
@@ -125,7 +124,7 @@ def _limiting_vertex(problem: WorkspaceProblem, positions: np.ndarray, orientati
             alone = replace(problem.spec, wrench_set=wrench[None, :])
             turned = orientation[failing] if np.ndim(orientation) == 3 else orientation  # one rotation per pose
             state = alone.state(problem.robot, positions[failing], turned)
-            own = np.min([REGISTRY[name].function(state, problem.limits) for name in problem.criteria], axis=0)
+            own = np.min(list(margins(problem.criteria, state, problem.limits).values()), axis=0)
             lower = own < worst[failing]
             vertex[failing[lower]], worst[failing[lower]] = number, own[lower]
     return {"limiting_wrench": vertex, "limiting_wrench_margin": worst}
@@ -140,7 +139,7 @@ def _fused(problem: WorkspaceProblem, positions: np.ndarray, orientation) -> dic
     geometric = [name for name in problem.criteria if REGISTRY[name].reads == GEOMETRY]
     if geometric:
         state = PoseGeometry(problem.robot, positions, orientation)
-        result.update({f"margin_{name}": REGISTRY[name].function(state, problem.limits) for name in geometric})
+        result.update({f"margin_{name}": value for name, value in margins(geometric, state, problem.limits).items()})
         result.update(state.diagnostics())
     if unsettled.any():
         for key, value in _criteria(problem, positions[unsettled], orientation, False).items():

@@ -18,10 +18,11 @@ import numpy as np
 import pandas as pd
 from omegaconf import DictConfig
 
-from pipeline.workspace.criteria import GEOMETRY, REGISTRY
+from pipeline.model.dynamics import SampleDynamics
+from pipeline.workspace import criteria
 from pipeline.workspace.grid import Grid
 from pipeline.workspace.kernel import WorkspaceProblem
-from pipeline.workspace.trajectory import inverse_dynamics, sample_margins, trapezoid
+from pipeline.workspace.trajectory import inverse_dynamics, trapezoid
 from pipeline.workspace.verdict import classify
 from pipeline.workspace.compute import grid_workspace
 
@@ -63,11 +64,9 @@ def simulate_lines(cfg: DictConfig, problem: WorkspaceProblem, grid: Grid,
     s, v, a = (np.concatenate([getattr(profile, name) for profile in profiles]) for name in "sva")
     position, velocity, acceleration = origins + s[:, None] * directions, v[:, None] * directions, a[:, None] * directions
     act = problem.limits
-    geometric = tuple(name for name in problem.criteria if REGISTRY[name].reads == GEOMETRY)
-    quantities = inverse_dynamics(problem.robot, position, velocity, acceleration, problem.orientation,
-                                  problem.spec, act, geometric)
-    raw = sample_margins(quantities, act)
-    margins, ok, _ = classify({name: raw[name] for name in problem.criteria}, problem.margin_atol)
+    state = SampleDynamics(problem.robot, position, problem.orientation, problem.spec, velocity, acceleration)
+    quantities = inverse_dynamics(state, act)
+    margins, ok, _ = classify(criteria.margins(problem.criteria, state, act), problem.margin_atol)
     samples = pd.DataFrame({
         "line": np.repeat(np.arange(len(lines)), counts), "axis": np.repeat([axis for axis, _, _ in lines], counts),
         "t": np.concatenate([profile.t for profile in profiles]), "s": s, "v": v, "a": a,
@@ -113,11 +112,11 @@ def _lines(positions: np.ndarray) -> list[tuple[str, np.ndarray, np.ndarray]]:
     return lines
 
 
-def _point_margins(samples: pd.DataFrame, points: pd.DataFrame, criteria) -> dict[str, np.ndarray]:
+def _point_margins(samples: pd.DataFrame, points: pd.DataFrame, names) -> dict[str, np.ndarray]:
     """Per grid point and criterion, the smallest margin over the samples of both its lines
     within half a grid step: the point is feasible when all those samples are, and its limiting
     criterion is the worst one among them."""
-    columns = [f"margin_{name}" for name in criteria]
+    columns = [f"margin_{name}" for name in names]
     key = pd.MultiIndex.from_frame(points[["x", "y", "z"]].round(9))
     worst = None
     for axis in ("x", "y"):
@@ -129,4 +128,4 @@ def _point_margins(samples: pd.DataFrame, points: pd.DataFrame, criteria) -> dic
         worst = per_point if worst is None else np.minimum(worst, per_point)
     if np.isnan(worst).any():
         raise ValueError("a grid point lies on no simulated line (a flat search box?)")
-    return {name: worst[:, i] for i, name in enumerate(criteria)}
+    return {name: worst[:, i] for i, name in enumerate(names)}

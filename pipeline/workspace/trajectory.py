@@ -12,13 +12,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from pipeline.model.actuators import ActuatorModel
-from pipeline.model.actuators import actuator_families
-from pipeline.model.dynamics import MotionSpec, PoseDynamics, centripetal, load_wrenches
-from pipeline.model.geometry import CableRobot
-from pipeline.model.linalg import remembered_pinv
-from pipeline.model.tensions import feasible_tensions
-from pipeline.workspace.criteria import REGISTRY
-from pipeline.workspace.criteria.geometry import zero_length
+from pipeline.model.dynamics import SampleDynamics
+from pipeline.workspace.criteria.forces import feasible_distribution, feasible_model
 
 
 @dataclass(frozen=True)
@@ -59,53 +54,25 @@ def trapezoid(distance: float, v_max: float, t_acc: float, t_dec: float, dt: flo
     return Profile(t=t, s=np.minimum(s, distance), v=v, a=a)
 
 
-def inverse_dynamics(
-    robot: CableRobot, positions: np.ndarray, velocities: np.ndarray, accelerations: np.ndarray,
-    orientation, motion: MotionSpec, actuator: ActuatorModel, geometric: tuple[str, ...] = (),
-) -> dict[str, np.ndarray]:
-    """Per-sample actuator quantities (n, m) for poses (n, 3) with their own velocity and
-    acceleration (constant orientation): shaft speed theta_dot = J p_dot (eq. 19), shaft
-    acceleration J p_ddot (+ J-dot p_dot when ``motion.jdot``), load torque M = (J^T)^+ F with F
-    the generalized force of w = m g (-up) - m p_ddot, the weight and inertial force the cables
-    balance (eqs. 20, 31 read by Newton's law, :func:`pipeline.model.dynamics.load_wrenches`),
+def inverse_dynamics(state: SampleDynamics, actuator: ActuatorModel) -> dict[str, np.ndarray]:
+    """Per-sample actuator quantities (n, m) of a trajectory's samples (each pose with its own
+    velocity and acceleration, constant orientation): shaft speed theta_dot = J p_dot (eq. 19),
+    shaft acceleration J p_ddot (+ J-dot p_dot when ``motion.jdot``), load torque M = (J^T)^+ F
+    with F the generalized force of w = m g (-up) - m p_ddot, the weight and inertial force the
+    cables balance (eqs. 20, 31 read by Newton's law, :func:`pipeline.model.dynamics.load_wrenches`),
     voltage u = G_v theta_ddot + L_v theta_dot - S_v M (eq. 21). Also the wrench residual
     |J^T M - F| and both sides of the power balance, sum_i M_i theta_dot_i and F . p_dot (n,).
     Under ``tension.model=feasible`` M is the LP's choice (``pipeline.model.tensions``) for each
-    sample's own wrench, speed and acceleration, and ``margins`` holds that model's margins;
-    under ``pinv`` ``margins`` has the share of the wrench M misses (``unreachable``), and
-    always the ``zero_length`` gate's margin; ``geometric``: criteria of the registry that read
-    the pose alone (interference), evaluated at every sample as the grid evaluates them."""
-    state = PoseDynamics(robot, positions, orientation, motion)
-    jt = state.jacobian[:, :, :3]
-    theta_dot = np.einsum("nmj,nj->nm", jt, velocities)
-    theta_ddot = np.einsum("nmj,nj->nm", jt, accelerations)
-    if motion.jdot:
-        along = np.einsum("nmj,nj->nm", state.unit, velocities)
-        speed2 = np.einsum("nj,nj->n", velocities, velocities)[:, None]
-        theta_ddot = theta_ddot + centripetal(speed2, along, state.lengths, motion.winch_radius)
-    wrench = load_wrenches(motion, accelerations, robot.up, orientation)[:, : state.structure.shape[1]]
-    pinv = remembered_pinv(state.structure, motion.rank_rtol)  # the same for every actuator
-    margins = {}
-    if motion.tension.model == "feasible":
-        other = (actuator.G_v * theta_ddot + actuator.L_v * theta_dot)[:, None, :]
-        families = actuator_families(motion.tension, motion.winch_radius, actuator, other, other)
-        margins, chosen, _ = feasible_tensions(state.structure, *pinv, wrench[:, None, :],
-                                               families, motion.tension.residual_rtol, distribution=True)
-        torque = chosen[:, 0, :]
+    sample's own wrench, speed and acceleration. The samples' margins are the registry's
+    (``criteria.margins`` of the same state)."""
+    theta_dot = state.shaft_speed[..., 0]
+    theta_ddot = state.acceleration_range(state.jacobian[:, :, :3], state.shaft_accel_from_velocity[..., 0])[0]
+    wrench = state.required_wrenches[:, 0, :]
+    if feasible_model(state):
+        torque = feasible_distribution(state, actuator)[:, 0, :]
     else:
-        torque = np.einsum("nmc,nc->nm", pinv[0], wrench)
-    if motion.tension.t_max is not None and "tension_max" not in margins:  # pinv: the rating
-        margins["tension_max"] = 1.0 - (torque / motion.winch_radius / motion.tension.t_max).max(axis=1)
-    if robot.l_max is not None:
-        margins["length"] = 1.0 - (state.lengths / robot.l_max).max(axis=1)
-    margins["zero_length"] = zero_length(state, None)
-    for name in geometric:
-        margins[name] = REGISTRY[name].function(state, actuator)
+        torque = np.einsum("nmc,nc->nm", state.wrench_pinv[0], wrench)
     reached = np.einsum("ncm,nm->nc", state.structure, torque)
-    if "unreachable" not in margins:  # pinv: the share of each sample's wrench M misses
-        size = np.linalg.norm(wrench, axis=1)
-        missed = np.linalg.norm(reached - wrench, axis=1) / np.where(size > 0, size, 1.0)
-        margins["unreachable"] = 1.0 - missed / motion.tension.pinv_residual
     return {
         "theta_dot": theta_dot,
         "theta_ddot": theta_ddot,
@@ -113,20 +80,5 @@ def inverse_dynamics(
         "voltage": actuator.G_v * theta_ddot + actuator.L_v * theta_dot + actuator.load_gain * torque,
         "wrench_residual": np.linalg.norm(reached - wrench, axis=1),
         "power_cables": np.einsum("nm,nm->n", torque, theta_dot),
-        "power_load": np.einsum("nj,nj->n", wrench[:, :3], velocities),
-        "margins": margins,
+        "power_load": np.einsum("nj,nj->n", wrench[:, :3], state.velocities),
     }
-
-
-def sample_margins(quantities: dict[str, np.ndarray], act: ActuatorModel) -> dict[str, np.ndarray]:
-    """Relative margins of every sample, as the CPR-WWA criteria define them (eqs. 30, 32-34);
-    under the ``feasible`` model its own (incl. ``unreachable`` and ``slack``) replace them, and
-    the cable rating and length margins come with them when those limits are given."""
-    worst = {
-        "speed": (quantities["theta_dot"], act.speed_limit),
-        "torque": (quantities["torque"], act.torque_limit),
-        "acceleration": (quantities["theta_ddot"], act.accel_limit),
-        "voltage": (quantities["voltage"], act.voltage_limit),
-    }
-    margins = {name: 1.0 - np.abs(values).max(axis=1) / limit for name, (values, limit) in worst.items()}
-    return {**margins, **quantities["margins"]}

@@ -118,6 +118,12 @@ def selected(analysis: str, spec, robot) -> tuple[str, ...]:
     return tuple(c.name for c in REGISTRY.values() if c.applies(analysis, spec, robot))
 
 
+def margins(names, state, limits) -> dict[str, np.ndarray]:
+    """The one evaluation every analysis and kernel goes through: criterion name -> (n,) margins
+    of the chunk ``state`` (a grid chunk's, a trajectory's samples') against ``limits``."""
+    return {name: REGISTRY[name].function(state, limits) for name in names}
+
+
 def register(criterion: Criterion) -> None:
     """Add ``criterion`` to the registry (after the package's own, a name of its own): from then
     on every problem it applies to checks it, every kernel evaluates it, figures colour it."""
