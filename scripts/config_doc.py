@@ -143,7 +143,7 @@ def page() -> str:
     lines += ["## Top-level keys", "", inspect.cleandoc(config.Config.__doc__), "",
               "| key | type | value | from |", "| --- | --- | --- | --- |"]
     for item in top:
-        value, where = found[item.name]
+        value, where = found.get(item.name, ({}, "default"))  # an empty mapping (criteria) flattens to no key
         kind = " \\| ".join(ANALYSES) if item.name == "analysis" else _type(item.type)  # a registry's names
         lines.append(f"| `{item.name}` | {kind} | `{_value(value)}` | {where} |")
     return "\n".join(lines).rstrip("\n") + "\n"

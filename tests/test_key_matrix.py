@@ -22,11 +22,13 @@ KEYS = {  # key -> (overrides, the criterion or column it adds when the job runs
     "output.mesh": (["output.mesh=true"], None),
     "output.metrics": (["output.metrics=true"], None),
     "output.points": (["output.points=false"], None),
+    "criteria": (["+criteria.torque.limit=3"], None),  # the package's criteria declare no keys of their own
 }
 # the cells that are refused, with the key the one line names
 REFUSED = {("lines", "workspace.home"): "workspace.home", ("lines", "output.mesh"): "output.mesh",
            ("cpr_wwa", "output.metrics"): "output.metrics", ("lines", "output.metrics"): "output.metrics",
-           ("payload", "output.metrics"): "output.metrics"}
+           ("payload", "output.metrics"): "output.metrics",
+           **{(analysis, "criteria"): "criteria.torque" for analysis in ANALYSES}}
 
 
 @pytest.mark.parametrize("key", sorted(KEYS))

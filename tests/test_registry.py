@@ -139,13 +139,15 @@ def test_a_job_builds_its_robot_once_from_its_kind_and_runs_that_problem(tmp_pat
 
 
 FLOOR_DEG = 10.0  # the floor-angle criterion below: every cable at least this steep
+FLOOR_KEY = f"+criteria.floor_angle.min_deg={FLOOR_DEG}"  # its one YAML line, as an override
 
 
-def floor_angle(state, limits) -> np.ndarray:
+def floor_angle(state, limits, min_deg: float) -> np.ndarray:
     """A criterion written as a user would, outside the package: the smallest angle of a cable to
-    the floor plane, relative to FLOOR_DEG (>= 0: every cable steep enough)."""
+    the floor plane, relative to its own key ``criteria.floor_angle.min_deg`` (>= 0: every cable
+    steep enough)."""
     steep = np.degrees(np.arcsin(np.clip(np.abs(state.unit[..., 2]), 0.0, 1.0))).min(axis=1)
-    return steep / FLOOR_DEG - 1.0
+    return steep / min_deg - 1.0
 
 
 def law_floor_margin(robot, positions, orientation) -> np.ndarray:
@@ -162,8 +164,11 @@ def law_floor_margin(robot, positions, orientation) -> np.ndarray:
 def floor_registered():
     """The floor-angle criterion registered from outside for one test (the registry is the
     process's: taken out again after it)."""
+    from pipeline.app.config import positive
+
     register(Criterion("floor_angle", floor_angle, GEOMETRY, None, "#117733",
-                       "anchors higher above the workspace", lambda analysis, spec, robot: True))
+                       "anchors higher above the workspace", lambda analysis, spec, robot: True,
+                       keys={"min_deg": positive}))
     try:
         yield
     finally:
@@ -176,14 +181,16 @@ def floor_registered():
     (SMALL_POINTS, "statics", "numpy"), (SMALL_POINTS, "payload", "numpy")])
 def test_a_criterion_registered_from_outside_is_evaluated_by_every_analysis(
         make_cfg, catalogue, floor_registered, robot, analysis, kernel):
-    """Issue 52's extension API: one function and one register() call, and the grid (numpy and
-    compiled kernels), the lines, the statics and the payload map all check it, with margins
-    equal to the law computed here from the points, and poses lost to it counted."""
+    """Issue 52's extension API: one function, one register() call and its key's one YAML line,
+    and the grid (numpy and compiled kernels), the lines, the statics and the payload map all
+    check it, with margins equal to the law computed here from the points, and poses lost to it
+    counted; without its key no analysis checks it."""
     from pipeline.workspace.lines import simulate_lines
 
-    cfg = make_cfg(*robot, f"analysis={analysis}", f"compute.kernel={kernel}")
+    cfg = make_cfg(*robot, f"analysis={analysis}", f"compute.kernel={kernel}", FLOOR_KEY)
     problem, grid = build_problem(cfg, catalogue)
     assert problem.criteria[-1] == "floor_angle"
+    assert "floor_angle" not in build_problem(make_cfg(*robot, f"analysis={analysis}"), catalogue)[0].criteria
     if analysis == "lines":
         samples, points, summary = simulate_lines(cfg, problem, grid)
         at = samples[["x", "y", "z"]].to_numpy()
@@ -202,8 +209,68 @@ def test_a_criterion_registered_from_outside_is_evaluated_by_every_analysis(
 def test_the_floor_angle_decides_poses_on_the_cpr8(make_cfg, catalogue, floor_registered):
     """Its verdict is the law's: the CPR-8's upper cables are nearly level near the top of the
     frame, so the poses there are lost to the floor angle, and only there."""
-    points, summary = compute_workspace(make_cfg("actuator=1"), catalogue)
-    problem, _ = build_problem(make_cfg("actuator=1"), catalogue)
+    points, summary = compute_workspace(make_cfg("actuator=1", FLOOR_KEY), catalogue)
+    problem, _ = build_problem(make_cfg("actuator=1", FLOOR_KEY), catalogue)
     steep = law_floor_margin(problem.robot, points[["x", "y", "z"]].to_numpy(), (0, 0, 0)) >= 0
     assert 0 < summary["lost_floor_angle"] and (points["feasible"].to_numpy() <= steep).all()
     assert (points.loc[~steep, "limiting"] == "floor_angle").all()
+
+
+def test_a_steeper_floor_angle_from_its_key_removes_more_poses(make_cfg, catalogue, floor_registered):
+    """The key reaches the margin: 20 degrees keeps fewer of the CPR-8's poses than 10, and the
+    kept ones are exactly those the law keeps at 20."""
+    _, at_10 = compute_workspace(make_cfg("actuator=1", FLOOR_KEY), catalogue)
+    points, at_20 = compute_workspace(make_cfg("actuator=1", "+criteria.floor_angle.min_deg=20"), catalogue)
+    problem, _ = build_problem(make_cfg("actuator=1", FLOOR_KEY), catalogue)
+    steep = law_floor_margin(problem.robot, points[["x", "y", "z"]].to_numpy(), (0, 0, 0)) * FLOOR_DEG / 20 + (
+        FLOOR_DEG / 20 - 1) >= -1e-12
+    assert at_20["lost_floor_angle"] > at_10["lost_floor_angle"] and (points["feasible"].to_numpy() <= steep).all()
+
+
+@pytest.mark.parametrize("override, message", [
+    ("+criteria.floor_angle.min_deg=-3", r"^criteria.floor_angle.min_deg=-3: must be > 0 and finite$"),
+    ("+criteria.floor_angle.min_deg=abc", r"^criteria.floor_angle.min_deg=abc: not a value this key takes$"),
+    ("+criteria.floor_angle.max_deg=3", r"^criteria.floor_angle=\{'max_deg': 3\}: its keys are min_deg$"),
+    ("+criteria.floor_angel.min_deg=3", r"^criteria.floor_angel: no criterion with keys of its own is called that \(floor_angle\)$"),
+    ("+criteria.torque.limit=3", r"^criteria.torque: no criterion with keys of its own")])
+def test_a_criterions_keys_are_checked_by_the_rules_it_declares(make_cfg, catalogue, floor_registered, override, message):
+    from pipeline.app.problem import validate
+    from pipeline.errors import ConfigError
+    from pipeline.workspace.criteria import checked_settings
+
+    with pytest.raises(ConfigError, match=message):
+        validate(make_cfg(override), catalogue)
+    with pytest.raises(ConfigError, match=r"^criteria=\[1, 2\]: a mapping of criterion names"):
+        checked_settings([1, 2])  # a file's criteria: [1, 2]
+
+
+def test_keys_of_a_criterion_the_analysis_does_not_check_are_refused(make_cfg, catalogue):
+    """A criterion with keys that applies to the dynamics only: its keys under analysis=statics
+    are refused in one line, not ignored; null keys mean not checked."""
+    from pipeline.app.config import positive
+    from pipeline.app.problem import validate
+    from pipeline.errors import ConfigError
+
+    register(Criterion("winch_turns", floor_angle, GEOMETRY, None, "#117733", "longer drums",
+                       lambda analysis, spec, robot: analysis in ("cpr_wwa", "lines"), keys={"min_deg": positive}))
+    try:
+        assert "winch_turns" in validate(make_cfg("+criteria.winch_turns.min_deg=5"), catalogue)[1].criteria
+        with pytest.raises(ConfigError, match=r"^criteria.winch_turns: analysis=statics does not check it"):
+            validate(make_cfg("analysis=statics", "+criteria.winch_turns.min_deg=5"), catalogue)
+        assert "winch_turns" not in validate(make_cfg("+criteria.winch_turns.min_deg=null"), catalogue)[1].criteria
+    finally:
+        del REGISTRY["winch_turns"], COLOURS["winch_turns"]
+
+
+def test_the_criterions_one_yaml_line_in_a_users_robot_file_runs_it_through_the_api(tmp_path, catalogue, floor_registered):
+    """The extension as a user writes it: the registered criterion, and its key as one line of
+    their own robot file (``criteria: {floor_angle: {min_deg: 10}}``), run by the API as the
+    command line runs a job; the summary counts the poses it removes and records the key."""
+    from pipeline import api
+
+    (tmp_path / "conf" / "robot").mkdir(parents=True)
+    (tmp_path / "conf" / "robot" / "steep.yaml").write_text(
+        "# @package _global_\ndefaults: [cpr8, _self_]\ncriteria: {floor_angle: {min_deg: 10}}\n")
+    ws = api.workspace(["robot=steep", "actuator=1"], folder=tmp_path / "job", config_dir=tmp_path / "conf")
+    assert ws.summary["lost_floor_angle"] > 0 and ws.summary["criteria.floor_angle.min_deg"] == 10
+    assert (ws.points["limiting"] == "floor_angle").sum() == ws.summary["lost_floor_angle"]

@@ -521,7 +521,8 @@ class Config:
     ``obstacles`` (the cell's obstacles no cable and not the platform may touch, criterion
     ``cable_obstacle``: a list of boxes ``{name: table, lo: [x, y, z], hi: [x, y, z]}`` and
     half-spaces ``{name: floor, point: [x, y, z], normal: [x, y, z]}``, the obstacle behind the
-    plane, m, fixed frame). A
+    plane, m, fixed frame), ``criteria`` (the keys of the criteria that declare their own,
+    ``{name: {key: value}}``: ``pipeline.workspace.criteria``, each checked where they are given). A
     job has the keys of conf/config.yaml plus those of its tension, analysis and robot files,
     and only those (checked against this schema by ``pipeline.app.problem.typed_config``; the
     robot and analysis kinds are named there)."""
@@ -545,6 +546,14 @@ class Config:
     lines: LinesConfig = field(default_factory=LinesConfig)
     poses: Any = MISSING
     obstacles: Any = MISSING
+    criteria: Any = MISSING
+
+    @staticmethod
+    def check_fields(cfg: DictConfig) -> None:
+        from pipeline.workspace.criteria import checked_settings
+
+        if "criteria" in cfg:  # the keys each criterion declares beside it, by its rules
+            checked_settings(OmegaConf.to_container(cfg.criteria) if isinstance(cfg.criteria, DictConfig) else cfg.criteria)
 
 
 def register() -> None:

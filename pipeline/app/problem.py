@@ -50,7 +50,7 @@ from pipeline.workspace.compute import (
     JOB_S, JOB_WORKER_START_S, LINE_SAMPLES, POSES_PER_SECOND, FUSED_START_S, estimated_seconds, fused_unfit,
     grid_workspace, name_of,
 )
-from pipeline.workspace.criteria import selected
+from pipeline.workspace.criteria import checked_settings, selected
 from pipeline.workspace.grid import Grid, box_grid, listed_grid, step_grid
 from pipeline.workspace.kernel import WorkspaceProblem
 from pipeline.workspace.reach import home_node
@@ -409,7 +409,12 @@ def build(cfg: DictConfig, catalogue: Catalogue | None) -> WorkspaceProblem:
     spec, limits and criteria, the orientation set."""
     robot = surroundings(cfg, ROBOTS[cfg.robot.name].build(cfg.robot))
     spec, limits = ANALYSES[cfg.analysis].build(cfg, catalogue, robot)
-    criteria = selected(cfg.analysis, spec, robot)  # the registry's, by what each applies to
+    settings = checked_settings(OmegaConf.to_container(cfg.criteria)) if "criteria" in cfg else {}
+    criteria = selected(cfg.analysis, spec, robot, settings)  # the registry's, by what each applies to
+    refused = [name for name in settings if name not in criteria]
+    if refused:
+        raise ConfigError(f"criteria.{refused[0]}: analysis={cfg.analysis} does not check it on this robot; "
+                          "remove its keys or choose an analysis it applies to")
     given = cfg.orientation
     if robot.fixed_point and (orientation_count(given) > 1 or any(given[a] != 0 for a in ("psi", "theta", "phi"))):
         freedoms = ", ".join(FREEDOMS[i] for i in robot.dofs)
@@ -423,7 +428,7 @@ def build(cfg: DictConfig, catalogue: Catalogue | None) -> WorkspaceProblem:
     return WorkspaceProblem(robot, orientation_set(given), spec, limits, criteria, cfg.model.margin_atol,
                             cfg.output.cables, nominal=(float(given.psi), float(given.theta), float(given.phi)),
                             angles=name_of(given.convention) if robot.fixed_point else None,
-                            metrics=bool(cfg.output.metrics))
+                            metrics=bool(cfg.output.metrics), settings=settings)
 
 
 def surroundings(cfg: DictConfig, robot: CableRobot) -> CableRobot:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -28,7 +28,8 @@ class WorkspaceProblem:
     ``fused``: evaluate with the compiled kernel of ``pipeline.workspace.fused`` (numpy for the
     poses it leaves unsettled); the job decides (``pipeline.workspace.compute.use_fused``).
     ``nominal``: the orientation as the config gives it, in its convention (``orientation.*``),
-    reported with every pose; ``orientations`` are always eq. (9)'s angles. ``angles``: for a
+    reported with every pose; ``orientations`` are always eq. (9)'s angles. ``settings``: the
+    criteria's own keys (``criteria.<name>.<key>``), by criterion. ``angles``: for a
     robot whose reference point a joint holds (``CableRobot.fixed_point``), the convention of
     the grid's rows, which are then orientations (psi, theta, phi) at the frame's origin, one
     verdict each; None: the rows are positions.
@@ -45,6 +46,7 @@ class WorkspaceProblem:
     nominal: tuple[float, float, float] = (0.0, 0.0, 0.0)
     angles: str | None = None
     metrics: bool = False
+    settings: dict = field(default_factory=dict)
 
     @property
     def orientation(self) -> tuple[float, float, float]:
@@ -98,7 +100,8 @@ def _criteria(problem: WorkspaceProblem, positions: np.ndarray, orientation, nom
     ``nominal`` one also the cable quantities and the metrics the problem asks for."""
     state = problem.spec.state(problem.robot, positions, orientation)
     result = cable_quantities(state, problem.limits) if problem.cables and nominal else {}
-    result.update({f"margin_{name}": value for name, value in margins(problem.criteria, state, problem.limits).items()})
+    found = margins(problem.criteria, state, problem.limits, problem.settings)
+    result.update({f"margin_{name}": value for name, value in found.items()})
     if problem.metrics and nominal:
         held = np.min([result[f"margin_{name}"] for name in problem.criteria], axis=0) >= -problem.margin_atol
         result.update(pose_metrics(state, problem.limits, written_distribution, held))
@@ -124,7 +127,7 @@ def _limiting_vertex(problem: WorkspaceProblem, positions: np.ndarray, orientati
             alone = replace(problem.spec, wrench_set=wrench[None, :])
             turned = orientation[failing] if np.ndim(orientation) == 3 else orientation  # one rotation per pose
             state = alone.state(problem.robot, positions[failing], turned)
-            own = np.min(list(margins(problem.criteria, state, problem.limits).values()), axis=0)
+            own = np.min(list(margins(problem.criteria, state, problem.limits, problem.settings).values()), axis=0)
             lower = own < worst[failing]
             vertex[failing[lower]], worst[failing[lower]] = number, own[lower]
     return {"limiting_wrench": vertex, "limiting_wrench_margin": worst}
@@ -139,7 +142,8 @@ def _fused(problem: WorkspaceProblem, positions: np.ndarray, orientation) -> dic
     geometric = [name for name in problem.criteria if REGISTRY[name].reads == GEOMETRY]
     if geometric:
         state = PoseGeometry(problem.robot, positions, orientation)
-        result.update({f"margin_{name}": value for name, value in margins(geometric, state, problem.limits).items()})
+        found = margins(geometric, state, problem.limits, problem.settings)
+        result.update({f"margin_{name}": value for name, value in found.items()})
         result.update(state.diagnostics())
     if unsettled.any():
         for key, value in _criteria(problem, positions[unsettled], orientation, False).items():

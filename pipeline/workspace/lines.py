@@ -66,7 +66,7 @@ def simulate_lines(cfg: DictConfig, problem: WorkspaceProblem, grid: Grid,
     act = problem.limits
     state = SampleDynamics(problem.robot, position, problem.orientation, problem.spec, velocity, acceleration)
     quantities = inverse_dynamics(state, act)
-    margins, ok, _ = classify(criteria.margins(problem.criteria, state, act), problem.margin_atol)
+    margins, ok, _ = classify(criteria.margins(problem.criteria, state, act, problem.settings), problem.margin_atol)
     samples = pd.DataFrame({
         "line": np.repeat(np.arange(len(lines)), counts), "axis": np.repeat([axis for axis, _, _ in lines], counts),
         "t": np.concatenate([profile.t for profile in profiles]), "s": s, "v": v, "a": a,

@@ -18,7 +18,7 @@ every kernel and on the lines; ``tests/test_registry.py`` registers one).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Callable
 
 import numpy as np
@@ -36,7 +36,10 @@ class Criterion:
     every kernel); ``gate``: priority among gates (0 first) or None; ``colour``: figures;
     ``remedy``: what to try next when it limits every pose (a job with none feasible says it);
     ``applies(analysis, spec, robot)``: whether a problem of ``analysis`` (cpr_wwa, lines,
-    statics, payload) with that per-chunk spec and robot checks it."""
+    statics, payload) with that per-chunk spec and robot checks it; ``keys``: its own config
+    keys ``criteria.<name>.<key>``, each with the rule its value must pass (a check as in
+    ``pipeline.app.config``: None, or what the value must be), given to ``function`` as keyword
+    arguments. A criterion with keys is checked where the config gives them (null: not checked)."""
 
     name: str
     function: Callable[[Any, Any], np.ndarray]
@@ -45,6 +48,7 @@ class Criterion:
     colour: str
     remedy: str
     applies: Callable[[str, Any, Any], bool]
+    keys: dict[str, Callable[[Any], str | None]] = field(default_factory=dict)
 
 
 def _dynamics(analysis: str, spec=None, robot=None) -> bool:
@@ -113,15 +117,49 @@ def gates() -> tuple[str, ...]:
     return tuple(sorted((c.name for c in REGISTRY.values() if c.gate is not None), key=lambda name: REGISTRY[name].gate))
 
 
-def selected(analysis: str, spec, robot) -> tuple[str, ...]:
-    """The criteria a problem of ``analysis`` with ``spec`` and ``robot`` checks, in registry order."""
-    return tuple(c.name for c in REGISTRY.values() if c.applies(analysis, spec, robot))
+def selected(analysis: str, spec, robot, settings: dict | None = None) -> tuple[str, ...]:
+    """The criteria a problem of ``analysis`` with ``spec``, ``robot`` and the criteria's own keys
+    (``settings``, :func:`checked_settings`) checks, in registry order."""
+    settings = settings or {}
+    return tuple(c.name for c in REGISTRY.values()
+                 if c.applies(analysis, spec, robot) and (not c.keys or c.name in settings))
 
 
-def margins(names, state, limits) -> dict[str, np.ndarray]:
+def checked_settings(node) -> dict[str, dict]:
+    """The criteria's own keys of a config's ``criteria`` node (plain containers), each value
+    checked by the rule its criterion declares beside it: ``{name: {key: value}}``, without the
+    criteria whose keys are null (not checked). ConfigError in one line for a name no criterion
+    with keys has, a key it does not declare or misses, or a value its rule refuses."""
+    from pipeline.errors import ConfigError
+
+    if not isinstance(node, dict):
+        raise ConfigError(f"criteria={node}: a mapping of criterion names to their keys, {{name: {{key: value}}}}")
+    settings = {}
+    for name, given in node.items():
+        criterion = REGISTRY.get(name)
+        if criterion is None or not criterion.keys:
+            with_keys = ", ".join(c.name for c in REGISTRY.values() if c.keys) or "none is registered"
+            raise ConfigError(f"criteria.{name}: no criterion with keys of its own is called that ({with_keys})")
+        if not isinstance(given, dict) or set(given) != set(criterion.keys):
+            raise ConfigError(f"criteria.{name}={given}: its keys are {', '.join(criterion.keys)}")
+        for key, check in criterion.keys.items():
+            try:
+                broken = None if given[key] is None else check(given[key])
+            except TypeError:
+                broken = "not a value this key takes"
+            if broken:
+                raise ConfigError(f"criteria.{name}.{key}={given[key]}: {broken}")
+        if all(value is not None for value in given.values()):
+            settings[name] = dict(given)
+    return settings
+
+
+def margins(names, state, limits, settings: dict | None = None) -> dict[str, np.ndarray]:
     """The one evaluation every analysis and kernel goes through: criterion name -> (n,) margins
-    of the chunk ``state`` (a grid chunk's, a trajectory's samples') against ``limits``."""
-    return {name: REGISTRY[name].function(state, limits) for name in names}
+    of the chunk ``state`` (a grid chunk's, a trajectory's samples') against ``limits``, each
+    criterion given its own keys (``settings``)."""
+    settings = settings or {}
+    return {name: REGISTRY[name].function(state, limits, **settings.get(name, {})) for name in names}
 
 
 def register(criterion: Criterion) -> None:
