@@ -36,7 +36,7 @@ from pipeline.app.problem import typed_config  # noqa: E402
 from pipeline.workspace.kernel import evaluate_chunk  # noqa: E402
 from pipeline.app.resources import CONF_DIR  # noqa: E402
 from pipeline.model.tensions import feasible_tensions  # noqa: E402
-from pipeline.workspace.compute import bounded_chunk_size  # noqa: E402
+from pipeline.workspace.dispatch import bounded_chunk_size  # noqa: E402
 from pipeline.app.problem import build_problem  # noqa: E402
 
 LP_SAMPLE = 10  # the LPs run on every 10th pose

@@ -37,7 +37,7 @@ from pipeline.workspace.kernel import evaluate_chunk  # noqa: E402
 from pipeline.workspace.parallel import iter_chunks  # noqa: E402
 from pipeline.app.resources import CONF_DIR  # noqa: E402
 from pipeline.workspace.reference import literal_margins  # noqa: E402
-from pipeline.workspace.compute import bounded_chunk_size  # noqa: E402
+from pipeline.workspace.dispatch import bounded_chunk_size  # noqa: E402
 from pipeline.app.problem import build_problem  # noqa: E402
 from bench_feasible import profiled_share  # noqa: E402
 

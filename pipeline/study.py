@@ -55,7 +55,7 @@ OUTPUT_DIR = Path("outputs") / "studies"
 ALWAYS_EXCLUDED = ["compute.n_jobs", "compute.backend", "compute.chunk_size", "compute.scheduler",
                    "compute.max_poses", "compute.kernel"]
 # Studies are many small jobs: by default two at a time on two worker processes kept for every
-# sweep of the command, where they pay for their start (pipeline.app.problem.workers_pay, else
+# sweep of the command, where they pay for their start (pipeline.workspace.dispatch.workers_pay, else
 # in this process), each job on one core (one level of parallelism); "serial": one after
 # another in this process, each with its own compute.n_jobs (large grids, Dask); "one_core": one
 # after another, each job on one core (what each of the concurrent studies of --all uses)

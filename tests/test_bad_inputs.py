@@ -445,7 +445,7 @@ def test_obstacles_and_a_fine_search_step_are_counted_before_any_work(make_cfg, 
 
     from pipeline.app.problem import build_problem
     from pipeline.study import load_study
-    from pipeline.workspace.compute import announce_cost
+    from pipeline.workspace.dispatch import announce_cost
 
     boxes = "[" + ",".join(f"{{lo:[{0.1 + 0.03 * i},0.1,-2.25],hi:[{0.11 + 0.03 * i},0.2,-2.21]}}" for i in range(100)) + "]"
     cfg = make_cfg("grid.n=40", f"obstacles={boxes}")

@@ -102,7 +102,7 @@ def test_a_dask_chunk_holds_at_least_a_fifth_of_a_second_of_kernel(make_cfg, cat
     the cost model (a task's round trip through the scheduler costs milliseconds); a number is
     used as given, and the memory budget bounds both."""
     from pipeline.app.problem import build_problem
-    from pipeline.workspace.compute import DASK_CHUNK_S, bounded_chunk_size, estimated_seconds
+    from pipeline.workspace.dispatch import DASK_CHUNK_S, bounded_chunk_size, estimated_seconds
 
     problem, _ = build_problem(make_cfg("orientation.psi=0.5"), catalogue)
     fused = dataclasses.replace(problem, fused=True)

@@ -17,7 +17,8 @@ from pipeline.analyses.evidence import FACTS, MARGIN, POINTS, evidence, scores, 
 from pipeline.app.readings import reading_name
 from pipeline.workspace.lines import simulate_lines
 from pipeline.study import checked_commands, load_study, sweep_command
-from pipeline.app.problem import build_problem, fused_pays
+from pipeline.app.problem import build_problem
+from pipeline.workspace.dispatch import fused_pays
 from pipeline.workspace.compute import grid_workspace
 
 
@@ -40,7 +41,7 @@ def study_summary(name, make_cfg, catalogue, readings=None) -> pd.DataFrame:
             for key, value in zip(keys, setting):
                 OmegaConf.update(cfg, key, float(value) if "." in value or key.startswith("robot.") else int(value))
             jobs.append((cfg, *build_problem(cfg, catalogue)))
-        pays = fused_pays((cfg, problem) for cfg, problem, _ in jobs)  # the case's sweep, as its plan decides
+        pays = fused_pays((cfg, problem, grid.n_points) for cfg, problem, grid in jobs)  # the case's sweep, as its plan decides
         for cfg, problem, grid in jobs:
             if cfg.analysis == "lines":
                 summary = simulate_lines(cfg, problem, grid, pays)[2]

@@ -129,7 +129,7 @@ def test_a_freedom_an_analysis_cannot_mean_is_refused_in_one_line(make_cfg, cata
 
 
 def test_the_compiled_kernel_leaves_a_robot_with_fewer_freedoms_to_numpy(make_cfg, catalogue):
-    from pipeline.workspace.compute import fused_unfit
+    from pipeline.workspace.dispatch import fused_unfit
 
     planar = points_robot("[[-1,-1,0],[1,-1,0],[1,1,0],[-1,1,0]]", "[[0,0,0],[0,0,0],[0,0,0],[0,0,0]]",
                           ["x", "y"], "[-0.9,-0.9,0]", "[0.9,0.9,0]", 0.1, "tension=pinv")

@@ -19,8 +19,8 @@ import pytest
 
 from conftest import command, job_imports, compute_workspace
 from pipeline.workspace import fused
-from pipeline.workspace.compute import fused_unfit, use_fused
-from pipeline.app.problem import build_problem, fused_pays
+from pipeline.workspace.dispatch import fused_pays, fused_unfit, use_fused
+from pipeline.app.problem import build_problem, grid_size
 from pipeline.workspace.kernel import evaluate_chunk
 from pipeline.workspace.verdict import classify
 
@@ -155,7 +155,7 @@ def test_a_sweep_of_many_small_jobs_pays_for_the_compiled_kernel_together(make_c
     216-pose jobs do not, nor jobs the compiled kernels cannot evaluate."""
     def jobs(*overrides):
         cfg = make_cfg(*overrides)
-        return cfg, build_problem(cfg, catalogue)[0]
+        return cfg, build_problem(cfg, catalogue)[0], grid_size(cfg)
 
     irpm = jobs("robot=irpm6")
     assert not fused_pays([irpm] * 2) and fused_pays([irpm] * 3)

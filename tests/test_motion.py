@@ -40,7 +40,7 @@ def test_chunk_size_bounded_by_memory_budget(make_cfg, catalogue):
     """grid.n=100 with the velocity grid tied to it keeps 101^3 candidates (2 376 of them extremes,
     which the kernel evaluates) per pose; chunks shrink so one chunk's largest array stays within
     4e6 floats, counted on the extremes (on every velocity with J-dot, which is not linear in v)."""
-    from pipeline.workspace.compute import CHUNK_BUDGET_FLOATS, bounded_chunk_size
+    from pipeline.workspace.dispatch import CHUNK_BUDGET_FLOATS, bounded_chunk_size
     from pipeline.app.problem import build_problem
 
     dense, _ = build_problem(make_cfg("grid.n=100"), catalogue)

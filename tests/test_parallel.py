@@ -4,8 +4,8 @@ import dataclasses
 
 import pandas as pd
 
-from pipeline.workspace import compute as workspace
-from pipeline.workspace.compute import worth_workers
+from pipeline.workspace import dispatch
+from pipeline.workspace.dispatch import worth_workers
 from pipeline.app.problem import build_problem
 from conftest import compute_workspace
 
@@ -30,9 +30,30 @@ def test_workers_only_when_the_kernel_outlasts_their_start(make_cfg, catalogue):
 
 def test_chunks_on_two_workers_equal_one_process(make_cfg, catalogue, monkeypatch):
     serial, serial_summary = compute_workspace(make_cfg("grid.n=12", "compute.chunk_size=300"), catalogue)
-    monkeypatch.setattr(workspace, "WORKER_START_S", 0.0)  # workers even for 1 728 poses
+    monkeypatch.setattr(dispatch, "WORKER_START_S", 0.0)  # workers even for 1 728 poses
     cfg = make_cfg("grid.n=12", "compute.chunk_size=300", "compute.n_jobs=2")
     parallel, summary = compute_workspace(cfg, catalogue)
     pd.testing.assert_frame_equal(parallel, serial)
     assert summary.pop("compute.n_jobs") == 2 and serial_summary.pop("compute.n_jobs") == 1
     assert summary == serial_summary and summary["n_feasible"] == serial["feasible"].sum() > 0
+
+
+def test_one_decision_gives_a_job_its_kernel_chunks_and_workers(make_cfg, catalogue):
+    """``dispatch.decide`` on its own: the main job's 216 poses stay on numpy in one process;
+    60^3 CPR-WWA poses take the compiled kernel (0.4 s of start against 1.4 s of numpy) in
+    20 000-pose chunks, and workers only once the fused kernel outlasts 1.5 s (10^6 poses/s);
+    the feasible model takes 4 096-pose chunks and workers from 16 000 poses; a sweep that pays
+    gives even a small job the compiled kernel."""
+    from pipeline.workspace.dispatch import decide
+
+    cfg = make_cfg("compute.n_jobs=2")
+    problem = build_problem(cfg, catalogue)[0]
+    small = decide(cfg, problem, 216)
+    assert (small.problem.fused, small.chunk_size, small.workers) == (False, 20_000, 1)
+    large = decide(cfg, problem, 60 ** 3)
+    assert (large.problem.fused, large.chunk_size, large.workers) == (True, 20_000, 1)
+    assert decide(cfg, problem, 2_000_000).workers == 2
+    feasible_cfg = make_cfg("compute.n_jobs=2", "tension=feasible")
+    feasible = decide(feasible_cfg, build_problem(feasible_cfg, catalogue)[0], 17_000)
+    assert (feasible.problem.fused, feasible.chunk_size, feasible.workers) == (False, 4096, 2)
+    assert decide(cfg, problem, 216, sweep_pays=True).problem.fused

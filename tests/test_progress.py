@@ -11,7 +11,7 @@ import pytest
 from pipeline.app.plan import plan
 from pipeline.workspace import fused, parallel
 from pipeline.workspace.progress import Progress, clock_text
-from pipeline.workspace.compute import announce_cost, estimated_seconds
+from pipeline.workspace.dispatch import announce_cost, estimated_seconds
 from pipeline.app.problem import build_problem
 from conftest import compute_workspace
 

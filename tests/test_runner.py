@@ -12,7 +12,8 @@ from hydra import compose, initialize_config_dir
 from omegaconf import OmegaConf
 
 import pipeline.app.run
-from pipeline.app.problem import validate, workers_pay
+from pipeline.app.problem import grid_size, validate
+from pipeline.workspace.dispatch import workers_pay
 from pipeline.app.plan import parse, plan, sweep_jobs
 from pipeline.app.run import run
 from pipeline.app.resources import CONF_DIR
@@ -61,7 +62,7 @@ def test_the_runner_writes_what_hydras_basic_launcher_writes(tmp_path, monkeypat
     assert len([n for n in basic if n.endswith("points.parquet")]) == 8
     assert job_files(sweep(tmp_path / "serial", "hydra/launcher=cdpr")) == basic
     pooled = plan(["-m", *SWEEP, f"hydra.sweep.dir={tmp_path / 'pool'}", "hydra.launcher.n_jobs=2"])
-    assert not workers_pay([(job.cfg, job.problem) for job in pooled.jobs], 2)
+    assert not workers_pay([(job.cfg, job.problem, grid_size(job.cfg)) for job in pooled.jobs], 2)
     monkeypatch.setattr(pipeline.app.run, "workers_pay", lambda jobs, workers: True)
     with caplog.at_level(logging.INFO, logger="pipeline"):
         run(pooled, hydra_logging=False)
@@ -82,11 +83,11 @@ def test_jobs_too_short_for_workers_run_in_this_process_and_long_ones_get_them(t
     assert "hydra.launcher.n_jobs=2: 8 jobs too short to pay for starting worker processes" in caplog.text
     assert "Launching 8 jobs locally" in caplog.text
     large = plan(["-m", "actuator=1,2,3,4,5", "grid.n=106", "hydra.launcher.n_jobs=2"])
-    assert workers_pay([(job.cfg, job.problem) for job in large.jobs], 2)
+    assert workers_pay([(job.cfg, job.problem, grid_size(job.cfg)) for job in large.jobs], 2)
     lines = plan(["-m", "analysis=lines", "actuator=1,2,3,4,5", "load.mass=1,1.5,2,2.5,3,3.5,4,4.5",
                   "hydra.launcher.n_jobs=2"])
-    assert len(lines.jobs) == 40 and workers_pay([(job.cfg, job.problem) for job in lines.jobs], 2)
-    assert not workers_pay([(job.cfg, job.problem) for job in lines.jobs[:5]], 2)
+    assert len(lines.jobs) == 40 and workers_pay([(job.cfg, job.problem, grid_size(job.cfg)) for job in lines.jobs], 2)
+    assert not workers_pay([(job.cfg, job.problem, grid_size(job.cfg)) for job in lines.jobs[:5]], 2)
 
 
 def test_planned_configs_are_those_a_job_would_type_itself():

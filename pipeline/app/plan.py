@@ -39,7 +39,8 @@ from omegaconf import DictConfig, ListConfig, OmegaConf, open_dict, read_write
 from omegaconf.errors import ConfigAttributeError, ConfigKeyError, MissingMandatoryValue
 
 from pipeline.app.config import masked, register
-from pipeline.app.problem import fused_pays, grid_size, typed_schema, validate
+from pipeline.app.problem import grid_size, typed_schema, validate
+from pipeline.workspace.dispatch import fused_pays
 from pipeline.app.resources import CONF_DIR
 from pipeline.app.yamltext import to_yaml
 from pipeline.errors import ConfigError, one_line
@@ -67,7 +68,7 @@ class Job:
     problem: WorkspaceProblem  # built from cfg by its robot and analysis kinds, once
     config: DictConfig  # as Hydra composes it, without Hydra's node (.hydra/config.yaml)
     files: tuple[str, ...]  # the key of its composition in the plan
-    fused: bool = False  # its sweep pays, as a whole, for the compiled kernels (problem.fused_pays)
+    fused: bool = False  # its sweep pays, as a whole, for the compiled kernels (dispatch.fused_pays)
 
 
 @dataclass
@@ -169,7 +170,7 @@ def plan(argv: list[str], reuse: Reuse | None = None) -> Plan | None:
                                config, files))
     _check_output_folders(folders, planned[0].cfg, len(planned))
     if len(planned) > 1:
-        if fused_pays((job.cfg, job.problem) for job in planned):
+        if fused_pays((job.cfg, job.problem, grid_size(job.cfg)) for job in planned):
             planned = [Job(**{**job.__dict__, "fused": True}) for job in planned]
     gather = "sweep_summary" in (OmegaConf.select(hydra, "hydra.callbacks") or {})
     return Plan(planned, multirun, sweep_dir, 1 if by_hydra else hydra.hydra.launcher.n_jobs, tuple(overrides),

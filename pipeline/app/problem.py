@@ -46,10 +46,8 @@ from pipeline.model.motion import acceleration_set, cartesian_cube, extreme_poin
 from pipeline.model.robots import PointsRobot, cpr8, irpm6, point_list
 from pipeline.model.statics import PayloadSpec, StaticLimits, StaticsSpec
 from pipeline.model.tensions import TensionSpec
-from pipeline.workspace.compute import (
-    JOB_S, JOB_WORKER_START_S, LINE_SAMPLES, POSES_PER_SECOND, FUSED_START_S, estimated_seconds, fused_unfit,
-    grid_workspace, name_of,
-)
+from pipeline.workspace.compute import grid_workspace, name_of
+from pipeline.workspace.dispatch import fused_unfit
 from pipeline.workspace.criteria import checked_settings, selected
 from pipeline.workspace.grid import Grid, box_grid, listed_grid, step_grid
 from pipeline.workspace.kernel import WorkspaceProblem
@@ -640,27 +638,3 @@ def _validate_size(cfg: DictConfig) -> None:
             f"{orientations:.3g} orientations = {poses * orientations:.3g} evaluations; use a "
             "coarser grid (grid.n, robot.search.step), fewer orientation.total.n, or raise "
             "compute.max_poses knowingly")
-
-
-def fused_pays(jobs) -> bool:
-    """Whether the compiled kernels pay for their start over these jobs together (pairs of a
-    typed config and its problem, a sweep: the IRPM wrench studies are 180 jobs of 25 000
-    poses, each too small alone; each process that runs its jobs loads them once)."""
-    seconds = 0.0
-    for cfg, problem in jobs:
-        if name_of(cfg.compute.kernel) == "auto" and fused_unfit(problem) is None:
-            seconds += grid_size(cfg) * len(problem.orientations) / POSES_PER_SECOND["pinv"]
-    return seconds > FUSED_START_S
-
-
-def workers_pay(jobs, workers: int) -> bool:
-    """Whether ``workers`` job processes finish these jobs (pairs of a typed config and its
-    problem) sooner than this process alone, by the cost model: they share the jobs' kernel
-    time and files but each first starts (``JOB_WORKER_START_S``). A study's 40 jobs of 216
-    poses take less than starting one worker."""
-    seconds = 0.0
-    for cfg, problem in jobs:
-        seconds += JOB_S + estimated_seconds(problem, grid_size(cfg))
-        if cfg.analysis == "lines":
-            seconds += 2 * cfg.grid.n ** 2 * LINE_SAMPLES / POSES_PER_SECOND[problem.spec.tension.model]
-    return seconds * (1.0 - 1.0 / workers) > workers * JOB_WORKER_START_S

@@ -23,8 +23,8 @@ from omegaconf import DictConfig, ListConfig, OmegaConf, open_dict
 from pipeline.app.callbacks import gather
 from pipeline.app.job import execute
 from pipeline.app.plan import Job, Plan
-from pipeline.app.problem import grid_size, workers_pay
-from pipeline.workspace.compute import chunking
+from pipeline.app.problem import grid_size
+from pipeline.workspace.dispatch import decide, workers_pay
 from pipeline.app.yamltext import to_yaml
 
 log = logging.getLogger("pipeline")
@@ -48,7 +48,7 @@ def run(plan: Plan, hydra_logging: bool = True, sharing: list[Job] | None = None
     caller's logging as it is, no log file) and, for a sweep, its summary; returns the jobs'
     summaries in plan order. A job's error stops the run (the jobs already finished are reused
     by a rerun). Worker processes are started only where they pay (cost model:
-    :func:`pipeline.app.problem.workers_pay`) for the plan's jobs, or for ``sharing``: every job
+    :func:`pipeline.workspace.dispatch.workers_pay`) for the plan's jobs, or for ``sharing``: every job
     of the process's plans, which share the workers once started (a study's cases)."""
     for address in sorted({str(job.cfg.compute.scheduler) for job in plan.jobs
                            if job.cfg.compute.backend == "dask" and job.cfg.compute.scheduler}):
@@ -62,7 +62,7 @@ def run(plan: Plan, hydra_logging: bool = True, sharing: list[Job] | None = None
     if workers < plan.workers and len(plan.jobs) > plan.workers:
         log.warning("hydra.launcher.n_jobs=%d: capped at the %d cores of this machine", plan.workers, workers)
     shared = plan.jobs if sharing is None else sharing
-    if workers > 1 and not workers_pay(((job.cfg, job.problem) for job in shared), workers):
+    if workers > 1 and not workers_pay(((job.cfg, job.problem, grid_size(job.cfg)) for job in shared), workers):
         log.info("hydra.launcher.n_jobs=%d: %d jobs too short to pay for starting worker processes "
                  "(cost model); they run in this process", plan.workers, len(shared))
         workers = 1
@@ -107,7 +107,7 @@ def _shared_cluster(jobs: list[Job]):
     one costs about 1.8 s here); nothing when fewer than two would, or their ``compute.n_jobs``
     differ."""
     local = [job for job in jobs if job.cfg.compute.backend == "dask" and not job.cfg.compute.scheduler
-             and grid_size(job.cfg) > chunking(job.cfg, job.problem, grid_size(job.cfg), job.fused)[1]]
+             and grid_size(job.cfg) > decide(job.cfg, job.problem, grid_size(job.cfg), job.fused).chunk_size]
     sizes = {job.cfg.compute.n_jobs for job in local}
     if len(local) < 2 or len(sizes) != 1:
         return nullcontext()

@@ -6,7 +6,7 @@ with ``@njit(SIGNATURES[name], cache=True)``: numba compiles them, with everythi
 when the module is first imported on a machine (seconds, once) and keeps the machine code in
 its cache (``__pycache__`` beside the module, or numba's user cache where that cannot be
 written); later processes load it (numba's import and the cache, what
-``pipeline.workspace.compute.FUSED_START_S`` allows for; docs/performance.md). A signature also keeps
+``pipeline.workspace.dispatch.FUSED_START_S`` allows for; docs/performance.md). A signature also keeps
 numba from compiling a second specialisation for another argument type (a literal, a read-only
 array): such a call is a TypeError instead of seconds of compiling.
 

@@ -35,8 +35,8 @@ Every other pose (rank two short, a singular statics pose, or a ratio or row wit
 
 They apply to the ``pinv`` tension model (CPR-WWA: without J-dot, on the extreme velocities and
 a product acceleration set, both readings of eqs. 27-29), without per-pose cable quantities
-(``pipeline.workspace.compute.fused_unfit``, the specs' ``fused_unfit``); a job uses them when the cost model says they pay
-for their start (``compute.kernel=auto``, ``pipeline.workspace.compute.use_fused``). A process
+(``pipeline.workspace.dispatch.fused_unfit``, the specs' ``fused_unfit``); a job uses them when the cost model says they pay
+for their start (``compute.kernel=auto``, ``pipeline.workspace.dispatch.use_fused``). A process
 loads them from numba's cache, or numba compiles them the first time on a machine
 (``pipeline.model.jit.compiled_loops``).
 """

@@ -26,7 +26,7 @@ class WorkspaceProblem:
     ``metrics``: the per-pose metrics of a static pose (``pipeline.model.metrics``), both at the
     nominal orientation.
     ``fused``: evaluate with the compiled kernel of ``pipeline.workspace.fused`` (numpy for the
-    poses it leaves unsettled); the job decides (``pipeline.workspace.compute.use_fused``).
+    poses it leaves unsettled); the job decides (``pipeline.workspace.dispatch.use_fused``).
     ``nominal``: the orientation as the config gives it, in its convention (``orientation.*``),
     reported with every pose; ``orientations`` are always eq. (9)'s angles. ``settings``: the
     criteria's own keys (``criteria.<name>.<key>``), by criterion. ``angles``: for a
