@@ -16,7 +16,7 @@ state: no matplotlib backend, no logging handlers.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from datetime import datetime
 from pathlib import Path
 from typing import Iterable
@@ -26,8 +26,9 @@ import pandas as pd
 from pipeline.analyses.choice import choose, verdict
 from pipeline.errors import ConfigError
 from pipeline.analyses.results import StudyResults, table
-from pipeline.app.job import changed_files, execute
-from pipeline.app.plan import Job, plan, quoted
+from pipeline.app.job import changed_files
+from pipeline.app.plan import Plan, plan, quoted
+from pipeline.app.run import run
 from pipeline.app.results import read_metadata
 from pipeline.study import OUTPUT_DIR, available, first_actuator_job, study_dir
 
@@ -80,7 +81,7 @@ def workspace(overrides: Iterable[str] = (), folder: str | Path | None = None,
     (the command line's ``--config-dir``). Raises ConfigError for bad input (nothing written)."""
     overrides = _listed(overrides, config_dir)
     folder = Path(folder) if folder is not None else _new_folder()
-    return _run(plan([*overrides, f"hydra.run.dir={quoted(folder)}"]).jobs[0])
+    return _run(plan([*overrides, f"hydra.run.dir={quoted(folder)}"]))[0]
 
 
 def actuator_choice(overrides: Iterable[str] = (), folder: str | Path | None = None,
@@ -98,10 +99,9 @@ def actuator_choice(overrides: Iterable[str] = (), folder: str | Path | None = N
         raise ConfigError(f"analysis={first.cfg.analysis}: no actuators to choose from "
                           "(the choice needs analysis=cpr_wwa)")
     ids = ",".join(str(i) for i in first.catalogue.ids)
-    jobs = plan(["-m", f"actuator={ids}", *overrides, f"hydra.sweep.dir={quoted(folder)}"]).jobs
-    done = {}
-    for job in jobs:  # every job checked before the first runs
-        done[int(job.cfg.actuator)] = _run(replace(job, folder=folder / f"actuator={job.cfg.actuator}"))
+    planned = plan(["-m", f"actuator={ids}", *overrides, f"hydra.sweep.dir={quoted(folder)}",
+                    "hydra.sweep.subdir='actuator=${actuator}'"])  # every job checked before the first runs
+    done = {int(ws.summary["actuator"]): ws for ws in _run(planned)}
     table = choose(pd.DataFrame([ws.summary for ws in done.values()]))
     return Choice(table, verdict(table), done)
 
@@ -120,9 +120,11 @@ def load_study(name: str, out_root: str | Path | None = None,
     return StudyResults(directory)
 
 
-def _run(job: Job) -> Workspace:
-    execute(job)
-    return Workspace.read(job.folder)
+def _run(planned: Plan) -> list[Workspace]:
+    """The plan's jobs as the command line runs them (``pipeline.app.run.run``: Hydra's records in
+    each folder, a sweep's summary), logging through the caller's logging as it is."""
+    run(planned, hydra_logging=False)
+    return [Workspace.read(job.folder) for job in planned.jobs]
 
 
 def _listed(overrides: Iterable[str], config_dir: str | Path | None = None) -> list[str]:

@@ -68,7 +68,10 @@ def test_actuator_choice_on_the_users_catalogue(tmp_path, monkeypatch):
     share = choice.table.set_index("actuator")["feasible_pct"]
     assert share[6] <= share[5]  # less torque never reaches more of the grid
     assert choice.verdict.startswith("actuator choice at x >= 85 %: accept 1, 2, 3, 4; reject 5 ")
-    assert sorted(p.name for p in pathlib.Path("choice").iterdir()) == [f"actuator={i}" for i in range(1, 7)]
+    assert sorted(p.name for p in pathlib.Path("choice").iterdir() if p.is_dir()) == [f"actuator={i}" for i in range(1, 7)]
+    assert (pathlib.Path("choice") / "multirun.yaml").is_file()  # run as the command line runs a sweep
+    assert (pathlib.Path("choice") / "actuator=6" / ".hydra" / "overrides.yaml").is_file()
+    assert pd.read_parquet(pathlib.Path("choice") / "summary.parquet")["actuator"].tolist() == [1, 2, 3, 4, 5, 6]
 
 
 def test_actuator_choice_on_a_catalogue_without_id_1(tmp_path, monkeypatch):
