@@ -37,9 +37,10 @@ from omegaconf import DictConfig, OmegaConf
 
 from pipeline.model.catalogue import load_catalogue
 from pipeline.analyses.choice import acceptance, choose, verdict
+from pipeline.app.config import check_declared, rule
 from pipeline.errors import ConfigError, one_line
 from pipeline.analyses.evidence import evidence, scores
-from pipeline.analyses.figures import SERIES_DIR, FigureSpec, expression_error, render
+from pipeline.analyses.figures import SERIES_DIR, FigureSpec, render
 from pipeline.analyses.results import StudyResults, table as read_table
 from pipeline.app.job import changed_files, execute, folder_lock
 from pipeline.analyses.optimise import (OptimiseSpec, best_drive, check_catalogue_objectives, corner_overrides, optimise,
@@ -97,17 +98,34 @@ class StudySpec:
 
     title: str
     source: str
-    overrides: list[str] = field(default_factory=list)
-    sweep: dict[str, str] = field(default_factory=dict)
-    cases: dict[str, list[str]] = field(default_factory=dict)
+    overrides: list[str] = rule(lambda overrides: _overrides_error(overrides), default_factory=list)
+    sweep: dict[str, str] = rule(lambda sweep: _strings_error(sweep.values()) or _hydra_error(sweep), default_factory=dict)
+    cases: dict[str, list[str]] = rule(lambda cases: next((f"{case}: {_overrides_error(overrides)}" for case, overrides
+                                                           in cases.items() if _overrides_error(overrides)), None),
+                                       default_factory=dict)
     case_labels: dict[str, str] = field(default_factory=dict)
     extra_overrides: bool = True
     optimise: Optional[OptimiseSpec] = None
     search: Optional[SearchSpec] = None
-    analyses: list[str] = field(default_factory=list)
+    analyses: list[str] = rule(lambda analyses: _strings_error(analyses) or next(
+        (f"unknown {a!r} (known: {', '.join(ANALYSES)})" for a in analyses if a not in ANALYSES), None), default_factory=list)
     figures: list[FigureSpec] = field(default_factory=list)
     name: Optional[str] = None
     config_dir: Optional[str] = None
+
+    def check_across(self, where: str) -> None:
+        designs = [name for name in ("optimise", "search") if getattr(self, name) is not None]
+        if designs and (self.sweep or self.cases):
+            raise ConfigError(f"{where}: {designs[0]}: a study either sweeps or optimises and searches "
+                              "(drop sweep and cases)")
+        if self.search is not None and self.optimise is not None and {
+                key: value for key, value in self.optimise.variables.items() if key != "actuator"} != self.search.variables:
+            raise ConfigError(f"{where}: search.variables: must be the optimise block's drive "
+                              "variables, so that the two answer the same question")
+        for case in self.case_labels:
+            if case not in self.cases:
+                raise ConfigError(f"{where}: case_labels: {case!r} is not a case (cases: "
+                                  f"{', '.join(self.cases) or 'none'})")
 
     @property
     def location(self) -> list[str]:
@@ -123,6 +141,21 @@ class StudySpec:
     def designs(self) -> bool:
         """Whether trials or a search replace the sweep (jobs run one after another here)."""
         return self.optimise is not None or self.search is not None
+
+
+def _strings_error(values) -> str | None:
+    """OmegaConf lets a list through where list[str] declares strings."""
+    return next((f"{value!r} is not a string" for value in values if not isinstance(value, str)), None)
+
+
+def _hydra_error(keys) -> str | None:
+    """Hydra's callbacks and plugins run code: a study file (data) may not set them."""
+    return next((f"{key}: a study file may not set Hydra's own settings" for key in keys
+                 if re.split(r"[./]", key)[0] == "hydra"), None)
+
+
+def _overrides_error(overrides) -> str | None:
+    return _strings_error(overrides) or _hydra_error(_key(o) for o in overrides)
 
 
 STUDY_NAME = re.compile(r"[A-Za-z0-9][\w-]*")  # a study's name is its folder's name under --out
@@ -147,15 +180,14 @@ def studies_folder(config_dir: Path | str | None) -> Path:
 
 def load_study(name: str, directory: Path | None = None, config_dir: Path | str | None = None) -> StudySpec:
     """Read and check ``studies/NAME.yaml`` of ``directory``, by default the package's or, given
-    a user's ``config_dir``, that folder's ``studies/``; unknown keys, analyses or figure kinds
-    fail here."""
-    from pipeline.analyses.figures import KINDS, file_error, template_error
-
+    a user's ``config_dir``, that folder's ``studies/``: unknown keys and wrong types fail as
+    OmegaConf reads it, then every rule the study's dataclasses declare beside their fields
+    (:func:`pipeline.app.config.check_declared`)."""
     directory = directory or studies_folder(config_dir)
     path = directory / f"{name}.yaml"
     if name not in available(directory):  # a declared name, never a path to another file
-        rule = "" if STUDY_NAME.fullmatch(name) else "; a study's name is letters, digits, _ and -"
-        raise ConfigError(f"study {name!r} not found (available: {', '.join(available(directory))}){rule}")
+        hint = "" if STUDY_NAME.fullmatch(name) else "; a study's name is letters, digits, _ and -"
+        raise ConfigError(f"study {name!r} not found (available: {', '.join(available(directory))}){hint}")
     try:
         refuse_aliases(path.read_text(encoding="utf-8"), str(path))
         spec = OmegaConf.merge(OmegaConf.structured(StudySpec), OmegaConf.load(path))
@@ -168,52 +200,7 @@ def load_study(name: str, directory: Path | None = None, config_dir: Path | str 
         raise ConfigError(f"{path}: {f'{key}: ' if key else ''}{text}") from exc
     study.name = name
     study.config_dir = None if config_dir is None else str(config_dir)
-    for key, values in [("overrides", study.overrides), ("analyses", study.analyses), ("sweep", study.sweep.values()),
-                        *((f"cases.{case}", overrides) for case, overrides in study.cases.items())]:
-        for value in values:  # OmegaConf lets a list through where list[str] declares strings
-            if not isinstance(value, str):
-                raise ConfigError(f"{path}: {key}: {value!r} is not a string")
-    for key in [*(_key(o) for o in study.overrides), *study.sweep,
-                *(_key(o) for case in study.cases.values() for o in case)]:
-        if re.split(r"[./]", key)[0] == "hydra":  # callbacks and plugins run code: not from data
-            raise ConfigError(f"{path}: {key}: a study file may not set Hydra's own settings")
-    designs = [name for name in ("optimise", "search") if getattr(study, name) is not None]
-    if designs and (study.sweep or study.cases):
-        raise ConfigError(f"{path}: {designs[0]}: a study either sweeps or optimises and searches "
-                          "(drop sweep and cases)")
-    if study.optimise is not None:
-        study.optimise.check(str(path))
-    if study.search is not None:
-        study.search.check(str(path))
-        if study.optimise is not None and {key: value for key, value in study.optimise.variables.items()
-                                           if key != "actuator"} != study.search.variables:
-            raise ConfigError(f"{path}: search.variables: must be the optimise block's drive "
-                              "variables, so that the two answer the same question")
-    for case in study.case_labels:
-        if case not in study.cases:
-            raise ConfigError(f"{path}: case_labels: {case!r} is not a case (cases: "
-                              f"{', '.join(study.cases) or 'none'})")
-    for analysis in study.analyses:
-        if analysis not in ANALYSES:
-            raise ConfigError(f"{path}: analyses: unknown {analysis!r} (known: {', '.join(ANALYSES)})")
-    for figure in study.figures:
-        if figure.kind not in KINDS:
-            raise ConfigError(f"{path}: figures: unknown kind {figure.kind!r} (known: {', '.join(KINDS)})")
-        for key, problem in (("file", file_error(figure.file)), ("title", template_error(figure.title or "")),
-                             ("caption", template_error(figure.caption or ""))):
-            if problem:
-                raise ConfigError(f"{path}: figures: {key}={getattr(figure, key)!r}: {problem}")
-        for key in ("x", "y", "value"):
-            problem = getattr(figure, key) and expression_error(getattr(figure, key))
-            if problem:
-                raise ConfigError(f"{path}: figures: {figure.file}: {key}={getattr(figure, key)!r}: pandas cannot "
-                                  f"evaluate it ({problem})")
-        if figure.axis not in ("x", "y", "z") or not (isinstance(figure.layers, int) and figure.layers >= 1):
-            raise ConfigError(f"{path}: figures: {figure.file}: axis={figure.axis!r}, layers={figure.layers!r}: "
-                              "slices cut across x, y or z, at 1 or more layers")
-        if figure.kind == "map" and not figure.value:
-            raise ConfigError(f"{path}: figures: {figure.file}: a map colours the poses by a points column: "
-                              "give value (e.g. value: max_payload_kg)")
+    check_declared(study, str(path))
     return study
 
 

@@ -19,6 +19,7 @@ import numpy as np
 import pandas as pd
 
 from pipeline.workspace.criteria import COLOURS, FEASIBLE_COLOUR
+from pipeline.app.config import rule
 from pipeline.errors import ConfigError, one_line
 from pipeline.app.results import write_csv
 from pipeline.analyses.views import pose_axes, robot_traces, write_view
@@ -47,12 +48,12 @@ class FigureSpec:
     ``slices`` cuts each job's grid across ``axis`` (x, y or z) at ``layers`` evenly spaced
     levels."""
 
-    kind: str
-    file: str
-    title: Optional[str] = None
-    x: Optional[str] = None
-    y: Optional[str] = None
-    value: Optional[str] = None
+    kind: str = rule(lambda kind: None if kind in KINDS else f"unknown kind {kind!r} (known: {', '.join(KINDS)})")
+    file: str = rule(lambda file: file_error(file))
+    title: Optional[str] = rule(lambda text: template_error(text), default=None)
+    x: Optional[str] = rule(lambda expression: _evaluable(expression), default=None)
+    y: Optional[str] = rule(lambda expression: _evaluable(expression), default=None)
+    value: Optional[str] = rule(lambda expression: _evaluable(expression), default=None)
     hue: Optional[str] = None
     facet: Optional[str] = None
     hline: Optional[Any] = None
@@ -64,12 +65,22 @@ class FigureSpec:
     panels_from: Optional[str] = None
     line: int = 0
     select: dict[str, Any] = field(default_factory=dict)
-    caption: Optional[str] = None
+    caption: Optional[str] = rule(lambda text: template_error(text), default=None)
     bars: bool = False
     legend: Optional[str] = None
     table: Optional[str] = None
-    axis: str = "z"
-    layers: int = 4
+    axis: str = rule(lambda axis: None if axis in ("x", "y", "z") else "slices cut across x, y or z", default="z")
+    layers: int = rule(lambda n: None if isinstance(n, int) and n >= 1 else "slices cut at 1 or more layers", default=4)
+
+    @property
+    def label(self) -> str:
+        """How an error names the figure: its file, where that is one."""
+        return "" if file_error(self.file) else self.file
+
+    def check_across(self, where: str) -> None:
+        if self.kind == "map" and not self.value:
+            raise ConfigError(f"{where}: figures: {self.file}: a map colours the poses by a points column: "
+                              "give value (e.g. value: max_payload_kg)")
 
 
 def render(spec: FigureSpec, results: StudyResults, out_dir: Path) -> list[Path]:
@@ -510,6 +521,11 @@ def _figure(**options):
 
 def label(key: str) -> str:
     return LABELS.get(key, key)
+
+
+def _evaluable(expression: str) -> str | None:
+    problem = expression and expression_error(expression)
+    return f"pandas cannot evaluate it ({problem})" if problem else None
 
 
 def expression_error(expression: str) -> str | None:

@@ -96,7 +96,7 @@ class OptimiseSpec:
     seed: int = 0
     sampler: str = "nsga2"
 
-    def check(self, where: str) -> None:
+    def check_across(self, where: str) -> None:
         """ConfigError naming the first field that cannot be used."""
         if not self.variables:
             raise ConfigError(f"{where}: optimise.variables: none given")

@@ -63,7 +63,7 @@ class SearchSpec:
     objective: str = "motor_torque_demand_Nm"
     actuators: Any = "catalogue"
 
-    def check(self, where: str) -> None:
+    def check_across(self, where: str) -> None:
         """ConfigError naming the first field that cannot be used."""
         if not self.variables:
             raise ConfigError(f"{where}: search.variables: none given (known: {', '.join(VARIABLES)})")

@@ -31,10 +31,11 @@ JOBLIB_BACKENDS = ("loky", "threading", "multiprocessing", "sequential", "dask")
 # constraints): ``rule(check, default)`` declares a field, :func:`check_values` applies every
 # declared rule of a typed config once, and a schema's ``check_fields`` holds its rules between
 # fields. A check returns None when the value is fine, else what it must be.
-def rule(check):
+def rule(check, **default):
     """A dataclass field whose (non-null) value must pass ``check``; its value comes from the
-    YAML files (no default here: one source of each default)."""
-    return field(default=MISSING, metadata={"check": check})
+    YAML files (no default here: one source of each default), except for the optional fields
+    of a study file (``default=`` or ``default_factory=``)."""
+    return field(**(default or {"default": MISSING}), metadata={"check": check})
 
 
 def positive(value):
@@ -639,6 +640,26 @@ def check_values(node: DictConfig, schema, prefix: str = "") -> None:
                 raise ConfigError(f"{prefix}{declared.name}={shown(value)}: {broken}")
     if hasattr(schema, "check_fields"):
         schema.check_fields(node)
+
+
+def check_declared(obj, where: str, label: str = "") -> None:
+    """The rules a file's dataclass instance (a study, its figures, its optimise and search
+    blocks) declares: each ``rule`` field's check, nested dataclasses and lists of them first,
+    then its ``check_across(where)`` (the rules that join fields). ConfigError
+    '<where>: <label><key>[=<value>]: <rule>' on the first failure; an item of a list names
+    itself by its ``label`` (a figure: its file)."""
+    for declared in fields(obj):
+        value = getattr(obj, declared.name)
+        for item in value if isinstance(value, list) else [value]:
+            if is_dataclass(item):
+                named = getattr(item, "label", "")
+                check_declared(item, where, f"{label}{declared.name}: " + (f"{named}: " if named else ""))
+        broken = value is not None and "check" in declared.metadata and declared.metadata["check"](value)
+        if broken:
+            given = f"={value!r}" if isinstance(value, (str, int, float)) else ""
+            raise ConfigError(f"{where}: {label}{declared.name}{given}: {broken}")
+    if hasattr(obj, "check_across"):
+        obj.check_across(where)
 
 
 def shown(value):
