@@ -71,3 +71,39 @@ def test_a_users_robot_checks_cables_that_only_pull_by_default(robot, model):
     with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
         assert compose(config_name="config", overrides=[f"robot={robot}"]).tension.model == model
         assert compose(config_name="config", overrides=[f"robot={robot}", "tension=pinv"]).tension.model == "pinv"
+
+
+def test_every_robot_kind_extends_the_one_base_schema_and_its_file_does_not_repeat_it():
+    """What every robot has is declared once: RobotConfig (platform, cable diameter, longest
+    cable), with its values in conf/config.yaml's robot node; the robot kinds' schemas extend it
+    and their files set only what differs (the CPR-8's 2 kg carrier, the IRPM's 15 m cables)."""
+    import yaml
+
+    from pipeline.app.resources import CONF_DIR
+
+    base = {item.name for item in dataclasses.fields(config.RobotConfig)}
+    assert base == {"name", "platform", "cable_diameter", "l_max"}
+    root = yaml.safe_load((CONF_DIR / "config.yaml").read_text())["robot"]
+    assert set(root) == base - {"name"}
+    for name, kind in ROBOTS.items():
+        assert issubclass(kind.schema, config.RobotConfig), name
+        own = yaml.safe_load((CONF_DIR / "robot" / f"{name}.yaml").read_text())["robot"]
+        repeated = {key for key in own if key in root and own[key] == root[key]}
+        assert not repeated, (name, repeated)
+
+
+def test_the_base_keys_reach_a_robot_that_had_none_the_cpr8s_longest_cable(make_cfg, catalogue):
+    """``robot.l_max`` was the IRPM's and the points robot's; as a base key the CPR-8 takes it:
+    its length criterion removes exactly the poses whose longest cable exceeds it."""
+    import numpy as np
+
+    from conftest import compute_workspace
+    from pipeline.app.problem import build_problem
+
+    cfg = make_cfg("robot.l_max=2.4")
+    problem, grid = build_problem(cfg, catalogue)
+    assert "length" in problem.criteria and "length" not in build_problem(make_cfg(), catalogue)[0].criteria
+    points, summary = compute_workspace(cfg, catalogue)
+    longest = np.linalg.norm(grid[:][:, None, :] + problem.robot.attachments - problem.robot.anchors, axis=2).max(axis=1)
+    assert 0 < (longest > 2.4).sum() < len(longest) and not points.loc[longest > 2.4 + 1e-9, "feasible"].any()
+    np.testing.assert_allclose(points["margin_length"], 1 - longest / 2.4, atol=1e-12)

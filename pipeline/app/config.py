@@ -203,18 +203,29 @@ class PlatformConfig:
 
 
 @dataclass
-class Cpr8Config:
-    """CPR-8 robot (Fig. 1). ``lower_anchor_drop``: depth of O', F', G', H' below O, F, G, H
-    (null = h_o as eqs. 14-17). ``cable_diameter`` (every robot): m, one or one per cable,
-    cables closer than the sum of their radii interfere (criterion ``cable_cable``; null: not
-    checked)."""
+class RobotConfig:
+    """What every robot has, declared once (values: the ``robot`` node of conf/config.yaml; each
+    robot kind's schema extends it and its file sets what differs): ``name``, the robot kind;
+    ``platform``, its moving platform; ``cable_diameter``, m, one or one per cable: cables
+    closer than the sum of their radii interfere (criterion ``cable_cable``; null: not
+    checked); ``l_max``, the longest cable, m (criterion ``length``; null: no limit). The cell's
+    ``obstacles`` and the tension limits (``tension.*``, one or one per cable) are keys of the
+    job, checked against the robot as it is built."""
 
     name: str = MISSING
+    platform: PlatformConfig = field(default_factory=PlatformConfig)
+    cable_diameter: Any = MISSING
+    l_max: Optional[float] = rule(positive)
+
+
+@dataclass
+class Cpr8Config(RobotConfig):
+    """CPR-8 robot (Fig. 1). ``lower_anchor_drop``: depth of O', F', G', H' below O, F, G, H
+    (null = h_o as eqs. 14-17)."""
+
     frame: FrameConfig = field(default_factory=FrameConfig)
     carrier: CarrierConfig = field(default_factory=CarrierConfig)
     lower_anchor_drop: Optional[float] = rule(non_negative)
-    platform: PlatformConfig = field(default_factory=PlatformConfig)
-    cable_diameter: Any = MISSING
 
     @staticmethod
     def check_fields(robot: DictConfig) -> None:
@@ -247,18 +258,14 @@ class SearchConfig:
 
 
 @dataclass
-class Irpm6Config:
+class Irpm6Config(RobotConfig):
     """6-cable IRPM (Hamed & Zohoor, Figs. 1-4): base and platform radii (m), pair angle gamma
-    (deg), longest cable l_max (m), the search box of section III."""
+    (deg), the search box of section III (its file sets l_max = 15 m)."""
 
-    name: str = MISSING
     r_base: float = rule(positive)
     r_end: float = rule(positive)
     gamma_deg: float = rule(lambda v: None if 0 <= v < 120 else "must be in [0, 120) (pairs would overlap)")
-    l_max: float = rule(positive)
     search: SearchConfig = field(default_factory=SearchConfig)
-    platform: PlatformConfig = field(default_factory=PlatformConfig)
-    cable_diameter: Any = MISSING
 
 
 @dataclass
@@ -279,26 +286,22 @@ class PointsSearchConfig(SearchConfig):
 
 
 @dataclass
-class PointsConfig:
+class PointsConfig(RobotConfig):
     """A robot given by its points (``pipeline.model.robots.PointsRobot.from_config`` checks them
     where it builds the robot): anchors (fixed frame) and attachments (platform frame), lists of
-    [x, y, z] in m; optional cable names; the up direction; the longest cable l_max (m, null =
-    none); the search box; ``dofs``, the platform's freedoms among x, y, z, rx, ry, rz (the
-    wrench rows the cables balance; a joint or a plane takes the others): all six for a free
+    [x, y, z] in m; optional cable names; the up direction; the search box; ``dofs``, the
+    platform's freedoms among x, y, z, rx, ry, rz (the wrench rows the cables balance; a joint
+    or a plane takes the others): all six for a free
     body, [x, y, z] for a point platform in space, [x, y] for a planar point, [x, y, rz] for a
     body in the x-y plane, [rx, ry, rz] for a platform on a spherical joint at the origin, whose
     search box is then of angles (psi, theta, phi in rad, in ``orientation.convention``)."""
 
-    name: str = MISSING
     anchors: Any = MISSING
     attachments: Any = MISSING
     cable_names: Optional[list[str]] = MISSING
     up: list[float] = MISSING
     dofs: list[str] = MISSING
-    l_max: Optional[float] = rule(positive)
     search: PointsSearchConfig = field(default_factory=PointsSearchConfig)
-    platform: PlatformConfig = field(default_factory=PlatformConfig)
-    cable_diameter: Any = MISSING
 
 
 @dataclass

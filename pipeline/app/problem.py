@@ -99,8 +99,8 @@ def _step_grid(spacing: Callable[[DictConfig], str]):
 ROBOTS = {
     "cpr8": RobotKind(
         Cpr8Config,
-        lambda rc: cpr8(rc.frame.d, rc.frame.s, rc.frame.v, rc.carrier.l, rc.carrier.w, rc.carrier.h,
-                        lower_anchor_drop=rc.lower_anchor_drop),
+        lambda rc: replace(cpr8(rc.frame.d, rc.frame.s, rc.frame.v, rc.carrier.l, rc.carrier.w, rc.carrier.h,
+                                lower_anchor_drop=rc.lower_anchor_drop), l_max=rc.l_max),
         _box_grid, _box_size),
     "irpm6": RobotKind(
         Irpm6Config,
