@@ -149,7 +149,7 @@ CASES = [
     ("pipeline", ["--config-dir", "robots", "robot=nobox", "robot.search.lo=[0,0,0]", "robot.search.step=1"],
      "robot.search.hi: no value given"),
     ("pipeline", ["--config-dir", "robots", "robot=empty"], "robot: the robot file gives no robot keys"),
-    ("pipeline", ["--config-dir", "robots", "robot=list"], "robot: the robot file gives no robot keys"),
+    ("pipeline", ["--config-dir", "robots", "robot=list"], "robot=list: the robot file gives no robot keys"),
     ("pipeline", ["compute.max_poses=-1"], "compute.max_poses=-1: must be >= 1"),
     ("pipeline", ["workspace.home=[0,0,9]"], "workspace.home: z=9 is outside the grid (z from -2.04712 to -0.152882)"),
     ("pipeline", ["workspace.home=[0,0]"], "workspace.home=[0.0, 0.0]: needs 3 values"),

@@ -195,7 +195,12 @@ def _composition(files: tuple[str, ...], parsed: list[Override]) -> Composition:
     except MissingConfigException as exc:  # a group option with no file
         raise ConfigError(_missing_option(exc, parsed, _search_folders(files))) from exc
     except Exception as exc:  # composition errors come as Hydra and OmegaConf types
-        raise ConfigError(one_line(exc)) from exc
+        text = one_line(exc)
+        listed = re.match(r"In 'robot/([^']+)': ConfigTypeError .*Cannot merge DictConfig with ListConfig", text)
+        if listed:  # a list where the base robot node (conf/config.yaml) holds keys
+            raise ConfigError(f"robot={listed[1]}: the robot file gives no robot keys (a list, not a mapping of "
+                              "keys): start your own with 'defaults: [points, _self_]'") from exc
+        raise ConfigError(text) from exc
     made = Composition(composed)
     if key[2] is None:
         return made
