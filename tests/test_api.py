@@ -14,9 +14,6 @@ from conftest import command
 from pipeline import api
 from pipeline.app.results import file_digest
 
-DOCS = pathlib.Path(__file__).resolve().parent.parent / "docs" / "api.md"
-
-
 def test_importing_the_api_keeps_the_notebook_backend_and_logging():
     """A notebook's pyplot backend and logging handlers are not touched by the import."""
     code = ("import logging, matplotlib; matplotlib.use('svg'); import pipeline.api, pipeline.analyses.figures; "
@@ -118,17 +115,6 @@ def test_load_study_reads_a_finished_study_or_says_how_to_make_it(tmp_path):
     pd.testing.assert_frame_equal(csv[["actuator", "feasible_pct", "accepted"]],
                                   choice[["actuator", "feasible_pct", "accepted"]])
     assert len(results.points("actuator=5")) == 216
-
-
-def test_the_docs_example_runs(tmp_path, monkeypatch, capsys):
-    """Every ```python block of docs/api.md, in order, in an empty folder."""
-    monkeypatch.chdir(tmp_path)
-    code = "\n".join(re.findall(r"```python\n(.*?)```", DOCS.read_text(), re.S))
-    assert "api.workspace" in code and "api.actuator_choice" in code
-    exec(compile(code, str(DOCS), "exec"), {})
-    printed = capsys.readouterr().out
-    assert "85.19 % feasible" in printed and "accept 1, 2; reject 3" in printed
-    assert "orientation.psi=nan: must be finite" in printed
 
 
 def test_two_threads_may_call_the_api_at_once(tmp_path, monkeypatch):

@@ -1,8 +1,10 @@
-"""The generated reference pages match what generates them."""
+"""The generated reference pages match what generates them, and the pages' examples run."""
 
 import subprocess
 import sys
 from pathlib import Path
+
+import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -16,3 +18,16 @@ def test_docs_config_md_is_what_the_schemas_and_the_yaml_files_say():
     text = (ROOT / "docs" / "config.md").read_text()
     for key in ("`wrench.fz` | float | `0.0` | default", "`tension.t_max=55000.0`", "`lines.samples` | first \\| all"):
         assert key in text
+
+
+@pytest.mark.parametrize("page", ["README.md", "docs/api.md"])
+def test_the_pages_python_examples_are_doctests_that_pass(tmp_path, monkeypatch, page):
+    """The API examples of the README and docs/api.md run, in an empty folder, and print what the
+    page says they print (an edited output, or a change of the numbers, fails here)."""
+    import doctest
+
+    monkeypatch.chdir(tmp_path)
+    assert ">>> from pipeline import api" in (ROOT / page).read_text()
+    failures, tried = doctest.testfile(str(ROOT / page), module_relative=False, report=True,
+                                       optionflags=doctest.NORMALIZE_WHITESPACE)
+    assert failures == 0 and tried >= 3, (failures, tried)

@@ -94,7 +94,7 @@ def test_where_table2_and_the_other_evidence_pull_apart(cpr8, reading, expected)
 
 
 def test_the_default_reading_has_the_best_joint_score(cpr8):
-    """docs/model.md section 4: eq. (20) with all six columns matches 15 of the 17 facts (Table 2
+    """docs/evidence.md section 1: eq. (20) with all six columns matches 15 of the 17 facts (Table 2
     alone favours the three translational columns: 13 facts). A tie (acceleration_set=colon:
     the same 15 facts and 20 points) keeps the earlier default."""
     score = scores(cpr8).set_index("reading")
@@ -107,7 +107,7 @@ def test_the_default_reading_has_the_best_joint_score(cpr8):
 
 
 def test_the_verdict_rests_on_two_facts_read_the_other_way(cpr8):
-    """docs/model.md section 4: read the other way, Fig. 5b's "much smaller" alone hands the
+    """docs/evidence.md section 1: read the other way, Fig. 5b's "much smaller" alone hands the
     best score to the forces-only reading of eq. (20), and Table 2's actuator 2 alone to eq. (32)
     without xi; every other fact, Fig. 6b's torque included (a tie broken by Table 2's grid
     points), leaves the default best."""
@@ -118,7 +118,7 @@ def test_the_verdict_rests_on_two_facts_read_the_other_way(cpr8):
     assert (best.drop(["fig5b_much_smaller", "table2_actuator_2"]) == "default").all()
 
 
-# the study's case reading -> its golden case (tests/golden.yaml, the table of docs/model.md section 4)
+# the study's case reading -> its golden case (tests/golden.yaml, the table of docs/evidence.md section 1)
 GRID = {f"{pinv}{'_' + reading if reading != 'default' else ''}": f"{pinv}_{reading}"
         for pinv in ("full", "translational") for reading in ("default", "include", "colon", "jdot", "noxi")}
 
@@ -134,7 +134,7 @@ def test_grid_counts_under_each_reading_are_the_golden_numbers(cpr8_jobs):
 
 
 def test_irpm_section_iii_conclusions_hold_exactly_under_either_cable_direction(make_cfg, catalogue):
-    """docs/model.md section 5: under the paper's section III definition (no s_max) the count at
+    """docs/evidence.md section 2: under the paper's section III definition (no s_max) the count at
     zero rotation is the same for every r_end under both readings; the centre reading's one
     extra match is section IV.A (f_x = f_y = 50 kN, s_max = 55 kN)."""
     table = evidence(study_summary("evidence_irpm", make_cfg, catalogue, readings={"attachment", "centre"}))

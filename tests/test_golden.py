@@ -36,8 +36,8 @@ def test_the_golden_file_is_data_the_tests_can_trust():
         assert all(len(pinned) == len(settings) for pinned in case["values"].values()), name
 
 
-MODEL_MD = Path(__file__).parents[1] / "docs" / "model.md"
-READING_ROWS = {  # docs/model.md section 4: a table row's first cell -> the golden case it shows
+MODEL_MD = Path(__file__).parents[1] / "docs" / "evidence.md"
+READING_ROWS = {  # docs/evidence.md section 1: a table row's first cell -> the golden case it shows
     "**default** (`pinv_columns=full`)": "full_default", "`model.pinv_columns=translational`": "translational_default",
     "`grid.spacing=centred`": "grid_centred", "`robot.lower_anchor_drop=2.2`": "anchors_at_floor",
     **{f"`{switch}`": f"full_{name}" for switch, name in (
@@ -53,7 +53,7 @@ ASYMMETRIC_ROWS = {"`motion.t_dec=0.91` (braking twice as hard), forces only": "
 
 
 def _table_rows(header: str) -> dict[str, list[str]]:
-    """The rows of the docs/model.md table whose header line starts with ``header``: first cell
+    """The rows of the docs/evidence.md table whose header line starts with ``header``: first cell
     -> the other cells."""
     lines = MODEL_MD.read_text().splitlines()
     start = next(i for i, line in enumerate(lines) if line.startswith(header))
@@ -71,7 +71,7 @@ def _counts(text: str) -> list[int]:
 
 
 def test_the_documented_tables_of_docs_model_md_are_the_golden_numbers():
-    """docs/model.md section 4 states the counts of every reading and of asymmetric acceleration
+    """docs/evidence.md section 1 states the counts of every reading and of asymmetric acceleration
     sets, and the lines' agreement: each cell is the golden case's (one source)."""
     for header, mapping in (("| reading (switch)", READING_ROWS), ("| `pinv_columns=translational` and", FORCES_ONLY_ROWS)):
         rows = _table_rows(header)
@@ -93,7 +93,7 @@ def test_the_documented_tables_of_docs_model_md_are_the_golden_numbers():
 
 def test_an_asymmetric_acceleration_set_moves_the_counts():
     """Braking twice as hard, or the colon set, changes the counts of the default box (t_acc =
-    t_dec): the acceleration set's asymmetry reaches the verdicts (docs/model.md section 4)."""
+    t_dec): the acceleration set's asymmetry reaches the verdicts (docs/evidence.md section 1)."""
     for case, default in (("braking_full", "full_default"), ("braking_translational", "translational_default"),
                           ("colon_translational", "translational_default")):
         assert values(f"{case}_zero") != values(f"{default}_zero") or values(f"{case}_rotated") != values(

@@ -1,5 +1,5 @@
 """The 6-cable IRPM of Hamed & Zohoor through the generic model: statics invariants, the paper's
-conclusions where the model supports them, and the documented disagreements (docs/model.md)."""
+conclusions where the model supports them, and the documented disagreements (docs/evidence.md)."""
 
 import numpy as np
 import pytest
@@ -28,7 +28,7 @@ SECTION_3 = "tension.t_max=null"  # the paper's definition of its section III wo
 
 def section3(irpm, *overrides):
     """The statically reachable combined workspace's volume (section III, the abstract): every
-    cable in tension and no longer than l_max; s_max belongs to section IV (docs/model.md)."""
+    cable in tension and no longer than l_max; s_max belongs to section IV (docs/evidence.md)."""
     return volume(irpm, SECTION_3, *overrides)
 
 
@@ -55,7 +55,7 @@ def test_tensions_balance_the_wrench_at_every_regular_pose(make_cfg, catalogue):
 def test_cables_towards_the_centre_make_the_tensions_independent_of_r_end(make_cfg, catalogue):
     """model.cable_direction=centre: u_i does not depend on r_end and the moment rows of A scale
     with it, so with no applied moment the tensions and the gram ratio are the same for every
-    r_end (docs/model.md section 5); towards the attachment points they are not."""
+    r_end (docs/evidence.md section 2); towards the attachment points they are not."""
     states = {}
     for direction in ("centre", "attachment"):
         for r_end in (1.2, 6.0):
@@ -122,7 +122,7 @@ def test_no_maximum_at_base_ratio_1_conclusion_3():
 def test_end_ratio_independence_conclusions_1_and_4_hold_exactly_under_the_papers_definition(irpm, direction):
     """Conclusions 1, 4: at zero rotation and zero moments the volume does not depend on
     r_end / r_base. Under section III's definition (no s_max) it does not, under both readings
-    of the cable directions, and the same points are feasible (docs/model.md section 5 proves it):
+    of the cable directions, and the same points are feasible (docs/evidence.md section 2 proves it):
     3675, 2500, 1375, 375 points = 147, 100, 55, 15 per layer on all 25 layers below the base."""
     for gamma, count in ((0, 3675), (15, 2500), (30, 1375), (45, 375)):
         tables = [irpm(SECTION_3, f"model.cable_direction={direction}", f"robot.gamma_deg={gamma}",
@@ -146,7 +146,7 @@ def test_the_section_iv_rating_makes_the_volume_depend_on_r_end(irpm):
 
 
 def test_the_section_iii_prism_is_the_linear_programs_answer(irpm, make_cfg, catalogue):
-    """docs/model.md section 5: under a vertical force through O_M, a pose at zero rotation is
+    """docs/evidence.md section 2: under a vertical force through O_M, a pose at zero rotation is
     statically reachable exactly when its horizontal position is sum_i lambda_i C_i for weights
     lambda >= 0 summing to 1 with sum_i lambda_i d_i = 0 and sum_i lambda_i (C_i x d_i)_z = 0
     (d_i the platform directions): a polygon of the base's geometry, the same at every depth and

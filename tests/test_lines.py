@@ -54,7 +54,7 @@ def test_actuator_1_zero_orientation_line_O_F_within_all_limits(lines, reading):
 
 def test_actuator_1_at_half_a_radian_violates_torque_not_speed_fig_6b(lines):
     """Fig. 6b: torque violated on some cables, speed and voltage within limits. With the full
-    pseudo-inverse (docs/model.md) torque fails on cables 1, 3 and 8 and speed and voltage hold
+    pseudo-inverse (docs/evidence.md) torque fails on cables 1, 3 and 8 and speed and voltage hold
     (peak 0.976 x 48 V, cable 5): cable 1 pays out at cruise under 1.68 x its torque limit, the
     braking quadrant, where the load lowers the voltage below the back-EMF. The translational
     reading shows no violation at all."""

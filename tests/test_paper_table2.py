@@ -1,6 +1,6 @@
 """Table 2 of Filipovic & Kevac (2018): feasible share of the geometric workspace per actuator,
-psi = theta = phi = 0, N = 6 (216 grid points), default readings of docs/model.md, and the
-forces-only reading of eq. (20) that fits Table 2 alone best (docs/model.md section 4)."""
+psi = theta = phi = 0, N = 6 (216 grid points), default readings of docs/evidence.md, and the
+forces-only reading of eq. (20) that fits Table 2 alone best (docs/evidence.md section 1)."""
 
 import pytest
 
@@ -65,6 +65,6 @@ def test_each_lost_point_is_attributed_to_one_constraint(table2):
 
 
 def test_shaft_acceleration_limit_never_binds_for_table1(results):
-    """Eq. (33): smallest margins over the grid, as stated in docs/model.md."""
+    """Eq. (33): smallest margins over the grid, as stated in docs/evidence.md."""
     smallest = [results[a][0]["margin_acceleration"].min() for a in sorted(PAPER)]
     assert smallest == pytest.approx([0.7233, 0.8534, 0.9444, 0.9901, 0.9876], abs=1e-4)

@@ -191,7 +191,7 @@ def test_comparison_study_reports_the_surviving_share_per_actuator_and_orientati
     assert proc.returncode == 0, proc.stderr
     out = tmp_path / "outputs" / "studies" / "tension_comparison"
     table = pd.read_parquet(out / "survival.parquet").set_index(["wrench_rows", "case", "actuator"])
-    expected = {  # (case, actuator): (paper, physical, survive, gained), docs/model.md section 7
+    expected = {  # (case, actuator): (paper, physical, survive, gained), docs/model.md section 4
         ("zero", 1): (216, 144, 144, 0), ("zero", 2): (208, 136, 136, 0),
         ("zero", 3): (184, 112, 112, 0), ("zero", 4): (184, 112, 112, 0),
         ("zero", 5): (24, 32, 24, 8), ("rot05", 1): (207, 161, 157, 4),

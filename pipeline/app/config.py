@@ -83,7 +83,7 @@ def vector(size: int, meaning: str, bound: float = INF):
 
 class PinvColumns(Enum):
     """Which columns of J enter the pseudo-inverse of eq. (20): all six (full, the default) or
-    the three position columns (translational); docs/model.md section 4."""
+    the three position columns (translational); docs/evidence.md section 1."""
 
     translational = "translational"
     full = "full"
@@ -124,7 +124,7 @@ class MomentArm(Enum):
 class CableDirection(Enum):
     """Where a cable of the IRPM statics pulls: from its anchor towards its attachment point
     (physical) or towards the platform's reference point (the platform a point for the cables'
-    directions and lengths, moment arms R d_i kept; docs/model.md section 5)."""
+    directions and lengths, moment arms R d_i kept; docs/evidence.md section 2)."""
 
     attachment = "attachment"
     centre = "centre"
@@ -360,7 +360,7 @@ class TensionConfig:
     of J^T (the CPR-8 at the zero orientation has rank 5 and misses up to 1.4 % of F; a robot
     that cannot hold its load misses most of it; docs/model.md section 1). ``distribution`` (read by the feasible
     model): the tensions written with ``output.cables=true``, ``min_norm`` (the least 2-norm within the
-    limits, exact by enumeration of faces, docs/model.md section 8) or ``lp`` (the vertex the LPs end
+    limits, exact by enumeration of faces, docs/model.md section 5) or ``lp`` (the vertex the LPs end
     on); the verdicts do not depend on it."""
 
     model: TensionModel = MISSING
@@ -429,7 +429,7 @@ class ChoiceConfig:
 class ModelConfig:
     """Readings of the ambiguous equations; each default is the best fit to all the published
     evidence (studies evidence_cpr8 and evidence_irpm), except ``cable_direction``, whose better
-    fit describes another robot (docs/model.md sections 4-5 give every reading's numbers).
+    fit describes another robot (docs/evidence.md sections 1-2 give every reading's numbers).
     ``pinv_columns``: eq. (20) with all six columns of J (full) or forces only (translational);
     ``velocity_boundary``: |v| = V_cmax in the set of eq. (26) or not;
     ``acceleration_set``: the box's corners or MATLAB's colon (eqs. 27-29); ``jdot``: the centripetal term of the shaft

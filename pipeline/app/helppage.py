@@ -45,8 +45,8 @@ def page(overrides: list[str], typed: DictConfig, version: str) -> str:
         if name not in plain:
             schema = ROBOTS[typed.robot.name].schema if name == "robot" else _field_schema(Config, name)
             lines += _section(name, typed[name], schema)
-    lines += ["", "docs: docs/config.md (every key with its type and value), docs/model.md (the readings), "
-              "docs/api.md (Python)."]
+    lines += ["", "docs: docs/config.md (every key with its type and value), docs/model.md (the model), "
+              "docs/evidence.md (the readings), docs/api.md (Python)."]
     return "\n".join(lines) + "\n"
 
 

@@ -87,7 +87,7 @@ def _run_locked(cfg: DictConfig, problem: WorkspaceProblem, out: Path, sweep_pay
         if (out / name).exists() and not (out / name).is_file():
             raise ConfigError(f"{out / name}: not a file, where the job writes its {name}; move it or "
                               "choose another folder (hydra.run.dir=...)")
-    log.info("reading: %s (docs/model.md, sections 4-5)", describe_reading(cfg.model))
+    log.info("reading: %s (docs/evidence.md, sections 1-2)", describe_reading(cfg.model))
     log.info("tension model: %s (%s)", cfg.tension.model.value, TENSION_MODELS[cfg.tension.model.value])
     files = JobFiles(out, config_yaml)
     summary = ANALYSES[cfg.analysis].files(cfg, problem, build_grid(cfg, problem.robot), files, sweep_pays)

@@ -430,7 +430,7 @@ def build(cfg: DictConfig, catalogue: Catalogue | None) -> WorkspaceProblem:
 
 
 def surroundings(cfg: DictConfig, robot: CableRobot) -> CableRobot:
-    """The robot with what its cables could touch (docs/model.md section 8; the interference
+    """The robot with what its cables could touch (docs/model.md section 5; the interference
     criteria apply to what it has): ``robot.cable_diameter`` (one or one per cable, m) gives the
     cables' radii (``cable_cable``), ``robot.platform.shape`` the platform's body
     (``cable_platform``), ``obstacles`` the cell's obstacles (``cable_obstacle``). Each is refused

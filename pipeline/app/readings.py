@@ -1,4 +1,4 @@
-"""The readings of a job: the ``model.*`` switches (docs/model.md, sections 4-5) by name and in
+"""The readings of a job: the ``model.*`` switches (docs/evidence.md, sections 1-2) by name and in
 words, for its log line, the report and the evidence studies."""
 
 from __future__ import annotations

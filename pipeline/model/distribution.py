@@ -4,7 +4,7 @@ the cable forces x of least weighted 2-norm |weights x| with S x = w and lower <
 as CASPR and WireX give them. ``weights`` (m,) are the tensions per unit of x (1 for the
 statics' tensions, 1 / R_i for the CPR-8's shaft torques, eq. 20).
 
-Exact by enumeration of faces (docs/model.md section 8). With y = weights x, B = S diag(1 /
+Exact by enumeration of faces (docs/model.md section 5). With y = weights x, B = S diag(1 /
 weights) and the SVD of B, every y balancing w is y0 + N lambda: y0 = B^+ w (least norm) and
 the columns of N (m, d) an orthonormal basis of B's null space, so |y|^2 = |y0|^2 + |lambda|^2
 and the problem is the projection of the origin onto the polytope {lambda : lower_i <= y0_i +

@@ -47,7 +47,7 @@ class MotionSpec:
     """What the carrier must do at every pose: velocity set, acceleration set, load, model options.
 
     ``pinv_columns``: ``"full"`` uses all six columns of eq. (19), so the moments balance too
-    (the default: the best fit to all the published evidence, docs/model.md section 4);
+    (the default: the best fit to all the published evidence, docs/evidence.md section 1);
     ``"translational"`` solves eq. (20) with the three position columns of J (orientation held
     constant, no moment balance; the best fit to Table 2 alone).
     ``rank_rtol``: singular values below ``rank_rtol * sigma_max`` are treated as zero in the

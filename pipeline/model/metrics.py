@@ -1,5 +1,5 @@
 """Per-pose metrics of a static pose (``output.metrics=true``, ``analysis=statics``), from the
-tensions the checked model uses (docs/model.md section 8):
+tensions the checked model uses (docs/model.md section 5):
 
 - ``tension_factor``: Pham et al.'s tension factor (Pham, Yeo, Yang, Chen, "Workspace analysis
   of fully restrained cable-driven manipulators", Robotics and Autonomous Systems 57, 2009;

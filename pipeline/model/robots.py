@@ -56,7 +56,7 @@ def cpr8(
 def irpm6(
     r_base: float, r_end: float, gamma_deg: float, box_lo, box_hi, l_max: float | None = None
 ) -> CableRobot:
-    """6-cable IRPM of Hamed & Zohoor, Figs. 1-4, eqs. (1)-(2) (docs/model.md: our reading).
+    """6-cable IRPM of Hamed & Zohoor, Figs. 1-4, eqs. (1)-(2) (docs/evidence.md section 2: our reading).
 
     Base points C_i lie on a circle of radius r_base in the base plane Z = 0, platform points D_i
     on a circle of radius r_end in the platform plane z = 0 (body frame, origin O_M). Points come

@@ -27,12 +27,12 @@ class StaticsSpec:
 
     ``moment_arm``: ``"platform"`` takes a_i = R d_i, moments about the platform's reference
     point O_M, where section IV applies the wrench; ``"base"`` takes eq. (9) literally,
-    a_i = r + R d_i, moments about the base centre O_F (docs/model.md compares them).
+    a_i = r + R d_i, moments about the base centre O_F (docs/evidence.md compares them).
     ``cable_direction``: ``"attachment"`` takes each cable from its anchor to its attachment
     point (eq. 1); ``"centre"`` from its anchor to the platform's reference point (directions and
     lengths of a point platform, moment arms kept): with no applied moment the moment rows of
     A s = f_ext are then r_end times rows that do not depend on r_end, so the tensions and the
-    volume do not either (the IRPM paper's conclusions 1, 4 and 5; docs/model.md section 5).
+    volume do not either (the IRPM paper's conclusions 1, 4 and 5; docs/evidence.md section 2).
     ``rank_rtol``: a pose is singular when the gram ratio of A (``PoseStatics.gram_ratio``)
     falls below it. ``wrench_set`` (K, 6): wrenches each added to the load's and every one
     required (``wrench.set``'s vertices, each once; none: the load's wrench alone), and

@@ -5,7 +5,7 @@ Lines run along x and along y through every row of the CPR-WWA position grid, at
 opposite one with the trapezoidal profile of ``motion.*``. Line 0 is O''-F'': the x-line at the
 smallest y on the top layer (the corners below the hanging points O and F, Fig. 3).
 
-Rule for a grid point (docs/model.md): it belongs to the simulated feasible workspace when every
+Rule for a grid point (docs/evidence.md section 3): it belongs to the simulated feasible workspace when every
 sample of its x-line and of its y-line within half a grid step of it satisfies eqs. (30),
 (32)-(34). A line can therefore belong to the workspace only partly, as O''-F'' at 0.5 rad does.
 """

@@ -1,4 +1,4 @@
-"""Interference criteria (docs/model.md section 8): cables that must not touch each other
+"""Interference criteria (docs/model.md section 5): cables that must not touch each other
 (``cable_cable``), enter the platform's body (``cable_platform``) or touch an obstacle of the
 cell, nor the platform either (``cable_obstacle``). They read only the pose's geometry, so the
 numpy and the compiled kernels evaluate them with the same code (``pipeline.workspace.kernel``)."""
