@@ -106,11 +106,26 @@ def _run_locked(cfg: DictConfig, problem: WorkspaceProblem, out: Path, sweep_pay
         lost, f"; headroom of the feasible poses: {headroom}" if headroom else "",
     )
     if summary["n_feasible"] == 0 and summary["n_points"] > 0:
-        count, name = max((value, key[len("lost_"):]) for key, value in summary.items()
-                          if key.startswith("lost_") and key[len("lost_"):] in REGISTRY)
-        log.warning("no pose is feasible: %d of %d are lost to %s first; to try next: %s", count,
-                    summary["n_points"], name, REGISTRY[name].remedy)
+        log.warning("no pose is feasible: %s", zero_cause(summary))
     return summary
+
+
+def zero_cause(summary: dict) -> str:
+    """Why a job kept no pose, and what to try: the criterion most poses are lost to first (a
+    violated gate decides first) and, where another criterion alone removes poses (every other
+    criterion holding there), the one that removes the most and its remedy: relaxing it alone
+    would win them."""
+    def largest(prefix: str) -> tuple[int, str | None]:
+        return max(((value, key[len(prefix):]) for key, value in summary.items()
+                    if key.startswith(prefix) and key[len(prefix):] in REGISTRY), default=(0, None))
+
+    count, name = largest("lost_")
+    alone, culprit = largest("alone_")
+    first = f"{count} of {summary['n_points']} are lost to {name} first"
+    if alone == 0 or culprit == name:
+        return f"{first}; to try next: {REGISTRY[name].remedy}"
+    return (f"{first}, but {culprit} alone removes {alone} (every other criterion holds there); "
+            f"to try next: {REGISTRY[culprit].remedy}")
 
 
 class JobFiles:

@@ -189,7 +189,7 @@ RESULT_COLUMNS = {"analysis", "actuator_name", "actuator_power_W", "n_orientatio
                   "n_feasible", "feasible_pct", "volume_m3", "n_lines", "n_samples",
                   "n_feasible_grid", "agreement_pct", "mesh_volume_m3", "mesh_surface_m2", "volume_spread_m3", "n_connected",
                   "connected_pct", "connected_volume_m3"}
-RESULT_PREFIXES = ("box.", "lost_", "least_margin_", "limit_", "line0_margin_", "home_")
+RESULT_PREFIXES = ("box.", "lost_", "alone_", "least_margin_", "limit_", "line0_margin_", "home_")
 
 
 def varying_settings(columns: dict[str, list], ignore=()) -> list[str]:

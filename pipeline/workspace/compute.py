@@ -56,6 +56,7 @@ def grid_workspace(
     parts, n_feasible, by_lp = [], 0, 0
     degenerate = Degeneracy(problem)
     lost = np.zeros(len(problem.criteria), dtype=np.int64)  # infeasible poses by limiting criterion
+    alone = np.zeros(len(problem.criteria), dtype=np.int64)  # poses that criterion alone removes
     least = dict.fromkeys(problem.criteria, np.inf)
     summarised = {key: [] for key in problem.spec.summarised}  # per-pose columns, 8 bytes a pose
     for span, raw in chunks:
@@ -68,6 +69,8 @@ def grid_workspace(
             least[name] = np.min(margins[name], initial=least[name], where=feasible)
         by_lp += int(np.count_nonzero(raw.get("lp_poses", False)))
         lost += np.bincount(limiting[~feasible], minlength=len(problem.criteria))
+        violated = np.column_stack([margins[name] < 0 for name in problem.criteria])
+        alone += violated[violated.sum(axis=1) == 1].sum(axis=0)
         positions = grid[span]  # computed again from the axes: no chunk's positions are kept
         degenerate.add(positions, raw, margins)
         points = tabulate(problem, positions, raw, margins, feasible, limiting)
@@ -76,7 +79,8 @@ def grid_workspace(
         else:
             sink(points)
     counts = {"n_points": grid.n_points, "n_feasible": n_feasible,
-              "lost": dict(zip(problem.criteria, lost.tolist())), "least": least,
+              "lost": dict(zip(problem.criteria, lost.tolist())), "alone": dict(zip(problem.criteria, alone.tolist())),
+              "least": least,
               "summarised": {key: np.concatenate(values) for key, values in summarised.items()},
               "degenerate": degenerate.summary()}
     if problem.spec.tension.model == "feasible":
@@ -123,9 +127,11 @@ def tabulate(problem: WorkspaceProblem, positions: np.ndarray, raw: dict,
 
 def summarize(cfg: DictConfig, counts: dict, cell_volume: float, problem) -> dict:
     """Flattened config (every swept key is a column) plus counts, percentage and volume;
-    ``counts``: n_points, n_feasible, ``lost`` (limiting criterion -> infeasible points) and
-    ``least`` (criterion -> its smallest margin over the feasible poses: ``least_margin_*``, the
-    headroom the feasible workspace keeps to each limit; NaN when no pose is feasible)."""
+    ``counts``: n_points, n_feasible, ``lost`` (limiting criterion -> infeasible points),
+    ``alone`` (criterion -> the poses it alone removes, every other criterion holding there:
+    ``alone_*``, what relaxing it alone would win) and ``least`` (criterion -> its smallest
+    margin over the feasible poses: ``least_margin_*``, the headroom the feasible workspace
+    keeps to each limit; NaN when no pose is feasible)."""
     n_points, n_feasible = counts["n_points"], counts["n_feasible"]
     row = flatten(OmegaConf.to_container(cfg, resolve=True, enum_to_str=True))
     row.update(problem.limits.described())  # the actuator's name and power, for CPR-WWA
@@ -141,6 +147,8 @@ def summarize(cfg: DictConfig, counts: dict, cell_volume: float, problem) -> dic
     )
     for name in problem.criteria:
         row[f"lost_{name}"] = int(counts["lost"].get(name, 0))
+    for name in problem.criteria:
+        row[f"alone_{name}"] = int(counts["alone"].get(name, 0))
     for name in problem.criteria:
         least = counts["least"][name]
         row[f"least_margin_{name}"] = float(least) if np.isfinite(least) else np.nan

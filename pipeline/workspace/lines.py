@@ -83,8 +83,9 @@ def simulate_lines(cfg: DictConfig, problem: WorkspaceProblem, grid: Grid,
     _, points["feasible"], limiting = classify(worst, 0.0)  # samples' margins are snapped already
     points["limiting"] = pd.Categorical.from_codes(limiting, categories=list(problem.criteria))
     agree = points["feasible"] == points["feasible_grid"]
-    for name in problem.criteria:  # counts of the lines' verdict; the grid's under lost_grid_*
+    for name in problem.criteria:  # counts of the lines' verdict; the grid's under lost_grid_*, alone_grid_*
         summary[f"lost_grid_{name}"] = summary.pop(f"lost_{name}")
+        summary[f"alone_grid_{name}"] = summary.pop(f"alone_{name}")
         summary[f"lost_{name}"] = int(((points["limiting"] == name) & ~points["feasible"]).sum())
     summary.update(
         n_lines=len(lines), n_samples=len(samples),
