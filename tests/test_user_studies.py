@@ -43,7 +43,7 @@ def test_the_example_folder_gives_its_study_figures_and_report(tmp_path, catalog
         _, alone = compute_workspace(job.cfg, job.catalogue)
         assert alone["n_feasible"] == row["n_feasible"]
     share = summary.set_index(["tension.t_max", "load.mass"])["feasible_pct"]
-    assert share[(400, 0)] == pytest.approx(43.55, abs=0.005) and share[(400, 20)] == pytest.approx(31.34, abs=0.005)
+    assert share[(400, 0)] == pytest.approx(40.09, abs=0.005) and share[(400, 20)] == pytest.approx(27.19, abs=0.005)
     assert share[(100, 20)] == 0  # docs/studies.md's numbers
     shares = summary.sort_values("load.mass").groupby("tension.t_max")["feasible_pct"].apply(list)
     for values in shares:  # a heavier payload never holds on more poses
@@ -82,3 +82,19 @@ def test_a_study_folder_without_studies_and_an_unknown_name_are_one_line(tmp_pat
 def test_the_papers_studies_still_come_from_the_package():
     assert "actuator_choice" in available()
     assert load_study("actuator_choice").config_dir is None
+
+
+@pytest.mark.parametrize("diameter, feasible", [(None, 463), (0.004, 461), (0.01, 371)])
+def test_the_example_robot_keeps_its_workspace_under_interference(catalogue, diameter, feasible):
+    """Issue 53: its crossed upper cables shared planes with their neighbours and met at every
+    pose (0 of 1 155 with any diameter); at staggered heights 4 mm cables keep all but 2 of the
+    463 poses the statics keep, 10 mm cables 371 (docs/robots.md), and the cables that touch
+    are the crossed upper ones."""
+    extra = [] if diameter is None else [f"robot.cable_diameter={diameter}"]
+    (job,) = plan(["--config-dir", str(EXAMPLE), "robot=myrobot", "tension.t_min=1", "tension.t_max=400",
+                   "compute.n_jobs=1", *extra]).jobs
+    points, summary = compute_workspace(job.cfg, job.catalogue)
+    assert summary["n_points"] == 1155 and summary["n_feasible"] == feasible
+    if diameter == 0.01:
+        touching = points.loc[points["limiting"] == "cable_cable", "closest_cables"].astype(str)
+        assert len(touching) and set(touching) <= {"1-2", "2-3", "3-4", "1-4", "1-3", "2-4"}, set(touching)
