@@ -21,6 +21,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Callable
 
+import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 from omegaconf import DictConfig
@@ -35,7 +36,9 @@ from pipeline.app.results import (
 )
 from pipeline.workspace.arrow import one_row
 from pipeline.app.problem import ANALYSES, build_grid
+from pipeline.model.geometry import PoseGeometry
 from pipeline.workspace.criteria import REGISTRY
+from pipeline.workspace.criteria.interference import pair_clearances
 from pipeline.workspace.kernel import WorkspaceProblem
 
 log = logging.getLogger("pipeline")
@@ -89,6 +92,11 @@ def _run_locked(cfg: DictConfig, problem: WorkspaceProblem, out: Path, sweep_pay
                               "choose another folder (hydra.run.dir=...)")
     log.info("reading: %s (docs/evidence.md, sections 1-2)", describe_reading(cfg.model))
     log.info("tension model: %s (%s)", cfg.tension.model.value, TENSION_MODELS[cfg.tension.model.value])
+    crossing = touching_at_centre(problem)
+    if crossing:
+        log.warning("cables %s touch at the centre of the search box (robot.cable_diameter): cables that cross "
+                    "in one plane touch at every pose; leave their attachments at staggered heights "
+                    "(docs/robots.md)", ", ".join(crossing))
     files = JobFiles(out, config_yaml)
     summary = ANALYSES[cfg.analysis].files(cfg, problem, build_grid(cfg, problem.robot), files, sweep_pays)
     write_parquet(one_row(summary), out / "summary.parquet", config_yaml,
@@ -108,6 +116,17 @@ def _run_locked(cfg: DictConfig, problem: WorkspaceProblem, out: Path, sweep_pay
     if summary["n_feasible"] == 0 and summary["n_points"] > 0:
         log.warning("no pose is feasible: %s", zero_cause(summary))
     return summary
+
+
+def touching_at_centre(problem: WorkspaceProblem) -> list[str]:
+    """The pairs of cables (``i-j`` by their names) that touch at the search box's centre at the
+    nominal orientation, under ``robot.cable_diameter``: a design check before the grid runs."""
+    robot = problem.robot
+    if robot.cable_radii is None or problem.angles is not None or not np.isfinite(robot.box_lo).all():
+        return []
+    state = PoseGeometry(robot, ((robot.box_lo + robot.box_hi) / 2)[None], problem.orientations[0])
+    names, (i, j) = robot.cable_names, robot.cable_pairs
+    return [f"{names[a]}-{names[b]}" for a, b, gap in zip(i, j, pair_clearances(state)[0]) if gap < 0]
 
 
 def zero_cause(summary: dict) -> str:

@@ -405,7 +405,7 @@ def validate(cfg: DictConfig, catalogue: Catalogue | None,
 def build(cfg: DictConfig, catalogue: Catalogue | None) -> WorkspaceProblem:
     """The workspace problem of a typed config: its robot kind's robot, its analysis kind's
     spec, limits and criteria, the orientation set."""
-    robot = surroundings(cfg, ROBOTS[cfg.robot.name].build(cfg.robot))
+    robot = surroundings(cfg, plausible(ROBOTS[cfg.robot.name].build(cfg.robot)))
     spec, limits = ANALYSES[cfg.analysis].build(cfg, catalogue, robot)
     settings = checked_settings(OmegaConf.to_container(cfg.criteria)) if "criteria" in cfg else {}
     criteria = selected(cfg.analysis, spec, robot, settings)  # the registry's, by what each applies to
@@ -427,6 +427,21 @@ def build(cfg: DictConfig, catalogue: Catalogue | None) -> WorkspaceProblem:
                             cfg.output.cables, nominal=(float(given.psi), float(given.theta), float(given.phi)),
                             angles=name_of(given.convention) if robot.fixed_point else None,
                             metrics=bool(cfg.output.metrics), settings=settings)
+
+
+MAX_SIZE_RATIO = 10_000  # anchors' span over the platform's: past any cable robot, a unit typed wrong
+
+
+def plausible(robot: CableRobot) -> CableRobot:
+    """The robot, unless its frame and platform differ in size past any cable robot's (a frame
+    typed in mm with the platform in m): ConfigError naming both sizes."""
+    frame = float(np.ptp(robot.anchors, axis=0).max())
+    platform = float(np.linalg.norm(robot.attachments, axis=1).max())
+    if platform > 0 and frame > MAX_SIZE_RATIO * platform:
+        raise ConfigError(f"robot: the anchors span {frame:.4g} m and the attachments reach {platform:.4g} m from the "
+                          f"platform's reference point, {frame / platform:.3g} times less: past any cable robot; are "
+                          "both in metres (robot.anchors, robot.attachments)?")
+    return robot
 
 
 def surroundings(cfg: DictConfig, robot: CableRobot) -> CableRobot:
@@ -485,12 +500,13 @@ def platform_shape(value, robot: CableRobot) -> Polytope:
 
 
 MAX_OBSTACLES = 100
+ANCHOR_RTOL = 1e-9  # an anchor this far (times the robot's extent) inside an obstacle already touches it
 
 
 def obstacles(value, robot: CableRobot) -> tuple[Obstacle, ...]:
     """The obstacles of ``obstacles``: boxes {lo, hi} and planes {point, normal} (m, fixed frame,
-    each with an optional name); refuses one that holds an anchor (every cable from it would
-    cross it)."""
+    each with an optional name); refuses one that holds an anchor or lies within its cable's
+    radius of one (every cable from it would touch it at every pose)."""
     if not isinstance(value, ListConfig):
         raise ConfigError(f"obstacles={shown(value)}: a list of boxes {{lo: [3], hi: [3]}} and planes "
                           "{point: [3], normal: [3]} (m)")
@@ -507,20 +523,25 @@ def obstacles(value, robot: CableRobot) -> tuple[Obstacle, ...]:
             if not (lo < hi).all():
                 raise ConfigError(f"{key}.lo={lo.tolist()}: must be below {key}.hi={hi.tolist()} on every axis")
             obstacle = Obstacle(name, lo=lo, hi=hi)
-            inside = ((robot.anchors > lo) & (robot.anchors < hi)).all(axis=1)
+            inside = np.minimum(robot.anchors - lo, hi - robot.anchors).min(axis=1)  # > 0: inside the box
+            clearance = np.where(inside > 0, -inside, np.linalg.norm(
+                np.maximum(np.maximum(lo - robot.anchors, robot.anchors - hi), 0), axis=1))
         elif fields_ == {"point", "normal"}:
             point, normal = (_point(item[end], f"{key}.{end}") for end in ("point", "normal"))
             if not np.linalg.norm(normal) > 0:
                 raise ConfigError(f"{key}.normal={normal.tolist()}: must not be zero")
             obstacle = Obstacle(name, point=point, normal=normal / np.linalg.norm(normal))
-            inside = (robot.anchors - point) @ obstacle.normal < -robot.shortest_cable
+            clearance = (robot.anchors - point) @ obstacle.normal  # < 0: behind the plane, inside
         else:
             raise ConfigError(f"{key}={shown(item)}: a box {{lo: [3], hi: [3]}} or a plane {{point: [3], normal: [3]}} "
                               "(m, fixed frame), with an optional name")
-        if inside.any():
-            anchor = int(np.flatnonzero(inside)[0])
-            raise ConfigError(f"{key} ({name}): anchor {anchor + 1} {robot.anchors[anchor].tolist()} is inside it, so "
-                              "every pose would have a cable through it")
+        radii = np.zeros(robot.n_cables) if robot.cable_radii is None else robot.cable_radii
+        touching = clearance - radii < -ANCHOR_RTOL * robot.extent
+        if touching.any():  # a cable from that anchor starts on or in it: every pose loses it
+            anchor = int(np.flatnonzero(touching)[0])
+            where = "inside it" if clearance[anchor] < 0 else f"within its cable's radius ({radii[anchor]:.3g} m) of it"
+            raise ConfigError(f"{key} ({name}): anchor {anchor + 1} {robot.anchors[anchor].tolist()} is {where}, so "
+                              "every pose would have a cable touching it")
         found.append(obstacle)
     return tuple(found)
 

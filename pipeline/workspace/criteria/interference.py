@@ -10,19 +10,24 @@ import numpy as np
 from pipeline.model.clearance import segment_distance
 
 
-def cable_cable(state, limits) -> np.ndarray:
-    """Every two cables i, j (straight segments from a_i to p + R b_i) at least r_i + r_j apart,
-    the radii of ``robot.cable_diameter``: margin min(1, d_ij / (r_i + r_j) - 1) over the pairs
+def pair_clearances(state) -> np.ndarray:
+    """(n, pairs) d_ij / (r_i + r_j) - 1 over the pairs
     :attr:`pipeline.model.geometry.CableRobot.cable_pairs` (pairs sharing an anchor or an
-    attachment point meet there by design), d_ij the segments' distance
-    (:func:`pipeline.model.clearance.segment_distance`): 0 when the cables touch, -1 when their
-    axes cross. The closest pair of each pose goes to ``state.closest_pair`` (an index into
-    ``cable_pairs``, column ``closest_cables``)."""
+    attachment point meet there by design), d_ij the distance of the straight segments from a_i
+    to p + R b_i (:func:`pipeline.model.clearance.segment_distance`), r the radii of
+    ``robot.cable_diameter``: 0 when the cables touch, -1 when their axes cross."""
     robot = state.robot
     i, j = robot.cable_pairs
     anchors, ends = robot.anchors, state.attachment_points
     distance = segment_distance(anchors[i], ends[:, i] - anchors[i], anchors[j], ends[:, j] - anchors[j])
-    relative = distance / (robot.cable_radii[i] + robot.cable_radii[j]) - 1.0
+    return distance / (robot.cable_radii[i] + robot.cable_radii[j]) - 1.0
+
+
+def cable_cable(state, limits) -> np.ndarray:
+    """Every two cables at least r_i + r_j apart: margin min(1, min over the pairs of
+    :func:`pair_clearances`). The closest pair of each pose goes to ``state.closest_pair`` (an
+    index into ``cable_pairs``, column ``closest_cables``)."""
+    relative = pair_clearances(state)
     state.closest_pair = relative.argmin(axis=1).astype(np.int16)
     return np.minimum(1.0, relative.min(axis=1))
 
