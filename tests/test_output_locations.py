@@ -69,3 +69,20 @@ def test_a_disk_that_fills_while_writing_stops_the_job_and_leaves_no_temporary_f
     left = {p.name for p in (disk / "run").iterdir()}
     assert not {"samples.parquet", "points.parquet", "summary.parquet"} & left
     assert not [name for name in left if name.endswith(".tmp")]
+
+
+def test_outputs_inside_the_config_folder_are_named_as_the_cause(tmp_path):
+    """``--config-dir .`` with the outputs below it: the second run met the first job's Hydra
+    record and said only that a file sets Hydra's settings; it names the job folder and the fix."""
+    import shutil
+    from pathlib import Path
+
+    robot = Path(__file__).resolve().parents[1] / "examples" / "my_robot" / "robot"
+    shutil.copytree(robot, tmp_path / "robot")
+    first = command(tmp_path, "pipeline", "--config-dir", ".", "robot=myrobot", "hydra.run.dir=out1")
+    assert first.returncode == 0, first.stderr[-2000:]
+    second = command(tmp_path, "pipeline", "--config-dir", ".", "robot=myrobot", "hydra.run.dir=out2")
+    lines = second.stderr.strip().splitlines()
+    assert second.returncode == 2 and len(lines) == 1, lines
+    assert "out1/ is a job's output folder, inside your config folder" in lines[0]
+    assert "write outputs elsewhere (hydra.run.dir=" in lines[0] and not (tmp_path / "out2").exists()
