@@ -18,6 +18,7 @@ arguments are appended to every job (e.g. ``catalogue=my_motors.csv``).
 from __future__ import annotations
 
 import argparse
+import difflib
 import hashlib
 import json
 import logging
@@ -122,6 +123,10 @@ class StudySpec:
                 key: value for key, value in self.optimise.variables.items() if key != "actuator"} != self.search.variables:
             raise ConfigError(f"{where}: search.variables: must be the optimise block's drive "
                               "variables, so that the two answer the same question")
+        files = [figure.file for figure in self.figures]
+        twice = sorted({file for file in files if files.count(file) > 1})
+        if twice:
+            raise ConfigError(f"{where}: figures: {twice[0]}: the file of {files.count(twice[0])} figures; each needs its own")
         for case in self.case_labels:
             if case not in self.cases:
                 raise ConfigError(f"{where}: case_labels: {case!r} is not a case (cases: "
@@ -462,6 +467,7 @@ def checked_commands(name: str, extra: list[str], out_root: Path | None = None,
                 for case, overrides in (study.cases or {"": []}).items()]
     reuse = Reuse()  # the cases share their config files: composed once
     checked = [(command, plan(command, reuse)) for command in commands]
+    _check_figure_keys(study, checked[0][1].jobs[0].cfg)
     needs = [f.kind for f in study.figures if f.kind in NEEDS_POINTS] + [
         a for a in study.analyses if a in NEEDS_POINTS]
     if needs and any(not job.cfg.output.points for _, planned in checked for job in planned.jobs):
@@ -489,6 +495,25 @@ def _concurrently(names: list[str], extra: list[str], out_root: Path | None, lau
         except BaseException:
             pool.shutdown(cancel_futures=True)
             raise
+
+
+def _check_figure_keys(study: StudySpec, cfg) -> None:
+    """Every config key a figure names (``hue``, ``facet``, ``per``, ``select``: a name with a dot,
+    ``box.*`` aside, is a config key) must be a key of the study's jobs: ConfigError naming the
+    figure, the key and the nearest one, before any job runs (it failed as a traceback after them)."""
+    from pipeline.workspace.compute import flatten
+
+    keys = set(flatten(OmegaConf.to_container(cfg, resolve=True, enum_to_str=True)))
+    for figure in study.figures:
+        for field_ in ("hue", "facet", "per", "select"):
+            value = getattr(figure, field_)
+            names = list(value) if isinstance(value, (list, dict)) else [value] if value else []
+            for name in names:
+                if "." in str(name) and not str(name).startswith("box.") and name not in keys:
+                    near = difflib.get_close_matches(str(name), sorted(keys), n=1)
+                    hint = f" (did you mean {near[0]}?)" if near else ""
+                    raise ConfigError(f"studies/{study.name}.yaml: figures: {figure.file}: {field_}={name!r}: not a key "
+                                      f"of the study's jobs{hint}")
 
 
 def _check_searchable(cfg, name: str) -> None:

@@ -411,3 +411,43 @@ def test_a_study_file_whose_name_is_not_a_plain_name_is_no_study(tmp_path):
     assert available(tmp_path) == ["ok-1"]
     with pytest.raises(ConfigError, match=r"study '\.\.' not found \(available: ok-1\); a study's name is letters"):
         load_study("..", tmp_path)
+
+
+@pytest.mark.parametrize("field_, value, message", [
+    ("hue", "tension.t_mx", "hue='tension.t_mx': not a key of the study's jobs (did you mean tension.t_max?)"),
+    ("per", "[load.mas]", "per='load.mas': not a key of the study's jobs (did you mean load.mass?)"),
+    ("select", "{robot.gama_deg: 0}", "select='robot.gama_deg': not a key"),
+])
+def test_a_figures_config_key_is_checked_before_any_job(tmp_path, field_, value, message):
+    """hue was not checked before the jobs: a 40-line KeyError after them. Every config key a
+    figure names is checked against the planned jobs, with the nearest key, and nothing runs."""
+    (tmp_path / "studies").mkdir()
+    (tmp_path / "studies" / "mine.yaml").write_text(
+        "title: t\nsource: s\noverrides: [robot=irpm6, robot.search.step=2]\nsweep: {load.mass: '1,2'}\n"
+        f"figures:\n  - {{kind: curve, file: f.png, x: load.mass, y: feasible_pct, {field_}: {value}}}\n")
+    out = tmp_path / "out"
+    done = command(tmp_path, "pipeline.study", "--config-dir", str(tmp_path), "--out", str(out), "mine")
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 2 and len(lines) == 1 and message in lines[0], lines
+    assert not (out / "mine" / "jobs").exists()
+
+
+def test_two_figures_of_one_file_are_refused_and_drawings_over_each_other_are_named(tmp_path, caplog):
+    """A study whose figure file lacks the field that tells its drawings apart wrote one file
+    four times over itself without a word: two figures of one file are refused at load, and one
+    figure whose drawings land in one file warns, naming it."""
+    import logging
+
+    (tmp_path / "twice.yaml").write_text("title: t\nsource: s\nsweep: {load.mass: '1,2'}\nfigures:\n"
+                                         "  - {kind: curve, file: f.png, x: load.mass, y: feasible_pct}\n"
+                                         "  - {kind: curve, file: f.png, x: load.mass, y: volume_m3}\n")
+    with pytest.raises(ConfigError, match=r"twice.yaml: figures: f.png: the file of 2 figures; each needs its own$"):
+        load_study("twice", tmp_path)
+    (tmp_path / "studies").mkdir()
+    (tmp_path / "studies" / "clouds.yaml").write_text(
+        "title: t\nsource: s\noverrides: [robot=irpm6, robot.search.step=2]\nsweep: {load.mass: '1,2'}\n"
+        "figures:\n  - {kind: cloud, file: cloud.png}\n")
+    with caplog.at_level(logging.WARNING, logger="pipeline.study"):
+        done = command(tmp_path, "pipeline.study", "--config-dir", str(tmp_path), "--out", str(tmp_path / "out"), "clouds")
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "figures: cloud.png: 2 drawings were written to cloud.png, each over the one before" in done.stderr + caplog.text

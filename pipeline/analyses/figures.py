@@ -10,6 +10,7 @@ module: a study's checks and its errors do not wait for it.
 
 from __future__ import annotations
 
+import logging
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -94,7 +95,13 @@ def render(spec: FigureSpec, results: StudyResults, out_dir: Path) -> list[Path]
     with matplotlib.style.context(STYLE):
         for _, part in groups:
             written.extend(KINDS[spec.kind](spec, part, results, out_dir))
-    return written
+    repeated = sorted({path.name for path in written if written.count(path) > 1})
+    if repeated:  # each drawing replaced the one before: only the last is left
+        logging.getLogger("pipeline.study").warning(
+            "figures: %s: %d drawings were written to %s, each over the one before; give the file name a field "
+            "that tells them apart (a swept key, {case})", spec.file, len(written) - len(set(written)) + len(repeated),
+            ", ".join(repeated))
+    return sorted(set(written), key=written.index)
 
 
 def choice_bar(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:

@@ -576,8 +576,9 @@ def _check_user_files(folder: Path) -> None:
             if ".hydra" in where.parts:  # a job's own record: the outputs were written into the config folder
                 job = Path(*where.parts[:where.parts.index(".hydra")])
                 raise ConfigError(f"--config-dir={folder}: {job}/ is a job's output folder, inside your config folder (its "
-                                  f"{where} records Hydra's settings); write outputs elsewhere (hydra.run.dir=..., or run "
-                                  "from another folder) or keep your robot files in a folder of their own")
+                                  f"{where} records Hydra's settings); write outputs elsewhere (hydra.run.dir=... for a "
+                                  "job, --out for a study, or run from another folder) or keep your robot files in a "
+                                  "folder of their own")
             raise ConfigError(f"--config-dir={folder}: {where} sets Hydra's own settings (callbacks, "
                               "launchers, environment: they run code); a robot, analysis or tension file "
                               "carries its own keys only")
