@@ -42,6 +42,8 @@ def test_a_full_grid_shows_its_feasible_set_as_a_surface_and_the_robot_at_a_pose
     assert enclosed_volume(vertices, triangles) == pytest.approx(summary["mesh_volume_m3"], rel=1e-4)
     assert (vertices >= box[0] - 1e-4).all() and (vertices <= box[1] + 1e-4).all()  # closed on the box
     assert by_name[f"feasible ({summary['n_feasible']})"]["visible"] == "legendonly"  # the surface shows them
+    lost = [trace for name, trace in by_name.items() if name.startswith("lost to ")]
+    assert lost and all(trace["visible"] == "legendonly" for trace in lost)  # they buried the feasible set
     anchors = by_name["anchors"]
     assert np.array_equal(np.column_stack([array(anchors[a]) for a in "xyz"]), robot.anchors) and robot.n_cables == 8
     cables = next(t for name, t in by_name.items() if name.startswith("cables at (1, 0.9, -1.1) m"))
@@ -116,3 +118,14 @@ def test_a_view_with_a_home_shows_the_connected_poses_apart_from_the_others(tmp_
     assert by_name["feasible, not connected (6)"]["marker"]["symbol"] == "circle-open"
     assert "lost to tension_max (6)" in by_name
     assert by_name["connected to home (6)"]["visible"] == "legendonly"  # the surface shows the feasible set
+
+
+def test_with_no_feasible_pose_the_lost_poses_are_shown(tmp_path):
+    """The lost poses start hidden only where the feasible set has something to show."""
+    import pandas as pd
+
+    grid = pd.DataFrame([(x, y, z) for x in range(2) for y in range(2) for z in range(2)], columns=list("xyz"))
+    grid = grid.assign(psi=0.0, theta=0.0, phi=0.0, feasible=False, limiting="slack", margin_slack=-1.0)
+    view = json.loads(write_view([(grid, "feasible", None)], "t", False, tmp_path / "v.json").read_text())
+    lost = [t for t in view["data"] if t["name"].startswith("lost to slack")]
+    assert len(lost) == 1 and "visible" not in lost[0]

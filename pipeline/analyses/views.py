@@ -4,7 +4,9 @@ margin on hover. A dense grid keeps all its feasible points and an evenly drawn 
 infeasible ones (fixed seed), so the view never hides where the workspace ends; the legend
 says how many of each are shown. On a full grid the feasible set is also drawn as its boundary
 surface, the job's own (``pipeline.workspace.boundary``; the feasible points then start hidden:
-the legend shows them), and the robot is drawn
+the legend shows them). The lost poses start hidden too wherever some pose is feasible (thousands
+of their markers buried the feasible set; a click on the legend shows each criterion's), and
+the robot is drawn
 at one feasible pose (:func:`robot_traces`): its frame, anchors, cables and platform. A robot
 whose grid is of orientations (a joint holds its platform) is shown in its angles instead.
 """
@@ -169,6 +171,7 @@ def _traces(points: pd.DataFrame, column: str, legend: bool, axes=("x", "y", "z"
             "z": group[axes[2]].round(4).to_numpy(), "mode": "markers",
             "name": f"{name if name in FEASIBLE_GROUPS else 'lost to ' + name} ({total.get(name, len(group))}{shown})",
             "legendgroup": name, "showlegend": legend,
+            **({"visible": "legendonly"} if name not in FEASIBLE_GROUPS and feasible.any() else {}),
             "marker": {"size": 2 if symbol == "diamond" else 2.5, "color": colour, "symbol": symbol},
             "customdata": group[margins].round(4).to_numpy(),
             "hovertemplate": (f"{axes[0]} %{{x}}, {axes[1]} %{{y}}, {axes[2]} %{{z}}" if axes[0] == "psi" else
