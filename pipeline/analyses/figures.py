@@ -484,7 +484,7 @@ def slices(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir
             drawn = ax.pcolormesh(u, v, values, shading="nearest", cmap="RdYlGn", vmin=-1.0, vmax=1.0)
             if min(values.shape) >= 2 and np.nanmin(values) < 0 < np.nanmax(values):
                 ax.contour(u, v, values, levels=[0.0], colors="black", linewidths=1.0)
-            ax.set_title(f"{spec.axis} = {level:g} m", fontsize=8)
+            ax.set_title(f"{spec.axis} = {round(float(level), 3):g} m", fontsize=8)  # mm: the grid's own digits
             ax.set_xlabel(f"{across[0]} (m)")
             rows.append(layer.assign(**{spec.axis: level}))
         axes[0].set_ylabel(f"{across[1]} (m)")
