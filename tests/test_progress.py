@@ -181,3 +181,19 @@ def test_a_job_that_will_compile_numbas_loops_says_so_in_its_estimate(caplog, mo
     with caplog.at_level(logging.WARNING, logger="pipeline"):
         announce_cost(dense, fused_job, 350 ** 3, 2)
     assert "about 17 s, once per machine" in caplog.records[0].getMessage()
+
+
+def test_the_cost_models_estimate_stands_until_the_rate_is_measured_without_the_first_step(caplog):
+    """A 12-minute job's first chunks (a worker's start, a first compile) said 7 h: the time left
+    is the cost model's until three chunks are done, then the rate since the first chunk."""
+    clock = Clock()
+    progress = Progress("chunks", 100, logging.getLogger("t"), clock=clock, estimate=200.0)
+    with caplog.at_level(logging.INFO, logger="t"):
+        for seconds in [300.0] + [2.0] * 4:  # a slow first chunk, then 2 s each
+            clock.now += seconds
+            progress.step()
+    lines = [r.getMessage() for r in caplog.records]
+    assert lines[0] == "chunks 1/100 (1%), 5:00 elapsed, about 3:18 left by the cost model"
+    assert lines[1] == "chunks 2/100 (2%), 5:02 elapsed, about 3:16 left by the cost model"
+    assert lines[2] == "chunks 3/100 (3%), 5:04 elapsed, about 3:14 left"  # 2 s x 97, not 101 s x 97
+    assert lines[4] == "chunks 5/100 (5%), 5:08 elapsed, about 3:10 left"

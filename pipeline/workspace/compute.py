@@ -52,6 +52,7 @@ def grid_workspace(
         backend=cfg.compute.backend,
         chunk_size=run.chunk_size,
         scheduler=cfg.compute.scheduler,
+        estimate=run.seconds,
     )
     parts, n_feasible, by_lp = [], 0, 0
     degenerate = Degeneracy(problem)

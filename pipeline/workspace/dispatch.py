@@ -134,9 +134,9 @@ def announce_cost(cfg: DictConfig, problem: WorkspaceProblem, n_points: int, wor
                   keeps_points: bool = False) -> None:
     """A warning before a job the cost model expects to take long or to need much memory, with
     the key that matters."""
-    cores = min(max(workers, 1), os.cpu_count() or 1)
+    used = cores(workers)
     compiling = first_compile_seconds(problem)
-    seconds = estimated_seconds(problem, n_points) / cores + compiling
+    seconds = estimated_seconds(problem, n_points) / used + compiling
     memory = estimated_bytes(problem, n_points, keeps_points)
     if seconds < LONG_JOB_S and memory < LARGE_JOB_BYTES:
         return
@@ -145,14 +145,19 @@ def announce_cost(cfg: DictConfig, problem: WorkspaceProblem, n_points: int, wor
         hint = (f"; grid.n_vel is null (grid.n's), so each pose tests {problem.spec.set_size()} velocities "
                 f"(grid.n_vel=6 tests {REFERENCE_SET}, as the paper's grid)")
     if problem.robot.obstacles:
-        share = OBSTACLE_SECONDS * len(problem.robot.obstacles) * n_points * len(problem.orientations) / cores
+        share = OBSTACLE_SECONDS * len(problem.robot.obstacles) * n_points * len(problem.orientations) / used
         hint += f"; its {len(problem.robot.obstacles)} obstacles take about {clock_text(share)} of it"
     size = f"{memory / 2**30:.1f} GiB" if memory >= 2**30 else f"{memory / 2**20:.0f} MiB"
     if compiling:
         hint += f"; this includes numba's first compile of the loops it needs, about {compiling:.0f} s, once per machine"
     log.warning("this job evaluates %d poses x %d orientations: about %s on %d core%s and %s of memory by "
-                "the cost model%s", n_points, len(problem.orientations), clock_text(seconds), cores,
-                "" if cores == 1 else "s", size, hint)
+                "the cost model%s", n_points, len(problem.orientations), clock_text(seconds), used,
+                "" if used == 1 else "s", size, hint)
+
+
+def cores(workers: int) -> int:
+    """The cores ``workers`` chunk workers keep busy here (joblib's -1: every core)."""
+    return min(max(workers, 1), os.cpu_count() or 1)
 
 
 def first_compile_seconds(problem: WorkspaceProblem) -> float:
@@ -173,11 +178,12 @@ def first_compile_seconds(problem: WorkspaceProblem) -> float:
 @dataclass(frozen=True)
 class Dispatch:
     """How a job runs its grid: the problem with the kernel chosen (``problem.fused``), the poses
-    per chunk and the chunk workers."""
+    per chunk, the chunk workers and the kernel's seconds by the cost model on them."""
 
     problem: WorkspaceProblem
     chunk_size: int
     workers: int
+    seconds: float
 
 
 def decide(cfg: DictConfig, problem: WorkspaceProblem, n_points: int, sweep_pays: bool = False) -> Dispatch:
@@ -186,8 +192,9 @@ def decide(cfg: DictConfig, problem: WorkspaceProblem, n_points: int, sweep_pays
     cluster) and the chunk workers (:func:`worth_workers`)."""
     problem = replace(problem, fused=use_fused(cfg, problem, n_points, sweep_pays))
     compute = cfg.compute
-    return Dispatch(problem, bounded_chunk_size(problem, compute.chunk_size, compute.backend),
-                    worth_workers(problem, n_points, compute.n_jobs, compute.backend))
+    workers = worth_workers(problem, n_points, compute.n_jobs, compute.backend)
+    return Dispatch(problem, bounded_chunk_size(problem, compute.chunk_size, compute.backend), workers,
+                    estimated_seconds(problem, n_points) / cores(workers))
 
 
 def bounded_chunk_size(problem: WorkspaceProblem, requested: int | None, backend: str = "loky") -> int:

@@ -43,14 +43,16 @@ def iter_chunks(
     backend: str = "loky",
     chunk_size: int = 20_000,
     scheduler: str | None = None,
+    estimate: float | None = None,
 ) -> Iterator[tuple[slice, dict[str, np.ndarray]]]:
     """(slice, ``function(problem, positions[slice])``) for every chunk, in order, as each
     finishes: a caller can write results out chunk by chunk (bounded memory). ``positions``: an
-    (n, 3) array or a ``Grid``, whose chunks are made as they are dispatched."""
+    (n, 3) array or a ``Grid``, whose chunks are made as they are dispatched; ``estimate``: the
+    cost model's seconds for them all, the progress lines' time left until the rate is measured."""
     here = backend != "dask" or not scheduler  # loky, or a Dask cluster started on this machine
     workers = local_workers(n_jobs) if here else n_jobs if n_jobs > 0 else 1
     slices = chunk_slices(len(positions), workers, chunk_size)
-    progress = Progress("chunks", len(slices), log, every=CHUNK_REPORT_S)
+    progress = Progress("chunks", len(slices), log, every=CHUNK_REPORT_S, estimate=estimate)
     if (len(slices) <= 1 or workers == 1) and here:  # a named scheduler gets the work it was named for
         for s in slices:
             yield s, function(problem, positions[s])
