@@ -34,13 +34,11 @@ import os
 import pickle
 import sys
 import tempfile
-import threading
 import time
 from pathlib import Path
 from types import ModuleType
 
 log = logging.getLogger(__name__)
-ANNOUNCE_AFTER_S = 1.0  # an import still running after this is numba compiling: say so
 # numba's first compile of each loops module on a machine (docs/performance.md; benchmarks/LOG.md, 2026-11-26)
 COMPILE_S = {"pipeline.workspace.fused_loops": 17.0, "pipeline.model.crossings": 9.0, "pipeline.model.faces": 2.5}
 
@@ -51,7 +49,7 @@ def compile_seconds(name: str) -> float:
     stale one numba finds unusable, counts as none: the estimate errs long)."""
     origin = Path(importlib.util.find_spec(name).origin)
     newest = max((p.stat().st_mtime for p in (origin.parent / "__pycache__").glob(f"{origin.stem}.*.nbi")), default=0.0)
-    return 0.0 if newest >= origin.stat().st_mtime else COMPILE_S[name]
+    return 0.0 if newest >= origin.stat().st_mtime else COMPILE_S.get(name, 1.0)
 
 
 @functools.cache
@@ -91,16 +89,16 @@ def _compile_lock(origin: Path):
 
 
 def _timed_import(name: str) -> ModuleType:
+    """Import the loops module ``name``, announcing numba's compile only where one happens (no
+    cache of the module's version here: a warm run of a loaded machine, whose cache loads slowly,
+    said it was compiling), with the range measured: an idle core's time, several times that
+    loaded (84 s for the fused loops' 17)."""
+    compiling = compile_seconds(name) > 0
+    if compiling:
+        log.info("numba is compiling the loops of %s, once per machine and version of the file: about %.0f s on "
+                 "an idle core, up to 5 times that on a loaded machine", name, COMPILE_S.get(name, 1.0))
     start = time.perf_counter()
-    announce = threading.Timer(ANNOUNCE_AFTER_S, log.info, (
-        "numba is compiling the loops of %s (once per machine and version of the file, 10-20 s)", name))
-    announce.daemon = True
-    announce.start()
-    try:
-        module = importlib.import_module(name)
-    finally:
-        announce.cancel()
-    elapsed = time.perf_counter() - start
-    if elapsed > ANNOUNCE_AFTER_S:
-        log.info("compiled the loops of %s in %.1f s (kept in numba's cache)", name, elapsed)
+    module = importlib.import_module(name)
+    if compiling:
+        log.info("compiled the loops of %s in %.1f s (kept in numba's cache)", name, time.perf_counter() - start)
     return module
