@@ -98,3 +98,22 @@ def test_the_example_robot_keeps_its_workspace_under_interference(catalogue, dia
     if diameter == 0.01:
         touching = points.loc[points["limiting"] == "cable_cable", "closest_cables"].astype(str)
         assert len(touching) and set(touching) <= {"1-2", "2-3", "3-4", "1-4", "1-3", "2-4"}, set(touching)
+
+
+def test_each_robot_file_of_a_study_is_named_in_its_summary_and_figure_names(tmp_path):
+    """Every user robot reports robot.name = points, so '{robot_name}' in a figure's file wrote one
+    file over itself: the summary names each job's robot file (robot_file), which figure names use."""
+    folder = tmp_path / "mine"
+    shutil.copytree(EXAMPLE, folder)
+    text = (folder / "robot" / "myrobot.yaml").read_text()
+    (folder / "robot" / "wide.yaml").write_text(text.replace("0.06", "0.08"))
+    (folder / "studies" / "two.yaml").write_text(
+        "title: t\nsource: s\noverrides: [tension.t_min=1, tension.t_max=400]\nsweep: {robot: 'myrobot,wide'}\n"
+        "figures:\n  - {kind: cloud, file: 'cloud_{robot_file}.png'}\n")
+    done = run(tmp_path, "pipeline.study", "--config-dir", str(folder), "--out", str(tmp_path / "out"), "two")
+    assert done.returncode == 0, done.stderr[-3000:]
+    summary = read_verified(tmp_path / "out" / "two" / "summary.parquet").to_pandas()
+    assert sorted(summary["robot_file"]) == ["myrobot", "wide"] and set(summary["robot.name"]) == {"points"}
+    assert summary.set_index("robot_file").loc["myrobot", "n_feasible"] == 463  # the example's, alone
+    figures = sorted(p.name for p in (tmp_path / "out" / "two" / "figures").glob("cloud_*.png"))
+    assert figures == ["cloud_myrobot.png", "cloud_wide.png"] and "drawings were written" not in done.stderr

@@ -42,7 +42,7 @@ def main(cfg: DictConfig) -> dict:
         catalogue = load_catalogue(cfg.catalogue) if "catalogue" in cfg else None
         typed, problem = validate(cfg, catalogue)
         summary = execute(Job(None, tuple(hydra_cfg.overrides.task), Path(hydra_cfg.runtime.output_dir),
-                              typed, catalogue, problem, cfg, ()))
+                              typed, catalogue, problem, cfg, (), str(hydra_cfg.runtime.choices.robot)))
     except ConfigError as exc:
         print(f"error: {exc}", file=sys.stderr)
         raise SystemExit(2) from None

@@ -56,7 +56,7 @@ def execute(job: Job) -> dict:
     try:
         out.mkdir(parents=True, exist_ok=True)
         with folder_lock(out):
-            return _run_locked(job.cfg, job.problem, out, job.fused)
+            return _run_locked(job.cfg, job.problem, out, job.fused, job.robot_file)
     except OSError as exc:
         raise ConfigError(f"cannot write {exc.filename or out}: {exc.strerror or exc}") from None
 
@@ -80,7 +80,7 @@ def folder_lock(out: Path, busy: str = "another run is writing this folder; wait
 JOB_FILES = ("summary.parquet", "points.parquet", "samples.parquet", "boundary.stl", "boundary.ply")  # what a job writes
 
 
-def _run_locked(cfg: DictConfig, problem: WorkspaceProblem, out: Path, sweep_pays: bool) -> dict:
+def _run_locked(cfg: DictConfig, problem: WorkspaceProblem, out: Path, sweep_pays: bool, robot_file: str) -> dict:
     config_yaml = to_yaml(cfg, resolve=True)
     done = finished_summary(out, config_yaml)
     if done is not None:
@@ -99,6 +99,7 @@ def _run_locked(cfg: DictConfig, problem: WorkspaceProblem, out: Path, sweep_pay
                     "(docs/robots.md)", ", ".join(crossing))
     files = JobFiles(out, config_yaml)
     summary = ANALYSES[cfg.analysis].files(cfg, problem, build_grid(cfg, problem.robot), files, sweep_pays)
+    summary["robot_file"] = robot_file  # which of a study's robot files (robot.name: its kind)
     write_parquet(one_row(summary), out / "summary.parquet", config_yaml,
                   {DIGESTS_KEY: digests_json(files.written)})
     lost = ", ".join(

@@ -68,6 +68,7 @@ class Job:
     problem: WorkspaceProblem  # built from cfg by its robot and analysis kinds, once
     config: DictConfig  # as Hydra composes it, without Hydra's node (.hydra/config.yaml)
     files: tuple[str, ...]  # the key of its composition in the plan
+    robot_file: str  # the robot file it composes (robot=NAME): robot.name is its kind, ``points`` for many
     fused: bool = False  # its sweep pays, as a whole, for the compiled kernels (dispatch.fused_pays)
 
 
@@ -167,7 +168,7 @@ def plan(argv: list[str], reuse: Reuse | None = None) -> Plan | None:
             folder = composed.folder(job_parsed, parsed, number if multirun else None, sweep_dir)
             folders.append(folder)
             planned.append(Job(number if multirun else None, tuple(job), folder, cfg, catalogue, problem,
-                               config, files))
+                               config, files, composed.robot_file))
     _check_output_folders(folders, planned[0].cfg, len(planned))
     if len(planned) > 1:
         if fused_pays((job.cfg, job.problem, grid_size(job.cfg)) for job in planned):
@@ -362,6 +363,7 @@ class Composition:
         plain = without_hydra(composed)
         self.hydra = Copies(composed)
         self.plain = Copies(plain)
+        self.robot_file = str(OmegaConf.select(composed, "hydra.runtime.choices.robot"))  # the robot file's name
         full = typed_schema(plain)  # typed once per composition
         self._full = Copies(full)
         self._typed = _derivable(full, plain)
