@@ -39,3 +39,16 @@ def text_number(values) -> str:
                 continue
             return f" ({value!r} is text to YAML: write {number!r})"
     return ""
+
+
+def require(module: str, extra: str, what: str):
+    """The module ``module``, or ConfigError naming the extra that installs it: ``what`` (the
+    feature, e.g. "the report") needs ``pip install 'cdpr-studies[extra]'`` (pyproject.toml's
+    optional dependencies, by use)."""
+    import importlib
+
+    try:
+        return importlib.import_module(module)
+    except ImportError:
+        raise ConfigError(f"{what} needs {module.split('.')[0]}, which the base install leaves out: "
+                          f"pip install 'cdpr-studies[{extra}]'") from None

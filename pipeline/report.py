@@ -25,7 +25,7 @@ from pipeline.analyses.figures import caption, label
 from pipeline.analyses.optimise import OBJECTIVES
 from pipeline.analyses.paper import TABLE2_ACCEPTED, TABLE2_FEASIBLE_PCT
 from pipeline.analyses.results import table as read_table
-from pipeline.errors import ConfigError, one_line
+from pipeline.errors import ConfigError, one_line, require
 from pipeline.app.results import code_version
 from pipeline.study import OUTPUT_DIR, available, load_study, studies_folder, verified_figures
 from pipeline.analyses.webpage import View, write_page
@@ -320,6 +320,8 @@ def main(argv: list[str] | None = None) -> None:
                         help="your own folder: the report of the studies in its studies/")
     args = parser.parse_args(argv)
     try:
+        for module in ("markdown_it", "plotly"):  # before anything is written
+            require(module, "report", "the report")
         index = build(args.studies, args.out, args.config_dir)
         print(f"wrote {index.with_suffix('.html')} (open it in a browser) and {index}")
     except FileNotFoundError as exc:

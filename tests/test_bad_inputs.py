@@ -76,7 +76,7 @@ CASES = [
     ("pipeline", ["robot=irpm7"], "irpm7"),
     ("pipeline", ["-m", "actuator=1,2", "hydra/launcher=submitit_slurm"],
      "hydra/launcher=submitit_slurm: no such option of Hydra's hydra/launcher group (options: basic, cdpr, joblib; "
-     "a Hydra plugin adds its own, e.g. pip install hydra-submitit-launcher)"),
+     "a Hydra plugin adds its own, e.g. pip install 'cdpr-studies[cluster]' (hydra-submitit-launcher))"),
     ("pipeline", ["-m", "actuator=1,2", "hydra.launcher.backend=dask"], "reads hydra.launcher.n_jobs only"),
     ("pipeline", ["robot=irpm6", "robot.r_end=0"], "robot.r_end=0"),
     ("pipeline", ["-m", "robot=irpm6", "tension.t_max=55000,-1"], "tension.t_max=-1"),

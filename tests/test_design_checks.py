@@ -55,7 +55,8 @@ def test_an_anchor_on_or_in_an_obstacle_is_refused_before_the_work(tmp_path, obs
 
 
 def test_a_frame_in_millimetres_with_a_platform_in_metres_is_refused(tmp_path):
-    anchors = "[[-2000,1500,2000],[2000,1500,2000],[2000,-1500,2000],[-2000,-1500,2000],[-2000,1500,0],[2000,1500,0],[2000,-1500,0],[-2000,-1500,0]]"
+    anchors = ("[[-2000,1500,2000],[2000,1500,2000],[2000,-1500,2000],[-2000,-1500,2000],"
+               "[-2000,1500,0],[2000,1500,0],[2000,-1500,0],[-2000,-1500,0]]")
     done = run(tmp_path, *EXAMPLE, f"robot.anchors={anchors}")
     lines = done.stderr.strip().splitlines()
     assert done.returncode == 2 and len(lines) == 1, lines

@@ -10,6 +10,7 @@ module: a study's checks and its errors do not wait for it.
 
 from __future__ import annotations
 
+import importlib.util
 import logging
 import re
 from dataclasses import dataclass, field
@@ -208,7 +209,11 @@ def _cloud_figure(spec: FigureSpec, panels: list, job: pd.Series, out_dir: Path,
     box = None
     if all(f"box.{axis}_{end}" in job for axis in "xyz" for end in ("min", "max")):
         box = tuple(np.array([job[f"box.{axis}_{end}"] for axis in "xyz"], dtype=float) for end in ("min", "max"))
-    write_view(panels, _fill(spec.title or "", job), spec.invert_z, png.with_suffix(".json"), robot, box)
+    if importlib.util.find_spec("plotly") is None:  # the views are the report's: its extra installs plotly
+        logging.getLogger("pipeline.study").warning("no interactive view beside %s: plotly is not installed "
+                                                    "(pip install 'cdpr-studies[report]')", png.name)
+    else:
+        write_view(panels, _fill(spec.title or "", job), spec.invert_z, png.with_suffix(".json"), robot, box)
     return png
 
 

@@ -23,7 +23,7 @@ import pandas as pd
 from omegaconf import OmegaConf
 
 from pipeline.model.catalogue import NUMERIC_COLUMNS, Catalogue, as_number
-from pipeline.errors import ConfigError
+from pipeline.errors import ConfigError, require
 
 log = logging.getLogger("pipeline.study")
 SAMPLERS = ("nsga2", "tpe")
@@ -169,8 +169,7 @@ def optimise(spec: OptimiseSpec, run_trial: Callable[[int, list[str]], dict],
              catalogue: Catalogue, required_pct: float) -> pd.DataFrame:
     """Run ``spec.budget`` trials; ``run_trial(number, overrides)`` runs one job and returns
     its summary. Returns one row per trial (see the module's docstring)."""
-    import optuna
-
+    optuna = require("optuna", "design", "an optimise study")
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     sampler = (optuna.samplers.NSGAIISampler(seed=spec.seed) if spec.sampler == "nsga2" else
                optuna.samplers.TPESampler(seed=spec.seed))

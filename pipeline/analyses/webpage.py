@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from pipeline.app.results import write_text
+from pipeline.errors import require
 
 PLOTLY_JS = "plotly.min.js"
 LIVE_VIEWS = 4
@@ -58,8 +59,8 @@ class View:
 def write_page(blocks: list, out: Path, title: str) -> Path:
     """Render ``blocks`` (Markdown lines or :class:`View`) into ``out/index.html`` and copy
     Plotly's script beside it; returns the page."""
-    from markdown_it import MarkdownIt
-    from plotly.offline import get_plotlyjs
+    MarkdownIt = require("markdown_it", "report", "the report's page").MarkdownIt
+    get_plotlyjs = require("plotly.offline", "report", "the report's page").get_plotlyjs
 
     markdown = MarkdownIt("commonmark", {"html": False}).enable("table")
     body, views = [], 0

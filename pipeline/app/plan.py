@@ -607,7 +607,8 @@ def _missing_option(exc: MissingConfigException, parsed: list[Override], folders
         if group.startswith("hydra/") and f"{group}/{override.value()}" in str(exc):  # a Hydra plugin's group
             found = re.search(r"Available options in '[^']+':(.*?)Config search path", str(exc), re.S)
             options = ", ".join(o for o in re.split(r"[\s:]+", found.group(1)) if o) if found else "?"
-            plugin = {"hydra/launcher": "hydra-submitit-launcher", "hydra/sweeper": "hydra-optuna-sweeper"}
+            plugin = {"hydra/launcher": "'cdpr-studies[cluster]' (hydra-submitit-launcher)",
+                      "hydra/sweeper": "hydra-optuna-sweeper"}
             return (f"{override.input_line}: no such option of Hydra's {group} group (options: {options}; a "
                     f"Hydra plugin adds its own, e.g. pip install {plugin.get(group, 'the plugin')})")
         if (CONF_DIR / group).is_dir() and not group.startswith("hydra") and f"{group}/{override.value()}" in str(exc):
