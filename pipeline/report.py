@@ -26,7 +26,7 @@ from pipeline.analyses.optimise import OBJECTIVES
 from pipeline.analyses.paper import TABLE2_ACCEPTED, TABLE2_FEASIBLE_PCT
 from pipeline.analyses.results import table as read_table
 from pipeline.errors import ConfigError, one_line, require
-from pipeline.app.results import code_version
+from pipeline.app.results import code_version, varying_settings
 from pipeline.study import OUTPUT_DIR, available, load_study, studies_folder, verified_figures
 from pipeline.analyses.webpage import View, write_page
 
@@ -372,6 +372,8 @@ def _write(studies_dir: Path, tmp: Path, config_dir: Path | None) -> None:
         figures = [f for f in verified_figures(studies_dir / name) if f.parent == studies_dir / name / "figures"]
         lines += [f"### {md(study.title)}", "", f"`{name}`: {md(study.source)}.", "",
                   *_answer(studies_dir / name)]
+        if config_dir is not None and (studies_dir / name / "summary.parquet").exists():  # her jobs and robots
+            lines += _jobs(read_table(studies_dir / name / "summary.parquet"))
         for figure in figures:
             target = tmp / "figures" / name / figure.name
             target.parent.mkdir(parents=True, exist_ok=True)
@@ -386,6 +388,35 @@ def _write(studies_dir: Path, tmp: Path, config_dir: Path | None) -> None:
         "*Interactive 3-D view of this figure: index.html.*\n" if isinstance(line, View) else line
         for line in lines))
     write_page(lines, tmp, "Reproduction report" if config_dir is None else "Study report")
+
+
+JOB_COLUMNS = (("feasible_pct", "feasible (%)", "{:.2f}"), ("volume_m3", "volume (m³)", "{:.4g}"),
+               ("mesh_volume_m3", "boundary volume (m³)", "{:.4g}"), ("max_payload_kg_median", "median payload (kg)", "{:.3g}"))
+MAX_JOB_ROWS = 60  # a user study's jobs listed in the report; the rest are in its summary.parquet
+
+
+def _jobs(summary: pd.DataFrame) -> list[str]:
+    """A user study's jobs as a table: the settings its sweep varied, the feasible share and the
+    volumes (by cells and by the boundary surface), the median largest payload where computed;
+    then each robot file's description (anchors, attachments, platform mass, tension limits:
+    what its jobs share)."""
+    settings = varying_settings({c: summary[c].tolist() for c in summary.columns}, ignore=("job",))
+    shown = [(c, name, form) for c, name, form in JOB_COLUMNS if c in summary and summary[c].notna().any()]
+    lines = ["| " + " | ".join([*(md(label(s)) for s in settings), "poses", *(name for _, name, _ in shown)]) + " |",
+             "|" + " --- |" * (len(settings) + 1 + len(shown))]
+    for _, row in summary.head(MAX_JOB_ROWS).iterrows():
+        cells = [md(row[s]) for s in settings] + [f"{int(row['n_points'])}"]
+        cells += [form.format(row[c]) if row[c] == row[c] else "–" for c, _, form in shown]
+        lines.append("| " + " | ".join(cells) + " |")
+    more = len(summary) - MAX_JOB_ROWS
+    lines += [f"*… and {more} more jobs in its summary.parquet.*" if more > 0 else "", ""]
+    for robot, rows in summary.groupby("robot_file", sort=True) if "robot_file" in summary else []:
+        first = rows.iloc[0]
+        parts = [f"{key}: {md(first[key])}" for key in ("robot.anchors", "robot.attachments", "robot.platform.mass",
+                                                        "tension.t_min", "tension.t_max")
+                 if key in first and rows[key].astype(str).nunique() == 1]  # what its jobs share
+        lines += [f"Robot `{md(robot)}` ({md(first['robot.name'])}): " + "; ".join(parts) + ".", ""]
+    return lines
 
 
 def md(value) -> str:

@@ -58,6 +58,12 @@ def test_the_example_folder_gives_its_study_figures_and_report(tmp_path, catalog
     assert (tmp_path / "outputs" / "report" / "figures" / "my_payload" / "feasible_share_vs_payload.png").exists()
     assert (tmp_path / "outputs" / "report" / "index.html").exists()
     assert package == {p.name: p.stat().st_mtime for p in STUDIES_DIR.iterdir()}  # nothing copied in
+    # her jobs as a table (nine images and no table before): each row the summary's, and her robot
+    rows = [line for line in text.splitlines() if line.startswith("| ") and line.count("|") == 7]
+    assert rows[0] == "| payload (kg) | tension.t_max | poses | feasible (%) | volume (m³) | boundary volume (m³) |"
+    table = {(float(r.split("|")[1]), float(r.split("|")[2])): float(r.split("|")[4]) for r in rows[2:]}
+    assert len(table) == 12 and table == {(m, t): round(p, 2) for (t, m), p in share.items()}
+    assert "Robot `myrobot` (points): robot.anchors: \\[\\[-2, 1.5, 2\\]" in text and "tension.t_min: 1" in text
 
 
 def test_a_users_studies_are_found_in_her_folder_and_plan_with_her_robots():
