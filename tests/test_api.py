@@ -127,3 +127,24 @@ def test_two_threads_may_call_the_api_at_once(tmp_path, monkeypatch):
         done = list(pool.map(lambda a: api.workspace([f"actuator={a}", "grid.n=3"], folder=f"a{a}"), [1, 2, 3, 4] * 2))
     assert [ws.summary["n_feasible"] for ws in done[:4]] == [27, 25, 22, 22]
     assert [ws.summary for ws in done[4:]] == [ws.summary for ws in done[:4]]
+
+
+def test_a_workspace_draws_itself_with_the_studies_figure_code(tmp_path, monkeypatch):
+    """Issue 53: the API had no picture. A job's cloud (with its 3-D view, whose feasible set is
+    the job's), slices and map come from the studies' code; what cannot draw one job is one line."""
+    import json
+
+    monkeypatch.chdir(tmp_path)
+    ws = api.workspace(["actuator=3"], folder="a3")
+    (cloud,) = ws.figure()
+    assert cloud == pathlib.Path("a3/figures/cloud.png") and cloud.stat().st_size > 10_000
+    view = json.loads(cloud.with_suffix(".json").read_text())
+    assert any(t["name"] == "feasible set (184)" for t in view["data"])  # Table 2: 184 of 216
+    slices = ws.figure("slices", out=tmp_path / "mine", axis="x", layers=2)
+    assert [p.name for p in slices if p.suffix == ".png"] == ["slices.png"]
+    for kind, keys, message in [("curve", {}, "kind='curve': a job draws as a cloud, slices or map"),
+                                ("slices", {"axis": "w"}, "figure: axis='w': slices cut across x, y or z"),
+                                ("map", {}, "a map colours the poses by a points column"),
+                                ("slices", {"colour": "red"}, "unexpected keyword argument 'colour'")]:
+        with pytest.raises(api.ConfigError, match=re.escape(message)):
+            ws.figure(kind, **keys)

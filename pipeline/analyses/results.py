@@ -35,10 +35,13 @@ class StudyResults:
 
     def config(self, job: str) -> DictConfig:
         """The resolved config ``job`` ran with, as its summary records it."""
-        return OmegaConf.create(read_metadata(self.directory / "jobs" / job / "summary.parquet")[CONFIG_KEY])
+        return OmegaConf.create(read_metadata(self.folder(job) / "summary.parquet")[CONFIG_KEY])
+
+    def folder(self, job: str) -> Path:
+        return self.directory / "jobs" / job
 
     def _data(self, job: str, name: str) -> pd.DataFrame:
-        folder = self.directory / "jobs" / job
+        folder = self.folder(job)
         try:
             changed = changed_files(folder)
         except READ_ERRORS as exc:  # its summary unreadable: outside data
@@ -46,6 +49,18 @@ class StudyResults:
         if changed:
             raise ValueError(f"{folder}: {', '.join(changed)} changed since the job finished")
         return pd.read_parquet(folder / name)
+
+
+class JobResults(StudyResults):
+    """One job's folder read as a study of that one job (``job``: its folder's name), so that the
+    API draws a job with the studies' figure code (``pipeline.api.Workspace.figure``)."""
+
+    @property
+    def summary(self) -> pd.DataFrame:
+        return table(self.directory / "summary.parquet").assign(job=self.directory.name)
+
+    def folder(self, job: str) -> Path:
+        return self.directory
 
 
 def table(path: Path) -> pd.DataFrame:
