@@ -272,3 +272,21 @@ def test_a_structure_matrix_of_rank_zero_holds_no_wrench_and_the_zero_wrench(mak
     assert points["margin_unreachable"].iloc[0] == pytest.approx(1.0 - residual / 1e-6)  # tension.residual_rtol
     if not feasible:
         assert points["limiting"].iloc[0] == "unreachable"
+
+
+def test_a_sweep_of_one_robot_says_its_rank_notes_once(tmp_path):
+    """The CPR-8's rank-5 notes were printed twice a job (ten lines for the main job): a sweep
+    says each once, a job run alone after it says them again, and every job's summary keeps them."""
+    import pandas as pd
+
+    from conftest import command
+
+    sweep = command(tmp_path, "pipeline", "-m", "actuator=1,2,3,4,5", f"hydra.sweep.dir={tmp_path / 'sweep'}")
+    assert sweep.returncode == 0, sweep.stderr[-2000:]
+    text = sweep.stdout + sweep.stderr
+    assert text.count("J^T is short of rank 6 at 216 of 216 poses") == 1
+    assert text.count("the structure matrix has rank 5 of 6: the cables cannot produce a moment about z") == 1
+    summary = pd.read_parquet(tmp_path / "sweep" / "summary.parquet")
+    assert (summary["deficient_rank"] == 5).all() and len(summary) == 5
+    alone = command(tmp_path, "pipeline", "actuator=2", f"hydra.run.dir={tmp_path / 'alone'}")
+    assert (alone.stdout + alone.stderr).count("the structure matrix has rank 5 of 6") == 1

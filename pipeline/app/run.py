@@ -76,6 +76,36 @@ def run(plan: Plan, hydra_logging: bool = True, sharing: list[Job] | None = None
     from pipeline.workspace.progress import Progress
 
     progress = Progress("jobs", len(plan.jobs), log) if plan.multirun else None
+    once = Once()
+    if plan.multirun:  # the jobs of one robot repeat its notes (the CPR-8's rank 5, twice a job): once each
+        logging.getLogger("pipeline.degeneracy").addFilter(once)
+    try:
+        summaries = _run_jobs(plan, progress, workers, hydra_logging, first)
+    finally:
+        logging.getLogger("pipeline.degeneracy").removeFilter(once)
+    if plan.multirun and plan.gather:
+        gather(plan.sweep_dir, [job.folder for job in plan.jobs], plan.task_overrides)
+    elif not plan.multirun:
+        log.info("results in %s", plan.jobs[0].folder.absolute())
+    return summaries
+
+
+class Once(logging.Filter):
+    """Each distinct message once while attached."""
+
+    def __init__(self):
+        super().__init__()
+        self.seen: set[str] = set()
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        text = record.getMessage()
+        new = text not in self.seen
+        self.seen.add(text)
+        return new
+
+
+def _run_jobs(plan: Plan, progress, workers: int, hydra_logging: bool, first) -> list[dict]:
+    """The plan's jobs, here or on ``workers`` job processes, each with its Hydra records."""
     started = ((job, _prepare(plan, job, hydra_logging)) for job in plan.jobs)
     summaries = []
     if workers == 1:
@@ -93,10 +123,6 @@ def run(plan: Plan, hydra_logging: bool = True, sharing: list[Job] | None = None
         for job, summary in zip(plan.jobs, runner(delayed(run_job)(job, setting) for job, setting in started)):
             summaries.append(summary)
             progress.step(_outcome(job, summary))
-    if plan.multirun and plan.gather:
-        gather(plan.sweep_dir, [job.folder for job in plan.jobs], plan.task_overrides)
-    elif not plan.multirun:
-        log.info("results in %s", plan.jobs[0].folder.absolute())
     return summaries
 
 

@@ -10,7 +10,7 @@ import numpy as np
 
 from pipeline.model.geometry import FREEDOMS
 
-log = logging.getLogger("pipeline")
+log = logging.getLogger("pipeline.degeneracy")  # a sweep says each note once (pipeline.app.run)
 
 WORDS = {"x": "force along x", "y": "force along y", "z": "force along z",
          "rx": "moment about x", "ry": "moment about y", "rz": "moment about z"}
