@@ -203,3 +203,24 @@ def test_a_process_composes_a_set_of_files_once_while_they_and_its_folder_stay_t
     argv[1] = str(tmp_path / "mine")
     planned = plan(argv)
     assert len(calls) == 4 and planned.record(planned.jobs[0]).hydra.runtime.cwd == str(elsewhere)
+
+
+def test_a_sweep_of_robot_files_says_why_their_shared_keys_meet_the_default_robot(tmp_path):
+    """'-m robot=a,b robot.search.step=0.5' named robot=cpr8, which the user never chose: Hydra
+    checks a sweep's shared overrides against its own config (the default robot); the line says
+    so and what to do."""
+    import shutil
+    from pathlib import Path
+
+    from pipeline.app.plan import plan
+    from pipeline.errors import ConfigError
+
+    example = Path(__file__).resolve().parents[1] / "examples" / "my_robot" / "robot" / "myrobot.yaml"
+    (tmp_path / "robot").mkdir()
+    shutil.copy(example, tmp_path / "robot" / "a.yaml")
+    shutil.copy(example, tmp_path / "robot" / "b.yaml")
+    with pytest.raises(ConfigError, match=r"^robot.search.step=0.5: no such key for robot=cpr8 .*; the sweep of robot "
+                                          r"shares these keys, .* set them in each robot file, or run one sweep per robot$"):
+        plan(["--config-dir", str(tmp_path), "-m", "robot=a,b", "robot.search.step=0.5"])
+    assert len(plan(["--config-dir", str(tmp_path), "-m", "robot=a,b", "tension.t_max=300",
+                     f"hydra.sweep.dir={tmp_path / 'out'}"]).jobs) == 2  # keys every robot has pass

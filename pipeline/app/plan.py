@@ -147,7 +147,16 @@ def plan(argv: list[str], reuse: Reuse | None = None) -> Plan | None:
 
     with HYDRA_STATE, initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3", job_name="pipeline"):
         base_files, first = composition(base)
-        first.job(base)  # a bad key or value named first (Hydra composes a sweep's own config from these)
+        try:
+            first.job(base)  # a bad key or value named first (Hydra composes a sweep's own config from these)
+        except ConfigError as exc:
+            swept = [o.key_or_group for o in parsed if o.is_sweep_override() and structural(o) and "/" not in o.key_or_group
+                     and (CONF_DIR / o.key_or_group).is_dir()]
+            if not swept:
+                raise
+            raise ConfigError(f"{exc}; the sweep of {swept[0]} shares these keys, which Hydra checks against the sweep's "
+                              f"own config, the default {swept[0]}: set them in each {swept[0]} file, or run one sweep "
+                              f"per {swept[0]}") from None
         hydra = first.hydra_node(base, parsed)
         choices = hydra.hydra.runtime.choices
         by_hydra = (choices.get("hydra/launcher"), choices.get("hydra/sweeper")) != ("cdpr", "basic")
