@@ -129,3 +129,27 @@ def test_with_no_feasible_pose_the_lost_poses_are_shown(tmp_path):
     view = json.loads(write_view([(grid, "feasible", None)], "t", False, tmp_path / "v.json").read_text())
     lost = [t for t in view["data"] if t["name"].startswith("lost to slack")]
     assert len(lost) == 1 and "visible" not in lost[0]
+
+
+def test_a_static_cloud_draws_the_jobs_boundary_surface(tmp_path):
+    """The PNG clouds showed points only: on a full grid they now draw the same boundary the view
+    and the summary have (its enclosed volume is the summary's mesh_volume_m3)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+    from pipeline.analyses.figures import _cloud_panel
+    from pipeline.analyses.views import boundary_of
+
+    done = workspace(["actuator=3", "orientation.psi=0.3"], tmp_path / "job")
+    box = tuple(np.array([done.summary[f"box.{a}_{end}"] for a in "xyz"]) for end in ("min", "max"))
+    vertices, triangles = boundary_of(done.points, "feasible", ("x", "y", "z"), box)
+    assert enclosed_volume(vertices, triangles) == pytest.approx(done.summary["mesh_volume_m3"], rel=1e-4)
+    ax = plt.figure().add_subplot(projection="3d")
+    _cloud_panel(ax, done.points, "feasible", False, box)
+    ax.figure.canvas.draw()  # a 3-D collection projects its faces when drawn
+    surfaces = [c for c in ax.collections if isinstance(c, Poly3DCollection)]
+    assert len(surfaces) == 1 and len(surfaces[0].get_paths()) == len(triangles)
+    plt.close("all")

@@ -24,7 +24,7 @@ from pipeline.workspace.criteria import COLOURS, FEASIBLE_COLOUR
 from pipeline.app.config import rule
 from pipeline.errors import ConfigError, one_line
 from pipeline.app.results import write_csv
-from pipeline.analyses.views import pose_axes, robot_traces, write_view
+from pipeline.analyses.views import boundary_of, pose_axes, robot_traces, write_view
 from pipeline.analyses.results import StudyResults
 
 STYLE = "pipeline.styles.paper"
@@ -197,18 +197,18 @@ def _robot_at_a_feasible_pose(results: StudyResults, job: pd.Series, points: pd.
 def _cloud_figure(spec: FigureSpec, panels: list, job: pd.Series, out_dir: Path, results: StudyResults) -> Path:
     fig = _figure(figsize=(5.6 * len(panels), 4.6))
     robot = _robot_at_a_feasible_pose(results, job, *panels[0][:2])
+    box = None
+    if all(f"box.{axis}_{end}" in job for axis in "xyz" for end in ("min", "max")):
+        box = tuple(np.array([job[f"box.{axis}_{end}"] for axis in "xyz"], dtype=float) for end in ("min", "max"))
     for i, (points, column, title) in enumerate(panels, start=1):
         ax = fig.add_subplot(1, len(panels), i, projection="3d")
-        _cloud_panel(ax, points, column, spec.invert_z)
+        _cloud_panel(ax, points, column, spec.invert_z, box)
         _box(ax, job)
         _draw_robot(ax, robot)
         if title:
             ax.set_title(title, fontsize=9)
     fig.suptitle(_fill(spec.title or "", job), fontsize=10)
     png = _save(fig, spec, out_dir, job)
-    box = None
-    if all(f"box.{axis}_{end}" in job for axis in "xyz" for end in ("min", "max")):
-        box = tuple(np.array([job[f"box.{axis}_{end}"] for axis in "xyz"], dtype=float) for end in ("min", "max"))
     if importlib.util.find_spec("plotly") is None:  # the views are the report's: its extra installs plotly
         logging.getLogger("pipeline.study").warning("no interactive view beside %s: plotly is not installed "
                                                     "(pip install 'cdpr-studies[report]')", png.name)
@@ -231,9 +231,14 @@ def _draw_robot(ax, traces: list[dict]) -> None:
             ax.scatter(*xyz, s=10, c=trace["marker"]["color"], depthshade=False)
 
 
-def _cloud_panel(ax, points: pd.DataFrame, column: str, invert_z: bool) -> None:
+def _cloud_panel(ax, points: pd.DataFrame, column: str, invert_z: bool, box: tuple | None = None) -> None:
     axes = pose_axes(points)
     feasible = points[column].to_numpy()
+    mesh = boundary_of(points, column, axes, box)
+    if mesh is not None:  # the feasible set's boundary, the job's own surface, under its points
+        vertices, triangles = mesh
+        ax.plot_trisurf(vertices[:, 0], vertices[:, 1], triangles, vertices[:, 2], color=FEASIBLE_COLOUR,
+                        alpha=0.18, linewidth=0, shade=False)
     if column == "feasible" and "connected" in points:  # workspace.home: its component filled, the rest hollow
         connected = points["connected"].to_numpy()
         ax.scatter(*(points.loc[connected, c] for c in axes), s=6, c=FEASIBLE_COLOUR,

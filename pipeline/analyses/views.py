@@ -69,10 +69,23 @@ def pose_axes(points: pd.DataFrame) -> tuple[str, str, str]:
 
 
 def _surface(points: pd.DataFrame, column: str, axes, box: tuple | None) -> dict | None:
-    """The boundary of the feasible set on a full grid (two values or more on every axis, one
-    pose per node), the surface of the job's summary (``pipeline.workspace.boundary``): the zero
-    level of the least margin (of the verdict alone, +-0.5, for a panel of other verdicts),
-    closed on ``box``; None otherwise (a plane, a list of poses, no feasible pose)."""
+    """:func:`boundary_of` as a Plotly mesh trace, None where there is none."""
+    mesh = boundary_of(points, column, axes, box)
+    if mesh is None:
+        return None
+    vertices, triangles = mesh
+    return {"type": "mesh3d", "x": vertices[:, 0].round(5), "y": vertices[:, 1].round(5), "z": vertices[:, 2].round(5),
+            "i": triangles[:, 0], "j": triangles[:, 1], "k": triangles[:, 2], "color": FEASIBLE_COLOUR,
+            "opacity": 0.45, "hoverinfo": "skip", "name": f"feasible set ({int(points[column].sum())})",
+            "legendgroup": "feasible"}
+
+
+def boundary_of(points: pd.DataFrame, column: str, axes, box: tuple | None):
+    """(vertices, triangles) of the boundary of the feasible set on a full grid (two values or
+    more on every axis, one pose per node), the surface of the job's summary
+    (``pipeline.workspace.boundary``): the zero level of the least margin (of the verdict alone,
+    +-0.5, for a panel of other verdicts), closed on ``box``; None otherwise (a plane, a list of
+    poses, no feasible pose). The interactive views and the static clouds draw it."""
     feasible = points[column].to_numpy(dtype=bool)
     counts = [points[a].nunique() for a in axes]
     if min(counts) < 2 or int(np.prod(counts)) != len(points) or not feasible.any():
@@ -83,11 +96,7 @@ def _surface(points: pd.DataFrame, column: str, axes, box: tuple | None) -> dict
     order = np.lexsort([points[a].to_numpy() for a in reversed(axes)])  # the grid's order: first axis slowest
     nodes = tuple(np.unique(points[a].to_numpy()) for a in axes)
     lo, hi = box if box is not None and axes[0] == "x" else ([n[0] for n in nodes], [n[-1] for n in nodes])
-    vertices, triangles = boundary_mesh(field[order].reshape(counts), nodes, np.asarray(lo), np.asarray(hi))
-    return {"type": "mesh3d", "x": vertices[:, 0].round(5), "y": vertices[:, 1].round(5), "z": vertices[:, 2].round(5),
-            "i": triangles[:, 0], "j": triangles[:, 1], "k": triangles[:, 2], "color": FEASIBLE_COLOUR,
-            "opacity": 0.45, "hoverinfo": "skip", "name": f"feasible set ({int(feasible.sum())})",
-            "legendgroup": "feasible"}
+    return boundary_mesh(field[order].reshape(counts), nodes, np.asarray(lo), np.asarray(hi))
 
 
 def robot_traces(robot, position: np.ndarray, rotation: np.ndarray) -> list[dict]:
