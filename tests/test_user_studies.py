@@ -123,3 +123,25 @@ def test_each_robot_file_of_a_study_is_named_in_its_summary_and_figure_names(tmp
     assert summary.set_index("robot_file").loc["myrobot", "n_feasible"] == 463  # the example's, alone
     figures = sorted(p.name for p in (tmp_path / "out" / "two" / "figures").glob("cloud_*.png"))
     assert figures == ["cloud_myrobot.png", "cloud_wide.png"] and "drawings were written" not in done.stderr
+
+
+@pytest.mark.slow
+def test_the_documented_dvc_stage_of_a_users_study_runs_and_stays_up_to_date(tmp_path):
+    """docs/studies.md's stage, as written there, in a repository of the user's: dvc repro runs
+    the study, and a second repro has nothing to do (the jobs' records of their absolute paths
+    are ignored, as the doc says)."""
+    import re
+    import sys
+
+    text = (Path(__file__).resolve().parents[1] / "docs" / "studies.md").read_text()
+    stage = re.search(r"```yaml\n(stages:\n  my_payload:.*?)```", text, re.S).group(1)
+    shutil.copytree(EXAMPLE, tmp_path / "examples" / "my_robot")
+    (tmp_path / "dvc.yaml").write_text(stage)
+    (tmp_path / ".dvcignore").write_text("hydra.yaml\nmultirun.yaml\npipeline.log\n")
+    dvc = [sys.executable, "-m", "dvc"]
+    for args in (["init", "--no-scm", "-q"], ["repro", "-q"]):
+        done = subprocess.run([*dvc, *args], cwd=tmp_path, capture_output=True, text=True, timeout=600)
+        assert done.returncode == 0, done.stderr[-2000:]
+    assert (tmp_path / "outputs" / "studies" / "my_payload" / "summary.parquet").is_file()
+    status = subprocess.run([*dvc, "status"], cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert status.returncode == 0 and "up to date" in status.stdout, status.stdout
