@@ -129,6 +129,12 @@ def test_help_lists_the_choices_and_every_key_with_its_meaning(tmp_path):
     assert "  actuator =" not in irpm and "  tension.t_max = 55000.0" in irpm
     bad = run(tmp_path, "--help", "robot=nosuch")
     assert bad.returncode == 2 and bad.stderr.startswith("error: robot=nosuch: no such option")
+    points = run(tmp_path, "--help", "robot=points", "robot.l_max=3")  # it refused: its points are required
+    assert points.returncode == 0, points.stderr
+    assert "  robot.anchors = ??? (required)" in points.stdout and "  robot.l_max = 3" in points.stdout
+    assert "  robot.dofs = [x, y, z, rx, ry, rz]" in points.stdout
+    typo = run(tmp_path, "--help", "robot=points", "robot.l_mx=3")
+    assert typo.returncode == 2 and "did you mean robot.l_max?" in typo.stderr
     assert list(tmp_path.iterdir()) == []
 
 

@@ -87,15 +87,21 @@ def cli() -> None:
 
 def _help(argv: list[str]) -> None:
     from pipeline.app.helppage import page
-    from pipeline.app.plan import plan
+    from pipeline.app.plan import composed, plan
     from pipeline.app.results import code_version
 
+    argv = [a for a in argv if a not in ("-m", "--multirun")]
     try:
-        planned = plan([a for a in argv if a not in ("-m", "--multirun")])
+        planned = plan(argv)
         if planned is None or len(planned.jobs) != 1:
             raise ValueError
-    except (ConfigError, ValueError) as exc:  # ValueError: a sweep, several jobs
-        print(f"error: {exc if isinstance(exc, ConfigError) else 'give one value per key with --help'}",
-              file=sys.stderr)
+        config = planned.jobs[0].cfg
+    except ConfigError as exc:
+        if "no value given" not in str(exc):
+            print(f"error: {exc}", file=sys.stderr)
+            raise SystemExit(2) from None
+        config = composed(argv)  # a robot whose points are still to give: its keys, ??? where required
+    except ValueError:  # a sweep, several jobs
+        print("error: give one value per key with --help", file=sys.stderr)
         raise SystemExit(2) from None
-    print(page(argv, planned.jobs[0].cfg, code_version()), end="")
+    print(page(argv, config, code_version()), end="")

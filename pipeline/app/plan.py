@@ -187,6 +187,25 @@ def plan(argv: list[str], reuse: Reuse | None = None) -> Plan | None:
                 base_files, gather, reuse.compositions, by_hydra)
 
 
+def composed(argv: list[str]) -> DictConfig:
+    """The config of one job of ``argv`` as Hydra composes it (its files, then its plain
+    overrides; no Hydra node), required keys (``???``) left as they are: what ``--help`` lists
+    for a robot whose points the command does not give yet. ConfigError for what cannot compose."""
+    parsed = parse(_overrides(argv) or [])
+    files = (*_search_path(argv), *(o.input_line for o in parsed if structural(o)), "hydra.mode=RUN")
+    with HYDRA_STATE, initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3", job_name="pipeline"):
+        plain = _composition(files, parsed).plain()
+    for override in parsed:
+        if not structural(override) and not override.is_hydra_override():
+            _apply(plain, override)
+
+    def shown(value):  # a required key's ??? as text a page can print
+        if isinstance(value, dict):
+            return {key: shown(item) for key, item in value.items()}
+        return "??? (required)" if value == "???" else value
+    return OmegaConf.create(shown(OmegaConf.to_container(plain, throw_on_missing=False)))
+
+
 COMPOSITIONS_KEPT = 32  # compositions a process keeps for later plans (a notebook's, a study's cases)
 _kept: OrderedDict[tuple, Composition] = OrderedDict()
 
