@@ -498,15 +498,18 @@ def _concurrently(names: list[str], extra: list[str], out_root: Path | None, lau
 
 
 def _check_figure_keys(study: StudySpec, cfg) -> None:
-    """Every config key a figure names (``hue``, ``facet``, ``per``, ``select``: a name with a dot,
-    ``box.*`` aside, is a config key) must be a key of the study's jobs: ConfigError naming the
-    figure, the key and the nearest one, before any job runs (it failed as a traceback after them)."""
+    """Every config key a figure names (``hue``, ``facet``, ``per``, ``select``, and ``x`` or ``y``
+    when a bare name: a name with a dot, ``box.*`` aside, is a config key) must be a key of the
+    study's jobs: ConfigError naming the figure, the key and the nearest one, before any job runs
+    (it failed as a traceback after them)."""
     from pipeline.workspace.compute import flatten
 
     keys = set(flatten(OmegaConf.to_container(cfg, resolve=True, enum_to_str=True)))
     for figure in study.figures:
-        for field_ in ("hue", "facet", "per", "select"):
+        for field_ in ("hue", "facet", "per", "select", "x", "y"):
             value = getattr(figure, field_)
+            if field_ in ("x", "y") and not re.fullmatch(r"[\w.]+", str(value or "")):
+                continue  # an expression: pandas evaluates it against the summary's columns
             names = list(value) if isinstance(value, (list, dict)) else [value] if value else []
             for name in names:
                 if "." in str(name) and not str(name).startswith("box.") and name not in keys:

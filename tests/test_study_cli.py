@@ -417,6 +417,7 @@ def test_a_study_file_whose_name_is_not_a_plain_name_is_no_study(tmp_path):
     ("hue", "tension.t_mx", "hue='tension.t_mx': not a key of the study's jobs (did you mean tension.t_max?)"),
     ("per", "[load.mas]", "per='load.mas': not a key of the study's jobs (did you mean load.mass?)"),
     ("select", "{robot.gama_deg: 0}", "select='robot.gama_deg': not a key"),
+    ("y", "robot.r_ed", "y='robot.r_ed': not a key of the study's jobs (did you mean robot.r_end?)"),
 ])
 def test_a_figures_config_key_is_checked_before_any_job(tmp_path, field_, value, message):
     """hue was not checked before the jobs: a 40-line KeyError after them. Every config key a
@@ -424,7 +425,8 @@ def test_a_figures_config_key_is_checked_before_any_job(tmp_path, field_, value,
     (tmp_path / "studies").mkdir()
     (tmp_path / "studies" / "mine.yaml").write_text(
         "title: t\nsource: s\noverrides: [robot=irpm6, robot.search.step=2]\nsweep: {load.mass: '1,2'}\n"
-        f"figures:\n  - {{kind: curve, file: f.png, x: load.mass, y: feasible_pct, {field_}: {value}}}\n")
+        f"figures:\n  - {{kind: curve, file: f.png, x: load.mass, y: feasible_pct, {field_}: {value}}}\n".replace(
+            f"y: feasible_pct, y: {value}", f"y: {value}"))
     out = tmp_path / "out"
     done = command(tmp_path, "pipeline.study", "--config-dir", str(tmp_path), "--out", str(out), "mine")
     lines = done.stderr.strip().splitlines()
@@ -451,3 +453,28 @@ def test_two_figures_of_one_file_are_refused_and_drawings_over_each_other_are_na
         done = command(tmp_path, "pipeline.study", "--config-dir", str(tmp_path), "--out", str(tmp_path / "out"), "clouds")
     assert done.returncode == 0, done.stderr[-2000:]
     assert "figures: cloud.png: 2 drawings were written to cloud.png, each over the one before" in done.stderr + caplog.text
+
+
+def test_a_curves_long_legend_goes_beside_the_plot_not_over_its_data(tmp_path):
+    """A hue of robot files' attachment lists (140 characters) covered the plot: a legend of long
+    entries (or many) is drawn beside the axes, so the saved figure grows to the right of it."""
+    import matplotlib.pyplot as plt
+    from PIL import Image
+
+    from pipeline.analyses.figures import FigureSpec, render
+
+    class Results:  # a study's summary is all a curve reads
+        def __init__(self, table):
+            self.summary = table
+
+    sizes = {}
+    for name, hue in (("short", ["a", "b"]), ("long", ["[[-0.06, 0.06, 0.05], [0.06, 0.06, 0.02], [0.06, -0.06]]",
+                                                      "[[-0.08, 0.08, 0.05], [0.08, 0.08, 0.02], [0.08, -0.08]]"])):
+        table = pd.DataFrame({"load.mass": [0, 1, 0, 1], "feasible_pct": [50.0, 40.0, 45.0, 35.0],
+                              "robot.attachments": [hue[0], hue[0], hue[1], hue[1]]})
+        spec = FigureSpec(kind="curve", file=f"{name}.png", x="load.mass", y="feasible_pct", hue="robot.attachments")
+        (png, _) = render(spec, Results(table), tmp_path / "figures")
+        with Image.open(png) as image:
+            sizes[name] = image.size
+    plt.close("all")
+    assert sizes["long"][0] > sizes["short"][0] + 200 and sizes["long"][1] == pytest.approx(sizes["short"][1], abs=40)

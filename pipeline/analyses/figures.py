@@ -29,6 +29,7 @@ from pipeline.analyses.results import StudyResults
 
 STYLE = "pipeline.styles.paper"
 MANY_BARS = 10  # a choice bar chart with more actuators turns its labels upright
+MANY_ENTRIES, LONG_ENTRY = 6, 24  # a curve's legend with more entries, or a longer one, goes beside the plot
 SERIES_DIR = "series"  # beside figures/: the curves' numbers as CSV
 PANEL_TITLES = {"feasible_grid": "CPR-WWA grid", "feasible": "simulated lines"}
 
@@ -391,8 +392,11 @@ def curve(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir:
         level = float(table[spec.hline].iloc[0]) if isinstance(spec.hline, str) else spec.hline
         ax.axhline(level, color="0.3", linestyle="--", lw=1, label=f"required {level:g}")
     if spec.hue or spec.hline is not None:
+        names = data[spec.hue].unique() if spec.hue else []
+        beside = len(names) > MANY_ENTRIES or any(len(str(n)) > LONG_ENTRY for n in names)  # else over the data
         ax.legend(title=spec.legend or (label(spec.hue) if spec.hue else None),
-                  **({"loc": "upper center", "ncol": data[spec.hue].nunique()} if spec.bars and spec.hue else {}))
+                  **({"loc": "upper left", "bbox_to_anchor": (1.01, 1.0)} if beside else
+                     {"loc": "upper center", "ncol": data[spec.hue].nunique()} if spec.bars and spec.hue else {}))
     _labels(ax, spec, spec.x, spec.y, table.iloc[0])
     png = _save(fig, spec, out_dir, table.iloc[0])
     return [png, _series(data, spec, out_dir.parent / SERIES_DIR / png.with_suffix(".csv").name)]
