@@ -16,6 +16,7 @@ from omegaconf import DictConfig
 
 from pipeline.model.dynamics import REFERENCE_SET
 from pipeline.model.metrics import WORK as METRICS_WORK
+from pipeline.workspace.quantities import WORK as CABLES_WORK
 from pipeline.workspace.kernel import WorkspaceProblem
 from pipeline.workspace.progress import clock_text
 
@@ -77,7 +78,9 @@ LARGE_JOB_BYTES = 2 * 2**30
 def estimated_seconds(problem: WorkspaceProblem, n_points: int) -> float:
     """The kernel's time for ``n_points`` positions on one core here, by the cost model."""
     evaluations = n_points * len(problem.orientations)
-    per_pose = problem.spec.work() + (METRICS_WORK[problem.spec.tension.model] if problem.metrics else 0.0)
+    model = problem.spec.tension.model
+    per_pose = (problem.spec.work() + (METRICS_WORK[model] if problem.metrics else 0.0)
+                + (CABLES_WORK[model] if problem.cables else 0.0))
     speed = POSES_PER_SECOND["fused" if problem.fused else problem.spec.tension.model]
     return evaluations * (per_pose / speed + OBSTACLE_SECONDS * len(problem.robot.obstacles))
 

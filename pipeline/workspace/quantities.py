@@ -15,6 +15,12 @@ import numpy as np
 from pipeline.workspace.criteria.forces import written_distribution
 
 
+# A pose's cable quantities (output.cables) against the cost model's unit pose: the least-norm
+# tensions of the feasible model, 126 us a pose for the example robot's 8 cables (2026-11-27),
+# nothing measurable under the minimum-norm model's (+2 us)
+WORK = {"pinv": 0.0, "feasible": 2.5}
+
+
 def cable_quantities(state, limits) -> dict[str, np.ndarray]:
     """(n,) arrays keyed by column name for one chunk's state (``PoseStatics``/``PoseDynamics``)."""
     names = state.robot.cable_names
