@@ -523,18 +523,16 @@ def obstacles(value, robot: CableRobot) -> tuple[Obstacle, ...]:
             if not (lo < hi).all():
                 raise ConfigError(f"{key}.lo={lo.tolist()}: must be below {key}.hi={hi.tolist()} on every axis")
             obstacle = Obstacle(name, lo=lo, hi=hi)
-            inside = np.minimum(robot.anchors - lo, hi - robot.anchors).min(axis=1)  # > 0: inside the box
-            clearance = np.where(inside > 0, -inside, np.linalg.norm(
-                np.maximum(np.maximum(lo - robot.anchors, robot.anchors - hi), 0), axis=1))
         elif fields_ == {"point", "normal"}:
             point, normal = (_point(item[end], f"{key}.{end}") for end in ("point", "normal"))
             if not np.linalg.norm(normal) > 0:
                 raise ConfigError(f"{key}.normal={normal.tolist()}: must not be zero")
             obstacle = Obstacle(name, point=point, normal=normal / np.linalg.norm(normal))
-            clearance = (robot.anchors - point) @ obstacle.normal  # < 0: behind the plane, inside
         else:
             raise ConfigError(f"{key}={shown(item)}: a box {{lo: [3], hi: [3]}} or a plane {{point: [3], normal: [3]}} "
                               "(m, fixed frame), with an optional name")
+        none = np.zeros((robot.n_cables, 0, 3))  # each anchor a point body, measured as cable_obstacle measures
+        clearance = obstacle.clearance(robot.anchors[:, None, :], none, none)  # < 0: inside
         radii = np.zeros(robot.n_cables) if robot.cable_radii is None else robot.cable_radii
         touching = clearance - radii < -ANCHOR_RTOL * robot.extent
         if touching.any():  # a cable from that anchor starts on or in it: every pose loses it
