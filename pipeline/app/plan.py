@@ -140,7 +140,7 @@ def plan(argv: list[str], reuse: Reuse | None = None) -> Plan | None:
     base = [o for o in parsed if not o.is_sweep_override()]  # what Hydra composes the sweep's config from
 
     def composition(job_parsed: list[Override]) -> tuple[tuple[str, ...], Composition]:
-        files = (*search_path, *(o.input_line for o in job_parsed if structural(o)), mode)
+        files = _files(search_path, job_parsed, mode)
         if files not in reuse.compositions:
             reuse.compositions[files] = _composition(files, job_parsed)
         return files, reuse.compositions[files]
@@ -187,12 +187,17 @@ def plan(argv: list[str], reuse: Reuse | None = None) -> Plan | None:
                 base_files, gather, reuse.compositions, by_hydra)
 
 
+def _files(search_path: tuple[str, ...], parsed: list[Override], mode: str) -> tuple[str, ...]:
+    """The key of a composition: the search path, the overrides that choose files, the mode."""
+    return (*search_path, *(o.input_line for o in parsed if structural(o)), mode)
+
+
 def composed(argv: list[str]) -> DictConfig:
     """The config of one job of ``argv`` as Hydra composes it (its files, then its plain
     overrides; no Hydra node), required keys (``???``) left as they are: what ``--help`` lists
     for a robot whose points the command does not give yet. ConfigError for what cannot compose."""
     parsed = parse(_overrides(argv) or [])
-    files = (*_search_path(argv), *(o.input_line for o in parsed if structural(o)), "hydra.mode=RUN")
+    files = _files(_search_path(argv), parsed, "hydra.mode=RUN")
     with HYDRA_STATE, initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3", job_name="pipeline"):
         plain = _composition(files, parsed).plain()
     for override in parsed:
