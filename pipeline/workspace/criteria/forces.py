@@ -14,29 +14,33 @@ from pipeline.model.tensions import feasible_tensions
 def feasible_margins(state, limits) -> dict[str, np.ndarray]:
     """(n,) margins of the ``feasible`` tension model, the worst over the required wrenches:
     ``unreachable`` and one per family of the state's ``force_families``, from hyperplane shifting
-    (LPs where it falls back, ``pipeline.model.tensions``). Cached on the state per limits: one
-    computation serves every criterion that reads it; ``state.tension_lp`` (n,) records the
-    poses the LPs solved."""
-    cache = state.__dict__.setdefault("_feasible_margins", {})
-    key = id(limits)  # the problem's one limits object; arrays inside make it unhashable
-    if key not in cache:
-        margins, _, by_lp = feasible_tensions(
-            state.structure, *state.wrench_pinv, state.required_wrenches,
-            state.force_families(limits), state.tension.residual_rtol,
-        )
-        cache[key] = margins
-        state.tension_lp = by_lp
-    return cache[key]
+    (LPs where it falls back, ``pipeline.model.tensions``). Computed once per state and limits
+    (:func:`_solved`): one computation serves every criterion that reads it."""
+    return _solved(state, limits, distribution=False)[0]
 
 
 def feasible_distribution(state, limits) -> np.ndarray:
     """The cable forces x (n, K, m) the ``feasible`` model chooses: the solution of the last
     family's LP (the best voltage margin once every earlier criterion does its best), or
-    x = S^+ w where it is unique."""
-    return feasible_tensions(
-        state.structure, *state.wrench_pinv, state.required_wrenches,
-        state.force_families(limits), state.tension.residual_rtol, distribution=True,
-    )[1]
+    x = S^+ w where it is unique; solved with the margins, once (the lines ask for both)."""
+    return _solved(state, limits, distribution=True)[1]
+
+
+def _solved(state, limits, distribution: bool) -> tuple[dict[str, np.ndarray], np.ndarray | None]:
+    """The feasible model's margins and, when asked, its distribution, cached on the state per
+    limits (the problem's one limits object; arrays inside make it unhashable); a solve with the
+    distribution serves a later call for the margins alone. ``state.tension_lp`` (n,) records
+    the poses the LPs solved."""
+    cache = state.__dict__.setdefault("_feasible_solved", {})
+    found = cache.get(id(limits))
+    if found is None or (distribution and found[1] is None):
+        margins, chosen, by_lp = feasible_tensions(
+            state.structure, *state.wrench_pinv, state.required_wrenches,
+            state.force_families(limits), state.tension.residual_rtol, distribution=distribution,
+        )
+        found = cache[id(limits)] = (margins, chosen)
+        state.tension_lp = by_lp
+    return found
 
 
 def written_distribution(state, limits) -> np.ndarray:
