@@ -18,7 +18,6 @@ arguments are appended to every job (e.g. ``catalogue=my_motors.csv``).
 from __future__ import annotations
 
 import argparse
-import difflib
 import hashlib
 import json
 import logging
@@ -46,7 +45,7 @@ from pipeline.analyses.results import StudyResults, table as read_table
 from pipeline.app.job import changed_files, execute, folder_lock
 from pipeline.analyses.optimise import (OptimiseSpec, best_drive, check_catalogue_objectives, corner_overrides, optimise,
                                trial_folder)
-from pipeline.app.plan import Job, Plan, Reuse, parse, plan, quoted, refuse_aliases
+from pipeline.app.plan import Job, Plan, Reuse, nearest_key, parse, plan, quoted, refuse_aliases
 from pipeline.app.run import run as run_jobs
 from pipeline.app.resources import STUDIES_DIR
 from pipeline.app.results import READ_ERRORS, code_version, file_digest, read_verified, write_csv, write_parquet, write_text
@@ -504,7 +503,8 @@ def _check_figure_keys(study: StudySpec, cfg) -> None:
     (it failed as a traceback after them)."""
     from pipeline.workspace.compute import flatten
 
-    keys = set(flatten(OmegaConf.to_container(cfg, resolve=True, enum_to_str=True)))
+    plain = OmegaConf.to_container(cfg, resolve=True, enum_to_str=True)
+    keys = set(flatten(plain))
     for figure in study.figures:
         for field_ in ("hue", "facet", "per", "select", "x", "y"):
             value = getattr(figure, field_)
@@ -513,8 +513,8 @@ def _check_figure_keys(study: StudySpec, cfg) -> None:
             names = list(value) if isinstance(value, (list, dict)) else [value] if value else []
             for name in names:
                 if "." in str(name) and not str(name).startswith("box.") and name not in keys:
-                    near = difflib.get_close_matches(str(name), sorted(keys), n=1)
-                    hint = f" (did you mean {near[0]}?)" if near else ""
+                    near = nearest_key(str(name), plain)
+                    hint = f" (did you mean {near}?)" if near else ""
                     raise ConfigError(f"studies/{study.name}.yaml: figures: {figure.file}: {field_}={name!r}: not a key "
                                       f"of the study's jobs{hint}")
 

@@ -677,14 +677,19 @@ def _leaf_keys(tree, prefix: str = ""):
             yield from _leaf_keys(value, f"{prefix}{key}.")
 
 
+def nearest_key(name: str, cfg) -> str | None:
+    """The key of ``cfg`` (a config or its plain container) a mistyped ``name`` most likely means."""
+    close = difflib.get_close_matches(name, list(_leaf_keys(cfg)), n=1, cutoff=0.8)
+    return close[0] if close else None
+
+
 def _apply(cfg: DictConfig, override: Override) -> None:
     """``key=value`` merged into the typed config, as Hydra's own override does."""
     try:
         OmegaConf.update(cfg, override.key_or_group, override.value(), merge=True)
     except (ConfigAttributeError, ConfigKeyError):  # not a key of this job's robot and analysis
-        close = [RENAMED[override.key_or_group]] if override.key_or_group in RENAMED else difflib.get_close_matches(
-            override.key_or_group, list(_leaf_keys(cfg)), n=1, cutoff=0.8)
-        hint = f"; did you mean {close[0]}?" if close else " (a key of another analysis or robot, or a typo)"
+        close = RENAMED.get(override.key_or_group) or nearest_key(override.key_or_group, cfg)
+        hint = f"; did you mean {close}?" if close else " (a key of another analysis or robot, or a typo)"
         raise ConfigError(f"{override.input_line}: no such key for robot={cfg.robot.name} with "
                           f"analysis={cfg.analysis}{hint}") from None
     except Exception as exc:  # OmegaConf raises key, type and validation errors
