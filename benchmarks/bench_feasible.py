@@ -36,6 +36,7 @@ from pipeline.app.problem import typed_config  # noqa: E402
 from pipeline.workspace.kernel import evaluate_chunk  # noqa: E402
 from pipeline.app.resources import CONF_DIR  # noqa: E402
 from pipeline.model.tensions import feasible_tensions  # noqa: E402
+from pipeline.workspace.criteria import force_families  # noqa: E402
 from pipeline.workspace.dispatch import bounded_chunk_size  # noqa: E402
 from pipeline.app.problem import build_problem  # noqa: E402
 
@@ -72,12 +73,12 @@ def margins_rates(problem, grid) -> tuple[float, float, float]:
     def inputs(positions):  # the structure matrices, wrenches and limits, built before timing
         state = problem.spec.state(problem.robot, positions, problem.orientation)
         return (state.structure, *state.wrench_pinv, state.required_wrenches,
-                state.force_families(problem.limits), state.tension.residual_rtol)
+                force_families(state, problem.limits))
 
     arguments = inputs(grid[:])
     feasible_tensions(*arguments)  # warm-up: load the compiled search, import the LP solver
     start = time.perf_counter()
-    _, _, by_lp = feasible_tensions(*arguments)
+    *_, by_lp = feasible_tensions(*arguments)
     fast = grid.n_points / (time.perf_counter() - start)
     sampled = inputs(grid[:][::LP_SAMPLE])
     start = time.perf_counter()

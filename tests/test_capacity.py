@@ -16,6 +16,7 @@ from pipeline.model.geometry import structure_matrix
 from pipeline.model.linalg import batched_pinv
 from pipeline.model.tensions import Family, capacity_margins, reachability
 from pipeline.app.problem import build_problem
+from pipeline.workspace.criteria import force_families
 from conftest import compute_workspace
 
 MARGIN_ATOL = 1e-6
@@ -50,7 +51,7 @@ def test_paper_grid_every_actuator_gives_the_lp_margins(columns, angle, make_cfg
         problem, grid = build_problem(cfg, catalogue)
         state = problem.spec.state(problem.robot, grid[:], problem.orientation)
         fast, exact, by_lp = both_ways(state.structure, state.required_wrenches,
-                                       state.force_families(problem.limits))
+                                       force_families(state, problem.limits))
         assert_same(fast, exact)
         fallbacks, total = fallbacks + by_lp.sum(), total + len(by_lp)
     assert fallbacks <= 0.01 * total
@@ -63,14 +64,14 @@ def test_irpm_six_normals_per_pose_give_its_closed_form(gamma, make_cfg, catalog
     problem, grid = build_problem(make_cfg("robot=irpm6", f"robot.gamma_deg={gamma}",
                                            "tension=feasible", "tension.t_min=100"), catalogue)
     state = problem.spec.state(problem.robot, grid[:][::7], problem.orientation)
-    families = state.force_families(problem.limits)
+    bounded = force_families(state, problem.limits)
     pinv, rank = batched_pinv(state.structure, 1e-9)
     full = rank == 6
     assert full.mean() > 0.9
     _, projected = reachability(state.structure, pinv, state.required_wrenches)
     closed, _, _ = capacity_margins(state.structure[full], pinv[full], rank[full], projected[full],
-                                    families)
-    shifted, unsettled = shifted_margins(state.structure[full], projected[full], families)
+                                    bounded)
+    shifted, unsettled = shifted_margins(state.structure[full], projected[full], bounded)
     assert not unsettled.any()
     assert_same(shifted, closed)
     assert (closed["slack"] < 0).any() and (closed["slack"] > 0).any()

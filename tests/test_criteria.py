@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from pipeline.workspace.criteria import REGISTRY
+from pipeline.workspace.criteria import margins
+from pipeline.workspace.criteria import force_families
 from pipeline.workspace.criteria.actuator import acceleration, max_abs_sum_of_ranges, voltage
 from pipeline.app.problem import build_problem
 from pipeline.model.dynamics import PoseDynamics
@@ -81,9 +82,9 @@ def test_both_chunk_states_offer_the_criteria_one_interface(make_cfg, catalogue,
         else:
             assert high is low is state.tensions and not state.ranges_over_a_set
             assert state.diagnostics() == {}
-        names = [family.name for family in state.force_families(problem.limits)]
+        names = [family.name for family in force_families(state, problem.limits)]
         assert names == (["slack", "torque", "voltage"] if kind == "cpr_wwa" else ["slack", "tension_max"])
         for name in problem.criteria:  # every registered criterion evaluates on either state
-            assert REGISTRY[name].function(state, problem.limits).shape == (len(grid[:]),)
+            assert margins([name], state, problem.limits)[name].shape == (len(grid[:]),)
         if tension == "feasible":
             assert "lp_poses" in state.diagnostics()

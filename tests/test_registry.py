@@ -1,6 +1,7 @@
 """Criteria are first-class (one registry) and every robot x analysis combination runs on the
 same physics (issue 15)."""
 
+import contextlib
 import numpy as np
 import pytest
 from omegaconf import OmegaConf
@@ -275,3 +276,96 @@ def test_the_criterions_one_yaml_line_in_a_users_robot_file_runs_it_through_the_
     ws = api.workspace(["robot=steep", "actuator=1"], folder=tmp_path / "job", config_dir=tmp_path / "conf")
     assert ws.summary["lost_floor_angle"] > 0 and ws.summary["criteria.floor_angle.min_deg"] == 10
     assert (ws.points["limiting"] == "floor_angle").sum() == ws.summary["lost_floor_angle"]
+
+
+FLOOR_N = 150.0  # the registered force floor below (N): every cable pulls at least this much
+
+
+def force_floor(state, limits, floor: float = FLOOR_N) -> np.ndarray:
+    """The minimum-norm model's margin of a floor on every cable's tension, written as a user
+    would; under ``tension=feasible`` its ``bounds`` decide instead."""
+    return (state.force_range[1] - floor).min(axis=1) / limits.scale
+
+
+@contextlib.contextmanager
+def floor_registered_at(floor: float):
+    """A force floor registered from outside with its interval on the forces (``bounds``)."""
+    from pipeline.workspace.criteria import ANY
+
+    register(Criterion("force_floor", lambda state, limits: force_floor(state, limits, floor), ANY, None, "#117733",
+                       "stronger anchors", lambda analysis, spec, robot: analysis in ("statics", "cpr_wwa"),
+                       bounds=lambda state, limits: (state.variables_of(floor), np.inf, limits.scale)))
+    try:
+        yield
+    finally:
+        del REGISTRY["force_floor"], COLOURS["force_floor"]
+
+
+@pytest.fixture
+def floor_bounded():
+    with floor_registered_at(FLOOR_N):
+        yield
+
+
+@pytest.mark.parametrize("robot, floor", [(["robot=irpm6", "robot.search.step=1"], FLOOR_N),
+                                          (["robot=cpr8", "analysis=statics", "load.mass=5"], 20.0),
+                                          (["robot=cpr8", "wrench.fx=20", "orientation.psi=0.2"], 5.0)])
+def test_a_registered_bound_on_the_forces_is_nested_by_the_feasible_model(make_cfg, catalogue, robot, floor):
+    """Issue 52: a criterion that bounds the forces is one entry with ``bounds``. Its verdicts are
+    those of tension.t_min = floor (the built-in slack family, a second way to say the same), on
+    the CPR-8's eight cables too, where the feasible tensions are not the minimum-norm ones (its
+    function's margin alone would lose every pose there), in the statics and in CPR-WWA."""
+    robot = [*robot, "tension=feasible"]
+    with floor_registered_at(floor):
+        floored, summary = compute_workspace(make_cfg(*robot), catalogue)
+    raised, _ = compute_workspace(make_cfg(*robot, f"tension.t_min={floor}"), catalogue)
+    assert summary["kernel"] == "numpy" and (floored["margin_force_floor"] < 0).any() and floored["feasible"].any()
+    np.testing.assert_array_equal(floored["feasible"], raised["feasible"])
+
+
+def test_a_registered_bound_gives_the_best_distributions_margin_by_an_lp(make_cfg, catalogue):
+    """On the CPR-8's eight cables the floor's margin is that of the best tensions, not of the
+    minimum-norm ones: max s subject to A x = w, x >= t_min (the earlier slack family, where it
+    holds) and x_i - floor >= s scale, by scipy's linprog pose by pose (the second method)."""
+    from scipy.optimize import linprog
+
+    floor, cfg = 20.0, make_cfg("robot=cpr8", "analysis=statics", "load.mass=5", "tension=feasible")
+    with floor_registered_at(floor):
+        floored, _ = compute_workspace(cfg, catalogue)
+    problem, grid = build_problem(cfg, catalogue)
+    state = problem.spec.state(problem.robot, grid[:], problem.orientation)
+    scale, m = problem.limits.scale, problem.robot.n_cables
+    held = np.flatnonzero(floored["margin_slack"].to_numpy() >= 0)
+    best = []
+    for pose in held:  # variables (x, s): maximise s
+        found = linprog(np.r_[np.zeros(m), -1.0], A_ub=np.c_[-np.eye(m), np.full(m, scale)], b_ub=np.full(m, -floor),
+                        A_eq=np.c_[state.structure[pose], np.zeros(len(state.structure[pose]))],
+                        b_eq=state.required_wrenches[0], bounds=[(0, None)] * m + [(None, None)])
+        best.append(min(-found.fun, 1.0))
+    assert len(held) > 20 and min(best) < 0 < max(best)
+    np.testing.assert_allclose(floored["margin_force_floor"].to_numpy()[held], best, atol=1e-7)
+
+
+def test_a_registered_bound_gives_the_law_on_a_square_structure_matrix(make_cfg, catalogue, floor_bounded):
+    """The IRPM's A is square, so the tensions are unique, s = A^-1 w (numpy's solve, the law):
+    the floor's margin is (min s - floor) / scale (at most 1) at every pose of full rank."""
+    cfg = make_cfg("robot=irpm6", "robot.search.step=1", "tension=feasible")
+    floored, _ = compute_workspace(cfg, catalogue)
+    problem, grid = build_problem(cfg, catalogue)
+    state = problem.spec.state(problem.robot, grid[:], problem.orientation)
+    solvable = np.linalg.cond(state.structure) < 1e8
+    wrench = np.broadcast_to(state.required_wrenches[0], (solvable.sum(), 6))  # one wrench, every pose
+    tensions = np.linalg.solve(state.structure[solvable], wrench[..., None])[..., 0]
+    law = np.minimum((tensions.min(axis=1) - FLOOR_N) / problem.limits.scale, 1.0)
+    assert solvable.mean() > 0.9
+    np.testing.assert_allclose(floored["margin_force_floor"].to_numpy()[solvable], law, atol=1e-9)
+
+
+def test_a_registered_criterion_the_fused_kernel_does_not_compile_sends_the_job_to_numpy(
+        make_cfg, catalogue, floor_bounded):
+    """The fused kernel evaluates what it compiles and the geometric criteria; a registered one
+    that reads the forces is evaluated by numpy, whose margins it then gets (not dropped)."""
+    points, summary = compute_workspace(make_cfg("robot=irpm6", "robot.search.step=1", "compute.kernel=auto"), catalogue)
+    assert summary["kernel"] == "numpy" and "margin_force_floor" in points
+    with pytest.raises(Exception, match="force_floor"):
+        compute_workspace(make_cfg("robot=irpm6", "robot.search.step=1", "compute.kernel=fused"), catalogue)

@@ -9,7 +9,8 @@ import pytest
 from scipy.optimize import nnls
 
 from pipeline.model.actuators import ActuatorModel
-from pipeline.workspace.criteria import REGISTRY
+from pipeline.workspace.criteria import margins as evaluate
+from pipeline.workspace.criteria import force_families
 from conftest import command, shaft_torque, compute_workspace
 from pipeline.model.dynamics import Load, MotionSpec, load_wrenches
 from pipeline.analyses.figures import caption
@@ -47,22 +48,22 @@ def test_symmetric_four_cable_point_mass_gets_the_analytic_tensions():
     state = motion.state(square_robot(), np.array([[0.0, 0.0, -depth]]), (0.0, 0.0, 0.0))
     length = np.sqrt(2 * HALF**2 + depth**2)
     tension = MASS * GRAVITY * length / (4 * depth)  # each cable carries a quarter of the weight
-    margins, chosen, _ = feasible_tensions(state.structure, *state.wrench_pinv, state.required_wrenches,
-                                           state.force_families(ACTUATOR), 1e-6, distribution=True)
+    margins, _, chosen, _ = feasible_tensions(state.structure, *state.wrench_pinv, state.required_wrenches,
+                                              force_families(state, ACTUATOR), distribution=True)
     assert chosen[0, 0] / RADIUS == pytest.approx(np.full(4, tension), rel=1e-7)
     torque = RADIUS * tension
     assert margins["slack"][0] == pytest.approx(torque / ACTUATOR.torque_limit, rel=1e-7)
-    assert REGISTRY["torque"].function(state, ACTUATOR)[0] == pytest.approx(1 - torque / ACTUATOR.torque_limit)
-    assert REGISTRY["voltage"].function(state, ACTUATOR)[0] == pytest.approx(
-        1 - ACTUATOR.S_v * torque / ACTUATOR.voltage_limit)
-    assert REGISTRY["unreachable"].function(state, ACTUATOR)[0] == pytest.approx(1.0)
+    found = evaluate(["torque", "voltage", "unreachable"], state, ACTUATOR)
+    assert found["torque"][0] == pytest.approx(1 - torque / ACTUATOR.torque_limit)
+    assert found["voltage"][0] == pytest.approx(1 - ACTUATOR.S_v * torque / ACTUATOR.voltage_limit)
+    assert found["unreachable"][0] == pytest.approx(1.0)
 
 
 def test_minimum_tension_raises_every_cable_and_is_reported_as_slack_when_out_of_reach():
     state = hanging_motion(t_min=10.0).state(square_robot(), np.array([[0.0, 0.0, -2.0]]), (0, 0, 0))
     # a quarter of the weight along each cable is 6.02 N < 10 N, and the null space of four
     # cables to a point cannot raise all four at once: the floor cannot be met
-    assert REGISTRY["slack"].function(state, ACTUATOR)[0] < 0
+    assert evaluate(["slack"], state, ACTUATOR)["slack"][0] < 0
 
 
 def verdicts(problem, positions):
@@ -132,7 +133,7 @@ def test_slack_agrees_with_an_independent_nonnegative_least_squares(columns, ori
                                            *angles), catalogue)
     state = problem.spec.state(problem.robot, grid[:], problem.orientations[0])
     margins, *_ = feasible_tensions(state.structure, *state.wrench_pinv, state.required_wrenches,
-                                   state.force_families(problem.limits), 1e-6)
+                                   force_families(state, problem.limits))
     wrenches = state.required_wrenches
     residual = np.array([max(nnls(s, w)[1] / np.linalg.norm(w) for w in wrenches) for s in state.structure])
     clear = np.abs(margins["slack"]) > 1e-6
@@ -146,14 +147,13 @@ def test_the_box_vertices_decide_every_acceleration_inside_it(make_cfg, catalogu
     is never below its minimum over the eight vertices (tested for slack, the first family)."""
     problem, grid = build_problem(make_cfg("tension.model=feasible", FORCES), catalogue)
     state = problem.spec.state(problem.robot, grid[:], problem.orientations[0])
-    families = state.force_families(problem.limits)
-    vertices, *_ = feasible_tensions(state.structure, *state.wrench_pinv, state.required_wrenches,
-                                    families[:1], 1e-6)
+    slack = force_families(state, problem.limits)[:1]
+    vertices, *_ = feasible_tensions(state.structure, *state.wrench_pinv, state.required_wrenches, slack)
     rng = np.random.default_rng(0)
     box = state.wrench_accelerations
     inside = box.min(axis=0) + rng.random((12, 3)) * (box.max(axis=0) - box.min(axis=0))
     wrenches = load_wrenches(problem.spec, inside, problem.robot.up, problem.orientation)[:, :3]
-    interior, *_ = feasible_tensions(state.structure, *state.wrench_pinv, wrenches, families[:1], 1e-6)
+    interior, *_ = feasible_tensions(state.structure, *state.wrench_pinv, wrenches, slack)
     assert (interior["slack"] >= vertices["slack"] - 1e-9).all()
 
 
@@ -279,9 +279,10 @@ def test_an_external_force_adds_to_the_weight(model):
     rest, up = np.zeros((1, 3)), robot.up
     assert load_wrenches(pulled, rest, up, (0, 0, 0)) == pytest.approx(load_wrenches(heavy, rest, up, (0, 0, 0)))
     for name in ("torque", "voltage"):
-        got = REGISTRY[name].function(pulled.state(robot, at, (0, 0, 0)), ACTUATOR)
-        assert got == pytest.approx(REGISTRY[name].function(heavy.state(robot, at, (0, 0, 0)), ACTUATOR))
-        assert got < REGISTRY[name].function(plain.state(robot, at, (0, 0, 0)), ACTUATOR)
+        got, heavier, alone = (evaluate([name], motion.state(robot, at, (0, 0, 0)), ACTUATOR)[name]
+                               for motion in (pulled, heavy, plain))
+        assert got == pytest.approx(heavier)
+        assert got < alone
 
 
 def test_statics_code_path_finds_the_same_68_hanging_poses(make_cfg, catalogue):

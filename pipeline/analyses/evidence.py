@@ -26,6 +26,7 @@ import pandas as pd
 from pipeline.app.readings import SETTINGS, reading_name
 from pipeline.errors import ConfigError
 from pipeline.analyses.paper import TABLE2_ACCEPTED, TABLE2_FEASIBLE_PCT
+from pipeline.workspace.criteria import SPEED, TORQUE, VOLTAGE
 
 POINTS, COMPARISONS, MARGIN, ACTUATORS = "grid points", "comparisons", "of the limit", "actuators"
 AGREEMENT_TOLERANCE_PCT = 5.0  # "their matching can be noticed": at most 5 % of the points differ
@@ -174,7 +175,7 @@ def _limit(set_name: str, criterion: str, exceeded: bool) -> Callable[[pd.DataFr
     return check
 
 
-_FIG6 = {"speed": "eq. (30)", "torque": "eq. (32)", "voltage": "eq. (34)"}
+_FIG6 = {SPEED: "eq. (30)", TORQUE: "eq. (32)", VOLTAGE: "eq. (34)"}
 CPR8_FACTS = [
     *(_table2(a) for a in TABLE2_FEASIBLE_PCT),
     Fact("table2_accepted", "Table 2, section 5.1",
@@ -195,11 +196,11 @@ CPR8_FACTS = [
     *(Fact(f"fig6a_{name}", f"Fig. 6a, {eq}", f"line O''-F'', zero orientation: {name} within its limit",
            MARGIN, _limit("zero", name, exceeded=False)) for name, eq in _FIG6.items()),
     Fact("fig6b_speed", "Fig. 6b, eq. (30)", "line O''-F'', 0.5 rad: speed within its limit",
-         MARGIN, _limit("rot05", "speed", exceeded=False)),
+         MARGIN, _limit("rot05", SPEED, exceeded=False)),
     Fact("fig6b_torque", "Fig. 6b, eq. (32)", "line O''-F'', 0.5 rad: some load torques beyond the limit",
-         MARGIN, _limit("rot05", "torque", exceeded=True)),
+         MARGIN, _limit("rot05", TORQUE, exceeded=True)),
     Fact("fig6b_voltage", "Fig. 6b, eq. (34)", "line O''-F'', 0.5 rad: control voltage within its limit",
-         MARGIN, _limit("rot05", "voltage", exceeded=False)),
+         MARGIN, _limit("rot05", VOLTAGE, exceeded=False)),
 ]
 
 

@@ -11,8 +11,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pipeline.model.tensions import Family
-
 G_CM2_TO_KG_M2 = 1e-7
 RPM_TO_RAD_S = np.pi / 30.0  # the paper's 1/9.5493 in eq. (30)
 
@@ -55,6 +53,12 @@ class ActuatorModel:
         back-EMF), hoisting the motoring one (docs/model.md section 2)."""
         return -self.S_v
 
+    @property
+    def scale(self) -> float:
+        """The unit of the slack margin under the ``feasible`` model (N m): the torque limit, as
+        ``StaticLimits.scale`` is the statics' (N)."""
+        return self.torque_limit
+
 
 def actuator_model(
     row: dict,
@@ -92,17 +96,10 @@ def actuator_model(
     )
 
 
-def actuator_families(tension, radius, act: ActuatorModel, high, low) -> list[Family]:
-    """CPR-8 families on x = M = R t: slack M >= R t_min, the cable rating M <= R t_max, torque
-    |M| <= T (eq. 32), voltage -U <= other - S_v M <= U (eqs. 21, 34; the motor holds M,
-    ``ActuatorModel.load_gain``), where ``other`` (the G_v theta_ddot + L_v theta_dot part)
-    ranges in [low, high] (n, K, m): (high - U) / S_v <= M <= (low + U) / S_v."""
-    torque_limit = act.torque_limit
-    families = [Family("slack", radius * tension.t_min, np.inf, torque_limit)]
-    if tension.t_max is not None:
-        rating = radius * tension.t_max
-        families.append(Family("tension_max", -np.inf, rating, rating))
-    families.append(Family("torque", -torque_limit, torque_limit, torque_limit))
+def voltage_interval(act: ActuatorModel, high, low) -> tuple:
+    """(lower, upper, scale) of the load torque M that keeps eq. (34) |other - S_v M| <= U (eq. 21,
+    the motor holds M, ``ActuatorModel.load_gain``) for every value of ``other`` (the
+    G_v theta_ddot + L_v theta_dot part) in [low, high]: (high - U) / S_v <= M <= (low + U) / S_v,
+    in units of U / S_v."""
     volts, s_v = act.voltage_limit, act.S_v
-    families.append(Family("voltage", (high - volts) / s_v, (low + volts) / s_v, volts / s_v))
-    return families
+    return (high - volts) / s_v, (low + volts) / s_v, volts / s_v

@@ -110,7 +110,7 @@ def min_norm_tensions(structure: np.ndarray, pinv: np.ndarray, rank: np.ndarray,
     rest = np.flatnonzero(~found.all(axis=1))
     if len(rest):
         start = feasible_tensions(structure[rest], pinv[rest], rank[rest], wrenches[rest],
-                                  [f.at(rest, n) for f in families], rtol, distribution=True)[1]
+                                  [f.at(rest, n) for f in families], distribution=True)[2]
         solved = qp_distribution(structure[rest], wrenches[rest], lower[rest], upper[rest], weights, start, rtol)
         x[rest] = np.where(found[rest][..., None], x[rest], solved)
     return x

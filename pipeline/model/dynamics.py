@@ -18,7 +18,7 @@ import numpy as np
 
 from pipeline.model.linalg import batched_pinv
 from pipeline.model.tensions import TensionSpec
-from pipeline.model.actuators import ActuatorModel, actuator_families
+from pipeline.model.actuators import ActuatorModel, voltage_interval
 from pipeline.model.geometry import CableRobot, PoseGeometry, euler_rate_axes, length_jacobian, rotation_matrix
 
 
@@ -101,6 +101,7 @@ class PoseDynamics(PoseGeometry):
     """Lazily evaluated CPR-WWA quantities (eqs. 18-22) for a chunk of poses."""
 
     ranges_over_a_set = True  # the forces range over the acceleration set
+    kind = "dynamics"  # what a criterion reading it declares (``Criterion.reads``)
 
     def __init__(self, robot: CableRobot, positions: np.ndarray, orientation, motion: MotionSpec):
         super().__init__(robot, positions, orientation)
@@ -121,15 +122,18 @@ class PoseDynamics(PoseGeometry):
         """Cable tensions t = M / R_i of load torques M (the ``feasible`` model's variables)."""
         return torques / self.motion.winch_radius
 
-    def force_families(self, act: ActuatorModel) -> list:
-        """The intervals on x = M = R t, per required acceleration a_k
-        (:func:`pipeline.model.actuators.actuator_families`): the voltage must hold for every
-        velocity of the set, |G_v J a_k + L_v theta_dot - S_v M| <= U (eqs. 21, 34)."""
+    def variables_of(self, tensions):
+        """The ``feasible`` model's variables M = R_i t of cable tensions t (eq. 20)."""
+        return self.motion.winch_radius * tensions
+
+    def voltage_bounds(self, act: ActuatorModel) -> tuple:
+        """The interval on M = R t per required acceleration a_k that keeps the voltage within
+        its limit for every velocity of the set, |G_v J a_k + L_v theta_dot - S_v M| <= U
+        (eqs. 21, 34; :func:`pipeline.model.actuators.voltage_interval`)."""
         high, low = self.voltage_from_velocity(act)  # (n, m)
         accelerations = np.broadcast_to(self.wrench_accelerations, (len(high), *self.wrench_accelerations.shape[-2:]))
         accel = act.G_v * np.einsum("nmj,nkj->nkm", self.jacobian[:, :, :3], accelerations)
-        return actuator_families(self.tension, self.motion.winch_radius, act,
-                                 accel + high[:, None, :], accel + low[:, None, :])
+        return voltage_interval(act, accel + high[:, None, :], accel + low[:, None, :])
 
     def voltage_from_velocity(self, act: ActuatorModel) -> tuple[np.ndarray, np.ndarray]:
         """(max, min) (n, m) of the velocity part of eq. (21), L_v theta_dot (+ G_v J-dot p-dot)."""

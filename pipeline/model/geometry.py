@@ -220,8 +220,9 @@ class PoseGeometry:
     - ``tension``: the :class:`pipeline.model.tensions.TensionSpec` the forces are checked by;
     - ``force_range``: (high, low) (n, m), each cable's tension (N) under the minimum-norm model,
       the largest and smallest over the state's wrench set (one wrench for the statics);
-    - ``forces_of(x)``: the tensions (N) of the variables x of the ``feasible`` model's families;
-    - ``force_families(limits)``: the intervals each criterion puts on x (``feasible`` model);
+    - ``forces_of(x)`` and ``variables_of(t)``: the tensions (N) of the variables x of the
+      ``feasible`` model, and back (the criteria's ``bounds`` are intervals on x);
+    - ``kind``: ``dynamics`` or ``statics``, what a criterion that reads it declares;
     - ``ranges_over_a_set``: whether the forces range over a set (per-cable min and max columns)
       or are one value per cable;
     - ``structure`` and ``rows``: the matrix S the forces balance the wrench with, and the freedoms

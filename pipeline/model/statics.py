@@ -17,7 +17,7 @@ import numpy as np
 from pipeline.model.dynamics import Load, load_wrench_terms
 from pipeline.model.linalg import batched_pinv, gram, gram_ratio
 from pipeline.model.geometry import CableRobot, PoseGeometry, structure_matrix
-from pipeline.model.tensions import Family, TensionSpec, payload_ranges, ray_interval
+from pipeline.model.tensions import TensionSpec, payload_ranges, ray_interval
 
 
 @dataclass(frozen=True)
@@ -94,6 +94,8 @@ class StaticLimits:
 class PoseStatics(PoseGeometry):
     """Lazily evaluated structure matrix, conditioning and cable tensions of a chunk of poses."""
 
+    kind = "statics"  # what a criterion reading it declares (``Criterion.reads``)
+
     def __init__(self, robot: CableRobot, positions: np.ndarray, orientation, spec: StaticsSpec):
         super().__init__(robot, positions, orientation)
         self.spec = spec
@@ -117,16 +119,10 @@ class PoseStatics(PoseGeometry):
         return over_set.max(axis=1), over_set.min(axis=1)
 
     def forces_of(self, tensions: np.ndarray) -> np.ndarray:
-        """The ``feasible`` model's variables are the tensions s themselves (N)."""
+        """The ``feasible`` model's variables are the tensions s themselves (N), both ways."""
         return tensions
 
-    def force_families(self, limits: StaticLimits) -> list[Family]:
-        """The intervals on s: slack s >= t_min and s <= t_max (eq. 10's s_max), in units of
-        ``StaticLimits.scale`` and t_max."""
-        slack = Family("slack", self.tension.t_min, np.inf, limits.scale)
-        if not np.isfinite(limits.t_max).all():
-            return [slack]
-        return [slack, Family("tension_max", -np.inf, limits.t_max, limits.t_max)]
+    variables_of = forces_of
 
     @cached_property
     def vectors(self) -> np.ndarray:

@@ -91,16 +91,15 @@ class Family:
 
 def feasible_tensions(
     structure: np.ndarray, pinv: np.ndarray, rank: np.ndarray, wrenches: np.ndarray,
-    families: list[Family], residual_rtol: float, distribution: bool = False,
-) -> tuple[dict[str, np.ndarray], np.ndarray | None, np.ndarray]:
-    """Margins (n,), each the least over the K required wrenches: ``unreachable``
-    (1 - residual / residual_rtol) and the nested capacity margins of ``families``; with
-    ``distribution`` the chosen x (n, K, m), else None; and (n,) which poses the LPs solved.
-    ``wrenches`` (K, r) or (n, K, r)."""
+    families: list[Family], distribution: bool = False,
+) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray | None, np.ndarray]:
+    """The nested capacity margins (n,) of ``families``, each the least over the K required
+    wrenches; (n,) the worst relative residual |S S^+ w - w| / |w| over them
+    (:func:`reachability`); with ``distribution`` the chosen x (n, K, m),
+    else None; and (n,) which poses the LPs solved. ``wrenches`` (K, r) or (n, K, r)."""
     residual, projected = reachability(structure, pinv, wrenches)
     margins, chosen, by_lp = capacity_margins(structure, pinv, rank, projected, families, distribution)
-    margins["unreachable"] = 1.0 - residual.max(axis=1) / residual_rtol
-    return margins, chosen, by_lp
+    return margins, residual.max(axis=1), chosen, by_lp
 
 
 def reachability(structure: np.ndarray, pinv: np.ndarray, wrenches: np.ndarray):

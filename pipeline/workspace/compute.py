@@ -13,6 +13,7 @@ import pyarrow as pa
 from omegaconf import DictConfig, OmegaConf
 
 from pipeline.workspace.arrow import categories, numbers
+from pipeline.workspace.criteria import UNREACHABLE
 from pipeline.workspace.criteria.interference import obstacle_pairs
 from pipeline.workspace.degeneracy import Degeneracy
 from pipeline.workspace.dispatch import announce_cost, decide
@@ -120,8 +121,8 @@ def tabulate(problem: WorkspaceProblem, positions: np.ndarray, raw: dict,
     for key, values in raw.items():  # output.cables and output.metrics (quantities, pipeline.model.metrics)
         if key.startswith(("length_", "tension_", "wrench_max_", "wrench_min_", "capacity_margin")):
             columns[key] = values
-    if "unreachable" in margins:  # |S S^+ w - w| / |w|, worst over the required wrenches
-        columns["wrench_residual"] = (1.0 - margins["unreachable"]) * problem.spec.tension.residual_limit
+    if UNREACHABLE in margins:  # |S S^+ w - w| / |w|, worst over the required wrenches
+        columns["wrench_residual"] = (1.0 - margins[UNREACHABLE]) * problem.spec.tension.residual_limit
     return pa.table({name: numbers(values) if isinstance(values, np.ndarray) else values
                      for name, values in columns.items()})
 

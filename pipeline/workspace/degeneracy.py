@@ -9,6 +9,7 @@ import logging
 import numpy as np
 
 from pipeline.model.geometry import FREEDOMS
+from pipeline.workspace.criteria import SINGULAR, UNREACHABLE, ZERO_LENGTH
 
 log = logging.getLogger("pipeline.degeneracy")  # a sweep says each note once (pipeline.app.run)
 
@@ -36,23 +37,23 @@ class Degeneracy:
     def add(self, positions: np.ndarray, raw: dict, margins: dict) -> None:
         if "jacobian_rank" in raw:
             self.ranks += np.bincount(raw["jacobian_rank"], minlength=7)
-        if "unreachable" in margins and len(positions):
+        if UNREACHABLE in margins and len(positions):
             limit = self.problem.spec.tension.residual_limit
-            self.missed = max(self.missed, float((1.0 - margins["unreachable"]).max()) * limit)
-        if "zero_length" in margins and (margins["zero_length"] < 0).any():
+            self.missed = max(self.missed, float((1.0 - margins[UNREACHABLE]).max()) * limit)
+        if ZERO_LENGTH in margins and (margins[ZERO_LENGTH] < 0).any():
             robot, tol = self.problem.robot, self.problem.robot.shortest_cable
-            for placed, orientation in self.problem.poses(positions[margins["zero_length"] < 0]):
+            for placed, orientation in self.problem.poses(positions[margins[ZERO_LENGTH] < 0]):
                 state = self.problem.spec.state(robot, placed, orientation)
                 self.collapsed.update(np.flatnonzero((state.lengths < tol).any(axis=0)).tolist())
         if self.sample is None:
             suspect = np.zeros(len(positions), dtype=bool)
-            for gate in ("singular", "unreachable"):
+            for gate in (SINGULAR, UNREACHABLE):
                 if gate in margins:
                     suspect |= margins[gate] < 0
             if "jacobian_rank" in raw:
                 suspect |= raw["jacobian_rank"] < self.full
-            if "zero_length" in margins:
-                suspect &= margins["zero_length"] >= 0  # a collapsed cable is explained by name
+            if ZERO_LENGTH in margins:
+                suspect &= margins[ZERO_LENGTH] >= 0  # a collapsed cable is explained by name
             for index in np.flatnonzero(suspect)[:1]:
                 self.sample = self.direction_at(positions[index])
 

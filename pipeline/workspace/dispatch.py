@@ -16,6 +16,8 @@ from omegaconf import DictConfig
 
 from pipeline.model.dynamics import REFERENCE_SET
 from pipeline.model.metrics import WORK as METRICS_WORK
+from pipeline.workspace.criteria import GEOMETRY, REGISTRY
+from pipeline.workspace.fused import COMPILED
 from pipeline.workspace.quantities import WORK as CABLES_WORK
 from pipeline.workspace.kernel import WorkspaceProblem
 from pipeline.workspace.progress import clock_text
@@ -88,14 +90,19 @@ def estimated_seconds(problem: WorkspaceProblem, n_points: int) -> float:
 def fused_unfit(problem: WorkspaceProblem) -> str | None:
     """Why the compiled kernels (``pipeline.workspace.fused``) cannot evaluate this problem; None
     when they can: the criteria of the spec's options they evaluate
-    (:meth:`pipeline.model.dynamics.MotionSpec.fused_unfit`) and no per-pose cable quantities."""
+    (:meth:`pipeline.model.dynamics.MotionSpec.fused_unfit`), no per-pose cable quantities, and
+    no criterion it does not compile unless that one reads the pose alone (a registered criterion
+    that reads the forces leaves the problem to the numpy kernel, which evaluates every one)."""
     if problem.cables:
         return "it does not write the per-pose cable quantities of output.cables=true"
     if problem.metrics:
         return "it does not write the per-pose metrics of output.metrics=true"
     if len(problem.robot.dofs) != 6 and problem.spec.kind == "statics":
         return "it balances all six rows of a free platform only (robot.dofs)"
-    return problem.spec.fused_unfit()
+    unfit = problem.spec.fused_unfit()
+    compiled = COMPILED.get(problem.spec.kind, ())
+    foreign = [name for name in problem.criteria if name not in compiled and REGISTRY[name].reads != GEOMETRY]
+    return unfit or (f"it does not compile the criterion {foreign[0]}" if foreign else None)
 
 
 def use_fused(cfg: DictConfig, problem: WorkspaceProblem, n_points: int, sweep_pays: bool = False) -> bool:

@@ -48,11 +48,14 @@ import numpy as np
 from pipeline.model.dynamics import acceleration_box, generalized_load_terms, load_wrench_terms
 from pipeline.model.geometry import euler_rate_axes, rotation_matrix
 from pipeline.model.jit import compiled_loops
+from pipeline.workspace.criteria import (ACCELERATION, LENGTH, SINGULAR, SLACK, SPEED, TENSION_MAX, TORQUE,
+                                         UNREACHABLE, VOLTAGE, ZERO_LENGTH)
 from pipeline.workspace.criteria.geometry import zero_length_margin
 
-CRITERIA = ("speed", "torque", "acceleration", "voltage", "tension_max", "length", "zero_length",
-            "unreachable")  # columns of cpr_wwa (the last two: the quantities their margins come from)
-STATICS_CRITERIA = ("singular", "slack", "tension_max", "length", "zero_length")  # columns of statics
+CRITERIA = (SPEED, TORQUE, ACCELERATION, VOLTAGE, TENSION_MAX, LENGTH, ZERO_LENGTH,
+            UNREACHABLE)  # columns of cpr_wwa (the last two: the quantities their margins come from)
+STATICS_CRITERIA = (SINGULAR, SLACK, TENSION_MAX, LENGTH, ZERO_LENGTH)  # columns of statics
+COMPILED = {"cpr_wwa": CRITERIA, "statics": STATICS_CRITERIA}  # by the spec's kind: what each kernel evaluates
 LOOPS = "pipeline.workspace.fused_loops"  # the compiled loops, and the constants named above
 
 

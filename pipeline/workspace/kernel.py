@@ -7,10 +7,9 @@ from typing import Any
 
 import numpy as np
 
-from pipeline.workspace.criteria import GEOMETRY, REGISTRY, margins
+from pipeline.workspace.criteria import GEOMETRY, REGISTRY, margins, written_tensions
 from pipeline.model.geometry import CableRobot, PoseGeometry, rotation_matrices
 from pipeline.model.metrics import pose_metrics
-from pipeline.workspace.criteria.forces import written_distribution
 from pipeline.workspace.quantities import cable_quantities
 
 @dataclass(frozen=True)
@@ -104,7 +103,7 @@ def _criteria(problem: WorkspaceProblem, positions: np.ndarray, orientation, nom
     result.update({f"margin_{name}": value for name, value in found.items()})
     if problem.metrics and nominal:
         held = np.min([result[f"margin_{name}"] for name in problem.criteria], axis=0) >= -problem.margin_atol
-        result.update(pose_metrics(state, problem.limits, written_distribution, held))
+        result.update(pose_metrics(state, problem.limits, written_tensions, held))
     result.update(state.diagnostics())  # the Jacobian's rank, the poses the feasible model's LPs solved
     if problem.spec.kind == "statics" and len(problem.spec.wrench_set) > 1:
         result.update(_limiting_vertex(problem, positions, orientation, result))

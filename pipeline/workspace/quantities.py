@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipeline.workspace.criteria.forces import written_distribution
+from pipeline.workspace.criteria import written_tensions
 
 
 # A pose's cable quantities (output.cables) against the cost model's unit pose: the least-norm
@@ -28,7 +28,7 @@ def cable_quantities(state, limits) -> dict[str, np.ndarray]:
     if state.tension.model == "pinv":
         high, low = state.force_range
     else:
-        chosen = written_distribution(state, limits)  # (n, K, m) over the required wrenches
+        chosen = written_tensions(state, limits)  # (n, K, m) over the required wrenches
         high, low = state.forces_of(chosen.max(axis=1)), state.forces_of(chosen.min(axis=1))
     if not state.ranges_over_a_set:
         columns.update({f"tension_{name}": high[:, i] for i, name in enumerate(names)})

@@ -14,6 +14,7 @@ import numpy as np
 from pipeline.model.actuators import ActuatorModel
 from pipeline.model.dynamics import MotionSpec, load_wrench_terms
 from pipeline.model.geometry import CableRobot, rotation_matrix, rotation_partials
+from pipeline.workspace.criteria import ACCELERATION, SPEED, TORQUE, VOLTAGE
 
 
 def literal_margins(
@@ -23,7 +24,7 @@ def literal_margins(
     rot = rotation_matrix(*orientation)
     d_rot = rotation_partials(*orientation)
     columns = 3 if motion.pinv_columns == "translational" else 6
-    names = ("speed", "torque", "acceleration", "voltage")
+    names = (SPEED, TORQUE, ACCELERATION, VOLTAGE)
     limits = (act.speed_limit, act.torque_limit, act.accel_limit, act.voltage_limit)
     out = {name: np.empty(len(positions)) for name in names}
     for p, position in enumerate(positions):

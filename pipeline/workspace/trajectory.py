@@ -13,6 +13,7 @@ import numpy as np
 
 from pipeline.model.actuators import ActuatorModel
 from pipeline.model.dynamics import SampleDynamics
+from pipeline.workspace.criteria import force_families
 from pipeline.workspace.criteria.forces import feasible_distribution, feasible_model
 
 
@@ -69,7 +70,7 @@ def inverse_dynamics(state: SampleDynamics, actuator: ActuatorModel) -> dict[str
     theta_ddot = state.acceleration_range(state.jacobian[:, :, :3], state.shaft_accel_from_velocity[..., 0])[0]
     wrench = state.required_wrenches[:, 0, :]
     if feasible_model(state):
-        torque = feasible_distribution(state, actuator)[:, 0, :]
+        torque = feasible_distribution(state, actuator, force_families(state, actuator))[:, 0, :]
     else:
         torque = np.einsum("nmc,nc->nm", state.wrench_pinv[0], wrench)
     reached = np.einsum("ncm,nm->nc", state.structure, torque)

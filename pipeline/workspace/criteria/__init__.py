@@ -24,8 +24,14 @@ from typing import Any, Callable
 import numpy as np
 
 from pipeline.workspace.criteria import actuator, geometry, interference, payload, tension
+from pipeline.model.tensions import Family
+from pipeline.workspace.criteria.forces import feasible_margins, feasible_model, written_distribution
 
 ANY, DYNAMICS, STATICS, GEOMETRY = "any", "dynamics", "statics", "geometry"
+# the names other modules refer a criterion by (a kernel's compiled columns, the degeneracy notes,
+# the papers' evidence): spelled here only
+ZERO_LENGTH, SINGULAR, UNREACHABLE, SLACK, TENSION_MAX = "zero_length", "singular", "unreachable", "slack", "tension_max"
+LENGTH, SPEED, TORQUE, ACCELERATION, VOLTAGE = "length", "speed", "torque", "acceleration", "voltage"
 
 
 @dataclass(frozen=True)
@@ -39,7 +45,12 @@ class Criterion:
     statics, payload) with that per-chunk spec and robot checks it; ``keys``: its own config
     keys ``criteria.<name>.<key>``, each with the rule its value must pass (a check as in
     ``pipeline.app.config``: None, or what the value must be), given to ``function`` as keyword
-    arguments. A criterion with keys is checked where the config gives them (null: not checked)."""
+    arguments. A criterion with keys is checked where the config gives them (null: not checked).
+    ``bounds(state, limits) -> (lower, upper, scale) | None``: the interval it puts on every
+    cable's force variable (``state.variables_of``; arrays broadcastable to (n, K, m)) under the
+    ``feasible`` tension model, None where it puts none on that state; there its margin is the
+    model's nested capacity margin of that interval (``criteria.forces``), and ``function``
+    gives the minimum-norm model's."""
 
     name: str
     function: Callable[[Any, Any], np.ndarray]
@@ -49,6 +60,7 @@ class Criterion:
     remedy: str
     applies: Callable[[str, Any, Any], bool]
     keys: dict[str, Callable[[Any], str | None]] = field(default_factory=dict)
+    bounds: Callable[[Any, Any], tuple | None] | None = None
 
 
 def _dynamics(analysis: str, spec=None, robot=None) -> bool:
@@ -62,41 +74,43 @@ def _feasible(spec) -> bool:
 
 
 REGISTRY: dict[str, Criterion] = {c.name: c for c in (
-    Criterion("zero_length", geometry.zero_length, ANY, 0, "#999933",
+    Criterion(ZERO_LENGTH, geometry.zero_length, ANY, 0, "#999933",
               "a search box that does not reach the anchors (robot.search.lo, hi)",
               lambda analysis, spec, robot: True),
-    Criterion("singular", geometry.singular, STATICS, 1, "#000000",
+    Criterion(SINGULAR, geometry.singular, STATICS, 1, "#000000",
               "robot.dofs=[x,y,z] for a point platform (every attachment at one point), else anchors and "
               "attachments that give the cables independent directions (the log names the wrench they cannot "
               "produce), or tension=feasible",
               lambda analysis, spec, robot: analysis in ("statics", "payload") and not _feasible(spec)),
-    Criterion("unreachable", tension.unreachable, ANY, 2, "#777777",
+    Criterion(UNREACHABLE, tension.unreachable, ANY, 2, "#777777",
               "anchors and attachments that give the cables independent directions (the log names the "
               "wrench they cannot produce), or more cables",
               lambda analysis, spec, robot: _dynamics(analysis) or (analysis == "statics" and _feasible(spec))),
-    Criterion("slack", tension.slack, ANY, 3, "#882255",
+    Criterion(SLACK, tension.slack, ANY, 3, "#882255",
               "tension=feasible if the cables may not push (tension=pinv's minimum-norm forces often do), "
               "else a lower tension.t_min, more cables or anchors around the load",
-              lambda analysis, spec, robot: analysis == "statics" or (_dynamics(analysis) and _feasible(spec))),
-    Criterion("tension_max", tension.tension_max, ANY, None, "#0072B2",
+              lambda analysis, spec, robot: analysis == "statics" or (_dynamics(analysis) and _feasible(spec)),
+              bounds=tension.slack_bounds),
+    Criterion(TENSION_MAX, tension.tension_max, ANY, None, "#0072B2",
               "stronger cables (a higher tension.t_max) or a lighter load",
-              lambda analysis, spec, robot: analysis != "payload" and spec.tension.t_max is not None),
+              lambda analysis, spec, robot: analysis != "payload" and spec.tension.t_max is not None,
+              bounds=tension.tension_max_bounds),
     Criterion("payload", payload.payload, STATICS, None, "#56B4E9", "a lighter payload (load.mass) or stronger cables",
               lambda analysis, spec, robot: analysis == "payload"),
-    Criterion("length", geometry.length, ANY, None, "#CC79A7", "longer cables (robot.l_max) or a smaller box",
+    Criterion(LENGTH, geometry.length, ANY, None, "#CC79A7", "longer cables (robot.l_max) or a smaller box",
               lambda analysis, spec, robot: robot.l_max is not None),
-    Criterion("speed", actuator.speed, DYNAMICS, None, "#0072B2",
+    Criterion(SPEED, actuator.speed, DYNAMICS, None, "#0072B2",
               "a lower motion.v_max, a larger drive.winch_radius or a smaller drive.gear_ratio",
               _dynamics),
-    Criterion("torque", actuator.torque, DYNAMICS, None, "#D55E00",
+    Criterion(TORQUE, actuator.torque, DYNAMICS, None, "#D55E00",
               "a stronger actuator, a higher drive.gear_ratio or a smaller drive.winch_radius",
-              _dynamics),
-    Criterion("acceleration", actuator.acceleration, DYNAMICS, None, "#CC79A7",
+              _dynamics, bounds=actuator.torque_bounds),
+    Criterion(ACCELERATION, actuator.acceleration, DYNAMICS, None, "#CC79A7",
               "longer motion.t_acc and motion.t_dec, or a larger drive.winch_radius",
               _dynamics),
-    Criterion("voltage", actuator.voltage, DYNAMICS, None, "#E69F00",
+    Criterion(VOLTAGE, actuator.voltage, DYNAMICS, None, "#E69F00",
               "a lower motion.v_max or another actuator (its voltage and speed constants)",
-              _dynamics),
+              _dynamics, bounds=lambda dyn, act: dyn.voltage_bounds(act)),
     Criterion("cable_cable", interference.cable_cable, GEOMETRY, None, "#DDCC77",
               "thinner cables (robot.cable_diameter), anchors and attachments that keep the cables apart, "
               "or a smaller box",
@@ -157,9 +171,32 @@ def checked_settings(node) -> dict[str, dict]:
 def margins(names, state, limits, settings: dict | None = None) -> dict[str, np.ndarray]:
     """The one evaluation every analysis and kernel goes through: criterion name -> (n,) margins
     of the chunk ``state`` (a grid chunk's, a trajectory's samples') against ``limits``, each
-    criterion given its own keys (``settings``)."""
+    criterion given its own keys (``settings``); under the ``feasible`` tension model a criterion
+    that bounds the forces (``Criterion.bounds``) reads the model's margin of its family."""
     settings = settings or {}
-    return {name: REGISTRY[name].function(state, limits, **settings.get(name, {})) for name in names}
+    bounds = any(REGISTRY[name].bounds for name in names)  # a geometric state has no tension model
+    bounded = feasible_margins(state, limits, force_families(state, limits)) if bounds and feasible_model(state) else {}
+    return {name: bounded[name] if name in bounded else REGISTRY[name].function(state, limits, **settings.get(name, {}))
+            for name in names}
+
+
+def force_families(state, limits) -> list[Family]:
+    """The intervals on the state's force variables under the ``feasible`` model, one
+    :class:`Family` per registered criterion that bounds this kind of state (``Criterion.bounds``;
+    registry order, which nests them: an earlier family does its best first)."""
+    found = []
+    for criterion in REGISTRY.values():
+        if criterion.bounds is not None and criterion.reads in (ANY, state.kind):
+            interval = criterion.bounds(state, limits)
+            if interval is not None:
+                found.append(Family(criterion.name, *interval))
+    return found
+
+
+def written_tensions(state, limits) -> np.ndarray:
+    """The cable forces (n, K, m) the ``feasible`` model writes within the registry's families
+    (``forces.written_distribution``: ``output.cables``, ``output.metrics``)."""
+    return written_distribution(state, limits, force_families(state, limits))
 
 
 def register(criterion: Criterion) -> None:

@@ -2,8 +2,8 @@
 load torque, shaft acceleration and control voltage against an :class:`ActuatorModel`.
 
 Each margin is 1 - (worst value over cables and the velocity/acceleration set) / limit. Under
-the ``feasible`` tension model torque and voltage read the capacity margins of
-``criteria.forces``.
+the ``feasible`` tension model torque and voltage bound the load torques M (``*_bounds``) and
+read the capacity margins of ``criteria.forces``.
 """
 
 from __future__ import annotations
@@ -11,7 +11,6 @@ from __future__ import annotations
 import numpy as np
 
 from pipeline.model.actuators import ActuatorModel
-from pipeline.workspace.criteria.forces import feasible_margins, feasible_model
 from pipeline.model.dynamics import PoseDynamics
 
 
@@ -40,10 +39,13 @@ def speed(dyn: PoseDynamics, act: ActuatorModel) -> np.ndarray:
 
 def torque(dyn: PoseDynamics, act: ActuatorModel) -> np.ndarray:
     """Eq. (32): |M_i| <= M_mot N_M for every acceleration of the set, M from eq. (20)."""
-    if feasible_model(dyn):
-        return feasible_margins(dyn, act)["torque"]
     high, low = dyn.acceleration_range(*dyn.torque_affine)
     return _margin(np.maximum(high, -low), act.torque_limit)
+
+
+def torque_bounds(dyn: PoseDynamics, act: ActuatorModel) -> tuple:
+    """Under ``feasible``: |M| <= M_mot N_M (eq. 32) on the load torques themselves."""
+    return -act.torque_limit, act.torque_limit, act.torque_limit
 
 
 def acceleration(dyn: PoseDynamics, act: ActuatorModel) -> np.ndarray:
@@ -59,8 +61,6 @@ def voltage(dyn: PoseDynamics, act: ActuatorModel) -> np.ndarray:
     the velocity part and the acceleration part are separable.
     Without J-dot the velocity part is L_v theta_dot (L_v >= 0), whose range is L_v times the
     range of theta_dot, already known from eq. (30)."""
-    if feasible_model(dyn):
-        return feasible_margins(dyn, act)["voltage"]
     torque_coefficients, torque_offset = dyn.torque_affine
     from_acceleration = dyn.acceleration_range(  # G_v J a - S_v M, affine in a
         act.G_v * dyn.jacobian[:, :, :3] + act.load_gain * torque_coefficients, act.load_gain * torque_offset
