@@ -29,10 +29,14 @@ orientations at the origin: the box is the joint's angle limits (else CASPR's ow
 in rad, with ``S_EULER_XYZ``'s angles in the xyz convention. Refused, in one line and exit status
 2, with the reason: a quaternion, universal, prismatic or free-axis joint, a
 multi-link (MCDM) model, a cable that is not ``<cable_ideal>`` (springs, variable stiffness), a
-cable routed through more than two points or a pulley (``<attachment_base_pulley>``), two
-cables of one name (both named), and a file that is not such XML. CASPR's ``SPATIAL_EULER_XYZ`` orientation is R = Rx Ry Rz of its
-angles (eq. (9)'s is R = Rz(phi) Ry(theta) Rx(psi)): the file sets
-``orientation.convention: xyz`` so that CASPR's angles mean the same pose, and says so.
+cable routed through more than two points or through a pulley other than a swivelling one at its
+frame end (a screw-drive pulley), two cables of one name (both named), and a file that is not
+such XML. A ``<base_rotating_pulley>`` at a cable's frame end (CASPR's swivelling pulley:
+``fixed_location``, ``pulley_radius``, ``cable_entry_vector``) becomes its ``robot.pulleys``
+entry, the anchor its fixed location and the axis its entry direction (docs/model.md section 6).
+CASPR's ``SPATIAL_EULER_XYZ`` orientation is R = Rx Ry Rz of its angles (eq. (9)'s is
+R = Rz(phi) Ry(theta) Rx(psi)): the file sets ``orientation.convention: xyz`` so that CASPR's
+angles mean the same pose, and says so.
 
 The importer writes only a new file of the user's: an existing file is replaced only with
 ``--force``, a target inside the package's own ``conf/`` (where it would replace or hide a
@@ -81,6 +85,7 @@ ORIENTING = {
     "U_XZ": "rx, rz (a universal joint)", "U_YZ": "ry, rz (a universal joint)",
     "P_X": "x (a prismatic joint)", "P_AXIS": "one translation (a prismatic joint)",
 }
+PULLEY = "base_rotating_pulley"  # CASPR's swivelling pulley at the frame (BaseRotatingPulleyAttachment)
 DEFAULT_ANGLE_LIMIT = np.pi  # CASPR's own q_lb/q_ub of its angle joints, without q_min/q_max
 
 
@@ -101,7 +106,7 @@ def read_cables(path: Path, cable_set: str | None = None, number: bool = False) 
     if not cables:
         raise ConfigError(f"{path}: cable_set {wanted!r} has no cables")
     out = {"set": chosen[0].get("id"), "names": [], "anchors": [], "attachments": [], "force_min": [],
-           "force_max": [], "reference": []}
+           "force_max": [], "reference": [], "pulleys": []}
     for index, cable in enumerate(cables, start=1):
         where = f"{path}: cable {cable.get('name') or index}"
         if cable.tag != "cable_ideal":
@@ -123,11 +128,15 @@ def read_cables(path: Path, cable_set: str | None = None, number: bool = False) 
         out["force_min"].append(low)
         out["force_max"].append(high)
         points = [a for a in cable.findall("attachments/*")]
-        pulleys = [a.tag for a in points if a.tag != "attachment"]
-        if pulleys:
-            raise ConfigError(f"{where}: <{pulleys[0]}> (a pulley): only straight cables from a frame point to "
-                              "a platform point are supported")
+        pulley = points.pop(0) if points and points[0].tag == PULLEY else None  # the frame's end of the cable
+        other = [a.tag for a in points if a.tag != "attachment"]
+        if other:
+            raise ConfigError(f"{where}: <{other[0]}>: only straight cables from a frame point (or from a "
+                              f"<{PULLEY}> there) to a platform point are supported")
         links = [(_text(attachment, "link", where), _vector(attachment, "location", where)) for attachment in points]
+        if pulley is not None:
+            links.insert(0, ("0", _vector(pulley, "fixed_location", f"{where}: <{PULLEY}>")))
+        out["pulleys"].append(None if pulley is None else _pulley(pulley, f"{where}: <{PULLEY}>"))
         found = sorted(link for link, _ in links)
         if any(link not in ("0", "1") for link in found):
             raise ConfigError(f"{where}: attached to links {found}: multi-link models are not supported "
@@ -139,6 +148,17 @@ def read_cables(path: Path, cable_set: str | None = None, number: bool = False) 
         out["anchors"].append(dict(links)["0"])
         out["attachments"].append(dict(links)["1"])
     return out
+
+
+def _pulley(element, where: str) -> dict:
+    """CASPR's swivelling pulley at the frame (BaseRotatingPulleyAttachment): the cable enters it
+    at ``fixed_location`` along ``cable_entry_vector``, on a pulley of ``pulley_radius`` (m)."""
+    radius = _number(element, "pulley_radius", where)
+    axis = np.asarray(_vector(element, "cable_entry_vector", where))
+    if radius < 0 or not np.linalg.norm(axis) > 0:
+        raise ConfigError(f"{where}: pulley_radius {radius:g} m and cable_entry_vector {axis.tolist()}: need a radius "
+                          ">= 0 and a direction that is not zero")
+    return {"axis": (axis / np.linalg.norm(axis)).tolist(), "radius": radius}
 
 
 def read_body(path: Path) -> dict:
@@ -237,6 +257,8 @@ def robot_yaml(cables: dict, body: dict | None, step: float, sources: tuple[str,
         f"  platform: {{mass: {0.0 if body is None else body['mass']!r}, com: {_flow(com)}}}",
         *([f"  dofs: [{', '.join(body['dofs'])}]"] if body is not None and len(body["dofs"]) < 6 else []),
         f"  search: {{lo: {_flow(lo)}, hi: {_flow(hi)}, step: {step!r}, spacing: {spacing}}}",
+        *(["  pulleys:", *[f"    - {{axis: {_flow(p['axis'] if p else [0.0, 0.0, 1.0])}, radius: {p['radius'] if p else 0.0!r}}}"
+                            for p in cables["pulleys"]]] if any(cables["pulleys"]) else []),
         f"tension: {{t_min: {_limit(cables['force_min'])}, t_max: {_limit(cables['force_max'])}}}",
         *(["orientation: {convention: xyz}"] if xyz else []),
     ]

@@ -223,7 +223,17 @@ BAD = {
                                  "<attachment><link>0</link><location>9 9 9</location></attachment>")]),
                "3 attachments on links ['0', '0', '1']: only straight cables"),
     "pulley": (GOOD.replace("<attachment>", "<attachment_base_pulley>", 1).replace(
-        "</attachment>", "</attachment_base_pulley>", 1), "<attachment_base_pulley> (a pulley)"),
+        "</attachment>", "</attachment_base_pulley>", 1), "<attachment_base_pulley>: only straight cables"),
+    "screw_pulley": (cables_xml([cable(1, ANCHORS[0], PLATFORM[0], 300).replace(
+        "<attachment>", "<screw_base_rotating_pulley><pulley_radius>0.05</pulley_radius></screw_base_rotating_pulley>"
+        "<attachment>", 1)]), "<screw_base_rotating_pulley>: only straight cables"),
+    "pulley_zero_axis": (cables_xml([cable(1, ANCHORS[0], PLATFORM[0], 300).replace(
+        """<attachment>
+          <link>0</link>
+          <location>-3.0 2.0 3.0</location>
+        </attachment>""", "<base_rotating_pulley><fixed_location>-3 2 3</fixed_location><pulley_radius>0.05</pulley_radius>"
+        "<cable_entry_vector>0 0 0</cable_entry_vector></base_rotating_pulley>", 1)]),
+        "cable_entry_vector [0.0, 0.0, 0.0]: need a radius >= 0 and a direction that is not zero"),
     "spring_cable": (GOOD.replace("cable_ideal", "cable_linear_spring", 2),
                      "<cable_linear_spring> is not an ideal cable"),
 }
@@ -334,3 +344,47 @@ def test_a_file_that_names_two_cables_alike_imports_with_numbered_cables(tmp_pat
                     for n in ("twice", "good"))
     assert twice["cable_names"] == [str(i) for i in range(1, len(plain["anchors"]) + 1)]
     assert twice["anchors"] == plain["anchors"] and twice["attachments"] == plain["attachments"]
+
+
+def caspr_pulley(fixed, entry, end, radius):
+    """CASPR's closed form (BaseRotatingPulleyAttachment.ComputePulleyLeavingLocation), written
+    here from its published steps: the centre in the plane of the entry vector and the cable's
+    end, the leaving point r_C + rho^2 (r_B - r_C) - rho sqrt(1 - rho^2) n x (r_B - r_C), the arc
+    by arccos. (n, 3) ends; the leaving points and the cable lengths from the fixed point."""
+    normal = np.cross(entry, end - fixed)
+    unit = normal / np.linalg.norm(normal, axis=1, keepdims=True)
+    inward = np.cross(normal, entry)
+    centre = fixed + radius * inward / np.linalg.norm(inward, axis=1, keepdims=True)
+    rho = radius / np.linalg.norm(end - centre, axis=1, keepdims=True)
+    leave = centre + rho**2 * (end - centre) - rho * np.sqrt(1 - rho**2) * np.cross(unit, end - centre)
+    first, second = fixed - centre, leave - centre
+    arc = radius * np.arccos(np.clip(np.einsum("nk,nk->n", first, second) / radius**2, -1, 1))
+    return leave, np.linalg.norm(end - leave, axis=1) + arc
+
+
+def test_casprs_swivelling_pulleys_import_and_give_its_cable_lengths(tmp_path):
+    """Every cable of the Octo set from a <base_rotating_pulley> (the upper ones fed from above,
+    the lower from below): the robot file carries them, and the job's cable lengths
+    (output.cables) are CASPR's own closed form's at every pose of the grid."""
+    entries = [(0.0, 0.0, -1.0)] * 4 + [(0.0, 0.0, 1.0)] * 4
+    cables = [cable(i + 1, ANCHORS[i], PLATFORM[i], 600).replace(
+        f"""<attachment>
+          <link>0</link>
+          <location>{' '.join(map(str, ANCHORS[i]))}</location>
+        </attachment>""", f"<base_rotating_pulley><fixed_location>{' '.join(map(str, ANCHORS[i]))}</fixed_location>"
+        f"<pulley_radius>0.08</pulley_radius><cable_entry_vector>{' '.join(map(str, entries[i]))}</cable_entry_vector>"
+        "</base_rotating_pulley>", 1) for i in range(8)]
+    (tmp_path / "p_cables.xml").write_text(cables_xml(cables))
+    done = run(tmp_path, "pipeline.caspr", "p_cables.xml", "--step", "0.5", "--lo", "-2", "-1", "0.5", "--hi", "2", "1",
+               "2.5", "--out", "mine/robot/p.yaml")
+    assert done.returncode == 0, done.stderr
+    data = yaml.safe_load((tmp_path / "mine" / "robot" / "p.yaml").read_text())
+    assert data["robot"]["pulleys"] == [{"axis": list(e), "radius": 0.08} for e in entries]
+    job = run(tmp_path, "pipeline", "--config-dir", "mine", "robot=p", "output.cables=true", "hydra.run.dir=out")
+    assert job.returncode == 0, job.stderr
+    points = pd.read_parquet(tmp_path / "out" / "points.parquet")
+    centres = points[["x", "y", "z"]].to_numpy()
+    assert len(centres) == 8 * 4 * 4  # the cells' centres
+    for i in range(8):
+        _, lengths = caspr_pulley(np.array(ANCHORS[i]), np.array(entries[i]), centres + PLATFORM[i], 0.08)
+        np.testing.assert_allclose(points[f"length_cable {i + 1}"], lengths, rtol=1e-12)

@@ -67,6 +67,7 @@ def test_a_plane_a_list_and_an_empty_set_have_no_surface_and_a_flat_platform_an_
         attachments = np.array([[0.1, 0.1, 0], [-0.1, -0.1, 0], [0.1, -0.1, 0], [-0.1, 0.1, 0]], float)
         cable_names = ("a", "b", "c", "d")
         obstacles = ()
+        pulleys = None
     outline = [t for t in robot_traces(Flat, np.zeros(3), np.eye(3)) if t["name"] == "platform"][0]
     corners = {(x, y) for x, y in zip(outline["x"], outline["y"]) if x is not None}
     assert outline["type"] == "scatter3d" and corners == {(0.1, 0.1), (-0.1, -0.1), (0.1, -0.1), (-0.1, 0.1)}

@@ -20,6 +20,7 @@ import pandas as pd
 
 from pipeline.model.geometry import attached_points
 from pipeline.model.clearance import Polytope
+from pipeline.model.pulleys import pulley_exits
 from pipeline.workspace.boundary import boundary_mesh, verdict_field
 from pipeline.workspace.criteria import COLOURS, FEASIBLE_COLOUR
 from pipeline.app.results import write_text
@@ -106,12 +107,13 @@ def robot_traces(robot, position: np.ndarray, rotation: np.ndarray) -> list[dict
     obstacles of its cell (``obstacles``: a box's edges, a plane's patch across the frame)."""
     anchors = np.asarray(robot.anchors, float)
     attached = position + attached_points(robot, rotation)
+    starts = anchors if robot.pulleys is None else pulley_exits(anchors, robot.pulleys, attached[None])[0][0]
     lo, hi = anchors.min(axis=0), anchors.max(axis=0)
     traces = [_lines(Polytope.box(lo, hi).vertices, BOX_EDGES, "frame", "#9a9a9a", 2),
               {"type": "scatter3d", "mode": "markers", "name": "anchors", "legendgroup": "robot",
                "x": anchors[:, 0], "y": anchors[:, 1], "z": anchors[:, 2], "text": list(robot.cable_names),
                "marker": {"size": 3, "color": "#222222"}, "hovertemplate": "anchor %{text}<extra></extra>"},
-              _lines(np.vstack([anchors, attached]), [(i, i + len(anchors)) for i in range(len(anchors))],
+              _lines(np.vstack([starts, attached]), [(i, i + len(anchors)) for i in range(len(anchors))],
                      f"cables at ({', '.join(f'{v:g}' for v in np.round(position, 3))}) m", "#555555", 1.5)]
     centred = attached - attached.mean(axis=0)
     if np.linalg.matrix_rank(centred, tol=1e-9 * max(1.0, float(np.abs(attached).max()))) == 3:

@@ -208,7 +208,9 @@ class RobotConfig:
     robot kind's schema extends it and its file sets what differs): ``name``, the robot kind;
     ``platform``, its moving platform; ``cable_diameter``, m, one or one per cable: cables
     closer than the sum of their radii interfere (criterion ``cable_cable``; null: not
-    checked); ``l_max``, the longest cable, m (criterion ``length``; null: no limit). The cell's
+    checked); ``l_max``, the longest cable, m (criterion ``length``; null: no limit); ``pulleys``,
+    a swivelling pulley per cable at its anchor ({axis, radius}, one or one per cable; null:
+    the cables leave the anchors). The cell's
     ``obstacles`` and the tension limits (``tension.*``, one or one per cable) are keys of the
     job, checked against the robot as it is built."""
 
@@ -216,6 +218,7 @@ class RobotConfig:
     platform: PlatformConfig = field(default_factory=PlatformConfig)
     cable_diameter: Any = MISSING
     l_max: Optional[float] = rule(positive)
+    pulleys: Any = MISSING
 
 
 @dataclass

@@ -42,6 +42,7 @@ from pipeline.model.catalogue import Catalogue
 from pipeline.model.clearance import Obstacle, Polytope
 from pipeline.model.dynamics import Load, MotionSpec
 from pipeline.model.geometry import FREEDOMS, CableRobot, eq9_angles
+from pipeline.model.pulleys import Pulleys
 from pipeline.model.motion import acceleration_set, cartesian_cube, extreme_points, velocity_set
 from pipeline.model.robots import PointsRobot, cpr8, irpm6, point_list
 from pipeline.model.statics import PayloadSpec, StaticLimits, StaticsSpec
@@ -131,6 +132,9 @@ def _cpr_wwa(cfg: DictConfig, catalogue: Catalogue, robot: CableRobot):
         hint = "; with model.pinv_columns=translational" if robot.dofs == (0, 1, 2) else ""
         raise ConfigError(f"robot.dofs=[{freedoms}]: the dynamics of eqs. (19)-(31) move a spatial platform (all six "
                           f"freedoms, or x, y, z with model.pinv_columns=translational){hint}; use analysis=statics")
+    if model.jdot and robot.pulleys is not None:
+        raise ConfigError("model.jdot=true: the J-dot term of eq. (33) is that of cables from fixed anchors, not from "
+                          "swivelling pulleys (robot.pulleys); set model.jdot=false")
     # a point platform (every attachment at its reference point) has no moment rows to balance
     forces_only = name_of(model.pinv_columns) == "translational" or not robot.attachments.any()
     _enough_cables(cfg, robot, 3 if forces_only else 6,
@@ -405,7 +409,7 @@ def validate(cfg: DictConfig, catalogue: Catalogue | None,
 def build(cfg: DictConfig, catalogue: Catalogue | None) -> WorkspaceProblem:
     """The workspace problem of a typed config: its robot kind's robot, its analysis kind's
     spec, limits and criteria, the orientation set."""
-    robot = surroundings(cfg, plausible(ROBOTS[cfg.robot.name].build(cfg.robot)))
+    robot = surroundings(cfg, guided(cfg, plausible(ROBOTS[cfg.robot.name].build(cfg.robot))))
     spec, limits = ANALYSES[cfg.analysis].build(cfg, catalogue, robot)
     settings = checked_settings(OmegaConf.to_container(cfg.criteria)) if "criteria" in cfg else {}
     criteria = selected(cfg.analysis, spec, robot, settings)  # the registry's, by what each applies to
@@ -442,6 +446,35 @@ def plausible(robot: CableRobot) -> CableRobot:
                           f"platform's reference point, {frame / platform:.3g} times less: past any cable robot; are "
                           "both in metres (robot.anchors, robot.attachments)?")
     return robot
+
+
+def guided(cfg: DictConfig, robot: CableRobot) -> CableRobot:
+    """The robot with its swivelling pulleys (``robot.pulleys``, docs/model.md section 6): one
+    mapping {axis: [x, y, z], radius: m} for every cable, or a list of one per cable. The axis is
+    the way the cable runs into the pulley from its winch (any length, normalised); the radius at
+    least 0 and at most a tenth of the robot's size (a larger one is a unit typed wrong)."""
+    value, key = cfg.robot.pulleys, "robot.pulleys"
+    if value is None:
+        return robot
+    items = list(value) if isinstance(value, ListConfig) else [value]
+    if len(items) not in (1, robot.n_cables):
+        raise ConfigError(f"{key}: {len(items)} pulleys for {robot.n_cables} cables (one for all, or one per cable)")
+    axes, radii = [], []
+    for k, item in enumerate(items):
+        where = f"{key}[{k}]" if isinstance(value, ListConfig) else key
+        if not isinstance(item, DictConfig) or set(item) != {"axis", "radius"}:
+            raise ConfigError(f"{where}={shown(item)}: a mapping {{axis: [x, y, z], radius: m}}")
+        axis = _checked(item.axis, f"{where}.axis", POINT_RULE, "must be 3 numbers [x, y, z]")
+        radius = item.radius
+        if not np.linalg.norm(axis) > 0:
+            raise ConfigError(f"{where}.axis={axis.tolist()}: must not be zero (the way the cable runs into the pulley)")
+        if isinstance(radius, bool) or not isinstance(radius, (int, float)) or not 0 <= radius <= robot.extent / 10:
+            raise ConfigError(f"{where}.radius={radius}: must be a number from 0 to a tenth of the robot's size "
+                              f"({robot.extent / 10:.3g} m), in m")
+        axes.append(axis / np.linalg.norm(axis))
+        radii.append(float(radius))
+    shape = (robot.n_cables,)
+    return replace(robot, pulleys=Pulleys(np.broadcast_to(axes, (*shape, 3)).copy(), np.broadcast_to(radii, shape).copy()))
 
 
 def surroundings(cfg: DictConfig, robot: CableRobot) -> CableRobot:

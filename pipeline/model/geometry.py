@@ -26,6 +26,7 @@ from functools import cached_property
 import numpy as np
 
 from pipeline.model.clearance import Obstacle, Polytope
+from pipeline.model.pulleys import Pulleys, pulley_exits
 
 
 @dataclass(frozen=True)
@@ -47,6 +48,8 @@ class CableRobot:
     that no cable may enter, every attachment on its surface (None: not checked).
     obstacles: the cell's obstacles (``pipeline.model.clearance.Obstacle``) that no cable and not
     the platform may touch.
+    pulleys: a swivelling pulley per cable at its anchor (``pipeline.model.pulleys.Pulleys``; None:
+    each cable leaves its anchor itself).
     """
 
     name: str
@@ -61,6 +64,7 @@ class CableRobot:
     cable_radii: np.ndarray | None = None
     platform_shape: Polytope | None = None
     obstacles: tuple[Obstacle, ...] = ()
+    pulleys: Pulleys | None = None
 
     @property
     def n_cables(self) -> int:
@@ -250,13 +254,35 @@ class PoseGeometry:
 
     @cached_property
     def vectors(self) -> np.ndarray:
-        """(n, m, 3) cable vectors anchor -> attachment point (eqs. 1-17)."""
-        return cable_vectors(self.robot, self.positions, self.rotation)
+        """(n, m, 3) cable vectors anchor -> attachment point (eqs. 1-17), or from the point where
+        it leaves its pulley (``exits``)."""
+        if self.robot.pulleys is None:
+            return cable_vectors(self.robot, self.positions, self.rotation)
+        return self.attachment_points - self.exits
+
+    @cached_property
+    def _pulleys(self) -> tuple[np.ndarray, np.ndarray]:
+        return pulley_exits(self.robot.anchors, self.robot.pulleys, self.attachment_points)
+
+    @cached_property
+    def exits(self) -> np.ndarray:
+        """(n, m, 3) where each straight cable begins: its anchor, or where it leaves its pulley
+        (``pipeline.model.pulleys``)."""
+        if self.robot.pulleys is None:
+            return np.broadcast_to(self.robot.anchors, (len(self.positions), self.robot.n_cables, 3))
+        return self._pulleys[0]
 
     @cached_property
     def lengths(self) -> np.ndarray:
-        """(n, m) cable lengths k, h, m, n, k', h', m', n' (eqs. 10-17)."""
+        """(n, m) lengths of the straight cables k, h, m, n, k', h', m', n' (eqs. 10-17): from the
+        anchor, or from the pulley (the free length)."""
         return np.linalg.norm(self.vectors, axis=2)
+
+    @cached_property
+    def cable_lengths(self) -> np.ndarray:
+        """(n, m) each cable's length from its anchor: the straight part, and the arc it wraps
+        around its pulley (``lengths`` without pulleys)."""
+        return self.lengths if self.robot.pulleys is None else self.lengths + self._pulleys[1]
 
     @cached_property
     def unit(self) -> np.ndarray:
@@ -267,7 +293,7 @@ class PoseGeometry:
     @cached_property
     def arms(self) -> np.ndarray:
         """(n, m, 3) R b_i: attachment points from the platform's reference point, fixed axes."""
-        return np.broadcast_to(attached_points(self.robot, self.rotation), self.vectors.shape)
+        return np.broadcast_to(attached_points(self.robot, self.rotation), (len(self.positions), self.robot.n_cables, 3))
 
     @cached_property
     def attachment_points(self) -> np.ndarray:

@@ -129,7 +129,7 @@ class PoseStatics(PoseGeometry):
         """(n, m, 3) cable vectors from each anchor to its attachment point (eq. 1) or, with
         ``cable_direction="centre"``, to the platform's reference point."""
         if self.spec.cable_direction == "centre":
-            return self.positions[:, None, :] - self.robot.anchors[None, :, :]
+            return self.positions[:, None, :] - self.exits
         return super().vectors
 
     @cached_property

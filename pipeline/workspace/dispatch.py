@@ -97,6 +97,8 @@ def fused_unfit(problem: WorkspaceProblem) -> str | None:
         return "it does not write the per-pose cable quantities of output.cables=true"
     if problem.metrics:
         return "it does not write the per-pose metrics of output.metrics=true"
+    if problem.robot.pulleys is not None:
+        return "it models cables that leave fixed anchors (no robot.pulleys)"
     if len(problem.robot.dofs) != 6 and problem.spec.kind == "statics":
         return "it balances all six rows of a free platform only (robot.dofs)"
     unfit = problem.spec.fused_unfit()

@@ -24,7 +24,7 @@ WORK = {"pinv": 0.0, "feasible": 2.5}
 def cable_quantities(state, limits) -> dict[str, np.ndarray]:
     """(n,) arrays keyed by column name for one chunk's state (``PoseStatics``/``PoseDynamics``)."""
     names = state.robot.cable_names
-    columns = {f"length_{name}": state.lengths[:, i] for i, name in enumerate(names)}
+    columns = {f"length_{name}": state.cable_lengths[:, i] for i, name in enumerate(names)}
     if state.tension.model == "pinv":
         high, low = state.force_range
     else:

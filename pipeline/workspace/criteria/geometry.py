@@ -35,4 +35,4 @@ def singular(st: PoseStatics, lim: StaticLimits) -> np.ndarray:
 
 def length(state, limits) -> np.ndarray:
     """Eq. (10): l_i <= l_max of the robot (``CableRobot.l_max``), in any analysis."""
-    return 1.0 - (state.lengths / state.robot.l_max).max(axis=1)
+    return 1.0 - (state.cable_lengths / state.robot.l_max).max(axis=1)

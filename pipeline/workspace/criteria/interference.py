@@ -14,12 +14,13 @@ def pair_clearances(state) -> np.ndarray:
     """(n, pairs) d_ij / (r_i + r_j) - 1 over the pairs
     :attr:`pipeline.model.geometry.CableRobot.cable_pairs` (pairs sharing an anchor or an
     attachment point meet there by design), d_ij the distance of the straight segments from a_i
-    to p + R b_i (:func:`pipeline.model.clearance.segment_distance`), r the radii of
-    ``robot.cable_diameter``: 0 when the cables touch, -1 when their axes cross."""
+    (or where the cable leaves its pulley, ``exits``) to p + R b_i
+    (:func:`pipeline.model.clearance.segment_distance`), r the radii of ``robot.cable_diameter``:
+    0 when the cables touch, -1 when their axes cross."""
     robot = state.robot
     i, j = robot.cable_pairs
-    anchors, ends = robot.anchors, state.attachment_points
-    distance = segment_distance(anchors[i], ends[:, i] - anchors[i], anchors[j], ends[:, j] - anchors[j])
+    starts, ends = state.exits, state.attachment_points
+    distance = segment_distance(starts[:, i], ends[:, i] - starts[:, i], starts[:, j], ends[:, j] - starts[:, j])
     return distance / (robot.cable_radii[i] + robot.cable_radii[j]) - 1.0
 
 
@@ -40,7 +41,7 @@ def cable_platform(state, limits) -> np.ndarray:
     Margin min_i max_f n_f . u_i, the sine of the angle between the cable and the face it
     clears best: 0 for a cable along a face, -1 for one that leaves straight into the body."""
     robot = state.robot
-    toward = robot.anchors[None, :, :] - state.attachment_points  # fixed frame
+    toward = state.exits - state.attachment_points  # fixed frame: towards the anchor or the pulley
     local = toward @ state.rotation  # R^T u for each row u: the platform's frame
     unit = local / np.linalg.norm(local, axis=2, keepdims=True).clip(min=np.finfo(float).tiny)
     sines = unit @ robot.platform_shape.normals.T  # (n, m, f)
@@ -55,9 +56,8 @@ def cable_obstacle(state, limits) -> np.ndarray:
     closest (obstacle, body) of each pose goes to ``state.closest_obstacle`` (an index into
     :func:`obstacle_pairs`, column ``closest_obstacle``)."""
     robot = state.robot
-    anchors = np.broadcast_to(robot.anchors, state.attachment_points.shape)
-    cables = np.stack([anchors, state.attachment_points], axis=2)  # (n, m, 2, 3)
-    along = state.attachment_points - anchors
+    cables = np.stack([state.exits, state.attachment_points], axis=2)  # (n, m, 2, 3)
+    along = state.attachment_points - state.exits
     length = np.linalg.norm(along, axis=2, keepdims=True)
     along = np.divide(along, length, out=np.zeros_like(along), where=length > 0)[:, :, None, :]
     none = np.zeros((*along.shape[:2], 0, 3))
