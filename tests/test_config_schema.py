@@ -75,14 +75,14 @@ def test_a_users_robot_checks_cables_that_only_pull_by_default(robot, model):
 
 def test_every_robot_kind_extends_the_one_base_schema_and_its_file_does_not_repeat_it():
     """What every robot has is declared once: RobotConfig (platform, cable diameter, longest
-    cable, pulleys), with its values in conf/config.yaml's robot node; the robot kinds' schemas extend it
+    cable, pulleys, elastic cables), with its values in conf/config.yaml's robot node; the robot kinds' schemas extend it
     and their files set only what differs (the CPR-8's 2 kg carrier, the IRPM's 15 m cables)."""
     import yaml
 
     from pipeline.app.resources import CONF_DIR
 
     base = {item.name for item in dataclasses.fields(config.RobotConfig)}
-    assert base == {"name", "platform", "cable_diameter", "l_max", "pulleys"}
+    assert base == {"name", "platform", "cable_diameter", "l_max", "pulleys", "cable_ea", "winch_length"}
     root = yaml.safe_load((CONF_DIR / "config.yaml").read_text())["robot"]
     assert set(root) == base - {"name"}
     for name, kind in ROBOTS.items():

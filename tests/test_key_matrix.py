@@ -22,16 +22,18 @@ KEYS = {  # key -> (overrides, the criterion or column it adds when the job runs
     "output.mesh": (["output.mesh=true"], None),
     "output.metrics": (["output.metrics=true"], None),
     "output.points": (["output.points=false"], None),
-    "criteria": (["+criteria.torque.limit=3"], None),  # the package's criteria declare no keys of their own
+    "criteria": (["+criteria.torque.limit=3"], None),  # torque declares no keys of its own
     "pulleys": (["robot.pulleys={axis: [0, 0, 1], radius: 0.05}"], None),
     "pulleys with jdot": (["robot.pulleys={axis: [0, 0, 1], radius: 0.05}", "model.jdot=true"], None),
+    "stiffness": (["robot.cable_ea=1e5", "+criteria.stiffness={translational: 1000, rotational: 10}"], "margin_stiffness"),
 }
 # the cells that are refused, with the key the one line names
 REFUSED = {("lines", "workspace.home"): "workspace.home", ("lines", "output.mesh"): "output.mesh",
            ("cpr_wwa", "output.metrics"): "output.metrics", ("lines", "output.metrics"): "output.metrics",
            ("payload", "output.metrics"): "output.metrics",
            **{(analysis, "criteria"): "criteria.torque" for analysis in ANALYSES},
-           **{(analysis, "pulleys with jdot"): "model.jdot" for analysis in ANALYSES}}  # J-dot of fixed anchors
+           **{(analysis, "pulleys with jdot"): "model.jdot" for analysis in ANALYSES},  # J-dot of fixed anchors
+           **{(analysis, "stiffness"): "criteria.stiffness" for analysis in ANALYSES if analysis != "statics"}}
 
 
 @pytest.mark.parametrize("key", sorted(KEYS))

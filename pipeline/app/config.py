@@ -210,7 +210,8 @@ class RobotConfig:
     closer than the sum of their radii interfere (criterion ``cable_cable``; null: not
     checked); ``l_max``, the longest cable, m (criterion ``length``; null: no limit); ``pulleys``,
     a swivelling pulley per cable at its anchor ({axis, radius}, one or one per cable; null:
-    the cables leave the anchors). The cell's
+    the cables leave the anchors); ``cable_ea``, each cable's axial stiffness EA, N (criterion
+    ``stiffness``; null: rigid), and ``winch_length``, m, the cable between anchor and winch. The cell's
     ``obstacles`` and the tension limits (``tension.*``, one or one per cable) are keys of the
     job, checked against the robot as it is built."""
 
@@ -219,6 +220,8 @@ class RobotConfig:
     cable_diameter: Any = MISSING
     l_max: Optional[float] = rule(positive)
     pulleys: Any = MISSING
+    cable_ea: Any = MISSING
+    winch_length: Any = MISSING
 
 
 @dataclass

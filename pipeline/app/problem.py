@@ -409,7 +409,7 @@ def validate(cfg: DictConfig, catalogue: Catalogue | None,
 def build(cfg: DictConfig, catalogue: Catalogue | None) -> WorkspaceProblem:
     """The workspace problem of a typed config: its robot kind's robot, its analysis kind's
     spec, limits and criteria, the orientation set."""
-    robot = surroundings(cfg, guided(cfg, plausible(ROBOTS[cfg.robot.name].build(cfg.robot))))
+    robot = surroundings(cfg, elastic(cfg, guided(cfg, plausible(ROBOTS[cfg.robot.name].build(cfg.robot)))))
     spec, limits = ANALYSES[cfg.analysis].build(cfg, catalogue, robot)
     settings = checked_settings(OmegaConf.to_container(cfg.criteria)) if "criteria" in cfg else {}
     criteria = selected(cfg.analysis, spec, robot, settings)  # the registry's, by what each applies to
@@ -433,6 +433,7 @@ def build(cfg: DictConfig, catalogue: Catalogue | None) -> WorkspaceProblem:
                             metrics=bool(cfg.output.metrics), settings=settings)
 
 
+MAX_WINCH_LENGTH = 10_000.0  # m: the cable stored between an anchor and its winch, past any robot
 MAX_SIZE_RATIO = 10_000  # anchors' span over the platform's: past any cable robot, a unit typed wrong
 
 
@@ -475,6 +476,24 @@ def guided(cfg: DictConfig, robot: CableRobot) -> CableRobot:
         radii.append(float(radius))
     shape = (robot.n_cables,)
     return replace(robot, pulleys=Pulleys(np.broadcast_to(axes, (*shape, 3)).copy(), np.broadcast_to(radii, shape).copy()))
+
+
+def elastic(cfg: DictConfig, robot: CableRobot) -> CableRobot:
+    """The robot with elastic cables (docs/model.md section 7): ``robot.cable_ea`` (N, > 0, one or
+    one per cable; null: rigid) and ``robot.winch_length`` (m, >= 0, the cable between the
+    anchor and the winch, in series). Refused with pulleys (their stiffness is not modelled)."""
+    if cfg.robot.cable_ea is None:
+        return robot
+    if robot.pulleys is not None:
+        raise ConfigError("robot.cable_ea: the stiffness of cables over swivelling pulleys (robot.pulleys) is not "
+                          "modelled; set one of them null")
+    ea = _limit_values("robot.cable_ea", cfg.robot.cable_ea, robot.n_cables)
+    if not (ea > 0).all():
+        raise ConfigError(f"robot.cable_ea={shown(cfg.robot.cable_ea)}: must be > 0 (N)")
+    winch = _limit_values("robot.winch_length", cfg.robot.winch_length, robot.n_cables, "m", MAX_WINCH_LENGTH)
+    if (winch < 0).any():
+        raise ConfigError(f"robot.winch_length={shown(cfg.robot.winch_length)}: must be >= 0 (m)")
+    return replace(robot, cable_ea=ea.copy(), winch_lengths=winch.copy())
 
 
 def surroundings(cfg: DictConfig, robot: CableRobot) -> CableRobot:
@@ -655,22 +674,23 @@ def _per_cable(value):
     return np.asarray(list(value), dtype=float)
 
 
-def _limit_values(key: str, value, n_cables: int) -> np.ndarray:
-    """A tension limit as an (m,) array: one finite number for every cable, or one per cable."""
+def _limit_values(key: str, value, n_cables: int, unit: str = "N", largest: float = MAX_FORCE) -> np.ndarray:
+    """A tension limit (or another per-cable value in ``unit``, at most ``largest``) as an (m,)
+    array: one finite number for every cable, or one per cable."""
     items = [value] if isinstance(value, (int, float)) and not isinstance(value, bool) else value
     try:
         items = list(items)
     except TypeError:
         items = None
     if items is None or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in items):
-        raise ConfigError(f"{key}={shown(value)}: must be a number (N) or a list of one per cable")
+        raise ConfigError(f"{key}={shown(value)}: must be a number ({unit}) or a list of one per cable")
     if len(items) not in (1, n_cables):
         raise ConfigError(f"{key}={shown(value)}: {len(items)} values for {n_cables} cables")
     values = np.broadcast_to(np.asarray(items, dtype=float), (n_cables,))
     if not np.isfinite(values).all():
         raise ConfigError(f"{key}={shown(value)}: must be finite (null: no limit)")
-    if (np.abs(values) > MAX_FORCE).any():
-        raise ConfigError(f"{key}={shown(value)}: must be at most {MAX_FORCE:g} N")
+    if (np.abs(values) > largest).any():
+        raise ConfigError(f"{key}={shown(value)}: must be at most {largest:g} {unit}")
     return values
 
 

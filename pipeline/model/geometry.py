@@ -50,6 +50,8 @@ class CableRobot:
     the platform may touch.
     pulleys: a swivelling pulley per cable at its anchor (``pipeline.model.pulleys.Pulleys``; None:
     each cable leaves its anchor itself).
+    cable_ea: (m,) each cable's axial stiffness EA, N (None: rigid cables, no stiffness criterion);
+    winch_lengths: (m,) the cable between each anchor and its winch, in series, m.
     """
 
     name: str
@@ -65,6 +67,8 @@ class CableRobot:
     platform_shape: Polytope | None = None
     obstacles: tuple[Obstacle, ...] = ()
     pulleys: Pulleys | None = None
+    cable_ea: np.ndarray | None = None
+    winch_lengths: np.ndarray | None = None
 
     @property
     def n_cables(self) -> int:
@@ -239,6 +243,8 @@ class PoseGeometry:
     tension_lp: np.ndarray | None = None
     closest_pair: np.ndarray | None = None
     closest_obstacle: np.ndarray | None = None
+    stiffness_translational: np.ndarray | None = None
+    stiffness_rotational: np.ndarray | None = None
 
     def __init__(self, robot: CableRobot, positions: np.ndarray, orientation):
         self.robot = robot
@@ -309,7 +315,10 @@ class PoseGeometry:
 
     def diagnostics(self) -> dict[str, np.ndarray]:
         """Per-pose columns besides the margins, set by the criteria that computed them: the
-        poses the feasible model's LPs solved, the closest pair of cables, the closest obstacle."""
+        poses the feasible model's LPs solved, the closest pair of cables, the closest obstacle,
+        the least translational and rotational stiffness."""
         found = {"lp_poses": self.tension_lp, "closest_pair": self.closest_pair,
-                 "closest_obstacle": self.closest_obstacle}
+                 "closest_obstacle": self.closest_obstacle,
+                 "stiffness_translational_N_per_m": self.stiffness_translational,
+                 "stiffness_rotational_Nm_per_rad": self.stiffness_rotational}
         return {key: value for key, value in found.items() if value is not None}

@@ -7,7 +7,8 @@ from typing import Any
 
 import numpy as np
 
-from pipeline.workspace.criteria import GEOMETRY, REGISTRY, margins, written_tensions
+from pipeline.workspace.criteria import GEOMETRY, REGISTRY, margins
+from pipeline.workspace.criteria.forces import written_tensions
 from pipeline.model.geometry import CableRobot, PoseGeometry, rotation_matrices
 from pipeline.model.metrics import pose_metrics
 from pipeline.workspace.quantities import cable_quantities

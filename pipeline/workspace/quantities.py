@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipeline.workspace.criteria import written_tensions
+from pipeline.workspace.criteria.forces import written_tensions
 
 
 # A pose's cable quantities (output.cables) against the cost model's unit pose: the least-norm

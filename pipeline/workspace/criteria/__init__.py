@@ -18,49 +18,19 @@ every kernel and on the lines; ``tests/test_registry.py`` registers one).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import Any, Callable
-
 import numpy as np
 
-from pipeline.workspace.criteria import actuator, geometry, interference, payload, tension
-from pipeline.model.tensions import Family
-from pipeline.workspace.criteria.forces import feasible_margins, feasible_model, written_distribution
+from pipeline.workspace.criteria import actuator, geometry, interference, payload, stiffness, tension
+from pipeline.workspace.criteria.forces import feasible_margins, feasible_model
+from pipeline.workspace.criteria.registry import (ANY, COLOURS, DYNAMICS, GEOMETRY, REGISTRY, STATICS, Criterion,
+                                                  force_families, register)
 
-ANY, DYNAMICS, STATICS, GEOMETRY = "any", "dynamics", "statics", "geometry"
+__all__ = ["ANY", "COLOURS", "DYNAMICS", "GEOMETRY", "REGISTRY", "STATICS", "Criterion", "checked_settings",
+           "force_families", "gates", "margins", "register", "selected"]
 # the names other modules refer a criterion by (a kernel's compiled columns, the degeneracy notes,
 # the papers' evidence): spelled here only
 ZERO_LENGTH, SINGULAR, UNREACHABLE, SLACK, TENSION_MAX = "zero_length", "singular", "unreachable", "slack", "tension_max"
 LENGTH, SPEED, TORQUE, ACCELERATION, VOLTAGE = "length", "speed", "torque", "acceleration", "voltage"
-
-
-@dataclass(frozen=True)
-class Criterion:
-    """``function(state, limits) -> (n,) margins``; ``reads``: ``any``, ``dynamics`` (a
-    ``PoseDynamics`` and an ``ActuatorModel``), ``statics`` (a ``PoseStatics`` and
-    ``StaticLimits``) or ``geometry`` (the pose alone: any ``PoseGeometry``, one code in
-    every kernel); ``gate``: priority among gates (0 first) or None; ``colour``: figures;
-    ``remedy``: what to try next when it limits every pose (a job with none feasible says it);
-    ``applies(analysis, spec, robot)``: whether a problem of ``analysis`` (cpr_wwa, lines,
-    statics, payload) with that per-chunk spec and robot checks it; ``keys``: its own config
-    keys ``criteria.<name>.<key>``, each with the rule its value must pass (a check as in
-    ``pipeline.app.config``: None, or what the value must be), given to ``function`` as keyword
-    arguments. A criterion with keys is checked where the config gives them (null: not checked).
-    ``bounds(state, limits) -> (lower, upper, scale) | None``: the interval it puts on every
-    cable's force variable (``state.variables_of``; arrays broadcastable to (n, K, m)) under the
-    ``feasible`` tension model, None where it puts none on that state; there its margin is the
-    model's nested capacity margin of that interval (``criteria.forces``), and ``function``
-    gives the minimum-norm model's."""
-
-    name: str
-    function: Callable[[Any, Any], np.ndarray]
-    reads: str
-    gate: int | None
-    colour: str
-    remedy: str
-    applies: Callable[[str, Any, Any], bool]
-    keys: dict[str, Callable[[Any], str | None]] = field(default_factory=dict)
-    bounds: Callable[[Any, Any], tuple | None] | None = None
 
 
 def _dynamics(analysis: str, spec=None, robot=None) -> bool:
@@ -73,7 +43,7 @@ def _feasible(spec) -> bool:
     return spec.tension.model == "feasible"
 
 
-REGISTRY: dict[str, Criterion] = {c.name: c for c in (
+for criterion in (
     Criterion(ZERO_LENGTH, geometry.zero_length, ANY, 0, "#999933",
               "a search box that does not reach the anchors (robot.search.lo, hi)",
               lambda analysis, spec, robot: True),
@@ -122,8 +92,13 @@ REGISTRY: dict[str, Criterion] = {c.name: c for c in (
     Criterion("cable_obstacle", interference.cable_obstacle, GEOMETRY, None, "#994F00",
               "anchors that route the cables around the obstacles, a smaller box, or obstacles moved",
               lambda analysis, spec, robot: bool(robot.obstacles)),
-)}
-COLOURS = {c.name: c.colour for c in REGISTRY.values()}
+    Criterion("stiffness", stiffness.stiffness, STATICS, None, "#44AA99",
+              "stiffer cables (robot.cable_ea), shorter cable to the winches (robot.winch_length), more "
+              "pretension (a higher tension.t_min) or anchors around the pose",
+              lambda analysis, spec, robot: analysis == "statics" and robot.cable_ea is not None,
+              keys={"translational": stiffness.required, "rotational": stiffness.required}),
+):
+    register(criterion)
 
 
 def gates() -> tuple[str, ...]:
@@ -180,30 +155,4 @@ def margins(names, state, limits, settings: dict | None = None) -> dict[str, np.
             for name in names}
 
 
-def force_families(state, limits) -> list[Family]:
-    """The intervals on the state's force variables under the ``feasible`` model, one
-    :class:`Family` per registered criterion that bounds this kind of state (``Criterion.bounds``;
-    registry order, which nests them: an earlier family does its best first)."""
-    found = []
-    for criterion in REGISTRY.values():
-        if criterion.bounds is not None and criterion.reads in (ANY, state.kind):
-            interval = criterion.bounds(state, limits)
-            if interval is not None:
-                found.append(Family(criterion.name, *interval))
-    return found
-
-
-def written_tensions(state, limits) -> np.ndarray:
-    """The cable forces (n, K, m) the ``feasible`` model writes within the registry's families
-    (``forces.written_distribution``: ``output.cables``, ``output.metrics``)."""
-    return written_distribution(state, limits, force_families(state, limits))
-
-
-def register(criterion: Criterion) -> None:
-    """Add ``criterion`` to the registry (after the package's own, a name of its own): from then
-    on every problem it applies to checks it, every kernel evaluates it, figures colour it."""
-    if criterion.name in REGISTRY:
-        raise ValueError(f"criterion {criterion.name!r} is already registered")
-    REGISTRY[criterion.name] = criterion
-    COLOURS[criterion.name] = criterion.colour
 FEASIBLE_COLOUR = "#009E73"  # feasible points and shares, in every figure and view

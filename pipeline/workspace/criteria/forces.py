@@ -9,6 +9,7 @@ import numpy as np
 
 from pipeline.model.distribution import min_norm_tensions
 from pipeline.model.tensions import Family, feasible_tensions
+from pipeline.workspace.criteria.registry import force_families
 
 
 def feasible_margins(state, limits, families: list[Family]) -> dict[str, np.ndarray]:
@@ -56,3 +57,9 @@ def written_distribution(state, limits, families: list[Family]) -> np.ndarray:
 def feasible_model(state) -> bool:
     """Whether the cable forces come from the ``feasible`` model's LPs."""
     return state.tension.model == "feasible"
+
+
+def written_tensions(state, limits) -> np.ndarray:
+    """The cable forces (n, K, m) the ``feasible`` model writes within the registry's families
+    (``forces.written_distribution``: ``output.cables``, ``output.metrics``)."""
+    return written_distribution(state, limits, force_families(state, limits))

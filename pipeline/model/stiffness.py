@@ -1,0 +1,63 @@
+"""The platform's stiffness held by elastic cables (Behzadipour & Khajepour 2006; Verhoeven 2004):
+K = sum_i k_i a_i a_i^T + sum_i t_i da_i/dx, for a small displacement x = [dp; dtheta] (m, and a
+small rotation vector, rad, fixed axes), with a_i = [u_i; b_i x u_i] the structure matrix's column
+(u_i the unit cable vector from its anchor to its attachment point, b_i = R b_i' the attachment
+from the platform's reference point), t_i the cable's tension and k_i = EA_i / (l_i + w_i) its
+axial stiffness (l_i its length from the anchor, w_i the winch side's, in series). The wrench the
+cables balance, A t, then changes by K dx to first order: the elastic term because each cable
+stretches along a_i (dl_i = a_i . dx), the geometric (tension) term because each cable turns:
+
+    du   = P (dp - [b]x dtheta) / l,        P = I - u u^T
+    d(b x u) = [b]x du + [u]x [b]x dtheta
+
+so, per cable, t/l [[P, -P [b]x], [[b]x P, -[b]x P [b]x + l [u]x [b]x]]. The geometric term is
+not symmetric in general (the moment's own turn); the criterion reads the symmetric part of the
+translational and rotational blocks (N/m and N m/rad kept apart). Not included: the load's own
+rotational term (its weight's moment turning with the platform) and the pulleys' (a robot with
+``robot.pulleys`` is refused)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def skew(v: np.ndarray) -> np.ndarray:
+    """(..., 3, 3) [v]x with [v]x w = v x w."""
+    zero = np.zeros(v.shape[:-1])
+    x, y, z = v[..., 0], v[..., 1], v[..., 2]
+    return np.stack([zero, -z, y, z, zero, -x, -y, x, zero], axis=-1).reshape(*v.shape[:-1], 3, 3)
+
+
+def stiffness_matrices(unit: np.ndarray, arms: np.ndarray, lengths: np.ndarray, tensions: np.ndarray,
+                       rates: np.ndarray) -> np.ndarray:
+    """(n, 6, 6) K of each pose from the unit cable vectors and the arms (n, m, 3), the cables'
+    lengths, tensions (N) and axial stiffnesses k_i (N/m) (n, m) (above); NaN where a cable has
+    no length."""
+    columns = np.concatenate([unit, np.cross(arms, unit)], axis=2)
+    stiffness = np.einsum("nm,nmi,nmj->nij", rates, columns, columns)
+    across = np.eye(3) - unit[..., :, None] * unit[..., None, :]
+    arm, along = skew(arms), skew(unit)
+    per_length = np.divide(tensions, lengths, out=np.full(lengths.shape, np.nan), where=lengths > 0)[..., None, None]
+    stiffness[:, :3, :3] += (per_length * across).sum(axis=1)
+    stiffness[:, :3, 3:] -= (per_length * across @ arm).sum(axis=1)
+    stiffness[:, 3:, :3] += (per_length * arm @ across).sum(axis=1)
+    stiffness[:, 3:, 3:] += (per_length * (-(arm @ across @ arm)) + tensions[..., None, None] * along @ arm).sum(axis=1)
+    return stiffness
+
+
+def least_stiffness(stiffness: np.ndarray, dofs=(0, 1, 2, 3, 4, 5)) -> tuple[np.ndarray, np.ndarray]:
+    """(n,) the least eigenvalue of the symmetric part of the translational block (N/m) and of
+    the rotational block (N m/rad), each over the platform's freedoms ``dofs`` among them (NaN
+    where it has none)."""
+    found = []
+    for block in ((0, 1, 2), (3, 4, 5)):
+        rows = [d for d in dofs if d in block]
+        if not rows:
+            found.append(np.full(len(stiffness), np.nan))
+            continue
+        part = stiffness[:, rows][:, :, rows]
+        least = np.full(len(stiffness), np.nan)  # NaN where K is not finite (no tensions, a collapsed cable)
+        finite = np.isfinite(part).all(axis=(1, 2))
+        least[finite] = np.linalg.eigvalsh((part[finite] + np.swapaxes(part[finite], 1, 2)) / 2)[:, 0]
+        found.append(least)
+    return found[0], found[1]

@@ -1,0 +1,130 @@
+"""The platform's stiffness with elastic cables and the criterion on it (issue 54 item 2).
+
+Oracles: the wrench the cables balance, A(x) t(x) with t = t0 + k (l(x) - l(x0)), differenced
+numerically over a small translation and a small rotation about fixed axes (its Jacobian is K
+by definition), written here from the anchors and attachment points alone; the closed form of a
+point held by six orthogonal cables; and the job's own columns and verdicts against that
+numerical K at the tensions the job writes."""
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from pipeline.model.stiffness import least_stiffness, stiffness_matrices
+from conftest import command, compute_workspace
+
+
+def cable_wrench(anchors, attachments, position, rotation, tensions0, rates, lengths0):
+    """A t at a pose: columns [u; (R b) x u], tensions stretched by the change of length."""
+    arms = attachments @ rotation.T
+    vectors = position + arms - anchors
+    lengths = np.linalg.norm(vectors, axis=1)
+    unit = vectors / lengths[:, None]
+    tensions = tensions0 + rates * (lengths - lengths0)
+    return np.concatenate([unit, np.cross(arms, unit)], axis=1).T @ tensions
+
+
+def numerical_stiffness(anchors, attachments, position, rotation, tensions, rates, h=1e-6):
+    """K by central differences: dp along each axis, then a rotation h about each fixed axis."""
+    lengths0 = np.linalg.norm(position + attachments @ rotation.T - anchors, axis=1)
+    columns = []
+    for j in range(6):
+        sides = []
+        for sign in (1.0, -1.0):
+            step = np.zeros(6)
+            step[j] = sign * h
+            turned = Rotation.from_rotvec(step[3:]).as_matrix() @ rotation
+            sides.append(cable_wrench(anchors, attachments, position + step[:3], turned, tensions, rates, lengths0))
+        columns.append((sides[0] - sides[1]) / (2 * h))
+    return np.column_stack(columns)
+
+
+def test_the_stiffness_matrix_is_the_derivative_of_the_cables_wrench():
+    rng = np.random.default_rng(2)
+    for _ in range(20):
+        anchors = rng.uniform(-3, 3, (8, 3))
+        attachments = rng.uniform(-0.3, 0.3, (8, 3))
+        position, rotation = rng.uniform(-0.5, 0.5, 3), Rotation.from_rotvec(rng.uniform(-0.5, 0.5, 3)).as_matrix()
+        tensions, rates = rng.uniform(10, 500, 8), rng.uniform(1e3, 1e5, 8)
+        arms = attachments @ rotation.T
+        vectors = position + arms - anchors
+        lengths = np.linalg.norm(vectors, axis=1)
+        ours = stiffness_matrices((vectors / lengths[:, None])[None], arms[None], lengths[None], tensions[None],
+                                  rates[None])[0]
+        numeric = numerical_stiffness(anchors, attachments, position, rotation, tensions, rates)
+        np.testing.assert_allclose(ours, numeric, atol=1e-5 * np.abs(numeric).max())
+        assert np.abs(ours - ours.T).max() > 1e-3  # the tension term turns the moments: not symmetric
+
+
+def test_a_point_held_by_six_orthogonal_cables_has_the_closed_form():
+    """Cables along +-x, +-y, +-z, each of length l, tension t, rate k: K = (2 k + 4 t / l) I."""
+    length, tension, rate = 2.0, 300.0, 5e4
+    unit = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], float)[None]
+    matrix = stiffness_matrices(unit, np.zeros_like(unit), np.full((1, 6), length), np.full((1, 6), tension),
+                                np.full((1, 6), rate))
+    np.testing.assert_allclose(matrix[0, :3, :3], (2 * rate + 4 * tension / length) * np.eye(3), rtol=1e-14)
+    translational, rotational = least_stiffness(matrix, (0, 1, 2))
+    assert translational[0] == pytest.approx(2 * rate + 4 * tension / length) and np.isnan(rotational[0])
+
+
+@pytest.mark.parametrize("tension", ["pinv", "feasible"])
+def test_the_jobs_stiffness_columns_and_verdicts_are_the_numerical_ones(make_cfg, catalogue, tension):
+    """The IRPM with 10^5 N cables and 2 m of cable to each winch: at the tensions the job writes,
+    the numerical K's least eigenvalues are its columns, and the verdicts follow them."""
+    required = {"translational": 8000.0, "rotational": 1500.0}
+    cfg = make_cfg("robot=irpm6", "robot.search.step=1.5", f"tension={tension}", "robot.cable_ea=1e5",
+                   "robot.winch_length=2", "output.cables=true",
+                   "+criteria.stiffness={translational: 8000, rotational: 1500}")
+    points, summary = compute_workspace(cfg, catalogue)
+    from pipeline.app.problem import build_problem
+
+    problem, grid = build_problem(cfg, catalogue)
+    robot = problem.robot
+    names = robot.cable_names
+    tensions = points[[f"tension_{n}" for n in names]].to_numpy()
+    checked = 0
+    for row, position in enumerate(grid[:]):
+        if not np.isfinite(tensions[row]).all():  # no tensions written where the feasible model finds none
+            continue
+        lengths = np.linalg.norm(position + robot.attachments - robot.anchors, axis=1)
+        numeric = numerical_stiffness(robot.anchors, robot.attachments, position, np.eye(3), tensions[row],
+                                      1e5 / (lengths + 2.0))
+        least = [np.linalg.eigvalsh((b + b.T) / 2)[0] for b in (numeric[:3, :3], numeric[3:, 3:])]
+        scale = np.abs(numeric).max()
+        assert points["stiffness_translational_N_per_m"].iloc[row] == pytest.approx(least[0], abs=1e-5 * scale)
+        assert points["stiffness_rotational_Nm_per_rad"].iloc[row] == pytest.approx(least[1], abs=1e-5 * scale)
+        margin = min(1.0, least[0] / required["translational"] - 1, least[1] / required["rotational"] - 1)
+        assert points["margin_stiffness"].iloc[row] == pytest.approx(margin, abs=1e-4)
+        checked += 1
+    assert checked > 100
+    stiff = points["margin_stiffness"] >= 0
+    assert 0 < stiff.mean() < 1 and (points.loc[points["feasible"], "margin_stiffness"] >= 0).all()
+    assert summary["kernel"] == "numpy"
+
+
+@pytest.mark.parametrize("overrides, message", [
+    (["robot.cable_ea=0"], "robot.cable_ea=0: must be > 0 (N)"),
+    (["robot.cable_ea=[1e5, 1e5]"], "robot.cable_ea=[100000.0, 100000.0]: 2 values for 8 cables"),
+    (["robot.cable_ea=1e5", "robot.winch_length=-1"], "robot.winch_length=-1: must be >= 0 (m)"),
+    (["robot.cable_ea=1e5", "robot.pulleys={axis: [0, 0, 1], radius: 0.05}"], "robot.cable_ea: the stiffness of cables"),
+    (["+criteria.stiffness={translational: 1000, rotational: 10}"], "criteria.stiffness: analysis=cpr_wwa does not check it"),
+    (["analysis=statics", "+criteria.stiffness={translational: 1000, rotational: 10}"],
+     "criteria.stiffness: analysis=statics does not check it"),
+    (["analysis=statics", "robot.cable_ea=1e5", "+criteria.stiffness={translational: -5, rotational: 10}"],
+     "criteria.stiffness.translational=-5: must be > 0"),
+])
+def test_elastic_cables_it_cannot_mean_are_refused_in_one_line(tmp_path, overrides, message):
+    run = tmp_path / "run"
+    done = command(tmp_path, "pipeline", "grid.n=3", *overrides, f"hydra.run.dir={run}")
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 2 and len(lines) == 1 and message in lines[0], lines
+    assert not run.exists()
+
+
+def test_a_collapsed_cable_or_missing_tensions_give_no_stiffness_not_an_error():
+    unit = np.array([[[1.0, 0, 0], [0, 1, 0], [0, 0, 1]], [[1.0, 0, 0], [0, 1, 0], [0, 0, 1]]])
+    lengths = np.array([[1.0, 1.0, 1.0], [0.0, 1.0, 1.0]])
+    tensions = np.array([[10.0, np.nan, 10.0], [10.0, 10.0, 10.0]])
+    matrix = stiffness_matrices(unit, np.zeros_like(unit), lengths, tensions, np.full((2, 3), 1e3))
+    translational, _ = least_stiffness(matrix, (0, 1, 2))
+    assert np.isnan(translational).all()
