@@ -1,6 +1,7 @@
 """What the interference criteria, the connected reach, the per-pose metrics and the boundary
-mesh cost (issue 40), in whole processes against the wrench-feasibility job without them, in
-the same run.
+mesh cost (issue 40), and the real cables' models (swivelling pulleys, the stiffness of elastic
+cables: issue 54), in whole processes against the wrench-feasibility job without them, in the
+same run.
 
     python benchmarks/bench_interference.py [--repeat 3] [--n 40]
 
@@ -8,7 +9,8 @@ The reference is ``python -m pipeline analysis=statics tension=feasible grid.n=N
 (N^3 poses: its carrier's weight held by cables that only pull, the exact check of
 ``pipeline.model.tensions``); each other line adds one feature, the last all of them. Printed:
 wall and CPU seconds (medians and ranges of ``--repeat`` runs), each line's ratio to the
-reference, and the extra CPU per pose. The boundary mesh is drawn by every job of a 3-D grid
+reference, and the extra CPU per pose (the cable models, which refuse each other, are not in
+"all of them"). The boundary mesh is drawn by every job of a 3-D grid
 (the reference too): its own time, marching cubes on the reference's margins in this process,
 is printed apart.
 """
@@ -36,6 +38,11 @@ FEATURES = {
     "connected reach (workspace.home)": ["workspace.home=[1.6,1.1,-1.1]"],
     "per-pose metrics (output.metrics=true)": ["output.metrics=true"],
 }
+CABLE_MODELS = {
+    "swivelling pulleys (robot.pulleys, r = 5 cm)": ["robot.pulleys={axis: [0, 0, -1], radius: 0.05}"],
+    "stiffness (robot.cable_ea, criteria.stiffness)": [
+        "robot.cable_ea=1e5", "+criteria.stiffness={translational: 1000, rotational: 10}"],
+}
 
 
 def main() -> None:
@@ -51,7 +58,7 @@ def main() -> None:
         reference = measured(f"reference: statics, tension=feasible, {poses} poses", [*base, "hydra.run.dir=ref{run}"],
                              args.repeat, cwd)
         everything = [o for extra in FEATURES.values() for o in extra]
-        for label, extra in [*FEATURES.items(), ("all of them", everything)]:
+        for label, extra in [*FEATURES.items(), ("all of them", everything), *CABLE_MODELS.items()]:
             wall, cpu = measured(label, [*base, *extra, f"hydra.run.dir=run{{run}}_{len(extra)}_{abs(hash(label))}"],
                                  args.repeat, cwd)
             print(f"  / reference: wall x{wall / reference[0]:.2f}, CPU x{cpu / reference[1]:.2f}; "

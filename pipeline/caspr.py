@@ -224,9 +224,10 @@ def search_box(cables: dict, body: dict | None, box=None) -> tuple[np.ndarray, n
     return lo, hi, "the anchors' bounding box"
 
 
-def robot_yaml(cables: dict, body: dict | None, step: float, sources: tuple[str, str | None], box) -> str:
-    """The robot file's text (YAML flow style, one cable per line); ``box``: (lo, hi, origin)
-    of :func:`search_box`."""
+def robot_yaml(cables: dict, body: dict | None, step: float, header: list[str], box) -> str:
+    """The robot file's text (YAML flow style, one cable per line) under the comment lines
+    ``header``; ``box``: (lo, hi, origin) of :func:`search_box`; ``cables["robot"]``: other robot
+    keys the source gives (an importer's own: cable diameter, stiffness, longest cable)."""
     com = np.zeros(3) if body is None else np.asarray(body["com"])
     origin = np.zeros(3) if body is None else body["origin"]
     attachments = [np.asarray(a) + (com if ref == "com" else 0.0)
@@ -234,12 +235,7 @@ def robot_yaml(cables: dict, body: dict | None, step: float, sources: tuple[str,
     anchors = np.asarray(cables["anchors"]) - origin  # relative to the joint's origin: positions are q
     lo, hi, _ = box
     spacing = "centres" if (np.asarray(hi) > np.asarray(lo)).all() else "faces"  # a plane: its one layer
-    bodies = f" with {_one_line(sources[1])} (link {_one_line(body['name'])!r}, joint {body['joint']})" if body else ""
-    lines = [
-        "# @package _global_",
-        f"# Imported from CASPR: {_one_line(sources[0])} (cable set {_one_line(str(cables['set']))!r}){bodies}.",
-        "# Anchors: link 0, relative to the joint's origin; attachments: link 1 (platform frame, joint origin).",
-    ]
+    lines = ["# @package _global_", *(f"# {_one_line(line)}" for line in header)]
     xyz = body is not None and body["convention"] == "xyz"
     if xyz:
         lines.append("# Orientation: CASPR's angles (a, b, c), R = Rx(a) Ry(b) Rz(c): orientation.convention=xyz "
@@ -259,6 +255,7 @@ def robot_yaml(cables: dict, body: dict | None, step: float, sources: tuple[str,
         f"  search: {{lo: {_flow(lo)}, hi: {_flow(hi)}, step: {step!r}, spacing: {spacing}}}",
         *(["  pulleys:", *[f"    - {{axis: {_flow(p['axis'] if p else [0.0, 0.0, 1.0])}, radius: {p['radius'] if p else 0.0!r}}}"
                             for p in cables["pulleys"]]] if any(cables["pulleys"]) else []),
+        *(f"  {key}: {value}" for key, value in cables.get("robot", {}).items()),
         f"tension: {{t_min: {_limit(cables['force_min'])}, t_max: {_limit(cables['force_max'])}}}",
         *(["orientation: {convention: xyz}"] if xyz else []),
     ]
@@ -347,43 +344,63 @@ def checked_target(out: Path, force: bool) -> Path:
     return out
 
 
+def target_arguments(parser: argparse.ArgumentParser) -> None:
+    """The options every importer takes: the search grid and the file it writes."""
+    parser.add_argument("--step", type=float, default=0.1, help="search grid step, m (default 0.1)")
+    parser.add_argument("--out", type=Path, help="file to write (default conf/robot/<name>.yaml)")
+    parser.add_argument("--force", action="store_true", help="replace an existing --out file")
+    parser.add_argument("--lo", type=float, nargs=3, help="search box corner x y z, m")
+    parser.add_argument("--hi", type=float, nargs=3, help="search box corner x y z, m")
+
+
+def given_box(args) -> tuple | None:
+    """``--lo``/``--hi`` as a box, None without them; ConfigError for a bad step or box."""
+    if not 0 < args.step < np.inf:
+        raise ConfigError(f"--step={args.step}: must be > 0 and finite")
+    if (args.lo is None) != (args.hi is None):
+        raise ConfigError("--lo and --hi: give both corners of the search box, or neither")
+    if args.lo is None:
+        return None
+    box = np.array(args.lo), np.array(args.hi)
+    if not (np.isfinite(box).all() and (box[0] <= box[1]).all()):
+        raise ConfigError(f"--lo={args.lo} --hi={args.hi}: must be finite with lo <= hi")
+    return box
+
+
+def write_robot(args, name: str, cables: dict, body: dict | None, header: list[str], box) -> tuple[Path, tuple]:
+    """Write the robot file of an import (:func:`checked_target`, :func:`search_box`,
+    :func:`robot_yaml`): its path and its search box."""
+    out = checked_target(args.out or Path("conf") / "robot" / f"{name}.yaml", args.force)
+    box = search_box(cables, body, box)
+    text = robot_yaml(cables, body, args.step, header, box)
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        write_text(out, text)
+    except OSError as exc:
+        raise ConfigError(f"--out={out}: cannot write ({exc.strerror or exc})") from None
+    return out, box
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="python -m pipeline.caspr", description=__doc__.split("\n\n")[0])
     parser.add_argument("--version", action="version", version=f"cdpr-studies {code_version()}")
     parser.add_argument("cables", type=Path, help="CASPR <name>_cables.xml")
     parser.add_argument("--bodies", type=Path, help="CASPR <name>_bodies.xml (joint, limits, mass, centre of mass)")
     parser.add_argument("--cable-set", help="cable_set id (default: the file's default_cable_set)")
-    parser.add_argument("--step", type=float, default=0.1, help="search grid step, m (default 0.1)")
-    parser.add_argument("--out", type=Path, help="file to write (default conf/robot/<name>.yaml)")
-    parser.add_argument("--force", action="store_true", help="replace an existing --out file")
-    parser.add_argument("--lo", type=float, nargs=3, help="search box corner x y z, m")
-    parser.add_argument("--hi", type=float, nargs=3, help="search box corner x y z, m")
+    target_arguments(parser)
     parser.add_argument("--number-cables", action="store_true",
                         help="name the cables 1, 2, ... in the file's order (for a file that names two alike)")
     args = parser.parse_args(argv)
     try:
-        if not 0 < args.step < np.inf:
-            raise ConfigError(f"--step={args.step}: must be > 0 and finite")
-        box = None
-        if (args.lo is None) != (args.hi is None):
-            raise ConfigError("--lo and --hi: give both corners of the search box, or neither")
-        if args.lo is not None:
-            box = np.array(args.lo), np.array(args.hi)
-            if not (np.isfinite(box).all() and (box[0] <= box[1]).all()):
-                raise ConfigError(f"--lo={args.lo} --hi={args.hi}: must be finite with lo <= hi")
+        box = given_box(args)
         cables = read_cables(args.cables, args.cable_set, args.number_cables)
         body = read_body(args.bodies) if args.bodies is not None else None
         if body is None and "com" in cables["reference"]:
             raise ConfigError(f"{args.cables}: attachments relative to the centre of mass need --bodies")
-        name = re.sub(r"_cables$", "", args.cables.stem).lower()
-        out = checked_target(args.out or Path("conf") / "robot" / f"{name}.yaml", args.force)
-        box = search_box(cables, body, box)
-        text = robot_yaml(cables, body, args.step, (args.cables.name, args.bodies and args.bodies.name), box)
-        try:
-            out.parent.mkdir(parents=True, exist_ok=True)
-            write_text(out, text)
-        except OSError as exc:
-            raise ConfigError(f"--out={out}: cannot write ({exc.strerror or exc})") from None
+        bodies = f" with {args.bodies.name} (link {body['name']!r}, joint {body['joint']})" if body else ""
+        header = [f"Imported from CASPR: {args.cables.name} (cable set {str(cables['set'])!r}){bodies}.",
+                  "Anchors: link 0, relative to the joint's origin; attachments: link 1 (platform frame, joint origin)."]
+        out, box = write_robot(args, re.sub(r"_cables$", "", args.cables.stem).lower(), cables, body, header, box)
     except ConfigError as exc:
         print(f"error: {exc}", file=sys.stderr)
         raise SystemExit(2) from None
@@ -400,7 +417,6 @@ def main(argv: list[str] | None = None) -> None:
         print("orientation: the file sets orientation.convention=xyz, CASPR's XYZ Euler angles "
               "(orientation.psi, theta, phi are its a, b, c)")
     print(f"run: python -m pipeline --config-dir {out.parent.parent} robot={out.stem}")
-
 
 if __name__ == "__main__":
     main()

@@ -62,7 +62,8 @@ def make_cfg_fixture():
 
 
 MAINS = {"pipeline": ("pipeline.app.cli", "cli"), "pipeline.study": ("pipeline.study", "main"),
-         "pipeline.caspr": ("pipeline.caspr", "main"), "pipeline.report": ("pipeline.report", "main")}
+         "pipeline.caspr": ("pipeline.caspr", "main"), "pipeline.report": ("pipeline.report", "main"),
+         "pipeline.wirex": ("pipeline.wirex", "main")}
 
 
 def command(cwd, module: str, *args: str) -> subprocess.CompletedProcess:

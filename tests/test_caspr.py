@@ -362,19 +362,25 @@ def caspr_pulley(fixed, entry, end, radius):
     return leave, np.linalg.norm(end - leave, axis=1) + arc
 
 
-def test_casprs_swivelling_pulleys_import_and_give_its_cable_lengths(tmp_path):
-    """Every cable of the Octo set from a <base_rotating_pulley> (the upper ones fed from above,
-    the lower from below): the robot file carries them, and the job's cable lengths
-    (output.cables) are CASPR's own closed form's at every pose of the grid."""
-    entries = [(0.0, 0.0, -1.0)] * 4 + [(0.0, 0.0, 1.0)] * 4
-    cables = [cable(i + 1, ANCHORS[i], PLATFORM[i], 600).replace(
+ENTRIES = [(0.0, 0.0, -1.0)] * 4 + [(0.0, 0.0, 1.0)] * 4  # the upper pulleys fed from above, the lower from below
+
+
+def pulley_cables(radius):
+    """The Octo set with every cable from a <base_rotating_pulley> at its anchor."""
+    return cables_xml([cable(i + 1, ANCHORS[i], PLATFORM[i], 600).replace(
         f"""<attachment>
           <link>0</link>
           <location>{' '.join(map(str, ANCHORS[i]))}</location>
         </attachment>""", f"<base_rotating_pulley><fixed_location>{' '.join(map(str, ANCHORS[i]))}</fixed_location>"
-        f"<pulley_radius>0.08</pulley_radius><cable_entry_vector>{' '.join(map(str, entries[i]))}</cable_entry_vector>"
-        "</base_rotating_pulley>", 1) for i in range(8)]
-    (tmp_path / "p_cables.xml").write_text(cables_xml(cables))
+        f"<pulley_radius>{radius}</pulley_radius><cable_entry_vector>{' '.join(map(str, ENTRIES[i]))}"
+        "</cable_entry_vector></base_rotating_pulley>", 1) for i in range(8)])
+
+
+def test_casprs_swivelling_pulleys_import_and_give_its_cable_lengths(tmp_path):
+    """The robot file carries the pulleys, and the job's cable lengths (output.cables) are CASPR's
+    own closed form's at every pose of the grid."""
+    entries = ENTRIES
+    (tmp_path / "p_cables.xml").write_text(pulley_cables(0.08))
     done = run(tmp_path, "pipeline.caspr", "p_cables.xml", "--step", "0.5", "--lo", "-2", "-1", "0.5", "--hi", "2", "1",
                "2.5", "--out", "mine/robot/p.yaml")
     assert done.returncode == 0, done.stderr
@@ -388,3 +394,36 @@ def test_casprs_swivelling_pulleys_import_and_give_its_cable_lengths(tmp_path):
     for i in range(8):
         _, lengths = caspr_pulley(np.array(ANCHORS[i]), np.array(entries[i]), centres + PLATFORM[i], 0.08)
         np.testing.assert_allclose(points[f"length_cable {i + 1}"], lengths, rtol=1e-12)
+
+
+def test_an_imported_pulley_robot_agrees_pose_by_pose_with_an_lp_on_casprs_geometry(tmp_path):
+    """With its bodies file (12.5 kg), tilted, cables in [5, 600] N (the file's): the job's verdicts are a plain
+    LP's on the directions from CASPR's own leaving points, and differ from the LP's on the
+    directions from the anchors (the pulleys matter to the verdict, the test can tell)."""
+    (tmp_path / "q_cables.xml").write_text(pulley_cables(0.25))
+    (tmp_path / "Octo_bodies.xml").write_text(BODIES)
+    done = run(tmp_path, "pipeline.caspr", "q_cables.xml", "--bodies", "Octo_bodies.xml", "--step", "0.25",
+               "--out", "mine/robot/q.yaml")
+    assert done.returncode == 0, done.stderr
+    tilt = ["orientation.psi=0.2", "orientation.theta=-0.3"]
+    job = run(tmp_path, "pipeline", "--config-dir", "mine", "robot=q", "tension.model=feasible",
+              *tilt, "hydra.run.dir=out")
+    assert job.returncode == 0, job.stderr
+    points = pd.read_parquet(tmp_path / "out" / "points.parquet")
+    psi, theta = 0.2, -0.3
+    rx = np.array([[1, 0, 0], [0, np.cos(psi), -np.sin(psi)], [0, np.sin(psi), np.cos(psi)]])
+    ry = np.array([[np.cos(theta), 0, np.sin(theta)], [0, 1, 0], [-np.sin(theta), 0, np.cos(theta)]])
+    rotation = rx @ ry
+    weight = np.array([0.0, 0.0, -12.5 * 9.81])
+    wrench = -np.concatenate([weight, np.cross(rotation @ np.array(COM), weight)])
+    arms = np.array(PLATFORM) @ rotation.T
+    ends = points[["x", "y", "z"]].to_numpy()[:, None, :] + arms
+    starts = np.stack([caspr_pulley(np.array(ANCHORS[i]), np.array(ENTRIES[i]), ends[:, i], 0.25)[0]
+                       for i in range(8)], axis=1)
+    verdicts = []
+    for begin in (starts, np.broadcast_to(np.array(ANCHORS, float), ends.shape)):
+        pulls = (begin - ends) / np.linalg.norm(begin - ends, axis=2, keepdims=True)
+        verdicts.append([linprog(np.zeros(8), A_eq=np.vstack([u.T, np.cross(arms, u).T]), b_eq=wrench,
+                                 bounds=[(5, 600)] * 8, method="highs").status == 0 for u in pulls])
+    assert verdicts[0] == points["feasible"].tolist()
+    assert 0 < sum(verdicts[0]) < len(points) and verdicts[1] != verdicts[0]

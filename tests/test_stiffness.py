@@ -88,7 +88,7 @@ def test_the_jobs_stiffness_columns_and_verdicts_are_the_numerical_ones(make_cfg
             continue
         lengths = np.linalg.norm(position + robot.attachments - robot.anchors, axis=1)
         numeric = numerical_stiffness(robot.anchors, robot.attachments, position, np.eye(3), tensions[row],
-                                      1e5 / (lengths + 2.0))
+                                      (1e5 + tensions[row]) / (lengths + 2.0))  # dt/dL = EA / L0
         least = [np.linalg.eigvalsh((b + b.T) / 2)[0] for b in (numeric[:3, :3], numeric[3:, 3:])]
         scale = np.abs(numeric).max()
         assert points["stiffness_translational_N_per_m"].iloc[row] == pytest.approx(least[0], abs=1e-5 * scale)
@@ -106,7 +106,8 @@ def test_the_jobs_stiffness_columns_and_verdicts_are_the_numerical_ones(make_cfg
     (["robot.cable_ea=0"], "robot.cable_ea=0: must be > 0 (N)"),
     (["robot.cable_ea=[1e5, 1e5]"], "robot.cable_ea=[100000.0, 100000.0]: 2 values for 8 cables"),
     (["robot.cable_ea=1e5", "robot.winch_length=-1"], "robot.winch_length=-1: must be >= 0 (m)"),
-    (["robot.cable_ea=1e5", "robot.pulleys={axis: [0, 0, 1], radius: 0.05}"], "robot.cable_ea: the stiffness of cables"),
+    (["analysis=statics", "robot.cable_ea=1e5", "robot.pulleys={axis: [0, 0, 1], radius: 0.05}",
+      "+criteria.stiffness={translational: 1000, rotational: 10}"], "criteria.stiffness: analysis=statics does not check it"),
     (["+criteria.stiffness={translational: 1000, rotational: 10}"], "criteria.stiffness: analysis=cpr_wwa does not check it"),
     (["analysis=statics", "+criteria.stiffness={translational: 1000, rotational: 10}"],
      "criteria.stiffness: analysis=statics does not check it"),
@@ -128,3 +129,30 @@ def test_a_collapsed_cable_or_missing_tensions_give_no_stiffness_not_an_error():
     matrix = stiffness_matrices(unit, np.zeros_like(unit), lengths, tensions, np.full((2, 3), 1e3))
     translational, _ = least_stiffness(matrix, (0, 1, 2))
     assert np.isnan(translational).all()
+
+
+def test_a_cables_rate_and_unstrained_length_follow_its_spring_law():
+    """t = EA (L - L0) / L0: the unstrained length recovered from (L, t), and dt/dL by central
+    differences at fixed L0."""
+    from pipeline.model.stiffness import axial_rates, unstrained_lengths
+
+    ea, unstrained = np.array([2e4, 1e5, 5e5]), np.array([[1.5, 3.0, 7.0]])
+    stretched = unstrained * np.array([[1.01, 1.002, 1.0004]])
+
+    def tension(length):
+        return ea * (length - unstrained) / unstrained
+
+    np.testing.assert_allclose(unstrained_lengths(ea, stretched, tension(stretched)), unstrained, rtol=1e-14)
+    h = 1e-7
+    slope = (tension(stretched + h) - tension(stretched - h)) / (2 * h)
+    np.testing.assert_allclose(axial_rates(ea, stretched, tension(stretched)), slope, rtol=1e-6)
+
+
+def test_the_job_writes_the_unstrained_length_each_winch_pays_out(make_cfg, catalogue):
+    points, _ = compute_workspace(make_cfg("robot=irpm6", "robot.search.step=1.5", "robot.cable_ea=1e5",
+                                           "robot.winch_length=2", "output.cables=true"), catalogue)
+    for name in ("C1D1", "C4D4"):
+        stretched = points[f"length_{name}"] + 2.0
+        law = stretched / (1 + points[f"tension_{name}"] / 1e5)
+        np.testing.assert_allclose(points[f"unstrained_{name}"], law, rtol=1e-14)
+        assert (points[f"unstrained_{name}"] < stretched)[points[f"tension_{name}"] > 1].all()  # 1 N: 1e-5 of EA

@@ -481,12 +481,9 @@ def guided(cfg: DictConfig, robot: CableRobot) -> CableRobot:
 def elastic(cfg: DictConfig, robot: CableRobot) -> CableRobot:
     """The robot with elastic cables (docs/model.md section 7): ``robot.cable_ea`` (N, > 0, one or
     one per cable; null: rigid) and ``robot.winch_length`` (m, >= 0, the cable between the
-    anchor and the winch, in series). Refused with pulleys (their stiffness is not modelled)."""
+    anchor and the winch, in series)."""
     if cfg.robot.cable_ea is None:
         return robot
-    if robot.pulleys is not None:
-        raise ConfigError("robot.cable_ea: the stiffness of cables over swivelling pulleys (robot.pulleys) is not "
-                          "modelled; set one of them null")
     ea = _limit_values("robot.cable_ea", cfg.robot.cable_ea, robot.n_cables)
     if not (ea > 0).all():
         raise ConfigError(f"robot.cable_ea={shown(cfg.robot.cable_ea)}: must be > 0 (N)")

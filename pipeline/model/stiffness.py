@@ -2,8 +2,10 @@
 K = sum_i k_i a_i a_i^T + sum_i t_i da_i/dx, for a small displacement x = [dp; dtheta] (m, and a
 small rotation vector, rad, fixed axes), with a_i = [u_i; b_i x u_i] the structure matrix's column
 (u_i the unit cable vector from its anchor to its attachment point, b_i = R b_i' the attachment
-from the platform's reference point), t_i the cable's tension and k_i = EA_i / (l_i + w_i) its
-axial stiffness (l_i its length from the anchor, w_i the winch side's, in series). The wrench the
+from the platform's reference point), t_i the cable's tension and k_i its axial stiffness: a cable
+of stretched length L = l_i + w_i (from the anchor, and the winch side's in series) and
+unstrained length L0 pulls with t = EA (L - L0) / L0, so dt/dL = EA / L0 = (EA + t) / L
+(:func:`axial_rates`; L0 = L / (1 + t / EA), :func:`unstrained_lengths`). The wrench the
 cables balance, A t, then changes by K dx to first order: the elastic term because each cable
 stretches along a_i (dl_i = a_i . dx), the geometric (tension) term because each cable turns:
 
@@ -19,6 +21,18 @@ rotational term (its weight's moment turning with the platform) and the pulleys'
 from __future__ import annotations
 
 import numpy as np
+
+
+def axial_rates(ea: np.ndarray, stretched: np.ndarray, tensions: np.ndarray) -> np.ndarray:
+    """(n, m) k = dt/dL = (EA + t) / L, N/m, of cables of axial stiffness EA (m,) stretched to
+    L (n, m) under tensions t (n, m); NaN where a cable has no length."""
+    return np.divide(ea + tensions, stretched, out=np.full(stretched.shape, np.nan), where=stretched > 0)
+
+
+def unstrained_lengths(ea: np.ndarray, stretched: np.ndarray, tensions: np.ndarray) -> np.ndarray:
+    """(n, m) L0 = L / (1 + t / EA), m: the unstrained length a cable stretched to L under t needs
+    (what its winch must have paid out)."""
+    return stretched / (1.0 + tensions / ea)
 
 
 def skew(v: np.ndarray) -> np.ndarray:

@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from pipeline.model.stiffness import unstrained_lengths
+
 from pipeline.workspace.criteria.forces import written_tensions
 
 
@@ -32,6 +34,9 @@ def cable_quantities(state, limits) -> dict[str, np.ndarray]:
         high, low = state.forces_of(chosen.max(axis=1)), state.forces_of(chosen.min(axis=1))
     if not state.ranges_over_a_set:
         columns.update({f"tension_{name}": high[:, i] for i, name in enumerate(names)})
+        if state.robot.cable_ea is not None:  # elastic cables: what each winch must have paid out
+            unstrained = unstrained_lengths(state.robot.cable_ea, state.cable_lengths + state.robot.winch_lengths, high)
+            columns.update({f"unstrained_{name}": unstrained[:, i] for i, name in enumerate(names)})
         return columns
     for i, name in enumerate(names):
         columns[f"tension_min_{name}"] = low[:, i]

@@ -95,7 +95,7 @@ for criterion in (
     Criterion("stiffness", stiffness.stiffness, STATICS, None, "#44AA99",
               "stiffer cables (robot.cable_ea), shorter cable to the winches (robot.winch_length), more "
               "pretension (a higher tension.t_min) or anchors around the pose",
-              lambda analysis, spec, robot: analysis == "statics" and robot.cable_ea is not None,
+              lambda analysis, spec, robot: analysis == "statics" and robot.cable_ea is not None and robot.pulleys is None,
               keys={"translational": stiffness.required, "rotational": stiffness.required}),
 ):
     register(criterion)

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipeline.model.stiffness import least_stiffness, stiffness_matrices
+from pipeline.model.stiffness import axial_rates, least_stiffness, stiffness_matrices
 from pipeline.workspace.criteria.forces import feasible_model, written_tensions
 
 ROTATIONS = (3, 4, 5)  # the freedoms' indices of the rotations
@@ -30,11 +30,10 @@ def stiffness(state, limits, translational: float, rotational: float) -> np.ndar
         tensions = state.forces_of(written_tensions(state, limits))
     else:
         tensions = state.tensions_over_set if state.ranges_over_a_set else state.tensions[:, None, :]
-    lengths = state.cable_lengths
-    stretched = lengths + robot.winch_lengths
-    rates = np.divide(robot.cable_ea, stretched, out=np.full(stretched.shape, np.nan), where=stretched > 0)
-    least = [np.full(len(lengths), np.inf), np.full(len(lengths), np.inf)]
+    stretched = state.cable_lengths + robot.winch_lengths
+    least = [np.full(len(stretched), np.inf), np.full(len(stretched), np.inf)]
     for k in range(tensions.shape[1]):
+        rates = axial_rates(robot.cable_ea, stretched, tensions[:, k, :])
         matrix = stiffness_matrices(state.unit, state.arms, state.lengths, tensions[:, k, :], rates)
         for found, value in zip(least, least_stiffness(matrix, robot.dofs)):
             np.minimum(found, value, out=found)  # NaN (no tensions) stays NaN
