@@ -40,7 +40,8 @@ def test_every_layer_is_a_package_with_its_modules():
     for name in LAYERS[1:]:
         assert (ROOT / name / "__init__.py").exists()
         assert len(list((ROOT / name).glob("*.py"))) >= 5
-    assert sorted(p.stem for p in ROOT.glob("*.py")) == ["__init__", "__main__", "api", "caspr", "errors", "report", "study", "wirex"]
+    assert sorted(p.stem for p in ROOT.glob("*.py")) == ["__init__", "__main__", "api", "caspr", "errors", "report", "study",
+                                                         "wirex"]
 
 
 def test_no_two_modules_import_each_other_and_hydra_only_through_its_public_api():
