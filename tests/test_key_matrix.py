@@ -25,7 +25,8 @@ KEYS = {  # key -> (overrides, the criterion or column it adds when the job runs
     "criteria": (["+criteria.torque.limit=3"], None),  # torque declares no keys of its own
     "pulleys": (["robot.pulleys={axis: [0, 0, 1], radius: 0.05}"], None),
     "pulleys with jdot": (["robot.pulleys={axis: [0, 0, 1], radius: 0.05}", "model.jdot=true"], None),
-    "stiffness": (["robot.cable_ea=1e5", "+criteria.stiffness={translational: 1000, rotational: 10}"], "margin_stiffness"),
+    "stiffness": (["robot.cable_ea=1e5", "+criteria.stiffness={translational: 1000, rotational: 10, frequency: 0}"],
+                  "margin_stiffness"),
 }
 # the cells that are refused, with the key the one line names
 REFUSED = {("lines", "workspace.home"): "workspace.home", ("lines", "output.mesh"): "output.mesh",

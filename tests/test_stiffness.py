@@ -8,6 +8,7 @@ numerical K at the tensions the job writes."""
 
 import numpy as np
 import pytest
+from scipy.linalg import eigh
 from scipy.spatial.transform import Rotation
 
 from pipeline.model.stiffness import least_stiffness, stiffness_matrices
@@ -69,12 +70,17 @@ def test_a_point_held_by_six_orthogonal_cables_has_the_closed_form():
 
 @pytest.mark.parametrize("tension", ["pinv", "feasible"])
 def test_the_jobs_stiffness_columns_and_verdicts_are_the_numerical_ones(make_cfg, catalogue, tension):
-    """The IRPM with 10^5 N cables and 2 m of cable to each winch: at the tensions the job writes,
-    the numerical K's least eigenvalues are its columns, and the verdicts follow them."""
-    required = {"translational": 8000.0, "rotational": 1500.0}
+    """The IRPM with 10^5 N cables and 2 m of cable to each winch, a 20 kg platform with its centre
+    off the reference point and its inertia: at the tensions the job writes, the numerical K's
+    least eigenvalues are its columns, its lowest natural frequency the generalized eigenproblem
+    with the mass matrix of the kinetic energy (M = J' diag(m, m, m, I_c) J, J the centre's
+    velocity map; scipy's eigh), and the verdicts follow them."""
+    required = {"translational": 8000.0, "rotational": 1500.0, "frequency": 2.0}
+    com, inertia = np.array([0.05, -0.02, 0.1]), np.array([[0.8, 0.05, 0.0], [0.05, 0.9, 0.02], [0.0, 0.02, 1.2]])
     cfg = make_cfg("robot=irpm6", "robot.search.step=1.5", f"tension={tension}", "robot.cable_ea=1e5",
-                   "robot.winch_length=2", "output.cables=true",
-                   "+criteria.stiffness={translational: 8000, rotational: 1500}")
+                   "robot.winch_length=2", "output.cables=true", "robot.platform.mass=20",
+                   "robot.platform.com=[0.05,-0.02,0.1]", "robot.platform.inertia=[0.8,0.9,1.2,0.05,0.0,0.02]",
+                   "+criteria.stiffness={translational: 8000, rotational: 1500, frequency: 2}")
     points, summary = compute_workspace(cfg, catalogue)
     from pipeline.app.problem import build_problem
 
@@ -90,10 +96,17 @@ def test_the_jobs_stiffness_columns_and_verdicts_are_the_numerical_ones(make_cfg
         numeric = numerical_stiffness(robot.anchors, robot.attachments, position, np.eye(3), tensions[row],
                                       (1e5 + tensions[row]) / (lengths + 2.0))  # dt/dL = EA / L0
         least = [np.linalg.eigvalsh((b + b.T) / 2)[0] for b in (numeric[:3, :3], numeric[3:, 3:])]
+        velocity = np.block([[np.eye(3), -np.cross(np.eye(3), com)], [np.zeros((3, 3)), np.eye(3)]])  # v_c = v + w x c
+        body = np.block([[20 * np.eye(3), np.zeros((3, 3))], [np.zeros((3, 3)), inertia]])
+        lowest = eigh((numeric + numeric.T) / 2, velocity.T @ body @ velocity, eigvals_only=True)[0]
+        least.append(np.sqrt(max(lowest, 0.0)) / (2 * np.pi))
         scale = np.abs(numeric).max()
         assert points["stiffness_translational_N_per_m"].iloc[row] == pytest.approx(least[0], abs=1e-5 * scale)
         assert points["stiffness_rotational_Nm_per_rad"].iloc[row] == pytest.approx(least[1], abs=1e-5 * scale)
-        margin = min(1.0, least[0] / required["translational"] - 1, least[1] / required["rotational"] - 1)
+        ours = (2 * np.pi * points["stiffness_frequency_Hz"].iloc[row]) ** 2  # omega^2: the eigenvalue itself
+        assert ours == pytest.approx(max(lowest, 0.0), rel=1e-5, abs=1e-5 * scale)
+        margin = min(1.0, least[0] / required["translational"] - 1, least[1] / required["rotational"] - 1,
+                     least[2] / required["frequency"] - 1)
         assert points["margin_stiffness"].iloc[row] == pytest.approx(margin, abs=1e-4)
         checked += 1
     assert checked > 100
@@ -102,21 +115,33 @@ def test_the_jobs_stiffness_columns_and_verdicts_are_the_numerical_ones(make_cfg
     assert summary["kernel"] == "numpy"
 
 
+REQUIRED = "+criteria.stiffness={translational: 1000, rotational: 10, frequency: 0}"
+
+
 @pytest.mark.parametrize("overrides, message", [
     (["robot.cable_ea=0"], "robot.cable_ea=0: must be > 0 (N)"),
     (["robot.cable_ea=[1e5, 1e5]"], "robot.cable_ea=[100000.0, 100000.0]: 2 values for 8 cables"),
     (["robot.cable_ea=1e5", "robot.winch_length=-1"], "robot.winch_length=-1: must be >= 0 (m)"),
     (["analysis=statics", "robot.cable_ea=1e5", "robot.pulleys={axis: [0, 0, 1], radius: 0.05}",
-      "+criteria.stiffness={translational: 1000, rotational: 10}"], "criteria.stiffness: analysis=statics does not check it"),
-    (["+criteria.stiffness={translational: 1000, rotational: 10}"], "criteria.stiffness: analysis=cpr_wwa does not check it"),
-    (["analysis=statics", "+criteria.stiffness={translational: 1000, rotational: 10}"],
+      REQUIRED], "criteria.stiffness: analysis=statics does not check it"),
+    ([REQUIRED], "criteria.stiffness: analysis=cpr_wwa does not check it"),
+    (["analysis=statics", "+criteria.stiffness={translational: 1000, rotational: 10, frequency: 0}"],
      "criteria.stiffness: analysis=statics does not check it"),
-    (["analysis=statics", "robot.cable_ea=1e5", "+criteria.stiffness={translational: -5, rotational: 10}"],
-     "criteria.stiffness.translational=-5: must be > 0"),
+    (["analysis=statics", "robot.cable_ea=1e5", "+criteria.stiffness={translational: -5, rotational: 10, frequency: 0}"],
+     "criteria.stiffness.translational=-5: must be >= 0"),
+    (["robot=irpm6", "robot.cable_ea=1e5", "+criteria.stiffness={translational: 0, rotational: 0, frequency: 5}"],
+     "criteria.stiffness: frequency needs a moving mass"),
+    (["analysis=statics", "robot.cable_ea=1e5", "robot.platform.mass=3",
+      "+criteria.stiffness={translational: 0, rotational: 0, frequency: 5}"], "frequency needs the platform's inertia"),
+    (["analysis=statics", "robot.platform.mass=3", "robot.platform.inertia=[1, 1, -1]"],
+     "robot.platform.inertia=[1, 1, -1]: must be finite and positive definite"),
+    (["robot=irpm6", "robot.platform.inertia=[1, 1, 1]"], "a platform with an inertia needs its mass"),
+    (["analysis=statics", "robot.platform.mass=3", "robot.platform.inertia=5"], "robot.platform.inertia=5: [Ixx, Iyy, Izz]"),
 ])
 def test_elastic_cables_it_cannot_mean_are_refused_in_one_line(tmp_path, overrides, message):
     run = tmp_path / "run"
-    done = command(tmp_path, "pipeline", "grid.n=3", *overrides, f"hydra.run.dir={run}")
+    size = ["robot.search.step=2"] if "robot=irpm6" in overrides else ["grid.n=3"]
+    done = command(tmp_path, "pipeline", *size, *overrides, f"hydra.run.dir={run}")
     lines = done.stderr.strip().splitlines()
     assert done.returncode == 2 and len(lines) == 1 and message in lines[0], lines
     assert not run.exists()
@@ -156,3 +181,15 @@ def test_the_job_writes_the_unstrained_length_each_winch_pays_out(make_cfg, cata
         law = stretched / (1 + points[f"tension_{name}"] / 1e5)
         np.testing.assert_allclose(points[f"unstrained_{name}"], law, rtol=1e-14)
         assert (points[f"unstrained_{name}"] < stretched)[points[f"tension_{name}"] > 1].all()  # 1 N: 1e-5 of EA
+
+
+def test_a_point_mass_between_six_orthogonal_cables_rings_at_the_closed_form():
+    """f = sqrt((2 k + 4 t / l) / m) / (2 pi) along every axis."""
+    from pipeline.model.stiffness import lowest_frequency, spatial_inertia
+
+    length, tension, rate, mass = 2.0, 300.0, 5e4, 7.0
+    unit = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], float)[None]
+    matrix = stiffness_matrices(unit, np.zeros_like(unit), np.full((1, 6), length), np.full((1, 6), tension),
+                                np.full((1, 6), rate))
+    found = lowest_frequency(matrix, spatial_inertia(mass, np.zeros(3), np.zeros((3, 3))), (0, 1, 2))
+    assert found[0] == pytest.approx(np.sqrt((2 * rate + 4 * tension / length) / mass) / (2 * np.pi), rel=1e-13)

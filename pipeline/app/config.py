@@ -195,11 +195,14 @@ class PlatformConfig:
     weight in f_ext; a robot of points: 0 unless its file gives one). ``shape``: its body, which
     no cable may enter (criterion ``cable_platform``) and obstacles see: ``hull`` (the convex hull
     of the attachment points), a box ``{lo: [x, y, z], hi: [x, y, z]}`` (m, platform frame) with
-    every attachment on its surface, or null (not checked; obstacles see the attachments' hull)."""
+    every attachment on its surface, or null (not checked; obstacles see the attachments' hull).
+    ``inertia``: about its centre of mass, kg m^2, [Ixx, Iyy, Izz] or with [Ixy, Ixz, Iyz] after
+    them (null: not given; the natural frequency of criterion ``stiffness`` needs it)."""
 
     mass: float = rule(mass_kg)
     com: list[float] = rule(vector(3, "x y z, m, platform frame"))
     shape: Any = MISSING
+    inertia: Any = MISSING
 
 
 @dataclass

@@ -49,7 +49,7 @@ from pipeline.model.statics import PayloadSpec, StaticLimits, StaticsSpec
 from pipeline.model.tensions import TensionSpec
 from pipeline.workspace.compute import grid_workspace, name_of
 from pipeline.workspace.dispatch import fused_unfit
-from pipeline.workspace.criteria import checked_settings, selected
+from pipeline.workspace.criteria import REGISTRY, checked_settings, selected
 from pipeline.workspace.grid import Grid, box_grid, listed_grid, step_grid
 from pipeline.workspace.kernel import WorkspaceProblem
 from pipeline.workspace.reach import home_node
@@ -417,6 +417,10 @@ def build(cfg: DictConfig, catalogue: Catalogue | None) -> WorkspaceProblem:
     if refused:
         raise ConfigError(f"criteria.{refused[0]}: analysis={cfg.analysis} does not check it on this robot; "
                           "remove its keys or choose an analysis it applies to")
+    for name, keys in settings.items():  # what a criterion itself cannot evaluate on this problem
+        reason = REGISTRY[name].refuses(spec, robot, keys) if REGISTRY[name].refuses else None
+        if reason:
+            raise ConfigError(f"criteria.{name}: {reason}")
     given = cfg.orientation
     if robot.fixed_point and (orientation_count(given) > 1 or any(given[a] != 0 for a in ("psi", "theta", "phi"))):
         freedoms = ", ".join(FREEDOMS[i] for i in robot.dofs)
@@ -646,7 +650,32 @@ def load_spec(cfg: DictConfig) -> Load:
         load["com"], dtype=float)
     com = moments / mass if mass > 0 else np.zeros(3)
     applied = np.array([w[key] for key in ("fx", "fy", "fz", "mx", "my", "mz")], dtype=float)
-    return Load(mass, float(load["gravity"]), com, np.asarray(load["external"], dtype=float) + applied)
+    inertia = None
+    if platform.get("inertia") is not None:  # the platform's about its own centre, the payload a point mass
+        def shifted(body_mass, at):  # parallel axes: the inertia of a point mass about the joint centre
+            offset = np.asarray(at, dtype=float) - com
+            return body_mass * (offset @ offset * np.eye(3) - np.outer(offset, offset))
+        inertia = (platform_inertia(platform["inertia"], float(platform["mass"]))
+                   + shifted(float(platform["mass"]), platform["com"]) + shifted(float(load["mass"]), load["com"]))
+    return Load(mass, float(load["gravity"]), com, np.asarray(load["external"], dtype=float) + applied, inertia)
+
+
+def platform_inertia(value, mass: float) -> np.ndarray:
+    """``robot.platform.inertia``: [Ixx, Iyy, Izz] or [Ixx, Iyy, Izz, Ixy, Ixz, Iyz], kg m^2, about
+    the platform's centre of mass (platform frame), as a (3, 3) matrix: positive definite, of a
+    platform with a mass."""
+    key = "robot.platform.inertia"
+    if not (isinstance(value, list) and len(value) in (3, 6)
+            and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)):
+        raise ConfigError(f"{key}={value}: [Ixx, Iyy, Izz] or [Ixx, Iyy, Izz, Ixy, Ixz, Iyz] (kg m^2, about the "
+                          "platform's centre of mass)")
+    xx, yy, zz, xy, xz, yz = [*value, 0.0, 0.0, 0.0][:6]
+    matrix = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]], dtype=float)
+    if not (np.isfinite(matrix).all() and np.linalg.eigvalsh(matrix)[0] > 0):
+        raise ConfigError(f"{key}={value}: must be finite and positive definite (kg m^2)")
+    if not mass > 0:
+        raise ConfigError(f"{key}={value}: a platform with an inertia needs its mass (robot.platform.mass > 0)")
+    return matrix
 
 
 def tension_spec(cfg: DictConfig, robot: CableRobot) -> TensionSpec:

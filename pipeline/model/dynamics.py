@@ -27,12 +27,14 @@ class Load:
     """What the cables carry besides inertia: a load of ``mass`` (kg) under gravity of magnitude
     ``gravity`` (m/s^2, along -up of the robot) with its centre of mass at ``com`` (m, platform
     frame), and a constant ``external`` wrench [f; M] (N, N m; fixed axes, moments about the
-    platform's reference point)."""
+    platform's reference point); ``inertia`` (3, 3), kg m^2, the body's about its centre of mass,
+    platform frame (None: not given)."""
 
     mass: float = 0.0
     gravity: float = 9.81
     com: np.ndarray = field(default_factory=lambda: np.zeros(3))
     external: np.ndarray = field(default_factory=lambda: np.zeros(6))
+    inertia: np.ndarray | None = None
 
 
 REFERENCE_SET = 12  # the velocities evaluated per pose at the paper's N = 6: the 12 extremes of eq. (23)'s 93

@@ -245,6 +245,7 @@ class PoseGeometry:
     closest_obstacle: np.ndarray | None = None
     stiffness_translational: np.ndarray | None = None
     stiffness_rotational: np.ndarray | None = None
+    frequency: np.ndarray | None = None
 
     def __init__(self, robot: CableRobot, positions: np.ndarray, orientation):
         self.robot = robot
@@ -320,5 +321,6 @@ class PoseGeometry:
         found = {"lp_poses": self.tension_lp, "closest_pair": self.closest_pair,
                  "closest_obstacle": self.closest_obstacle,
                  "stiffness_translational_N_per_m": self.stiffness_translational,
-                 "stiffness_rotational_Nm_per_rad": self.stiffness_rotational}
+                 "stiffness_rotational_Nm_per_rad": self.stiffness_rotational,
+                 "stiffness_frequency_Hz": self.frequency}
         return {key: value for key, value in found.items() if value is not None}

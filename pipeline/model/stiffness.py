@@ -75,3 +75,29 @@ def least_stiffness(stiffness: np.ndarray, dofs=(0, 1, 2, 3, 4, 5)) -> tuple[np.
         least[finite] = np.linalg.eigvalsh((part[finite] + np.swapaxes(part[finite], 1, 2)) / 2)[:, 0]
         found.append(least)
     return found[0], found[1]
+
+
+def spatial_inertia(mass: float, com: np.ndarray, inertia: np.ndarray) -> np.ndarray:
+    """(n, 6, 6) or (6, 6) M of a body about the platform's reference point, fixed axes, for
+    x = [dp; dtheta]: [[m I, -m [c]x], [m [c]x, I_c - m [c]x [c]x]] with c the centre of mass from
+    the reference point and I_c the inertia about it, both turned with the platform (kinetic
+    energy 1/2 x' M x: the centre moves with dp + dtheta x c)."""
+    arm = skew(com)
+    top = np.concatenate([np.broadcast_to(mass * np.eye(3), arm.shape), -mass * arm], axis=-1)
+    bottom = np.concatenate([mass * arm, inertia - mass * arm @ arm], axis=-1)
+    return np.concatenate([top, bottom], axis=-2)
+
+
+def lowest_frequency(stiffness: np.ndarray, inertia: np.ndarray, dofs) -> np.ndarray:
+    """(n,) the lowest natural frequency, Hz, of K x = omega^2 M x over the freedoms ``dofs``
+    (the symmetric part of K; 0 where it has a direction of no or negative stiffness, NaN where K
+    is not finite): with M = L L^T, the least eigenvalue of L^-1 K L^-T."""
+    rows = list(dofs)
+    part = stiffness[:, rows][:, :, rows]
+    mass = np.broadcast_to(inertia, stiffness.shape)[:, rows][:, :, rows]
+    found = np.full(len(stiffness), np.nan)
+    finite = np.isfinite(part).all(axis=(1, 2))
+    lower = np.linalg.inv(np.linalg.cholesky(mass[finite]))
+    reduced = lower @ ((part[finite] + np.swapaxes(part[finite], 1, 2)) / 2) @ np.swapaxes(lower, 1, 2)
+    found[finite] = np.sqrt(np.maximum(np.linalg.eigvalsh(reduced)[:, 0], 0.0)) / (2 * np.pi)
+    return found

@@ -96,7 +96,8 @@ for criterion in (
               "stiffer cables (robot.cable_ea), shorter cable to the winches (robot.winch_length), more "
               "pretension (a higher tension.t_min) or anchors around the pose",
               lambda analysis, spec, robot: analysis == "statics" and robot.cable_ea is not None and robot.pulleys is None,
-              keys={"translational": stiffness.required, "rotational": stiffness.required}),
+              keys={"translational": stiffness.required, "rotational": stiffness.required,
+                    "frequency": stiffness.required}, refuses=stiffness.refuses),
 ):
     register(criterion)
 

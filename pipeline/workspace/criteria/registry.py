@@ -31,7 +31,8 @@ class Criterion:
     cable's force variable (``state.variables_of``; arrays broadcastable to (n, K, m)) under the
     ``feasible`` tension model, None where it puts none on that state; there its margin is the
     model's nested capacity margin of that interval (``criteria.forces``), and ``function``
-    gives the minimum-norm model's."""
+    gives the minimum-norm model's. ``refuses(spec, robot, keys)``: why a problem cannot evaluate it
+    with the keys given (one line: the job is refused before it runs), None when it can."""
 
     name: str
     function: Callable[[Any, Any], np.ndarray]
@@ -42,6 +43,7 @@ class Criterion:
     applies: Callable[[str, Any, Any], bool]
     keys: dict[str, Callable[[Any], str | None]] = field(default_factory=dict)
     bounds: Callable[[Any, Any], tuple | None] | None = None
+    refuses: Callable[[Any, Any, dict], str | None] | None = None
 
 
 REGISTRY: dict[str, Criterion] = {}
