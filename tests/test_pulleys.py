@@ -150,6 +150,13 @@ def test_the_robots_structure_matrix_balances_along_the_pulleys_cables(make_cfg,
         worst = max(worst, np.abs(wrench - applied).max() / scale)
         off = max(off, np.abs(straight - applied).max() / scale)
     assert worst < 1e-9 and off > 1e-4
+    for i, name in enumerate(robot.cable_names):  # output.cables: the exit points and wrap angles
+        ends = grid[:] + robot.attachments[i]
+        theirs = np.array([tempel(robot.anchors[i], robot.pulleys.axes[i], 0.1, end)[0] for end in ends])
+        written = points[[f"exit_{axis}_{name}" for axis in "xyz"]].to_numpy()
+        np.testing.assert_allclose(written, theirs, atol=1e-12)
+        free = np.linalg.norm(ends - theirs, axis=1)
+        np.testing.assert_allclose(points[f"wrap_{name}"] * 0.1, points[f"length_{name}"] - free, atol=1e-12)
 
 
 @pytest.mark.parametrize("value, message", [

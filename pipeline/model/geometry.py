@@ -286,6 +286,14 @@ class PoseGeometry:
         return np.linalg.norm(self.vectors, axis=2)
 
     @cached_property
+    def wrap_angles(self) -> np.ndarray:
+        """(n, m) the angle each cable wraps around its pulley, rad (0 without one)."""
+        if self.robot.pulleys is None:
+            return np.zeros(self.lengths.shape)
+        radii = self.robot.pulleys.radii
+        return np.divide(self._pulleys[1], radii, out=np.zeros(self.lengths.shape), where=radii > 0)
+
+    @cached_property
     def cable_lengths(self) -> np.ndarray:
         """(n, m) each cable's length from its anchor: the straight part, and the arc it wraps
         around its pulley (``lengths`` without pulleys)."""

@@ -120,7 +120,7 @@ def tabulate(problem: WorkspaceProblem, positions: np.ndarray, raw: dict,
         columns["closest_obstacle"] = categories(raw["closest_obstacle"], obstacle_pairs(problem.robot))
     for key, values in raw.items():  # output.cables and output.metrics (quantities, pipeline.model.metrics)
         if key.startswith(("length_", "tension_", "wrench_max_", "wrench_min_", "capacity_margin", "stiffness_",
-                           "unstrained_")):
+                           "unstrained_", "wrap_", "exit_")):
             columns[key] = values
     if UNREACHABLE in margins:  # |S S^+ w - w| / |w|, worst over the required wrenches
         columns["wrench_residual"] = (1.0 - margins[UNREACHABLE]) * problem.spec.tension.residual_limit

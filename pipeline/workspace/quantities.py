@@ -27,6 +27,10 @@ def cable_quantities(state, limits) -> dict[str, np.ndarray]:
     """(n,) arrays keyed by column name for one chunk's state (``PoseStatics``/``PoseDynamics``)."""
     names = state.robot.cable_names
     columns = {f"length_{name}": state.cable_lengths[:, i] for i, name in enumerate(names)}
+    if state.robot.pulleys is not None:  # where each cable leaves its pulley, and how far it wraps it
+        for i, name in enumerate(names):
+            columns[f"wrap_{name}"] = state.wrap_angles[:, i]
+            columns.update({f"exit_{axis}_{name}": state.exits[:, i, k] for k, axis in enumerate("xyz")})
     if state.tension.model == "pinv":
         high, low = state.force_range
     else:
