@@ -27,6 +27,7 @@ KEYS = {  # key -> (overrides, the criterion or column it adds when the job runs
     "pulleys with jdot": (["robot.pulleys={axis: [0, 0, 1], radius: 0.05}", "model.jdot=true"], None),
     "stiffness": (["robot.cable_ea=1e5", "+criteria.stiffness={translational: 1000, rotational: 10, frequency: 0}"],
                   "margin_stiffness"),
+    "sag": (["robot.cable_mass=0.05", "+criteria.sag={ratio: 0.02}"], "margin_sag"),
 }
 # the cells that are refused, with the key the one line names
 REFUSED = {("lines", "workspace.home"): "workspace.home", ("lines", "output.mesh"): "output.mesh",
@@ -34,7 +35,8 @@ REFUSED = {("lines", "workspace.home"): "workspace.home", ("lines", "output.mesh
            ("payload", "output.metrics"): "output.metrics",
            **{(analysis, "criteria"): "criteria.torque" for analysis in ANALYSES},
            **{(analysis, "pulleys with jdot"): "model.jdot" for analysis in ANALYSES},  # J-dot of fixed anchors
-           **{(analysis, "stiffness"): "criteria.stiffness" for analysis in ANALYSES if analysis != "statics"}}
+           **{(analysis, "stiffness"): "criteria.stiffness" for analysis in ANALYSES if analysis != "statics"},
+           ("payload", "sag"): "criteria.sag"}
 
 
 @pytest.mark.parametrize("key", sorted(KEYS))

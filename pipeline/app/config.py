@@ -214,7 +214,8 @@ class RobotConfig:
     checked); ``l_max``, the longest cable, m (criterion ``length``; null: no limit); ``pulleys``,
     a swivelling pulley per cable at its anchor ({axis, radius}, one or one per cable; null:
     the cables leave the anchors); ``cable_ea``, each cable's axial stiffness EA, N (criterion
-    ``stiffness``; null: rigid), and ``winch_length``, m, the cable between anchor and winch. The cell's
+    ``stiffness``; null: rigid), ``winch_length``, m, the cable between anchor and winch, and
+    ``cable_mass``, kg/m, each cable's mass per length (criterion ``sag``; null: weightless). The cell's
     ``obstacles`` and the tension limits (``tension.*``, one or one per cable) are keys of the
     job, checked against the robot as it is built."""
 
@@ -225,6 +226,7 @@ class RobotConfig:
     pulleys: Any = MISSING
     cable_ea: Any = MISSING
     winch_length: Any = MISSING
+    cable_mass: Any = MISSING
 
 
 @dataclass

@@ -421,6 +421,9 @@ def build(cfg: DictConfig, catalogue: Catalogue | None) -> WorkspaceProblem:
         reason = REGISTRY[name].refuses(spec, robot, keys) if REGISTRY[name].refuses else None
         if reason:
             raise ConfigError(f"criteria.{name}: {reason}")
+    bounded = {name: keys for name, keys in settings.items() if REGISTRY[name].bounds is not None}
+    if bounded:  # the feasible model nests their intervals with their keys
+        spec = replace(spec, tension=replace(spec.tension, bounded=bounded))
     given = cfg.orientation
     if robot.fixed_point and (orientation_count(given) > 1 or any(given[a] != 0 for a in ("psi", "theta", "phi"))):
         freedoms = ", ".join(FREEDOMS[i] for i in robot.dofs)
@@ -437,6 +440,7 @@ def build(cfg: DictConfig, catalogue: Catalogue | None) -> WorkspaceProblem:
                             metrics=bool(cfg.output.metrics), settings=settings)
 
 
+MAX_CABLE_MASS = 100.0  # kg/m: a steel rope of 13 cm, past any cable robot's
 MAX_WINCH_LENGTH = 10_000.0  # m: the cable stored between an anchor and its winch, past any robot
 MAX_SIZE_RATIO = 10_000  # anchors' span over the platform's: past any cable robot, a unit typed wrong
 
@@ -483,9 +487,14 @@ def guided(cfg: DictConfig, robot: CableRobot) -> CableRobot:
 
 
 def elastic(cfg: DictConfig, robot: CableRobot) -> CableRobot:
-    """The robot with elastic cables (docs/model.md section 7): ``robot.cable_ea`` (N, > 0, one or
-    one per cable; null: rigid) and ``robot.winch_length`` (m, >= 0, the cable between the
-    anchor and the winch, in series)."""
+    """The robot with elastic and heavy cables (docs/model.md sections 7-8): ``robot.cable_ea`` (N,
+    > 0, one or one per cable; null: rigid), ``robot.winch_length`` (m, >= 0, the cable between
+    the anchor and the winch, in series) and ``robot.cable_mass`` (kg/m, > 0; null: weightless)."""
+    if cfg.robot.cable_mass is not None:
+        mass = _limit_values("robot.cable_mass", cfg.robot.cable_mass, robot.n_cables, "kg/m", MAX_CABLE_MASS)
+        if not (mass > 0).all():
+            raise ConfigError(f"robot.cable_mass={shown(cfg.robot.cable_mass)}: must be > 0 (kg/m; null: weightless)")
+        robot = replace(robot, cable_mass=mass.copy())
     if cfg.robot.cable_ea is None:
         return robot
     ea = _limit_values("robot.cable_ea", cfg.robot.cable_ea, robot.n_cables)

@@ -113,6 +113,10 @@ class PoseDynamics(PoseGeometry):
     def tension(self) -> TensionSpec:
         return self.motion.tension
 
+    @property
+    def load(self) -> Load:
+        return self.motion.load
+
     @cached_property
     def force_range(self) -> tuple[np.ndarray, np.ndarray]:
         """(n, m) largest and smallest cable tension t = M / R over the acceleration set, M the

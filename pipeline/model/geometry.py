@@ -51,6 +51,7 @@ class CableRobot:
     pulleys: a swivelling pulley per cable at its anchor (``pipeline.model.pulleys.Pulleys``; None:
     each cable leaves its anchor itself).
     cable_ea: (m,) each cable's axial stiffness EA, N (None: rigid cables, no stiffness criterion);
+    cable_mass: (m,) each cable's mass per length, kg/m (None: weightless cables, no sag criterion);
     winch_lengths: (m,) the cable between each anchor and its winch, in series, m.
     """
 
@@ -68,6 +69,7 @@ class CableRobot:
     obstacles: tuple[Obstacle, ...] = ()
     pulleys: Pulleys | None = None
     cable_ea: np.ndarray | None = None
+    cable_mass: np.ndarray | None = None
     winch_lengths: np.ndarray | None = None
 
     @property
@@ -226,6 +228,7 @@ class PoseGeometry:
     offer the criteria one interface, so that no criterion asks which state it was given:
 
     - ``tension``: the :class:`pipeline.model.tensions.TensionSpec` the forces are checked by;
+    - ``load``: the :class:`pipeline.model.dynamics.Load` the cables carry (its gravity too);
     - ``force_range``: (high, low) (n, m), each cable's tension (N) under the minimum-norm model,
       the largest and smallest over the state's wrench set (one wrench for the statics);
     - ``forces_of(x)`` and ``variables_of(t)``: the tensions (N) of the variables x of the

@@ -105,6 +105,10 @@ class PoseStatics(PoseGeometry):
         return self.spec.tension
 
     @property
+    def load(self) -> Load:
+        return self.spec.load
+
+    @property
     def ranges_over_a_set(self) -> bool:
         """Whether the cables balance a wrench set (``wrench.set``), else one wrench."""
         return len(self.spec.wrench_set) > 0

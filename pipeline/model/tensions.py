@@ -33,7 +33,7 @@ by HiGHS (scipy.optimize.linprog); maximising the sum of the independent s's max
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from math import comb
 
 import numpy as np
@@ -56,7 +56,9 @@ class TensionSpec:
     CPR-WWA's (J^T)^+ F, which on the paper's CPR-8 misses up to 1.4 % of F); ``residual_limit``
     is the one of the model. ``distribution``: which tensions the ``feasible`` model writes (``output.cables``):
     ``min_norm``, the least 2-norm within the limits (:func:`min_norm_distribution`, as CASPR
-    and WireX give them), or ``lp``, the vertex its LPs end on."""
+    and WireX give them), or ``lp``, the vertex its LPs end on. ``bounded``: the keys of the
+    criteria with keys of their own that bound the forces (``criteria.<name>``, by name): the
+    ``feasible`` model nests their intervals too."""
 
     model: str = "pinv"
     t_min: float | np.ndarray = 0.0
@@ -64,6 +66,7 @@ class TensionSpec:
     residual_rtol: float = 1e-6
     distribution: str = "lp"
     pinv_residual: float = 0.05
+    bounded: dict = field(default_factory=dict)
 
     @property
     def residual_limit(self) -> float:

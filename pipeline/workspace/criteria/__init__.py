@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipeline.workspace.criteria import actuator, geometry, interference, payload, stiffness, tension
+from pipeline.workspace.criteria import actuator, geometry, interference, payload, sag, stiffness, tension
 from pipeline.workspace.criteria.forces import feasible_margins, feasible_model
 from pipeline.workspace.criteria.registry import (ANY, COLOURS, DYNAMICS, GEOMETRY, REGISTRY, STATICS, Criterion,
                                                   force_families, register)
@@ -98,6 +98,10 @@ for criterion in (
               lambda analysis, spec, robot: analysis == "statics" and robot.cable_ea is not None and robot.pulleys is None,
               keys={"translational": stiffness.required, "rotational": stiffness.required,
                     "frequency": stiffness.required}, refuses=stiffness.refuses),
+    Criterion("sag", sag.sag, ANY, None, "#88CCEE",
+              "more pretension (a higher tension.t_min), lighter cables (robot.cable_mass) or a larger sag allowed",
+              lambda analysis, spec, robot: analysis in ("statics", "cpr_wwa", "lines") and robot.cable_mass is not None,
+              keys={"ratio": sag.ratio}, bounds=sag.sag_bounds),
 ):
     register(criterion)
 

@@ -62,11 +62,15 @@ def register(criterion: Criterion) -> None:
 def force_families(state, limits) -> list[Family]:
     """The intervals on the state's force variables under the ``feasible`` model, one
     :class:`Family` per registered criterion that bounds this kind of state (``Criterion.bounds``;
-    registry order, which nests them: an earlier family does its best first)."""
+    registry order, which nests them: an earlier family does its best first); one with keys of its
+    own where the problem gives them (``TensionSpec.bounded``), given them as keyword arguments."""
     found = []
     for criterion in REGISTRY.values():
-        if criterion.bounds is not None and criterion.reads in (ANY, state.kind):
-            interval = criterion.bounds(state, limits)
-            if interval is not None:
-                found.append(Family(criterion.name, *interval))
+        if criterion.bounds is None or criterion.reads not in (ANY, state.kind):
+            continue
+        if criterion.keys and criterion.name not in state.tension.bounded:
+            continue  # its keys are not given: not checked
+        interval = criterion.bounds(state, limits, **state.tension.bounded.get(criterion.name, {}))
+        if interval is not None:
+            found.append(Family(criterion.name, *interval))
     return found
