@@ -1,6 +1,6 @@
 """What the interference criteria, the connected reach, the per-pose metrics and the boundary
 mesh cost (issue 40), and the real cables' models (swivelling pulleys, the stiffness of elastic
-cables: issue 54), in whole processes against the wrench-feasibility job without them, in the
+cables, the sag rule of heavy ones: issues 54, 55), in whole processes against the wrench-feasibility job without them, in the
 same run.
 
     python benchmarks/bench_interference.py [--repeat 3] [--n 40]
@@ -42,6 +42,7 @@ CABLE_MODELS = {
     "swivelling pulleys (robot.pulleys, r = 5 cm)": ["robot.pulleys={axis: [0, 0, -1], radius: 0.05}"],
     "stiffness (robot.cable_ea, criteria.stiffness)": [
         "robot.cable_ea=1e5", "+criteria.stiffness={translational: 1000, rotational: 10, frequency: 0}"],
+    "sag rule (robot.cable_mass, criteria.sag)": ["robot.cable_mass=0.05", "+criteria.sag={ratio: 0.02}"],
 }
 
 
