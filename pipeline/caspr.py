@@ -28,7 +28,8 @@ through the joint's origin. A joint that holds the platform's reference point (`
 orientations at the origin: the box is the joint's angle limits (else CASPR's own, [-pi, pi]),
 in rad, with ``S_EULER_XYZ``'s angles in the xyz convention. Refused, in one line and exit status
 2, with the reason: a quaternion, universal, prismatic or free-axis joint, a
-multi-link (MCDM) model, a cable that is not ``<cable_ideal>`` (springs, variable stiffness), a
+multi-link (MCDM) model, a cable that is not ``<cable_ideal>`` or ``<cable_linear_spring>`` (whose
+``K``, CASPR's k = K / length, becomes ``robot.cable_ea``; variable stiffness is refused), a
 cable routed through more than two points or through a pulley other than a swivelling one at its
 frame end (a screw-drive pulley), two cables of one name (both named), and a file that is not
 such XML. A ``<base_rotating_pulley>`` at a cable's frame end (CASPR's swivelling pulley:
@@ -85,6 +86,7 @@ ORIENTING = {
     "U_XZ": "rx, rz (a universal joint)", "U_YZ": "ry, rz (a universal joint)",
     "P_X": "x (a prismatic joint)", "P_AXIS": "one translation (a prismatic joint)",
 }
+SPRING = "cable_linear_spring"  # CASPR's elastic cable: k = K / length, K the robot's cable_ea
 PULLEY = "base_rotating_pulley"  # CASPR's swivelling pulley at the frame (BaseRotatingPulleyAttachment)
 DEFAULT_ANGLE_LIMIT = np.pi  # CASPR's own q_lb/q_ub of its angle joints, without q_min/q_max
 
@@ -106,12 +108,16 @@ def read_cables(path: Path, cable_set: str | None = None, number: bool = False) 
     if not cables:
         raise ConfigError(f"{path}: cable_set {wanted!r} has no cables")
     out = {"set": chosen[0].get("id"), "names": [], "anchors": [], "attachments": [], "force_min": [],
-           "force_max": [], "reference": [], "pulleys": []}
+           "force_max": [], "reference": [], "pulleys": [], "ea": []}
     for index, cable in enumerate(cables, start=1):
         where = f"{path}: cable {cable.get('name') or index}"
-        if cable.tag != "cable_ideal":
-            raise ConfigError(f"{where}: <{cable.tag}> is not an ideal cable (springs and variable-stiffness "
-                              "cables are not supported, only <cable_ideal>)")
+        if cable.tag not in ("cable_ideal", SPRING):
+            raise ConfigError(f"{where}: <{cable.tag}> is not an ideal or a linear-spring cable (variable-stiffness "
+                              f"cables are not supported, only <cable_ideal> and <{SPRING}>)")
+        stiffness = _number(cable, "properties/K", where) if cable.tag == SPRING else None
+        if stiffness is not None and not 0 < stiffness <= MAX_FORCE:
+            raise ConfigError(f"{where}: K {stiffness:g} N: need 0 < K <= {MAX_FORCE:g} (CASPR's k = K / length)")
+        out["ea"].append(stiffness)
         name = str(index) if number else cable.get("name") or str(index)
         if name in out["names"]:
             raise ConfigError(f"{path}: cables {out['names'].index(name) + 1} and {index} are both named "
@@ -147,6 +153,12 @@ def read_cables(path: Path, cable_set: str | None = None, number: bool = False) 
                               "(a cable routed through several points is not)")
         out["anchors"].append(dict(links)["0"])
         out["attachments"].append(dict(links)["1"])
+    springs = [ea is not None for ea in out["ea"]]
+    if any(springs) and not all(springs):
+        raise ConfigError(f"{path}: cable {springs.index(False) + 1} is ideal and cable {springs.index(True) + 1} a "
+                          "linear spring: the cables' stiffness is given for all of them or for none")
+    if all(springs):
+        out["robot"] = {"cable_ea": _limit(out["ea"])}
     return out
 
 

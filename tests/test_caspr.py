@@ -234,8 +234,11 @@ BAD = {
         </attachment>""", "<base_rotating_pulley><fixed_location>-3 2 3</fixed_location><pulley_radius>0.05</pulley_radius>"
         "<cable_entry_vector>0 0 0</cable_entry_vector></base_rotating_pulley>", 1)]),
         "cable_entry_vector [0.0, 0.0, 0.0]: need a radius >= 0 and a direction that is not zero"),
-    "spring_cable": (GOOD.replace("cable_ideal", "cable_linear_spring", 2),
-                     "<cable_linear_spring> is not an ideal cable"),
+    "variable_stiffness": (GOOD.replace("cable_ideal", "cable_vsd_flexure_linear", 2),
+                           "<cable_vsd_flexure_linear> is not an ideal or a linear-spring cable"),
+    "mixed_springs": (GOOD.replace("cable_ideal", "cable_linear_spring", 2).replace(
+        "<force_min>", "<K>2e4</K><force_min>", 1), "cable 2 is ideal and cable 1 a linear spring"),
+    "spring_without_k": (GOOD.replace("cable_ideal", "cable_linear_spring", 2), "cable 1: missing <properties/K>"),
 }
 
 
@@ -427,3 +430,20 @@ def test_an_imported_pulley_robot_agrees_pose_by_pose_with_an_lp_on_casprs_geome
                                  bounds=[(5, 600)] * 8, method="highs").status == 0 for u in pulls])
     assert verdicts[0] == points["feasible"].tolist()
     assert 0 < sum(verdicts[0]) < len(points) and verdicts[1] != verdicts[0]
+
+
+def test_casprs_linear_spring_cables_import_with_their_stiffness(tmp_path):
+    """<cable_linear_spring> with <K> (CASPR: k = K / length) becomes robot.cable_ea, and the
+    imported robot's stiffness criterion runs on it."""
+    springs = GOOD.replace("cable_ideal", "cable_linear_spring").replace("<force_min>", "<K>30000</K><force_min>")
+    (tmp_path / "s_cables.xml").write_text(springs)
+    (tmp_path / "Octo_bodies.xml").write_text(BODIES)
+    done = run(tmp_path, "pipeline.caspr", "s_cables.xml", "--bodies", "Octo_bodies.xml", "--step", "0.5",
+               "--out", "mine/robot/s.yaml")
+    assert done.returncode == 0, done.stderr
+    assert yaml.safe_load((tmp_path / "mine" / "robot" / "s.yaml").read_text())["robot"]["cable_ea"] == 30000.0
+    job = run(tmp_path, "pipeline", "--config-dir", "mine", "robot=s", "tension.model=feasible", "hydra.run.dir=out",
+              "+criteria.stiffness={translational: 1000, rotational: 0, frequency: 0}")
+    assert job.returncode == 0, job.stderr
+    points = pd.read_parquet(tmp_path / "out" / "points.parquet")
+    assert "margin_stiffness" in points and points["stiffness_translational_N_per_m"].notna().any()
