@@ -193,3 +193,48 @@ def test_a_point_mass_between_six_orthogonal_cables_rings_at_the_closed_form():
                                 np.full((1, 6), rate))
     found = lowest_frequency(matrix, spatial_inertia(mass, np.zeros(3), np.zeros((3, 3))), (0, 1, 2))
     assert found[0] == pytest.approx(np.sqrt((2 * rate + 4 * tension / length) / mass) / (2 * np.pi), rel=1e-13)
+
+
+def wirelib_stiffness(anchors, attachments, position, rotation, forces, rates):
+    """WireLib's CStiffness::StiffnessMatrixMain, ported here from its steps: K_c = AT Linv AT'
+    (Verhoeven's eq. 3.29, AT's columns [u; b x u] with u towards the base) and K_g(i, j) -=
+    dAT(j, i) f for each cable, dAT by the quotient rule on l = base - r - R b under a unit
+    translation or a unit angular velocity."""
+    structure, geometric = np.zeros((6, len(anchors))), np.zeros((6, 6))
+    for i, (base, point) in enumerate(zip(anchors, attachments)):
+        arm = rotation @ point
+        cable = base - position - arm
+        length = np.linalg.norm(cable)
+        unit = cable / length
+        structure[:, i] = np.r_[unit, np.cross(arm, unit)]
+        derivative = np.zeros((6, 6))
+        for j in range(6):
+            twist = np.zeros(6)
+            twist[j] = 1.0
+            moved = -twist[:3] if j < 3 else -np.cross(twist[3:], arm)
+            rate = cable @ moved / length
+            turned = (moved * length - cable * rate) / length ** 2
+            derivative[:3, j] = turned
+            derivative[3:, j] = np.cross(arm, turned) + (np.cross(np.cross(twist[3:], arm), unit) if j >= 3 else 0.0)
+        geometric -= derivative.T * forces[i]
+    return structure @ np.diag(rates) @ structure.T, geometric
+
+
+def test_the_stiffness_matrix_is_wirelibs_with_its_geometric_term_transposed():
+    """WireLib (WireX) writes K_g with the derivative's transpose: ours is K_c + K_g', and both
+    have the same symmetric part, which the criterion reads."""
+    rng = np.random.default_rng(4)
+    for _ in range(10):
+        anchors = rng.uniform(-3, 3, (8, 3))
+        attachments = rng.uniform(-0.3, 0.3, (8, 3))
+        position, rotation = rng.uniform(-0.5, 0.5, 3), Rotation.from_rotvec(rng.uniform(-0.5, 0.5, 3)).as_matrix()
+        tensions, rates = rng.uniform(10, 500, 8), rng.uniform(1e3, 1e5, 8)
+        arms = attachments @ rotation.T
+        vectors = position + arms - anchors
+        lengths = np.linalg.norm(vectors, axis=1)
+        ours = stiffness_matrices((vectors / lengths[:, None])[None], arms[None], lengths[None], tensions[None],
+                                  rates[None])[0]
+        elastic, geometric = wirelib_stiffness(anchors, attachments, position, rotation, tensions, rates)
+        np.testing.assert_allclose(ours, elastic + geometric.T, atol=1e-9 * np.abs(ours).max())
+        total = elastic + geometric
+        np.testing.assert_allclose((ours + ours.T) / 2, (total + total.T) / 2, atol=1e-9 * np.abs(ours).max())
