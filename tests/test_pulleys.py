@@ -202,3 +202,15 @@ def test_the_robots_picture_draws_each_cable_from_where_it_leaves_its_pulley(mak
     exits, _ = pulley_exits(robot.anchors, robot.pulleys, (position + robot.attachments)[None])
     np.testing.assert_allclose(starts, exits[0], atol=1e-12)
     assert np.linalg.norm(starts - robot.anchors, axis=1).min() > 0.01
+
+
+def test_a_vanishing_pulley_gives_the_anchors_verdicts_and_directions(make_cfg, catalogue):
+    """Radius 1e-9 m on every cable: the same verdicts as no pulleys, margins within 1e-6 where
+    they are a share of their limit (in [-1, 1]: past it, a rank-deficient pose's wrench residual
+    over 1e-6 amplifies the nanometre)."""
+    base = ["robot=irpm6", "robot.search.step=1", "robot.gamma_deg=20", "tension=feasible"]
+    plain, _ = compute_workspace(make_cfg(*base), catalogue)
+    tiny, _ = compute_workspace(make_cfg(*base, "robot.pulleys={axis: [0.3, -0.2, 1], radius: 1e-9}"), catalogue)
+    np.testing.assert_array_equal(plain["feasible"], tiny["feasible"])
+    for column in [c for c in plain.columns if c.startswith("margin_")]:
+        np.testing.assert_allclose(tiny[column].clip(-1, 1), plain[column].clip(-1, 1), atol=1e-6)

@@ -102,6 +102,9 @@ def test_the_jobs_stiffness_columns_and_verdicts_are_the_numerical_ones(make_cfg
         least.append(np.sqrt(max(lowest, 0.0)) / (2 * np.pi))
         scale = np.abs(numeric).max()
         assert points["stiffness_translational_N_per_m"].iloc[row] == pytest.approx(least[0], abs=1e-5 * scale)
+        direction = np.linalg.eigh((numeric[:3, :3] + numeric[:3, :3].T) / 2)[1][:, 0]
+        written = points[["stiffness_weakest_x", "stiffness_weakest_y", "stiffness_weakest_z"]].to_numpy()[row]
+        assert abs(abs(direction @ written) - 1) < 1e-4 and abs(written).max() == written.max()  # same axis, sign fixed
         assert points["stiffness_rotational_Nm_per_rad"].iloc[row] == pytest.approx(least[1], abs=1e-5 * scale)
         ours = (2 * np.pi * points["stiffness_frequency_Hz"].iloc[row]) ** 2  # omega^2: the eigenvalue itself
         assert ours == pytest.approx(max(lowest, 0.0), rel=1e-5, abs=1e-5 * scale)

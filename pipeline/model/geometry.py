@@ -249,6 +249,7 @@ class PoseGeometry:
     stiffness_translational: np.ndarray | None = None
     stiffness_rotational: np.ndarray | None = None
     frequency: np.ndarray | None = None
+    stiffness_weakest: np.ndarray | None = None
 
     def __init__(self, robot: CableRobot, positions: np.ndarray, orientation):
         self.robot = robot
@@ -334,4 +335,6 @@ class PoseGeometry:
                  "stiffness_translational_N_per_m": self.stiffness_translational,
                  "stiffness_rotational_Nm_per_rad": self.stiffness_rotational,
                  "stiffness_frequency_Hz": self.frequency}
+        if self.stiffness_weakest is not None:  # the direction of the least translational stiffness
+            found.update({f"stiffness_weakest_{axis}": self.stiffness_weakest[:, k] for k, axis in enumerate("xyz")})
         return {key: value for key, value in found.items() if value is not None}

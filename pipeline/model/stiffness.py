@@ -77,6 +77,19 @@ def least_stiffness(stiffness: np.ndarray, dofs=(0, 1, 2, 3, 4, 5)) -> tuple[np.
     return found[0], found[1]
 
 
+def weakest_direction(stiffness: np.ndarray) -> np.ndarray:
+    """(n, 3) the unit direction of the least translational stiffness (the eigenvector of the
+    symmetric part of K's translational block with the least eigenvalue; its largest component
+    positive; NaN where K is not finite)."""
+    part = stiffness[:, :3, :3]
+    found = np.full((len(stiffness), 3), np.nan)
+    finite = np.isfinite(part).all(axis=(1, 2))
+    vectors = np.linalg.eigh((part[finite] + np.swapaxes(part[finite], 1, 2)) / 2)[1][:, :, 0]
+    largest = np.take_along_axis(vectors, np.abs(vectors).argmax(axis=1)[:, None], axis=1)
+    found[finite] = vectors * np.sign(largest)
+    return found
+
+
 def spatial_inertia(mass: float, com: np.ndarray, inertia: np.ndarray) -> np.ndarray:
     """(n, 6, 6) or (6, 6) M of a body about the platform's reference point, fixed axes, for
     x = [dp; dtheta]: [[m I, -m [c]x], [m [c]x, I_c - m [c]x [c]x]] with c the centre of mass from

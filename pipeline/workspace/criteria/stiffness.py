@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from pipeline.model.stiffness import (axial_rates, least_stiffness, lowest_frequency, spatial_inertia,
-                                      stiffness_matrices)
+                                      stiffness_matrices, weakest_direction)
 from pipeline.workspace.criteria.forces import feasible_model, written_tensions
 
 ROTATIONS = (3, 4, 5)  # the freedoms' indices of the rotations
@@ -51,8 +51,9 @@ def stiffness(state, limits, translational: float, rotational: float, frequency:
     over the keys required, the lambdas the least eigenvalues of the symmetric parts of K's blocks
     over the robot's freedoms (a point platform: the translational only), f the lowest natural
     frequency, each the least over the required wrenches; -1 where the model gives no tensions.
-    The values go to ``state.stiffness_translational``, ``stiffness_rotational`` and
-    ``frequency`` (when the problem has a mass and, if it turns, an inertia)."""
+    The values go to ``state.stiffness_translational``, ``stiffness_rotational``,
+    ``stiffness_weakest`` (the direction of the least translational stiffness) and ``frequency``
+    (when the problem has a mass and, if it turns, an inertia)."""
     robot = state.robot
     if feasible_model(state):
         tensions = state.forces_of(written_tensions(state, limits))
@@ -63,14 +64,18 @@ def stiffness(state, limits, translational: float, rotational: float, frequency:
     moving = load.mass > 0 and (load.inertia is not None or not turns(robot))
     mass = _mass_matrix(state) if moving else None
     least = [np.full(len(stretched), np.inf) for _ in range(3)]
+    weakest = np.full((len(stretched), 3), np.nan)
     for k in range(tensions.shape[1]):
         rates = axial_rates(robot.cable_ea, stretched, tensions[:, k, :])
         matrix = stiffness_matrices(state.unit, state.arms, state.lengths, tensions[:, k, :], rates)
         found = [*least_stiffness(matrix, robot.dofs)]
+        lower = ~(found[0] >= least[0])  # this wrench's translational stiffness is the least so far (or NaN)
+        weakest[lower] = weakest_direction(matrix)[lower]
         found.append(lowest_frequency(matrix, mass, robot.dofs) if moving else np.full(len(stretched), np.nan))
         for kept, value in zip(least, found):
             np.minimum(kept, value, out=kept)  # NaN (no tensions) stays NaN
     state.stiffness_translational, state.stiffness_rotational = least[:2]
+    state.stiffness_weakest = weakest
     state.frequency = least[2] if moving else None
     ratios = [np.full(len(stretched), 1.0)]
     for value, wanted in zip(least, (translational, rotational if turns(robot) else 0.0, frequency)):
