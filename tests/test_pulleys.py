@@ -205,12 +205,15 @@ def test_the_robots_picture_draws_each_cable_from_where_it_leaves_its_pulley(mak
 
 
 def test_a_vanishing_pulley_gives_the_anchors_verdicts_and_directions(make_cfg, catalogue):
-    """Radius 1e-9 m on every cable: the same verdicts as no pulleys, margins within 1e-6 where
-    they are a share of their limit (in [-1, 1]: past it, a rank-deficient pose's wrench residual
-    over 1e-6 amplifies the nanometre)."""
+    """Radius 1e-9 m on every cable: the same verdicts as no pulleys, and margins within 1e-6 where
+    they are a share of their limit (in [-1, 1]) at the poses whose wrench the cables reach (in the
+    base plane every cable lies flat: there the unreachable gate decides, and the later families'
+    relaxed LPs amplify the nanometre)."""
     base = ["robot=irpm6", "robot.search.step=1", "robot.gamma_deg=20", "tension=feasible"]
     plain, _ = compute_workspace(make_cfg(*base), catalogue)
     tiny, _ = compute_workspace(make_cfg(*base, "robot.pulleys={axis: [0.3, -0.2, 1], radius: 1e-9}"), catalogue)
     np.testing.assert_array_equal(plain["feasible"], tiny["feasible"])
     for column in [c for c in plain.columns if c.startswith("margin_")]:
-        np.testing.assert_allclose(tiny[column].clip(-1, 1), plain[column].clip(-1, 1), atol=1e-6)
+        reached = plain["margin_unreachable"] >= 0
+        assert reached.mean() > 0.9
+        np.testing.assert_allclose(tiny[column].clip(-1, 1)[reached], plain[column].clip(-1, 1)[reached], atol=1e-6)
