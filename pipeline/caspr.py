@@ -10,7 +10,8 @@ link 0 (the frame: our anchor) and link 1 (the platform: our attachment point, p
 relative to the joint (``attachment_reference="joint"``) or to the centre of mass (``"com"``,
 which needs the bodies file), with ``force_min``/``force_max`` (N); the bodies file's
 ``<bodies_system>`` (or, in older files, a bare ``<links>``) with one ``<link_rigid>``: its
-``<joint type q_min q_max>``, ``<physical>`` ``mass`` (kg) and ``com_location`` (m), and its
+``<joint type q_min q_max>``, ``<physical>`` ``mass`` (kg), ``com_location`` (m) and ``inertia``
+(about the centre of mass or the joint: ``robot.platform.inertia`` about the centre), and its
 ``<parent>`` ``location`` (the joint's origin in the frame: the anchors are written relative to
 it, so the searched positions are CASPR's joint coordinates q).
 
@@ -211,8 +212,32 @@ def read_body(path: Path) -> dict:
     origin = link.find("parent/location")
     return {"name": link.get("name") or "", "joint": kind, "dofs": dofs, "mass": mass, "box": box,
             "convention": convention, "angles": all(d.startswith("r") for d in dofs),
-            "com": _vector(link, "physical/com_location", where),
+            "com": _vector(link, "physical/com_location", where), "inertia": _inertia(link, mass, where),
             "origin": np.zeros(3) if origin is None else np.asarray(_vector(link, "parent/location", where))}
+
+
+def _inertia(link, mass: float, where: str) -> list[float] | None:
+    """The link's ``<inertia>`` about its centre of mass as ``robot.platform.inertia`` [Ixx, Iyy,
+    Izz, Ixy, Ixz, Iyz] (CASPR's matrix [[Ixx, Ixy, Ixz], [Ixy, Iyy, Iyz], [Ixz, Iyz, Izz]]; one
+    given about the joint, ref="joint", moved to the centre by parallel axes); None without one
+    or without a mass (a planar model's may give Izz alone). ConfigError for one with a negative
+    principal moment."""
+    node = link.find("physical/inertia")
+    if node is None or not mass > 0:
+        return None
+    values = [_number(node, key, f"{where}: <inertia>") for key in ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")]
+    xx, yy, zz, xy, xz, yz = values
+    matrix = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
+    if node.get("ref") == "joint":
+        com = np.asarray(_vector(link, "physical/com_location", where))
+        matrix = matrix - mass * (com @ com * np.eye(3) - np.outer(com, com))
+    elif node.get("ref") != "com":
+        raise ConfigError(f"{where}: <inertia ref={node.get('ref')!r}>: com or joint")
+    if not np.linalg.eigvalsh(matrix)[0] >= -1e-12 * max(1.0, float(np.abs(matrix).max())):
+        raise ConfigError(f"{where}: <inertia> about the centre of mass {matrix.round(12).tolist()} has a negative "
+                          "principal moment (kg m^2)")
+    return [float(matrix[0, 0]), float(matrix[1, 1]), float(matrix[2, 2]), float(matrix[0, 1]), float(matrix[0, 2]),
+            float(matrix[1, 2])]
 
 
 def search_box(cables: dict, body: dict | None, box=None) -> tuple[np.ndarray, np.ndarray, str]:
@@ -262,7 +287,8 @@ def robot_yaml(cables: dict, body: dict | None, step: float, header: list[str], 
         "  attachments:",
         *[f"    - {_flow(a)}" for a in attachments],
         f"  cable_names: [{', '.join(_quoted(n) for n in cables['names'])}]",
-        f"  platform: {{mass: {0.0 if body is None else body['mass']!r}, com: {_flow(com)}}}",
+        f"  platform: {{mass: {0.0 if body is None else body['mass']!r}, com: {_flow(com)}"
+        + (f", inertia: {_flow(body['inertia'])}}}" if body is not None and body.get("inertia") else "}"),
         *([f"  dofs: [{', '.join(body['dofs'])}]"] if body is not None and len(body["dofs"]) < 6 else []),
         f"  search: {{lo: {_flow(lo)}, hi: {_flow(hi)}, step: {step!r}, spacing: {spacing}}}",
         *(["  pulleys:", *[f"    - {{axis: {_flow(p['axis'] if p else [0.0, 0.0, 1.0])}, radius: {p['radius'] if p else 0.0!r}}}"

@@ -82,7 +82,7 @@ def test_a_file_of_casprs_library_format_keeps_points_limits_mass_and_the_joint_
     assert data["robot"]["anchors"] == [list(a) for a in ANCHORS]
     assert data["robot"]["attachments"] == [list(p) for p in PLATFORM]
     assert data["robot"]["cable_names"] == [f"cable {i}" for i in range(1, 9)]
-    assert data["robot"]["platform"] == {"mass": 12.5, "com": COM}
+    assert data["robot"]["platform"] == {"mass": 12.5, "com": COM, "inertia": [0.8, 0.9, 1.1, 0.0, 0.0, 0.0]}
     assert data["robot"]["search"] == {"lo": [-2.5, -1.5, 0.2], "hi": [2.5, 1.5, 2.8], "step": 0.5,
                                        "spacing": "centres"}
     assert data["tension"] == {"t_min": 10.0, "t_max": [600.0] * 4 + [400.0] * 4}
@@ -443,7 +443,23 @@ def test_casprs_linear_spring_cables_import_with_their_stiffness(tmp_path):
     assert done.returncode == 0, done.stderr
     assert yaml.safe_load((tmp_path / "mine" / "robot" / "s.yaml").read_text())["robot"]["cable_ea"] == 30000.0
     job = run(tmp_path, "pipeline", "--config-dir", "mine", "robot=s", "tension.model=feasible", "hydra.run.dir=out",
-              "+criteria.stiffness={translational: 1000, rotational: 0, frequency: 0}")
+              "+criteria.stiffness={translational: 1000, rotational: 0, frequency: 1}")  # the file's inertia
     assert job.returncode == 0, job.stderr
     points = pd.read_parquet(tmp_path / "out" / "points.parquet")
     assert "margin_stiffness" in points and points["stiffness_translational_N_per_m"].notna().any()
+    assert (points["stiffness_frequency_Hz"] > 0).any()
+
+
+def test_an_inertia_about_the_joint_moves_to_the_centre_of_mass(tmp_path):
+    """ref="joint": I_G = I_O - m (|c|^2 I - c c') (parallel axes, as CASPR reads it); one with a
+    negative principal moment about the centre is refused in one line (a planar model's Izz
+    alone is not: tests/test_freedoms.py)."""
+    about_joint = BODIES.replace('<inertia ref="com">', '<inertia ref="joint">')
+    assert _write(tmp_path, bodies=about_joint).returncode == 0
+    written = yaml.safe_load((tmp_path / "mine" / "robot" / "x.yaml").read_text())["robot"]["platform"]["inertia"]
+    com = np.array(COM)
+    expected = np.diag([0.8, 0.9, 1.1]) - 12.5 * (com @ com * np.eye(3) - np.outer(com, com))
+    np.testing.assert_allclose(written, [*np.diag(expected), expected[0, 1], expected[0, 2], expected[1, 2]], rtol=1e-12)
+    flat = BODIES.replace("<Izz>1.1</Izz>", "<Izz>-1.1</Izz>")
+    done = _write(tmp_path / "bad", bodies=flat) if (tmp_path / "bad").mkdir() is None else None
+    assert done.returncode == 2 and "has a negative principal moment (kg m^2)" in done.stderr

@@ -137,7 +137,9 @@ REQUIRED = "+criteria.stiffness={translational: 1000, rotational: 10, frequency:
     (["analysis=statics", "robot.cable_ea=1e5", "robot.platform.mass=3",
       "+criteria.stiffness={translational: 0, rotational: 0, frequency: 5}"], "frequency needs the platform's inertia"),
     (["analysis=statics", "robot.platform.mass=3", "robot.platform.inertia=[1, 1, -1]"],
-     "robot.platform.inertia=[1, 1, -1]: must be finite and positive definite"),
+     "robot.platform.inertia=[1, 1, -1]: must be finite with no negative principal moment"),
+    (["analysis=statics", "robot.cable_ea=1e5", "robot.platform.mass=3", "robot.platform.inertia=[0, 0, 0.05]",
+      "+criteria.stiffness={translational: 0, rotational: 0, frequency: 5}"], "gives no inertia about a freedom"),
     (["robot=irpm6", "robot.platform.inertia=[1, 1, 1]"], "a platform with an inertia needs its mass"),
     (["analysis=statics", "robot.platform.mass=3", "robot.platform.inertia=5"], "robot.platform.inertia=5: [Ixx, Iyy, Izz]"),
 ])

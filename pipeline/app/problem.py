@@ -671,8 +671,8 @@ def load_spec(cfg: DictConfig) -> Load:
 
 def platform_inertia(value, mass: float) -> np.ndarray:
     """``robot.platform.inertia``: [Ixx, Iyy, Izz] or [Ixx, Iyy, Izz, Ixy, Ixz, Iyz], kg m^2, about
-    the platform's centre of mass (platform frame), as a (3, 3) matrix: positive definite, of a
-    platform with a mass."""
+    the platform's centre of mass (platform frame), as a (3, 3) matrix: positive semi-definite (a
+    planar platform's may be Izz alone), of a platform with a mass."""
     key = "robot.platform.inertia"
     if not (isinstance(value, list) and len(value) in (3, 6)
             and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)):
@@ -680,8 +680,8 @@ def platform_inertia(value, mass: float) -> np.ndarray:
                           "platform's centre of mass)")
     xx, yy, zz, xy, xz, yz = [*value, 0.0, 0.0, 0.0][:6]
     matrix = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]], dtype=float)
-    if not (np.isfinite(matrix).all() and np.linalg.eigvalsh(matrix)[0] > 0):
-        raise ConfigError(f"{key}={value}: must be finite and positive definite (kg m^2)")
+    if not (np.isfinite(matrix).all() and np.linalg.eigvalsh(matrix)[0] >= 0):
+        raise ConfigError(f"{key}={value}: must be finite with no negative principal moment (kg m^2)")
     if not mass > 0:
         raise ConfigError(f"{key}={value}: a platform with an inertia needs its mass (robot.platform.mass > 0)")
     return matrix

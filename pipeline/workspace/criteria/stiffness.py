@@ -35,6 +35,11 @@ def refuses(spec, robot, keys: dict) -> str | None:
         return "frequency needs a moving mass (robot.platform.mass or load.mass)"
     if keys["frequency"] > 0 and turns(robot) and spec.load.inertia is None:
         return "frequency needs the platform's inertia (robot.platform.inertia)"
+    if keys["frequency"] > 0 and turns(robot):
+        rows = list(robot.dofs)
+        mass = spatial_inertia(spec.load.mass, spec.load.com, spec.load.inertia)[np.ix_(rows, rows)]
+        if not np.linalg.eigvalsh(mass)[0] > 0:
+            return "frequency: the platform's inertia (robot.platform.inertia) gives no inertia about a freedom it turns about"
     return None
 
 
