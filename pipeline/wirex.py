@@ -9,7 +9,8 @@ and ``radius`` the pulley's radius (``robot.pulleys``; 0 for all: none written);
 ``<platform>`` x, y, z the attachment point. ``<platform mass>`` and ``<centerofgravity>`` are the
 platform's; the robot's ``motionpattern`` its freedoms (3R3T all six, 3T x, y, z, 1R2T x, y, rz,
 2T x, y). The cable type (``<cable>``: ``elasticity`` E in Pa and ``radius`` in m) gives
-``robot.cable_diameter`` and ``robot.cable_ea`` = E pi r^2, its ``max_length`` (when > 0)
+``robot.cable_diameter`` and ``robot.cable_ea`` = E pi r^2, its ``weight`` (N/m, as WireLib's
+cable sagging reads it) ``robot.cable_mass`` = weight / g, its ``max_length`` (when > 0)
 ``robot.l_max``, its ``minimum_load`` the tension's floor; each chain's winch type (``<winch>``)
 its ``f_max``, the cable's rating. A file names no search box: ``--lo``/``--hi`` give one, else
 the anchors' bounding box. Refused, in one line and exit status 2: a file that is not such XML, a
@@ -34,7 +35,9 @@ from pipeline.errors import ConfigError
 
 # motion pattern -> the CASPR joint with the same freedoms and grid axes (pipeline.caspr.JOINTS)
 PATTERNS = {"3R3T": "SPATIAL_QUATERNION", "3T": "T_XYZ", "1R2T": "PLANAR_XY", "2T": "P_XY"}
-ROTATION = [f"a{i}{j}" for i in (1, 2, 3) for j in (1, 2, 3)]  # a_ij: row i, column j of the base frame
+ROTATION = [f"a{i}{j}" for i in (1, 2, 3) for j in (1, 2, 3)]
+GRAVITY = 9.81  # m/s^2: WireLib's cable weight is a force per length (its sagging code's w, N/m)
+MAX_WEIGHT = 1000.0  # N/m: a cable heavier than 100 kg/m is a unit typed wrong  # a_ij: row i, column j of the base frame
 
 
 def _floats(element, names, where: str) -> np.ndarray:
@@ -104,8 +107,12 @@ def read_wirex(path: Path) -> tuple[dict, dict]:
         cables["pulleys"].append({"axis": frame[:, 2].tolist(), "radius": float(pulley)} if pulley > 0 else None)
     if len(set(cables["names"])) != len(chains):
         raise ConfigError(f"{path}: two chains share an id (each cable names its own columns)")
+    weight = _floats(kind, ("weight",), where)[0] if kind.get("weight") is not None else 0.0
+    if not 0 <= weight < MAX_WEIGHT:
+        raise ConfigError(f"{where}: weight {weight:g} N/m: need 0 <= weight < {MAX_WEIGHT:g}")
     cables["robot"] = {"cable_diameter": repr(float(2 * radius)), "cable_ea": repr(float(young * np.pi * radius ** 2)),
-                       **({"l_max": repr(float(longest))} if longest > 0 else {})}
+                       **({"l_max": repr(float(longest))} if longest > 0 else {}),
+                       **({"cable_mass": repr(float(weight / GRAVITY))} if weight > 0 else {})}
     platform = robot.find("platform")
     mass, com = 0.0, np.zeros(3)
     if platform is not None:

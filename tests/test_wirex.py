@@ -80,6 +80,7 @@ def test_the_sample_robot_imports_as_the_same_robot_typed_by_hand(imported):
     assert robot["cable_diameter"] == pytest.approx(0.012)
     assert robot["cable_ea"] == pytest.approx(110e9 * np.pi * 0.006 ** 2)
     assert data["tension"] == {"t_min": 0.0, "t_max": 720.0}
+    assert robot["cable_mass"] == pytest.approx(0.023 / 9.81)  # WireLib's weight: N/m
     assert "l_max" not in robot and "dofs" not in robot  # max_length 0: none; 3R3T: all six freedoms
 
 
@@ -120,6 +121,7 @@ BAD = {
     "two_cable_types": (wcrfx(cable_types=2), "2 <cable> types: one is imported"),
     "negative_elasticity": (wcrfx(elasticity=-1.0), "elasticity -1 Pa"),
     "nan_radius": (wcrfx().replace('radius="0.100000"', 'radius="nan"', 1), "chain 1 <base>: radius='nan' is not finite"),
+    "negative_weight": (wcrfx().replace('weight="0.023000"', 'weight="-1"'), "weight -1 N/m: need 0 <= weight"),
     "no_platform_point": (wcrfx().replace('<platform x="-0.060000"', '<other x="-0.060000"', 1),
                           "chain 1: needs a <base> and a <platform> point"),
     "missing_coordinate": (wcrfx().replace(' y="1.500000" z="2.000000"', ' z="2.000000"', 1),
