@@ -62,6 +62,7 @@ from pipeline.errors import ConfigError
 from pipeline.app.config import MAX_FORCE, MAX_MASS
 from pipeline.app.resources import CONF_DIR
 from pipeline.app.results import code_version, write_text
+from pipeline.model.dynamics import inertia_tensor
 
 SHIPPED_ROBOTS = tuple(sorted(p.stem for p in (CONF_DIR / "robot").glob("*.yaml")))
 
@@ -225,9 +226,7 @@ def _inertia(link, mass: float, where: str) -> list[float] | None:
     node = link.find("physical/inertia")
     if node is None or not mass > 0:
         return None
-    values = [_number(node, key, f"{where}: <inertia>") for key in ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")]
-    xx, yy, zz, xy, xz, yz = values
-    matrix = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
+    matrix = inertia_tensor(*(_number(node, key, f"{where}: <inertia>") for key in ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")))
     if node.get("ref") == "joint":
         com = np.asarray(_vector(link, "physical/com_location", where))
         matrix = matrix - mass * (com @ com * np.eye(3) - np.outer(com, com))

@@ -40,7 +40,7 @@ from pipeline.errors import ConfigError
 from pipeline.model.actuators import actuator_model
 from pipeline.model.catalogue import Catalogue
 from pipeline.model.clearance import Obstacle, Polytope
-from pipeline.model.dynamics import Load, MotionSpec
+from pipeline.model.dynamics import Load, MotionSpec, inertia_tensor
 from pipeline.model.geometry import FREEDOMS, CableRobot, eq9_angles
 from pipeline.model.pulleys import Pulleys
 from pipeline.model.motion import acceleration_set, cartesian_cube, extreme_points, velocity_set
@@ -678,8 +678,7 @@ def platform_inertia(value, mass: float) -> np.ndarray:
             and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)):
         raise ConfigError(f"{key}={value}: [Ixx, Iyy, Izz] or [Ixx, Iyy, Izz, Ixy, Ixz, Iyz] (kg m^2, about the "
                           "platform's centre of mass)")
-    xx, yy, zz, xy, xz, yz = [*value, 0.0, 0.0, 0.0][:6]
-    matrix = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]], dtype=float)
+    matrix = inertia_tensor(*value)
     if not (np.isfinite(matrix).all() and np.linalg.eigvalsh(matrix)[0] >= 0):
         raise ConfigError(f"{key}={value}: must be finite with no negative principal moment (kg m^2)")
     if not mass > 0:

@@ -37,6 +37,12 @@ class Load:
     inertia: np.ndarray | None = None
 
 
+def inertia_tensor(xx: float, yy: float, zz: float, xy: float = 0.0, xz: float = 0.0, yz: float = 0.0) -> np.ndarray:
+    """(3, 3) [[Ixx, Ixy, Ixz], [Ixy, Iyy, Iyz], [Ixz, Iyz, Izz]], kg m^2: the moments and
+    products of inertia as CASPR's bodies files and ``robot.platform.inertia`` give them."""
+    return np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]], dtype=float)
+
+
 REFERENCE_SET = 12  # the velocities evaluated per pose at the paper's N = 6: the 12 extremes of eq. (23)'s 93
 # A pose's work grows by this share of the paper's for each velocity evaluated beyond REFERENCE_SET
 # (benchmarks/LOG.md, 2026-11-26: 936 extremes at grid.n_vel=60 cost 3.9x the paper's pose under the

@@ -59,35 +59,29 @@ def stiffness_matrices(unit: np.ndarray, arms: np.ndarray, lengths: np.ndarray, 
     return stiffness
 
 
-def least_stiffness(stiffness: np.ndarray, dofs=(0, 1, 2, 3, 4, 5)) -> tuple[np.ndarray, np.ndarray]:
+def least_stiffness(stiffness: np.ndarray, dofs=(0, 1, 2, 3, 4, 5)) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(n,) the least eigenvalue of the symmetric part of the translational block (N/m) and of
     the rotational block (N m/rad), each over the platform's freedoms ``dofs`` among them (NaN
-    where it has none)."""
-    found = []
-    for block in ((0, 1, 2), (3, 4, 5)):
+    where it has none), and (n, 3) the unit direction of the least translational stiffness (its
+    eigenvector, over x, y, z; its largest component positive). NaN where K is not finite."""
+    n = len(stiffness)
+    least = [np.full(n, np.nan), np.full(n, np.nan)]
+    weakest = np.full((n, 3), np.nan)
+    for k, block in enumerate(((0, 1, 2), (3, 4, 5))):
         rows = [d for d in dofs if d in block]
         if not rows:
-            found.append(np.full(len(stiffness), np.nan))
             continue
         part = stiffness[:, rows][:, :, rows]
-        least = np.full(len(stiffness), np.nan)  # NaN where K is not finite (no tensions, a collapsed cable)
         finite = np.isfinite(part).all(axis=(1, 2))
-        least[finite] = np.linalg.eigvalsh((part[finite] + np.swapaxes(part[finite], 1, 2)) / 2)[:, 0]
-        found.append(least)
-    return found[0], found[1]
-
-
-def weakest_direction(stiffness: np.ndarray) -> np.ndarray:
-    """(n, 3) the unit direction of the least translational stiffness (the eigenvector of the
-    symmetric part of K's translational block with the least eigenvalue; its largest component
-    positive; NaN where K is not finite)."""
-    part = stiffness[:, :3, :3]
-    found = np.full((len(stiffness), 3), np.nan)
-    finite = np.isfinite(part).all(axis=(1, 2))
-    vectors = np.linalg.eigh((part[finite] + np.swapaxes(part[finite], 1, 2)) / 2)[1][:, :, 0]
-    largest = np.take_along_axis(vectors, np.abs(vectors).argmax(axis=1)[:, None], axis=1)
-    found[finite] = vectors * np.sign(largest)
-    return found
+        values, vectors = np.linalg.eigh((part[finite] + np.swapaxes(part[finite], 1, 2)) / 2)
+        least[k][finite] = values[:, 0]
+        if k == 0:  # the direction, in x, y, z (a freedom the platform lacks: 0)
+            first = vectors[:, :, 0]
+            largest = np.take_along_axis(first, np.abs(first).argmax(axis=1)[:, None], axis=1)
+            found = np.zeros((finite.sum(), 3))
+            found[:, rows] = first * np.sign(largest)
+            weakest[finite] = found
+    return least[0], least[1], weakest
 
 
 def spatial_inertia(mass: float, com: np.ndarray, inertia: np.ndarray) -> np.ndarray:

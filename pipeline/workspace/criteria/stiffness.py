@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from pipeline.model.stiffness import (axial_rates, least_stiffness, lowest_frequency, spatial_inertia,
-                                      stiffness_matrices, weakest_direction)
+                                      stiffness_matrices)
 from pipeline.workspace.criteria.forces import feasible_model, written_tensions
 
 ROTATIONS = (3, 4, 5)  # the freedoms' indices of the rotations
@@ -73,9 +73,10 @@ def stiffness(state, limits, translational: float, rotational: float, frequency:
     for k in range(tensions.shape[1]):
         rates = axial_rates(robot.cable_ea, stretched, tensions[:, k, :])
         matrix = stiffness_matrices(state.unit, state.arms, state.lengths, tensions[:, k, :], rates)
-        found = [*least_stiffness(matrix, robot.dofs)]
-        lower = ~(found[0] >= least[0])  # this wrench's translational stiffness is the least so far (or NaN)
-        weakest[lower] = weakest_direction(matrix)[lower]
+        along, about, direction = least_stiffness(matrix, robot.dofs)
+        lower = ~(along >= least[0])  # this wrench's translational stiffness is the least so far (or NaN)
+        weakest[lower] = direction[lower]
+        found = [along, about]
         found.append(lowest_frequency(matrix, mass, robot.dofs) if moving else np.full(len(stretched), np.nan))
         for kept, value in zip(least, found):
             np.minimum(kept, value, out=kept)  # NaN (no tensions) stays NaN
