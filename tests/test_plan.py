@@ -223,4 +223,4 @@ def test_a_sweep_of_robot_files_says_why_their_shared_keys_meet_the_default_robo
                                           r"shares these keys, .* set them in each robot file, or run one sweep per robot$"):
         plan(["--config-dir", str(tmp_path), "-m", "robot=a,b", "robot.search.step=0.5"])
     assert len(plan(["--config-dir", str(tmp_path), "-m", "robot=a,b", "tension.t_max=300",
-                     f"hydra.sweep.dir={tmp_path / 'out'}"]).jobs) == 2  # keys every robot has pass
+                     f"hydra.sweep.dir={tmp_path / 'out'}"]).jobs) == 2  # keys every robot has are accepted

@@ -90,6 +90,8 @@ def test_heavier_cables_lose_more_poses_and_the_minimum_norm_model_checks_them_t
 
 @pytest.mark.parametrize("overrides, message", [
     (["robot.cable_mass=0", "+criteria.sag={ratio: 0.01}"], "robot.cable_mass=0: must be > 0 (kg/m"),
+    (["robot.cable_mass=nan", "+criteria.sag={ratio: 0.01}"], "robot.cable_mass=nan: must be finite"),
+    (["robot.cable_mass=0.05", "+criteria.sag={ratio: nan}"], "criteria.sag.ratio=nan: must be in (0, 0.05]"),
     (["robot.cable_mass=0.05", "+criteria.sag={ratio: 0.2}"], "criteria.sag.ratio=0.2: must be in (0, 0.05]"),
     (["+criteria.sag={ratio: 0.01}"], "criteria.sag: analysis=cpr_wwa does not check it"),
     (["analysis=payload", "robot.cable_mass=0.05", "+criteria.sag={ratio: 0.01}"],

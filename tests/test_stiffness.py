@@ -40,18 +40,25 @@ def numerical_stiffness(anchors, attachments, position, rotation, tensions, rate
     return np.column_stack(columns)
 
 
+def random_robot(rng):
+    """Eight cables between random anchors and attachment points, a random pose (tilted), random
+    tensions and rates, and our K of it."""
+    anchors = rng.uniform(-3, 3, (8, 3))
+    attachments = rng.uniform(-0.3, 0.3, (8, 3))
+    position, rotation = rng.uniform(-0.5, 0.5, 3), Rotation.from_rotvec(rng.uniform(-0.5, 0.5, 3)).as_matrix()
+    tensions, rates = rng.uniform(10, 500, 8), rng.uniform(1e3, 1e5, 8)
+    arms = attachments @ rotation.T
+    vectors = position + arms - anchors
+    lengths = np.linalg.norm(vectors, axis=1)
+    ours = stiffness_matrices((vectors / lengths[:, None])[None], arms[None], lengths[None], tensions[None],
+                              rates[None])[0]
+    return anchors, attachments, position, rotation, tensions, rates, ours
+
+
 def test_the_stiffness_matrix_is_the_derivative_of_the_cables_wrench():
     rng = np.random.default_rng(2)
     for _ in range(20):
-        anchors = rng.uniform(-3, 3, (8, 3))
-        attachments = rng.uniform(-0.3, 0.3, (8, 3))
-        position, rotation = rng.uniform(-0.5, 0.5, 3), Rotation.from_rotvec(rng.uniform(-0.5, 0.5, 3)).as_matrix()
-        tensions, rates = rng.uniform(10, 500, 8), rng.uniform(1e3, 1e5, 8)
-        arms = attachments @ rotation.T
-        vectors = position + arms - anchors
-        lengths = np.linalg.norm(vectors, axis=1)
-        ours = stiffness_matrices((vectors / lengths[:, None])[None], arms[None], lengths[None], tensions[None],
-                                  rates[None])[0]
+        anchors, attachments, position, rotation, tensions, rates, ours = random_robot(rng)
         numeric = numerical_stiffness(anchors, attachments, position, rotation, tensions, rates)
         np.testing.assert_allclose(ours, numeric, atol=1e-5 * np.abs(numeric).max())
         assert np.abs(ours - ours.T).max() > 1e-3  # the tension term turns the moments: not symmetric
@@ -64,7 +71,7 @@ def test_a_point_held_by_six_orthogonal_cables_has_the_closed_form():
     matrix = stiffness_matrices(unit, np.zeros_like(unit), np.full((1, 6), length), np.full((1, 6), tension),
                                 np.full((1, 6), rate))
     np.testing.assert_allclose(matrix[0, :3, :3], (2 * rate + 4 * tension / length) * np.eye(3), rtol=1e-14)
-    translational, rotational = least_stiffness(matrix, (0, 1, 2))
+    translational, rotational, _ = least_stiffness(matrix, (0, 1, 2))
     assert translational[0] == pytest.approx(2 * rate + 4 * tension / length) and np.isnan(rotational[0])
 
 
@@ -123,6 +130,9 @@ REQUIRED = "+criteria.stiffness={translational: 1000, rotational: 10, frequency:
 
 @pytest.mark.parametrize("overrides, message", [
     (["robot.cable_ea=0"], "robot.cable_ea=0: must be > 0 (N)"),
+    (["robot.cable_ea=inf"], "robot.cable_ea=inf: must be finite"),
+    (["robot.cable_ea=1e5", "robot.winch_length=nan"], "robot.winch_length=nan: must be finite"),
+    (["robot.cable_ea=1e12"], "robot.cable_ea=1000000000000.0: must be at most 1e+09 N"),
     (["robot.cable_ea=[1e5, 1e5]"], "robot.cable_ea=[100000.0, 100000.0]: 2 values for 8 cables"),
     (["robot.cable_ea=1e5", "robot.winch_length=-1"], "robot.winch_length=-1: must be >= 0 (m)"),
     (["analysis=statics", "robot.cable_ea=1e5", "robot.pulleys={axis: [0, 0, 1], radius: 0.05}",
@@ -157,7 +167,7 @@ def test_a_collapsed_cable_or_missing_tensions_give_no_stiffness_not_an_error():
     lengths = np.array([[1.0, 1.0, 1.0], [0.0, 1.0, 1.0]])
     tensions = np.array([[10.0, np.nan, 10.0], [10.0, 10.0, 10.0]])
     matrix = stiffness_matrices(unit, np.zeros_like(unit), lengths, tensions, np.full((2, 3), 1e3))
-    translational, _ = least_stiffness(matrix, (0, 1, 2))
+    translational, _, _ = least_stiffness(matrix, (0, 1, 2))
     assert np.isnan(translational).all()
 
 
@@ -230,15 +240,7 @@ def test_the_stiffness_matrix_is_wirelibs_with_its_geometric_term_transposed():
     have the same symmetric part, which the criterion reads."""
     rng = np.random.default_rng(4)
     for _ in range(10):
-        anchors = rng.uniform(-3, 3, (8, 3))
-        attachments = rng.uniform(-0.3, 0.3, (8, 3))
-        position, rotation = rng.uniform(-0.5, 0.5, 3), Rotation.from_rotvec(rng.uniform(-0.5, 0.5, 3)).as_matrix()
-        tensions, rates = rng.uniform(10, 500, 8), rng.uniform(1e3, 1e5, 8)
-        arms = attachments @ rotation.T
-        vectors = position + arms - anchors
-        lengths = np.linalg.norm(vectors, axis=1)
-        ours = stiffness_matrices((vectors / lengths[:, None])[None], arms[None], lengths[None], tensions[None],
-                                  rates[None])[0]
+        anchors, attachments, position, rotation, tensions, rates, ours = random_robot(rng)
         elastic, geometric = wirelib_stiffness(anchors, attachments, position, rotation, tensions, rates)
         np.testing.assert_allclose(ours, elastic + geometric.T, atol=1e-9 * np.abs(ours).max())
         total = elastic + geometric

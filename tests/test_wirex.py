@@ -114,6 +114,7 @@ def test_a_turned_base_frame_gives_its_third_column_as_the_axis(tmp_path):
 
 BAD = {
     "garbage": ("not xml", "not well-formed XML"),
+    "truncated": (wcrfx()[: len(wcrfx()) // 2], "not well-formed XML"),
     "wrong_root": ("<robot/>", "root element <robot>, a WireX robot file has <models> with <robot>"),
     "pattern": (wcrfx(pattern="2R3T"), "motionpattern '2R3T': imported are 3R3T, 3T, 1R2T, 2T"),
     "not_a_rotation": (wcrfx(frames=[2 * IDENTITY] * 8), "chain 1 <base>: a11..a33 are not a rotation"),
