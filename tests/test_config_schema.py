@@ -82,7 +82,8 @@ def test_every_robot_kind_extends_the_one_base_schema_and_its_file_does_not_repe
     from pipeline.app.resources import CONF_DIR
 
     base = {item.name for item in dataclasses.fields(config.RobotConfig)}
-    assert base == {"name", "platform", "cable_diameter", "l_max", "pulleys", "cable_ea", "winch_length", "cable_mass"}
+    assert base == {"name", "platform", "cable_diameter", "l_max", "pulleys", "cable_ea", "winch_length", "cable_mass",
+                    "catenary"}
     root = yaml.safe_load((CONF_DIR / "config.yaml").read_text())["robot"]
     assert set(root) == base - {"name"}
     for name, kind in ROBOTS.items():

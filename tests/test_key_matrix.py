@@ -28,6 +28,7 @@ KEYS = {  # key -> (overrides, the criterion or column it adds when the job runs
     "stiffness": (["robot.cable_ea=1e5", "+criteria.stiffness={translational: 1000, rotational: 10, frequency: 0}"],
                   "margin_stiffness"),
     "sag": (["robot.cable_mass=0.05", "+criteria.sag={ratio: 0.02}"], "margin_sag"),
+    "catenary": (["robot.cable_mass=0.05", "robot.catenary=0.05", "tension=feasible"], "margin_catenary"),
 }
 # the cells that are refused, with the key the one line names
 REFUSED = {("lines", "workspace.home"): "workspace.home", ("lines", "output.mesh"): "output.mesh",
@@ -36,7 +37,8 @@ REFUSED = {("lines", "workspace.home"): "workspace.home", ("lines", "output.mesh
            **{(analysis, "criteria"): "criteria.torque" for analysis in ANALYSES},
            **{(analysis, "pulleys with jdot"): "model.jdot" for analysis in ANALYSES},  # J-dot of fixed anchors
            **{(analysis, "stiffness"): "criteria.stiffness" for analysis in ANALYSES if analysis != "statics"},
-           ("payload", "sag"): "criteria.sag"}
+           ("payload", "sag"): "criteria.sag",
+           **{(analysis, "catenary"): "robot.catenary" for analysis in ANALYSES if analysis != "statics"}}
 
 
 @pytest.mark.parametrize("key", sorted(KEYS))

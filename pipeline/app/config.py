@@ -50,6 +50,10 @@ def finite(value):
     return None if abs(value) < INF else "must be finite"
 
 
+def sag_share(value):
+    return None if 0 < value <= 0.1 else "must be in (0, 0.1]: the sag a cable may take, a share of its chord"
+
+
 # Largest force or moment (N, N m) and mass (kg) a config may give: far beyond any cable robot,
 # and well inside the range where the LP solver's coefficients stay finite (HiGHS reads 1e20 as
 # infinite), so a mistyped exponent is one line rather than a solver failure.
@@ -215,7 +219,9 @@ class RobotConfig:
     a swivelling pulley per cable at its anchor ({axis, radius}, one or one per cable; null:
     the cables leave the anchors); ``cable_ea``, each cable's axial stiffness EA, N (criterion
     ``stiffness``; null: rigid), ``winch_length``, m, the cable between anchor and winch, and
-    ``cable_mass``, kg/m, each cable's mass per length (criterion ``sag``; null: weightless). The cell's
+    ``cable_mass``, kg/m, each cable's mass per length (criterion ``sag``; null: weightless);
+    ``catenary``, the largest sag a cable may take as a share of its chord, when the cables sag
+    (Irvine's elastic catenary, analysis=statics, criterion ``catenary``; null: straight). The cell's
     ``obstacles`` and the tension limits (``tension.*``, one or one per cable) are keys of the
     job, checked against the robot as it is built."""
 
@@ -227,6 +233,7 @@ class RobotConfig:
     cable_ea: Any = MISSING
     winch_length: Any = MISSING
     cable_mass: Any = MISSING
+    catenary: Optional[float] = rule(sag_share)
 
 
 @dataclass

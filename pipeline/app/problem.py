@@ -43,6 +43,7 @@ from pipeline.model.clearance import Obstacle, Polytope
 from pipeline.model.dynamics import Load, MotionSpec, inertia_tensor
 from pipeline.model.geometry import FREEDOMS, CableRobot, eq9_angles
 from pipeline.model.pulleys import Pulleys
+from pipeline.model.sagging import MAX_CABLES, SaggingSpec
 from pipeline.model.motion import acceleration_set, cartesian_cube, extreme_points, velocity_set
 from pipeline.model.robots import PointsRobot, cpr8, irpm6, point_list
 from pipeline.model.statics import PayloadSpec, StaticLimits, StaticsSpec
@@ -411,6 +412,8 @@ def build(cfg: DictConfig, catalogue: Catalogue | None) -> WorkspaceProblem:
     spec, limits and criteria, the orientation set."""
     robot = surroundings(cfg, elastic(cfg, guided(cfg, plausible(ROBOTS[cfg.robot.name].build(cfg.robot)))))
     spec, limits = ANALYSES[cfg.analysis].build(cfg, catalogue, robot)
+    if robot.catenary is not None:
+        spec = sagging(cfg, spec, robot)
     settings = checked_settings(OmegaConf.to_container(cfg.criteria)) if "criteria" in cfg else {}
     criteria = selected(cfg.analysis, spec, robot, settings)  # the registry's, by what each applies to
     refused = [name for name in settings if name not in criteria]
@@ -438,6 +441,30 @@ def build(cfg: DictConfig, catalogue: Catalogue | None) -> WorkspaceProblem:
                             cfg.output.cables, nominal=(float(given.psi), float(given.theta), float(given.phi)),
                             angles=name_of(given.convention) if robot.fixed_point else None,
                             metrics=bool(cfg.output.metrics), settings=settings)
+
+
+def sagging(cfg: DictConfig, spec, robot: CableRobot) -> SaggingSpec:
+    """The statics of sagging cables (``robot.catenary``, docs/model.md section 9), refused in one
+    line where they cannot mean anything yet: another analysis, cables that may push, pulleys,
+    cables to the platform's centre, more than ``sagging.MAX_CABLES`` cables (the proof's 2^m
+    corners), the metrics of straight cables."""
+    if cfg.analysis != "statics":
+        why = f"analysis={cfg.analysis}: sagging cables are checked by analysis=statics"
+    elif spec.tension.model != "feasible":
+        why = "tension.model=pinv: sagging cables need tension=feasible (cables pull)"
+    elif robot.pulleys is not None:
+        why = "robot.pulleys: a pulley turns with its catenary's end, not modelled"
+    elif spec.cable_direction != "attachment":
+        why = "model.cable_direction: sagging cables run to their attachments"
+    elif robot.n_cables > MAX_CABLES:
+        why = f"{robot.n_cables} cables: the proof checks 2^m corners, at most {MAX_CABLES} cables"
+    elif cfg.output.metrics:
+        why = "output.metrics: the tension factor and wrench capacity are of straight cables"
+    else:
+        why = None
+    if why:
+        raise ConfigError(f"robot.catenary={cfg.robot.catenary}: {why}")
+    return SaggingSpec(**{f.name: getattr(spec, f.name) for f in fields(spec)})
 
 
 MAX_CABLE_MASS = 100.0  # kg/m: a steel rope of 13 cm, past any cable robot's
@@ -495,6 +522,10 @@ def elastic(cfg: DictConfig, robot: CableRobot) -> CableRobot:
         if not (mass > 0).all():
             raise ConfigError(f"robot.cable_mass={shown(cfg.robot.cable_mass)}: must be > 0 (kg/m; null: weightless)")
         robot = replace(robot, cable_mass=mass.copy())
+    if cfg.robot.catenary is not None:
+        if robot.cable_mass is None:
+            raise ConfigError(f"robot.catenary={cfg.robot.catenary}: sagging cables need their weight, robot.cable_mass (kg/m)")
+        robot = replace(robot, catenary=float(cfg.robot.catenary))
     if cfg.robot.cable_ea is None:
         return robot
     ea = _limit_values("robot.cable_ea", cfg.robot.cable_ea, robot.n_cables)

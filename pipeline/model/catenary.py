@@ -141,54 +141,70 @@ def sag(horizontal, vertical, length, weight, ea, span, rise):
     return np.where(inside, (x * rise - z * span) / np.where(chord > 0, chord, 1.0), 0.0)
 
 
-def solve(span, rise, weight, ea, given: str, value, guess: Catenary | None = None) -> Catenary:
+def solve(span, rise, weight, ea, given: str, value) -> Catenary:
     """The catenaries with ends ``span`` a >= 0 apart horizontally and B ``rise`` h above A, weight
     w (N/m), EA (N; inf: inextensible) and ``given`` (:data:`GIVEN`) ``value``: the unstrained
-    length L0 (m), the chord tension tau (N) or the largest tension (N). Arrays broadcast.
-    ``guess``: a nearby solution to start from (else the parabolic cable). Not ``converged``
+    length L0 (m), the chord tension tau (N), the largest tension (N) or the sag's share of the
+    chord, from the parabolic cable. Arrays broadcast. Not ``converged``
     where no catenary meets the condition (a top tension below the cable's own weight's share,
     an unstrained length shorter than the chord under ``ea=inf``)."""
     if given not in GIVEN:
         raise ValueError(f"given={given!r}: one of {', '.join(GIVEN)}")
     a, h, w, ea, value = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (span, rise, weight, ea, value)))
     chord = np.hypot(a, h)
-    y = _start(a, h, w, ea, given, value, chord) if guess is None else np.stack(
-        np.broadcast_arrays(guess.horizontal, guess.vertical, guess.length))
+    y = _start(a, h, w, ea, given, value, chord)
     scale = np.stack([chord, chord, chord if given != "top_tension" else np.maximum(np.abs(value), 1.0)])
     scale = np.where(scale > 0, scale, 1.0)
 
-    def residual(y):
-        p = y[1] + w * y[2]
-        t_p, t_q = np.sqrt(y[0] ** 2 + p ** 2), np.sqrt(y[0] ** 2 + y[1] ** 2)
-        reach = _reach(y[0], y[1], p, t_p, t_q, y[2], w, ea)
-        ends = t_p + t_q
-        z = (y[1] * y[2] + w * y[2] ** 2 / 2.0) / ea + y[2] * (p + y[1]) / np.where(np.real(ends) == 0, 1.0, ends)
-        third = {"length": y[2] - value,
-                 "chord_tension": value * reach - chord,  # tau = H l / a = l / (x / H): also when a = 0
-                 "top_tension": np.where(np.real(p + y[1]) >= 0, t_p, t_q) - value,
-                 "sag_ratio": sag(y[0], y[1], y[2], w, ea, a, h) - value * chord}[given]
-        return np.stack([y[0] * reach - a, z - h, third]) / scale
-
-    f = residual(y)
+    f = _residual(y, a, h, w, ea, value, chord, given) / scale
+    active = np.flatnonzero(np.isfinite(np.abs(f).max(axis=0)) & (np.abs(f).max(axis=0) > RTOL))  # flat indices
+    flat_y, flat_f = y.reshape(3, -1), f.reshape(3, -1)
+    flat = [v.reshape(-1) for v in np.broadcast_arrays(a, h, w, ea, value, chord)]
+    scale_flat = scale.reshape(3, -1)
     for _ in range(MAX_ITERATIONS):
-        size = np.abs(f).max(axis=0)
-        if np.all(~np.isfinite(size) | (size <= RTOL)):
+        if not len(active):
             break
-        step = 1e-20 * (np.abs(y) + 1.0)
+        sub = [v[active] for v in flat]
+
+        def local(y, sub=sub, active=active):
+            return _residual(y, *sub, given) / scale_flat[:, active]
+
+        step = 1e-20 * (np.abs(flat_y[:, active]) + 1.0)
         columns = []
         for k in range(3):  # complex steps: d f / d y_k to round-off
-            probe = y.astype(complex)
+            probe = flat_y[:, active].astype(complex)
             probe[k] += 1j * step[k]
-            columns.append(np.imag(residual(probe)) / step[k])
-        jacobian = np.stack(columns, axis=-1)  # (3, ..., 3): d f_i / d y_k
-        moved = np.moveaxis(jacobian, 0, -2)  # (..., 3, 3)
+            columns.append(np.imag(local(probe)) / step[k])
+        jacobian = np.moveaxis(np.stack(columns, axis=-1), 0, -2)  # (p, 3, 3): d f_i / d y_k
         with np.errstate(all="ignore"):
-            delta = -np.linalg.solve(_regular(moved), np.moveaxis(f, 0, -1)[..., None])[..., 0]
-        delta = np.moveaxis(delta, -1, 0)
-        y, f = _damped(y, f, delta, residual)
+            delta = -np.linalg.solve(_regular(jacobian), flat_f[:, active].T[..., None])[..., 0].T
+        moved, f_new = _damped(flat_y[:, active], flat_f[:, active], delta, local)
+        stuck = (moved == flat_y[:, active]).all(axis=0)  # no step lowered the residual
+        flat_y[:, active], flat_f[:, active] = moved, f_new
+        size = np.abs(f_new).max(axis=0)
+        active = active[np.isfinite(size) & (size > RTOL) & ~stuck]
+    y, f = flat_y.reshape(y.shape), flat_f.reshape(f.shape)  # (views of them)
     size = np.abs(f).max(axis=0)
     converged = np.isfinite(size) & (size <= 10 * RTOL) & (y[2] > 0)
     return Catenary(y[0], y[1], y[2], w, ea, a, h, converged)
+
+
+def _residual(y, a, h, w, ea, value, chord, given):
+    """The three conditions of :func:`solve` at (H, V, L0) = y (3, ...), unscaled."""
+    p = y[1] + w * y[2]
+    t_p, t_q = np.sqrt(y[0] ** 2 + p ** 2), np.sqrt(y[0] ** 2 + y[1] ** 2)
+    reach = _reach(y[0], y[1], p, t_p, t_q, y[2], w, ea)
+    ends = t_p + t_q
+    z = (y[1] * y[2] + w * y[2] ** 2 / 2.0) / ea + y[2] * (p + y[1]) / np.where(np.real(ends) == 0, 1.0, ends)
+    if given == "length":
+        third = y[2] - value
+    elif given == "chord_tension":
+        third = value * reach - chord  # tau = H l / a = l / (x / H): also when a = 0
+    elif given == "top_tension":
+        third = np.where(np.real(p + y[1]) >= 0, t_p, t_q) - value
+    else:
+        third = sag(y[0], y[1], y[2], w, ea, a, h) - value * chord
+    return np.stack([y[0] * reach - a, z - h, third])
 
 
 def _regular(matrices):
@@ -198,12 +214,12 @@ def _regular(matrices):
 
 
 def _damped(y, f, delta, residual):
-    """The Newton step, halved (up to 30 times) until the residual falls, H kept >= 0 and L0 > 0."""
+    """The Newton step, halved (up to 16 times) until the residual falls, H kept >= 0 and L0 > 0."""
     size = np.abs(f).max(axis=0)
     factor = np.ones(size.shape)
     best_y, best_f = y, f
     done = ~np.isfinite(size) | (size <= RTOL) | ~np.isfinite(delta).all(axis=0)
-    for _ in range(30):
+    for _ in range(16):
         trial = y + factor * delta
         trial = np.stack([np.maximum(trial[0], 0.0), trial[1], np.maximum(trial[2], y[2] * 1e-3)])
         with np.errstate(all="ignore"):

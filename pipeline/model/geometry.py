@@ -53,6 +53,8 @@ class CableRobot:
     cable_ea: (m,) each cable's axial stiffness EA, N (None: rigid cables, no stiffness criterion);
     cable_mass: (m,) each cable's mass per length, kg/m (None: weightless cables, no sag criterion);
     winch_lengths: (m,) the cable between each anchor and its winch, in series, m.
+    catenary: the sag each cable may take, a share of its chord, when its cables sag (Irvine's
+    catenary, ``pipeline.model.sagging``; None: straight cables).
     """
 
     name: str
@@ -71,6 +73,7 @@ class CableRobot:
     cable_ea: np.ndarray | None = None
     cable_mass: np.ndarray | None = None
     winch_lengths: np.ndarray | None = None
+    catenary: float | None = None
 
     @property
     def n_cables(self) -> int:
@@ -325,6 +328,26 @@ class PoseGeometry:
         """(n, 6, m) A = [u_i; (R b_i) x u_i] (``geometry.structure_matrix``): A t balances the
         wrench on the platform, moments about its reference point."""
         return structure_matrix(self.unit, self.arms)
+
+    settles = False  # whether the forces decide the wrench they balance (sagging cables: settled_forces)
+
+    def balanced_wrenches(self, families) -> np.ndarray:
+        """The wrenches the forces balance within the families' intervals: the required ones
+        (``pipeline.model.sagging`` moves them by the cables' own weight, which the forces decide)."""
+        return self.required_wrenches
+
+    def sag_tensions(self, ratio: float) -> np.ndarray:
+        """(n, m) the least tension of each cable at its platform end that keeps its sag within
+        ``ratio`` of its chord (criterion ``sag``): the parabolic rule, an approximation (docs/model.md
+        section 8) of a taut string under its own weight, the load across the chord mu g cos(theta)
+        per length over the chord l, whose mid-span sag is mu g cos(theta) l^2 / (8 t) at the
+        tension t of its lower end; a cable's tension grows by mu g per metre it rises, so the
+        platform's end, when it is the upper one, must pull mu g h more (h its height above the
+        anchor): t >= mu g (l cos(theta) / (8 ratio) + max(0, h))."""
+        rising = self.unit @ self.robot.up  # sin(theta), positive where the platform's end is the upper one
+        across = np.sqrt(np.clip(1.0 - rising ** 2, 0.0, 1.0))
+        weight = self.robot.cable_mass * self.load.gravity
+        return weight * self.lengths * (across / (8.0 * ratio) + np.maximum(rising, 0.0))
 
     def diagnostics(self) -> dict[str, np.ndarray]:
         """Per-pose columns besides the margins, set by the criteria that computed them: the

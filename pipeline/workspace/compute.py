@@ -13,7 +13,7 @@ import pyarrow as pa
 from omegaconf import DictConfig, OmegaConf
 
 from pipeline.workspace.arrow import categories, numbers
-from pipeline.workspace.criteria import UNREACHABLE
+from pipeline.workspace.criteria import CATENARY, UNREACHABLE
 from pipeline.workspace.criteria.interference import obstacle_pairs
 from pipeline.workspace.degeneracy import Degeneracy
 from pipeline.workspace.dispatch import announce_cost, decide
@@ -55,7 +55,7 @@ def grid_workspace(
         scheduler=cfg.compute.scheduler,
         estimate=run.seconds,
     )
-    parts, n_feasible, by_lp = [], 0, 0
+    parts, n_feasible, by_lp, undecided = [], 0, 0, 0
     degenerate = Degeneracy(problem)
     lost = np.zeros(len(problem.criteria), dtype=np.int64)  # infeasible poses by limiting criterion
     alone = np.zeros(len(problem.criteria), dtype=np.int64)  # poses that criterion alone removes
@@ -70,6 +70,7 @@ def grid_workspace(
         for name in problem.criteria:  # the feasible poses' headroom to each limit
             least[name] = np.min(margins[name], initial=least[name], where=feasible)
         by_lp += int(np.count_nonzero(raw.get("lp_poses", False)))
+        undecided += int(np.count_nonzero(raw.get("catenary_undecided", False)))
         lost += np.bincount(limiting[~feasible], minlength=len(problem.criteria))
         violated = np.column_stack([margins[name] < 0 for name in problem.criteria])
         alone += violated[violated.sum(axis=1) == 1].sum(axis=0)
@@ -82,9 +83,12 @@ def grid_workspace(
             sink(points)
     counts = {"n_points": grid.n_points, "n_feasible": n_feasible,
               "lost": dict(zip(problem.criteria, lost.tolist())), "alone": dict(zip(problem.criteria, alone.tolist())),
-              "least": least,
+              "least": least, "undecided": undecided,
               "summarised": {key: np.concatenate(values) for key, values in summarised.items()},
               "degenerate": degenerate.summary()}
+    if CATENARY in problem.criteria:
+        log.info("sagging cables: %d of %d poses undecided by the proofs, counted out (column catenary_undecided)",
+                 undecided, grid.n_points)
     if problem.spec.tension.model == "feasible":
         log.info("feasible tension model: %d of %d poses by LP (poor conditioning or fallback), "
                  "the rest by hyperplane shifting", by_lp, grid.n_points)
@@ -110,7 +114,7 @@ def tabulate(problem: WorkspaceProblem, positions: np.ndarray, raw: dict,
     columns["limiting"] = categories(limiting, list(problem.criteria))
     for name, margin in margins.items():
         columns[f"margin_{name}"] = margin
-    for key in ("jacobian_rank", "max_payload_kg", "min_payload_kg", "limiting_wrench"):
+    for key in ("jacobian_rank", "max_payload_kg", "min_payload_kg", "limiting_wrench", "catenary_undecided"):
         if key in raw:
             columns[key] = raw[key]
     if "closest_pair" in raw:  # the cable_cable criterion's closest cables, "i-j" by their names
@@ -120,7 +124,7 @@ def tabulate(problem: WorkspaceProblem, positions: np.ndarray, raw: dict,
         columns["closest_obstacle"] = categories(raw["closest_obstacle"], obstacle_pairs(problem.robot))
     for key, values in raw.items():  # output.cables and output.metrics (quantities, pipeline.model.metrics)
         if key.startswith(("length_", "tension_", "wrench_max_", "wrench_min_", "capacity_margin", "stiffness_",
-                           "unstrained_", "wrap_", "exit_")):
+                           "unstrained_", "wrap_", "exit_", "sag_", "angle_platform_", "angle_anchor_", "added_length_")):
             columns[key] = values
     if UNREACHABLE in margins:  # |S S^+ w - w| / |w|, worst over the required wrenches
         columns["wrench_residual"] = (1.0 - margins[UNREACHABLE]) * problem.spec.tension.residual_limit
@@ -131,6 +135,7 @@ def tabulate(problem: WorkspaceProblem, positions: np.ndarray, raw: dict,
 def summarize(cfg: DictConfig, counts: dict, cell_volume: float, problem) -> dict:
     """Flattened config (every swept key is a column) plus counts, percentage and volume;
     ``counts``: n_points, n_feasible, ``lost`` (limiting criterion -> infeasible points),
+    ``undecided`` (the poses the proofs of sagging cables leave undecided: ``undecided_pct``),
     ``alone`` (criterion -> the poses it alone removes, every other criterion holding there:
     ``alone_*``, what relaxing it alone would win) and ``least`` (criterion -> its smallest
     margin over the feasible poses: ``least_margin_*``, the headroom the feasible workspace
@@ -148,6 +153,8 @@ def summarize(cfg: DictConfig, counts: dict, cell_volume: float, problem) -> dic
         feasible_pct=100.0 * n_feasible / n_points,
         volume_m3=n_feasible * cell_volume,
     )
+    if CATENARY in problem.criteria:  # poses the proofs of sagging cables left undecided (counted out)
+        row["undecided_pct"] = 100.0 * counts.get("undecided", 0) / n_points
     for name in problem.criteria:
         row[f"lost_{name}"] = int(counts["lost"].get(name, 0))
     for name in problem.criteria:

@@ -85,7 +85,7 @@ def evaluate_chunk(problem: WorkspaceProblem, rows: np.ndarray) -> dict[str, np.
                 result[key] = np.minimum(result[key], value)
             elif key == "min_payload_kg":  # the payload every orientation of the set needs
                 result[key] = np.maximum(result[key], value)
-            elif key == "lp_poses":
+            elif key in ("lp_poses", "catenary_undecided"):
                 result[key] = result[key] | value
     return result
 

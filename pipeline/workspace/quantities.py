@@ -3,7 +3,10 @@ the cable tensions the checked model uses, so that a user can see why a pose fai
 
 Columns, per cable name c: ``length_<c>`` (m). Statics: ``tension_<c>`` (N), the minimum-norm
 tensions of eq. (10) (``pinv``) or the distribution the LPs chose (``feasible``, the solution of
-the last family's LP). CPR-WWA and lines: ``tension_min_<c>`` and ``tension_max_<c>`` (N), the
+the last family's LP); with sagging cables (``robot.catenary``) the settled equilibrium's largest
+tension of each cable and its shape (``SaggingStatics.shapes``: ``sag_<c>``, ``angle_platform_<c>``,
+``angle_anchor_<c>``, ``unstrained_<c>``, ``added_length_<c>``). CPR-WWA and lines:
+``tension_min_<c>`` and ``tension_max_<c>`` (N), the
 range over the acceleration set of t = M / R_i with M of eq. (20) (``pinv``) or of the chosen
 forces at the vertices of the acceleration box (``feasible``). All at the nominal orientation.
 """
@@ -12,6 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from pipeline.model.sagging import SaggingStatics
 from pipeline.model.stiffness import unstrained_lengths
 
 from pipeline.workspace.criteria.forces import written_tensions
@@ -38,6 +42,10 @@ def cable_quantities(state, limits) -> dict[str, np.ndarray]:
         high, low = state.forces_of(chosen.max(axis=1)), state.forces_of(chosen.min(axis=1))
     if not state.ranges_over_a_set:
         columns.update({f"tension_{name}": high[:, i] for i, name in enumerate(names)})
+        if isinstance(state, SaggingStatics):  # the catenaries' shapes and lengths
+            for quantity, values in state.shapes(chosen[:, 0, :]).items():
+                columns.update({f"{quantity}_{name}": values[:, i] for i, name in enumerate(names)})
+            return columns
         if state.robot.cable_ea is not None:  # elastic cables: what each winch must have paid out
             unstrained = unstrained_lengths(state.robot.cable_ea, state.cable_lengths + state.robot.winch_lengths, high)
             columns.update({f"unstrained_{name}": unstrained[:, i] for i, name in enumerate(names)})

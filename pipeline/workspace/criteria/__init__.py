@@ -7,7 +7,7 @@ margins say; gates in priority order) and its colour in every figure. One module
 ``actuator`` (eqs. 30, 32-34 of the CPR-8 paper), ``tension`` (unreachable, slack, tension
 rating), ``geometry`` (zero_length, singular, cable length), ``interference`` (cable_cable,
 cable_platform, cable_obstacle),
-``payload`` (the largest payload); ``forces``
+``payload`` (the largest payload), ``sag`` and ``catenary`` (heavy cables); ``forces``
 holds the ``feasible`` tension model they share. A criterion also says when it applies
 (``applies``: a predicate on the analysis, its spec and the robot), and :func:`selected` gives a
 problem its criteria from the registry, in registry order (gates first). A new criterion is one
@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipeline.workspace.criteria import actuator, geometry, interference, payload, sag, stiffness, tension
+from pipeline.workspace.criteria import actuator, catenary, geometry, interference, payload, sag, stiffness, tension
 from pipeline.workspace.criteria.forces import feasible_margins, feasible_model
 from pipeline.workspace.criteria.registry import (ANY, COLOURS, DYNAMICS, GEOMETRY, REGISTRY, STATICS, Criterion,
                                                   force_families, register)
@@ -31,6 +31,7 @@ __all__ = ["ANY", "COLOURS", "DYNAMICS", "GEOMETRY", "REGISTRY", "STATICS", "Cri
 # the papers' evidence): spelled here only
 ZERO_LENGTH, SINGULAR, UNREACHABLE, SLACK, TENSION_MAX = "zero_length", "singular", "unreachable", "slack", "tension_max"
 LENGTH, SPEED, TORQUE, ACCELERATION, VOLTAGE = "length", "speed", "torque", "acceleration", "voltage"
+CATENARY = "catenary"
 
 
 def _dynamics(analysis: str, spec=None, robot=None) -> bool:
@@ -95,13 +96,18 @@ for criterion in (
     Criterion("stiffness", stiffness.stiffness, STATICS, None, "#44AA99",
               "stiffer cables (robot.cable_ea), shorter cable to the winches (robot.winch_length), more "
               "pretension (a higher tension.t_min) or anchors around the pose",
-              lambda analysis, spec, robot: analysis == "statics" and robot.cable_ea is not None and robot.pulleys is None,
+              lambda analysis, spec, robot: (analysis == "statics" and robot.cable_ea is not None and robot.pulleys is None
+                                             and robot.catenary is None),
               keys={"translational": stiffness.required, "rotational": stiffness.required,
                     "frequency": stiffness.required}, refuses=stiffness.refuses),
     Criterion("sag", sag.sag, ANY, None, "#88CCEE",
               "more pretension (a higher tension.t_min), lighter cables (robot.cable_mass) or a larger sag allowed",
               lambda analysis, spec, robot: analysis in ("statics", "cpr_wwa", "lines") and robot.cable_mass is not None,
               keys={"ratio": sag.ratio}, bounds=sag.sag_bounds),
+    Criterion(CATENARY, catenary.catenary, STATICS, None, "#AA4499",
+              "a pose on the workspace's boundary, where the proof cannot decide: a finer grid shows it; or "
+              "more pretension (a higher tension.t_min)",
+              lambda analysis, spec, robot: analysis == "statics" and robot.catenary is not None),
 ):
     register(criterion)
 

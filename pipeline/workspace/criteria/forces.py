@@ -36,7 +36,7 @@ def _solved(state, limits, families, distribution: bool) -> tuple[dict[str, np.n
     found = cache.get(id(limits))
     if found is None or (distribution and found[1] is None):
         margins, _, chosen, by_lp = feasible_tensions(
-            state.structure, *state.wrench_pinv, state.required_wrenches, families, distribution=distribution,
+            state.structure, *state.wrench_pinv, state.balanced_wrenches(families), families, distribution=distribution,
         )
         found = cache[id(limits)] = (margins, chosen)
         state.tension_lp = by_lp
@@ -47,11 +47,14 @@ def written_distribution(state, limits, families: list[Family]) -> np.ndarray:
     """The cable forces x (n, K, m) the ``feasible`` model writes (``output.cables``): with
     ``tension.distribution=min_norm`` the least 2-norm tensions within every family's bounds
     where they admit one (:mod:`pipeline.model.distribution`), else :func:`feasible_distribution`."""
+    if state.settles:  # forces that decide their own wrench (sagging cables): the settled ones
+        return state.settled_forces(families)
+    wrenches = state.balanced_wrenches(families)
     if state.tension.distribution != "min_norm":
         return feasible_distribution(state, limits, families)
     weights = state.forces_of(np.ones(state.structure.shape[2]))  # tensions per unit of the variables
-    return min_norm_tensions(state.structure, *state.wrench_pinv, state.required_wrenches,
-                             families, weights, state.tension.residual_rtol)
+    return min_norm_tensions(state.structure, *state.wrench_pinv, wrenches, families, weights,
+                             state.tension.residual_rtol)
 
 
 def feasible_model(state) -> bool:

@@ -6,9 +6,10 @@ whose mid-span sag is mu g cos(theta) l^2 / (8 t) at the tension t of its lower 
 tension grows by mu g per metre it rises, so the platform's end, when it is the upper one, must
 pull mu g h more (h its height above the anchor):
 
-    t >= mu g (l cos(theta) / (8 ratio) + max(0, h)).
+    t >= mu g (l cos(theta) / (8 ratio) + max(0, h))
 
-The cable is still a straight line to every other criterion. Against Irvine's inextensible
+(``PoseGeometry.sag_tensions``). The cable is still a straight line to every other criterion.
+With sagging cables (``robot.catenary``) the tensions are the catenary's own, exact. Against Irvine's inextensible
 catenary (tests/test_sag.py, docs/model.md section 8) the rule is safe for inclined cables and
 underestimates a level cable's sag by up to 2.5 % of it at ratio 0.05 (0.4 % at 0.02)."""
 
@@ -22,22 +23,12 @@ def ratio(value) -> str | None:
     return None if 0 < value <= 0.05 else "must be in (0, 0.05]: the parabolic rule holds for small sag only"
 
 
-def least_tensions(state, ratio: float) -> np.ndarray:
-    """(n, m) mu g (l cos(theta) / (8 ratio) + max(0, h)), N: the least tension of each cable at
-    its platform end at each pose (above)."""
-    robot = state.robot
-    rising = state.unit @ robot.up  # sin(theta), positive where the platform's end is the upper one
-    across = np.sqrt(np.clip(1.0 - rising ** 2, 0.0, 1.0))
-    weight = robot.cable_mass * state.load.gravity
-    return weight * state.lengths * (across / (8.0 * ratio) + np.maximum(rising, 0.0))
-
-
 def sag(state, limits, ratio: float) -> np.ndarray:
     """Margin min_i (t_i - t_sag,i) / scale of the minimum-norm tensions (the slack margin's
     units, ``StaticLimits.scale`` or the torque limit); under ``feasible`` its bounds decide."""
-    return (state.force_range[1] - least_tensions(state, ratio)).min(axis=1) / limits.scale
+    return (state.force_range[1] - state.sag_tensions(ratio)).min(axis=1) / limits.scale
 
 
 def sag_bounds(state, limits, ratio: float) -> tuple:
     """Under ``feasible``: x >= the least tensions in the state's variables, per pose and cable."""
-    return state.variables_of(least_tensions(state, ratio))[:, None, :], np.inf, limits.scale
+    return state.variables_of(state.sag_tensions(ratio))[:, None, :], np.inf, limits.scale
