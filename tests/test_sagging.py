@@ -83,6 +83,8 @@ def test_every_feasible_pose_is_an_equilibrium_of_catenaries(heavy):
             assert pose[f"unstrained_{name}"] == pytest.approx(length, rel=1e-8)
             assert pose[f"angle_platform_{name}"] == pytest.approx(np.arctan2(v, h), abs=1e-8)
         assert np.abs(total).max() <= 1e-6 * 5 * G and np.abs(moment).max() <= 1e-6 * 5 * G
+    assert (points.sag_max_ratio[points.feasible] <= 0.05 * (1 + 1e-9)).all()
+    assert points.sag_max_ratio[~points.feasible].isna().all() and summary["sag_max_ratio_max"] > 0.01
 
 
 def test_sagging_cables_need_more_than_straight_ones_and_weightless_ones_are_the_straight(catalogue):
@@ -221,3 +223,14 @@ def test_what_sagging_cables_cannot_mean_is_one_line(tmp_path, case):
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1 and named in lines[0], lines
     assert not run.exists()
+
+
+def test_the_cogiro_study_gives_the_numbers_its_docs_state(catalogue):
+    """docs/studies.md quotes this job of the study sagging_cogiro, run from its own overrides."""
+    from conftest import make_cfg
+    from pipeline.study import load_study
+
+    overrides = [o.strip('"') for o in load_study("sagging_cogiro").overrides]
+    summary = compute_workspace(make_cfg(*overrides, "robot.cable_mass=0.25", "robot.catenary=0.05"), catalogue)[1]
+    assert (summary["n_feasible"], summary["n_points"], summary["lost_catenary"]) == (3871, 5040, 8)
+    assert round(summary["undecided_pct"], 2) == 0.14 and round(summary["added_length_max_max"], 3) == 0.116

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
+from typing import ClassVar
 
 import numpy as np
 
@@ -45,7 +46,10 @@ SAGGING_WORK = 10.0  # a pose's work against the straight statics' (SaggingSpec.
 @dataclass(frozen=True)
 class SaggingSpec(StaticsSpec):
     """``analysis=statics`` of a robot with sagging cables (``robot.catenary``): its states are
-    :class:`SaggingStatics`."""
+    :class:`SaggingStatics`; the summary gives min, median and max of the proven equilibria's
+    largest sag share and added length."""
+
+    summarised: ClassVar[tuple[str, ...]] = ("sag_max_ratio", "added_length_max")
 
     def state(self, robot, positions: np.ndarray, orientation) -> "SaggingStatics":
         return SaggingStatics(robot, positions, orientation, self)
@@ -65,7 +69,9 @@ class SaggingStatics(PoseStatics):
     ``feasible`` model's variables, the top tensions its forces."""
 
     settles = True
-    catenary_undecided: np.ndarray | None = None  # (n,) set by the criterion catenary
+    catenary_undecided: np.ndarray | None = None  # (n,) set by the criterion catenary, with the next two
+    sag_share: np.ndarray | None = None  # (n,) the largest sag / chord of a proven equilibrium (NaN: none)
+    added_length: np.ndarray | None = None  # (n,) its largest unstrained length beyond the chord, m
 
     @cached_property
     def ends(self) -> tuple[np.ndarray, np.ndarray]:
@@ -258,5 +264,6 @@ class SaggingStatics(PoseStatics):
     def diagnostics(self) -> dict[str, np.ndarray]:
         found = super().diagnostics()
         if self.catenary_undecided is not None:
-            found["catenary_undecided"] = self.catenary_undecided
+            found.update(catenary_undecided=self.catenary_undecided, sag_max_ratio=self.sag_share,
+                         added_length_max=self.added_length)
         return found

@@ -114,7 +114,8 @@ def tabulate(problem: WorkspaceProblem, positions: np.ndarray, raw: dict,
     columns["limiting"] = categories(limiting, list(problem.criteria))
     for name, margin in margins.items():
         columns[f"margin_{name}"] = margin
-    for key in ("jacobian_rank", "max_payload_kg", "min_payload_kg", "limiting_wrench", "catenary_undecided"):
+    for key in ("jacobian_rank", "max_payload_kg", "min_payload_kg", "limiting_wrench", "catenary_undecided",
+                "sag_max_ratio", "added_length_max"):
         if key in raw:
             columns[key] = raw[key]
     if "closest_pair" in raw:  # the cable_cable criterion's closest cables, "i-j" by their names

@@ -85,6 +85,8 @@ def evaluate_chunk(problem: WorkspaceProblem, rows: np.ndarray) -> dict[str, np.
                 result[key] = np.minimum(result[key], value)
             elif key == "min_payload_kg":  # the payload every orientation of the set needs
                 result[key] = np.maximum(result[key], value)
+            elif key in ("sag_max_ratio", "added_length_max"):  # the largest over the orientations proven
+                result[key] = np.fmax(result[key], value)
             elif key in ("lp_poses", "catenary_undecided"):
                 result[key] = result[key] | value
     return result

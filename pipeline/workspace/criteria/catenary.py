@@ -25,7 +25,10 @@ at the intervals' ends: that a cable pulled harder is shorter and its ends' angl
 chord's is the catenary's (checked on random cables in tests/test_sagging.py).
 
 Margin 1 where feasibility is proven; where infeasibility is, the room (negative); -1 where
-neither is (``catenary_undecided``, a per-pose column): such a pose is counted out, never in."""
+neither is (``catenary_undecided``, a per-pose column): such a pose is counted out, never in.
+Where it is proven, the cables at the centre of the box (an equilibrium lies within +-1 % of
+their chord tensions) give the per-pose columns ``sag_max_ratio`` (the largest sag, a share of its
+chord) and ``added_length_max`` (m, the largest unstrained length beyond the chord)."""
 
 from __future__ import annotations
 
@@ -54,10 +57,15 @@ def catenary(state, limits) -> np.ndarray:
     room = room["centre"]
     holds = np.flatnonzero(room >= 0)
     proven = np.zeros(len(room), dtype=bool)
+    state.sag_share, state.added_length = np.full(len(room), np.nan), np.full(len(room), np.nan)
     if len(holds):
         centre = _centre(state, holds, wrenches[holds], lower[holds], upper[holds], limits.scale)
         for part in np.array_split(np.arange(len(holds)), -(-len(holds) // PROOF_POSES)):
             proven[holds[part]] = _proven(state, holds[part], centre[part], lower[holds[part]], upper[holds[part]])
+        shown = proven[holds]  # the proven equilibria's cables, at the centre of their box
+        cables = state.chords(centre[shown], holds[shown])
+        state.sag_share[holds[shown]] = (cables.sag / cables.chord).max(axis=(1, 2))
+        state.added_length[holds[shown]] = (cables.length - cables.chord).max(axis=(1, 2))
     disproven = np.zeros(len(room), dtype=bool)
     failing = np.flatnonzero(room < 0)
     if len(failing):
