@@ -234,3 +234,52 @@ def test_the_cogiro_study_gives_the_numbers_its_docs_state(catalogue):
     summary = compute_workspace(make_cfg(*overrides, "robot.cable_mass=0.25", "robot.catenary=0.05"), catalogue)[1]
     assert (summary["n_feasible"], summary["n_points"], summary["lost_catenary"]) == (3871, 5040, 8)
     assert round(summary["undecided_pct"], 2) == 0.14 and round(summary["added_length_max_max"], 3) == 0.116
+
+
+def shot(horizontal, vertical, length, w, ea, steps=400):
+    """The far end of an elastic cable pulled at its start with (H, V), by fixed-step RK4 on its
+    equilibrium (a second integrator, written here)."""
+    def slope(s):
+        force = np.array([horizontal, vertical + w * s])
+        tension = np.hypot(*force)
+        return force / tension * (1.0 + tension / ea)
+
+    h, point = length / steps, np.zeros(2)
+    for k in range(steps):
+        s = k * h
+        point = point + h / 6 * (slope(s) + 4 * slope(s + h / 2) + slope(s + h))
+    return point
+
+
+def test_elastic_sagging_cables_balance_the_load_too(catalogue):
+    """The crane's cables elastic (EA = 20 kN, strains of a few per mille): at feasible poses each
+    written top tension, shot by RK4 from its attachment (H, V, L0 by fsolve here), reaches its
+    anchor and gives forces that hold the load (1e-6 of its weight), its unstrained length the
+    written one."""
+    from scipy.optimize import fsolve
+
+    from conftest import make_cfg
+
+    points, _ = compute_workspace(make_cfg(*CRANE, "robot.cable_ea=2e4", "output.cables=true"), catalogue)
+    anchors, w = np.array(CRANE_ANCHORS), 0.1 * G
+    feasible = points[points.feasible]
+    assert len(feasible) > 50
+    for _, pose in feasible.sample(6, random_state=2).iterrows():
+        total = np.array([0.0, 0.0, -6 * G])
+        for i in range(4):
+            to_anchor = anchors[i] - pose[["x", "y", "z"]].to_numpy(float)
+            rise, level = to_anchor[2], to_anchor[:2]
+            span, chord, top = np.linalg.norm(level), np.linalg.norm(to_anchor), pose[f"tension_{i + 1}"]
+
+            def missed(unknowns):
+                h, v, length = unknowns
+                end = shot(h, v, length, w, 2e4)
+                return [(end[0] - span) / chord, (end[1] - rise) / chord,
+                        (max(np.hypot(h, v), np.hypot(h, v + w * length)) - top) / top]
+
+            start = [top * span / chord, top * rise / chord - w * chord / 2, chord / (1 + top / 2e4)]
+            h, v, length = fsolve(missed, start, xtol=1e-13)
+            assert np.abs(missed([h, v, length])).max() < 1e-9
+            assert pose[f"unstrained_{i + 1}"] == pytest.approx(length, rel=1e-7)
+            total += np.array([*(h * level / span), v])
+        assert np.abs(total).max() <= 1e-6 * 6 * G
