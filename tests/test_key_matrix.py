@@ -29,6 +29,8 @@ KEYS = {  # key -> (overrides, the criterion or column it adds when the job runs
                   "margin_stiffness"),
     "sag": (["robot.cable_mass=0.05", "+criteria.sag={ratio: 0.02}"], "margin_sag"),
     "catenary": (["robot.cable_mass=0.05", "robot.catenary=0.05", "tension=feasible"], "margin_catenary"),
+    "cable rules": (["robot.cable_mass=0.05", "+criteria.cable_contraction={share: 0.002}",
+                     "+criteria.cable_frequency={hz: 2}"], "margin_cable_frequency"),
 }
 # the cells that are refused, with the key the one line names
 REFUSED = {("lines", "workspace.home"): "workspace.home", ("lines", "output.mesh"): "output.mesh",
@@ -37,7 +39,7 @@ REFUSED = {("lines", "workspace.home"): "workspace.home", ("lines", "output.mesh
            **{(analysis, "criteria"): "criteria.torque" for analysis in ANALYSES},
            **{(analysis, "pulleys with jdot"): "model.jdot" for analysis in ANALYSES},  # J-dot of fixed anchors
            **{(analysis, "stiffness"): "criteria.stiffness" for analysis in ANALYSES if analysis != "statics"},
-           ("payload", "sag"): "criteria.sag",
+           ("payload", "sag"): "criteria.sag", ("payload", "cable rules"): "criteria.cable_contraction",
            **{(analysis, "catenary"): "robot.catenary" for analysis in ANALYSES if analysis != "statics"}}
 
 

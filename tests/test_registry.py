@@ -233,7 +233,8 @@ def test_a_steeper_floor_angle_from_its_key_removes_more_poses(make_cfg, catalog
     ("+criteria.floor_angle.min_deg=abc", r"^criteria.floor_angle.min_deg=abc: not a value this key takes$"),
     ("+criteria.floor_angle.max_deg=3", r"^criteria.floor_angle=\{'max_deg': 3\}: its keys are min_deg$"),
     ("+criteria.floor_angel.min_deg=3",
-     r"^criteria.floor_angel: no criterion with keys of its own is called that \(stiffness, sag, floor_angle\)$"),
+     r"^criteria.floor_angel: no criterion with keys of its own is called that "
+     r"\(stiffness, sag, cable_contraction, cable_frequency, floor_angle\)$"),
     ("+criteria.torque.limit=3", r"^criteria.torque: no criterion with keys of its own")])
 def test_a_criterions_keys_are_checked_by_the_rules_it_declares(make_cfg, catalogue, floor_registered, override, message):
     from pipeline.app.problem import validate

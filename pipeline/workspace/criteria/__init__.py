@@ -40,6 +40,12 @@ def _dynamics(analysis: str, spec=None, robot=None) -> bool:
     return analysis in ("cpr_wwa", "lines")
 
 
+def _straight_heavy(analysis: str, spec, robot) -> bool:
+    """Heavy straight cables (``robot.cable_mass`` without ``robot.catenary``): the rules of
+    ``criteria.sag`` other than the sag itself apply to them."""
+    return analysis in ("statics", "cpr_wwa", "lines") and robot.cable_mass is not None and robot.catenary is None
+
+
 def _feasible(spec) -> bool:
     return spec.tension.model == "feasible"
 
@@ -104,6 +110,12 @@ for criterion in (
               "more pretension (a higher tension.t_min), lighter cables (robot.cable_mass) or a larger sag allowed",
               lambda analysis, spec, robot: analysis in ("statics", "cpr_wwa", "lines") and robot.cable_mass is not None,
               keys={"ratio": sag.ratio}, bounds=sag.sag_bounds),
+    Criterion("cable_contraction", sag.contraction, ANY, None, "#117733",
+              "more pretension (a higher tension.t_min), lighter cables (robot.cable_mass) or more cable allowed",
+              _straight_heavy, keys={"share": sag.share}, bounds=sag.contraction_bounds),
+    Criterion("cable_frequency", sag.frequency, ANY, None, "#999999",
+              "more pretension (a higher tension.t_min), lighter or shorter cables, or a lower frequency required",
+              _straight_heavy, keys={"hz": sag.hertz}, bounds=sag.frequency_bounds),
     Criterion(CATENARY, catenary.catenary, STATICS, None, "#AA4499",
               "a pose on the workspace's boundary, where the proof cannot decide: a finer grid shows it; or "
               "more pretension (a higher tension.t_min)",
