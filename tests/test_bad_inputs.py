@@ -278,7 +278,8 @@ def test_every_declared_rule_is_applied(make_cfg):
     tried = 0
     for key, check in rules.items():
         parent, _, leaf = key.rpartition(".")
-        if leaf not in (OmegaConf.select(cfg, parent) if parent else cfg):
+        node = OmegaConf.select(cfg, parent) if parent else cfg
+        if node is None or leaf not in node:
             continue  # a key of another analysis
         for bad in (float("nan"), -1, 0, 1e9, [float("inf")]):
             if not _refused(check, bad):

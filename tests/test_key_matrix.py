@@ -29,6 +29,7 @@ KEYS = {  # key -> (overrides, the criterion or column it adds when the job runs
                   "margin_stiffness"),
     "sag": (["robot.cable_mass=0.05", "+criteria.sag={ratio: 0.02}"], "margin_sag"),
     "catenary": (["robot.cable_mass=0.05", "robot.catenary=0.05", "tension=feasible"], "margin_catenary"),
+    "platform_motion": (["platform_motion.acceleration=[[0.5,0,0,0,0,0],[0,0,-0.5,0,0,0]]"], None),
     "cable rules": (["robot.cable_mass=0.05", "+criteria.cable_contraction={share: 0.002}",
                      "+criteria.cable_frequency={hz: 2}"], "margin_cable_frequency"),
 }
@@ -40,6 +41,7 @@ REFUSED = {("lines", "workspace.home"): "workspace.home", ("lines", "output.mesh
            **{(analysis, "pulleys with jdot"): "model.jdot" for analysis in ANALYSES},  # J-dot of fixed anchors
            **{(analysis, "stiffness"): "criteria.stiffness" for analysis in ANALYSES if analysis != "statics"},
            ("payload", "sag"): "criteria.sag", ("payload", "cable rules"): "criteria.cable_contraction",
+           **{(analysis, "platform_motion"): "platform_motion" for analysis in ANALYSES if analysis != "statics"},
            **{(analysis, "catenary"): "robot.catenary" for analysis in ANALYSES if analysis != "statics"}}
 
 

@@ -160,7 +160,7 @@ def test_the_tension_factor_is_pham_et_als_internal_force_ratio(make_cfg, catalo
 @pytest.mark.parametrize("overrides, message", [
     (["analysis=cpr_wwa", "tension=pinv", "tension.t_min=0"], "analysis=cpr_wwa is not"),
     (["analysis=payload"], "analysis=payload is not"),
-    (["wrench.set=[[0,0,1,0,0,0],[0,0,-1,0,0,0]]"], "a wrench set has several loads"),
+    (["wrench.set=[[0,0,1,0,0,0],[0,0,-1,0,0,0]]"], "a wrench set or a platform's motion has several loads"),
 ])
 def test_metrics_where_they_mean_nothing_are_refused_in_one_line(make_cfg, catalogue, overrides, message):
     with pytest.raises(ConfigError) as refused:

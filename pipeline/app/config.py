@@ -443,6 +443,24 @@ class ChoiceConfig:
     required_pct: float = rule(lambda v: None if 0 < v <= 100 else "must be in (0, 100]")
 
 
+MAX_ACCELERATION = 1e4  # m/s^2, rad/s^2 and rad/s: past any cable robot's, a unit typed wrong
+
+
+@dataclass
+class PlatformMotionConfig:
+    """``analysis=statics``: the motion the cables must hold the platform in at every pose (issue
+    56: the dynamic workspace). ``acceleration``: the accelerations required, each with every
+    wrench, a box ``{min: [6], max: [6]}`` (its vertices decide: the wrench is affine in the
+    acceleration) or a list of ``[ax, ay, az, alpha_x, alpha_y, alpha_z]`` (m/s^2 of the
+    platform's reference point and rad/s^2 of its turn, fixed axes); null: at rest.
+    ``angular_velocity``: [wx, wy, wz], rad/s, the platform's (its centripetal and gyroscopic
+    terms, quadratic in it: one velocity, not a set). The platform's mass, centre of mass and
+    inertia are ``robot.platform`` and ``load``'s."""
+
+    acceleration: Any = MISSING
+    angular_velocity: list[float] = rule(vector(3, "wx wy wz, rad/s", MAX_ACCELERATION))
+
+
 @dataclass
 class ModelConfig:
     """Readings of the ambiguous equations; each default is the best fit to all the published
@@ -566,6 +584,7 @@ class Config:
     output: OutputConfig = field(default_factory=OutputConfig)
     workspace: WorkspaceConfig = field(default_factory=WorkspaceConfig)
     lines: LinesConfig = field(default_factory=LinesConfig)
+    platform_motion: PlatformMotionConfig = field(default_factory=PlatformMotionConfig)
     poses: Any = MISSING
     obstacles: Any = MISSING
     criteria: Any = MISSING

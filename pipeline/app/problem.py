@@ -33,7 +33,7 @@ import numpy as np
 from omegaconf import DictConfig, ListConfig, OmegaConf
 
 from pipeline.app.config import (
-    MAX_FORCE, Config, Cpr8Config, Irpm6Config, PointsConfig, check_values, masked, merged, shown,
+    MAX_ACCELERATION, MAX_FORCE, Config, Cpr8Config, Irpm6Config, PointsConfig, check_values, masked, merged, shown,
     unknown_keys, vector,
 )
 from pipeline.errors import ConfigError
@@ -185,11 +185,16 @@ def _statics(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
         tension=tension_spec(cfg, robot),
         load=load,
         **dict(zip(("wrench_set", "vertex_numbers"), wrench_set(cfg.wrench.set))),
+        **platform_motion(cfg, load),
     )
+    if spec.set_size() > MAX_SET_VERTICES:
+        raise ConfigError(f"platform_motion.acceleration: {len(spec.accelerations)} accelerations with each of "
+                          f"{len(spec.wrench_set)} wrenches of wrench.set, {spec.set_size()}; at most {MAX_SET_VERTICES}")
     rating = spec.tension.t_max
     force = spec.load.external[:3] - spec.load.mass * spec.load.gravity * robot.up
     scale = float(np.max(rating)) if rating is not None else max(float(np.linalg.norm(force)), 1.0)
-    limits = StaticLimits(np.inf if rating is None else rating, cfg.model.rank_rtol, scale, len(spec.wrench_set))
+    required = spec.set_size() if len(spec.wrench_set) or spec.moves else 0  # a set's wrenches (summary)
+    limits = StaticLimits(np.inf if rating is None else rating, cfg.model.rank_rtol, scale, required)
     return spec, limits
 
 
@@ -203,6 +208,9 @@ def _payload(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
         raise ConfigError("wrench.set: analysis=payload finds the largest payload under one wrench; a required "
                           "wrench set is for analysis=statics")
     spec, limits = _statics(cfg, catalogue, robot)
+    if spec.moves:
+        raise ConfigError("platform_motion: analysis=payload finds the largest payload of a platform at rest; "
+                          "a platform's motion is for analysis=statics")
     platform = cfg.robot.platform
     applied = spec.load.external  # load.external + wrench.*, as the statics has it
     load = Load(float(platform.mass), float(cfg.load.gravity), np.asarray(platform.com, dtype=float), applied)
@@ -275,36 +283,62 @@ def wrench_set(value) -> tuple[np.ndarray, tuple[int, ...]]:
     """(K, 6) the vertices of ``wrench.set``: a box's (every combination of each coordinate's min
     and max, once where they are equal) or the listed ones, each once; (0, 6) for null. And
     each vertex's number in the set as given (1 = its first), which ``limiting_wrench`` reports."""
+    return vertex_set(value, "wrench.set", _wrench, "[fx, fy, fz, mx, my, mz] (N, N m)", "the one wrench")
+
+
+def vertex_set(value, key: str, parse: Callable, what: str, empty: str) -> tuple[np.ndarray, tuple[int, ...]]:
+    """(K, 6) the vertices of the set ``key`` gives (a box or a list of ``what``, each parsed by
+    ``parse(value, key)``) and their numbers (above); null: (0, 6), ``empty``."""
     if value is None:
         return np.zeros((0, 6)), ()
     shown_value = OmegaConf.to_container(value) if isinstance(value, (DictConfig, ListConfig)) else value
     if isinstance(value, DictConfig):
         if set(value) != {"min", "max"}:
-            raise ConfigError(f"wrench.set={shown_value}: a box needs min and max, 6 numbers each")
-        low, high = (_wrench(value[key], f"wrench.set.{key}") for key in ("min", "max"))
+            raise ConfigError(f"{key}={shown_value}: a box needs min and max, 6 numbers each")
+        low, high = (parse(value[side], f"{key}.{side}") for side in ("min", "max"))
         if not (low <= high).all():
-            raise ConfigError(f"wrench.set.min={low.tolist()}: must be <= wrench.set.max={high.tolist()}")
+            raise ConfigError(f"{key}.min={low.tolist()}: must be <= {key}.max={high.tolist()}")
         box = np.array(list(itertools.product(*(sorted({a, b}) for a, b in zip(low, high)))), dtype=float)
         return box, tuple(range(1, len(box) + 1))
     if not isinstance(value, ListConfig):
-        raise ConfigError(f"wrench.set={shown_value}: a box {{min: [6], max: [6]}} or a list of "
-                          "[fx, fy, fz, mx, my, mz] (N, N m)")
+        raise ConfigError(f"{key}={shown_value}: a box {{min: [6], max: [6]}} or a list of {what}")
     if not len(value):
-        raise ConfigError("wrench.set=[]: no vertices (null: the one wrench)")
+        raise ConfigError(f"{key}=[]: no vertices (null: {empty})")
     if len(value) > MAX_SET_VERTICES:
-        raise ConfigError(f"wrench.set: {len(value)} vertices; at most {MAX_SET_VERTICES}")
-    vertices = np.array([_wrench(v, f"wrench.set: vertex {i}") for i, v in enumerate(value, start=1)])
+        raise ConfigError(f"{key}: {len(value)} vertices; at most {MAX_SET_VERTICES}")
+    vertices = np.array([parse(v, f"{key}: vertex {i}") for i, v in enumerate(value, start=1)])
     _, first = np.unique(vertices, axis=0, return_index=True)  # a repeated vertex is one more solve for nothing
     first = np.sort(first)
     return vertices[first], tuple(int(i) + 1 for i in first)
 
 
+def platform_motion(cfg: DictConfig, load: Load) -> dict:
+    """The statics' ``accelerations`` and ``angular_velocity`` of ``platform_motion`` (at rest
+    without the node); refuses angular motion of a platform without its inertia and more
+    wrenches than ``MAX_SET_VERTICES`` with the wrench set."""
+    if "platform_motion" not in cfg:
+        return {}
+    node = cfg.platform_motion
+    accelerations = vertex_set(node.acceleration, "platform_motion.acceleration", _acceleration,
+                               "[ax, ay, az, alpha_x, alpha_y, alpha_z] (m/s^2, rad/s^2)", "at rest")[0]
+    omega = np.asarray(node.angular_velocity, dtype=float)
+    if load.inertia is None and load.mass > 0 and (np.any(omega) or np.any(accelerations[:, 3:])):
+        raise ConfigError("platform_motion: a platform that turns needs its inertia, robot.platform.inertia "
+                          "([Ixx, Iyy, Izz(, Ixy, Ixz, Iyz)] kg m^2 about its centre of mass)")
+    return {"accelerations": accelerations, "angular_velocity": omega}
+
+
 WRENCH_RULE = vector(6, "fx fy fz mx my mz, N and N m", MAX_FORCE)  # the rule of load.external
+ACCELERATION_RULE = vector(6, "ax ay az alpha_x alpha_y alpha_z, m/s^2 and rad/s^2", MAX_ACCELERATION)
 POINT_RULE = vector(3, "x, y, z, m", MAX_FORCE)  # an obstacle's or a platform box's corner, point, normal
 
 
 def _wrench(value, key: str) -> np.ndarray:
     return _checked(value, key, WRENCH_RULE, "must be a list of 6 numbers (fx fy fz mx my mz)")
+
+
+def _acceleration(value, key: str) -> np.ndarray:
+    return _checked(value, key, ACCELERATION_RULE, "must be a list of 6 numbers (ax ay az alpha_x alpha_y alpha_z)")
 
 
 def _point(value, key: str) -> np.ndarray:
@@ -433,8 +467,9 @@ def build(cfg: DictConfig, catalogue: Catalogue | None) -> WorkspaceProblem:
         raise ConfigError(f"orientation: robot.dofs=[{freedoms}] holds the platform at the origin and its grid is "
                           "of orientations (robot.search: psi, theta, phi in rad, in orientation.convention); "
                           "orientation.psi, theta, phi and total are not read, leave them 0")
-    if cfg.output.metrics and (cfg.analysis != "statics" or len(spec.wrench_set)):
-        why = "a wrench set has several loads" if cfg.analysis == "statics" else f"analysis={cfg.analysis} is not"
+    if cfg.output.metrics and (cfg.analysis != "statics" or len(spec.wrench_set) or spec.moves):
+        why = ("a wrench set or a platform's motion has several loads" if cfg.analysis == "statics"
+               else f"analysis={cfg.analysis} is not")
         raise ConfigError(f"output.metrics=true: the tension factor and the largest wrenches are of a static pose "
                           f"under one load (analysis=statics without wrench.set); {why}")
     return WorkspaceProblem(robot, orientation_set(given), spec, limits, criteria, cfg.model.margin_atol,

@@ -14,7 +14,7 @@ from functools import cached_property
 
 import numpy as np
 
-from pipeline.model.dynamics import Load, load_wrench_terms
+from pipeline.model.dynamics import Load, inertial_wrenches, load_wrench_terms
 from pipeline.model.linalg import batched_pinv, gram, gram_ratio
 from pipeline.model.geometry import CableRobot, PoseGeometry, structure_matrix
 from pipeline.model.tensions import TensionSpec, payload_ranges, ray_interval
@@ -48,26 +48,34 @@ class StaticsSpec:
     load: Load = field(default_factory=Load)
     wrench_set: np.ndarray = field(default_factory=lambda: np.zeros((0, 6)))
     vertex_numbers: tuple[int, ...] = ()
+    accelerations: np.ndarray = field(default_factory=lambda: np.zeros((0, 6)))
+    angular_velocity: np.ndarray = field(default_factory=lambda: np.zeros(3))
     kind: ClassVar[str] = "statics"  # which compiled kernel evaluates it (pipeline.workspace.fused)
     summarised: ClassVar[tuple[str, ...]] = ()  # per-pose columns the summary gives min, median, max of
 
     def state(self, robot: CableRobot, positions: np.ndarray, orientation) -> "PoseStatics":
         return PoseStatics(robot, positions, orientation, self)
 
+    @property
+    def moves(self) -> bool:
+        """Whether the platform moves (``platform_motion``): its momentum's rate joins every wrench."""
+        return bool(len(self.accelerations)) or bool(np.any(self.angular_velocity))
+
     def set_size(self) -> int:
-        """Largest per-pose, per-cable set a criterion holds in memory: the wrench set's vertices."""
-        return max(1, len(self.wrench_set))
+        """Largest per-pose, per-cable set a criterion holds in memory: the wrench set's vertices
+        times the accelerations'."""
+        return max(1, len(self.wrench_set)) * max(1, len(self.accelerations))
 
     def work(self) -> float:
         """A pose's work against the statics of one wrench (the cost model's reference,
         ``pipeline.workspace.compute``): each vertex of a wrench set adds about a sixth
         (benchmarks/LOG.md, 2026-11-26: 4 vertices x1.8, 64 vertices x12.8, both tension models)."""
-        return 1.0 + len(self.wrench_set) / 6 if len(self.wrench_set) else 1.0
+        return 1.0 + self.set_size() / 6 if self.set_size() > 1 else 1.0
 
     def fused_unfit(self) -> str | None:
         """Why the compiled statics kernel cannot evaluate this spec, None when it can."""
-        if len(self.wrench_set):
-            return "it balances one wrench (no wrench.set)"
+        if len(self.wrench_set) or self.moves:
+            return "it balances one wrench (no wrench.set, no platform_motion)"
         return None if self.tension.model == "pinv" else "it evaluates tension.model=pinv only"
 
 
@@ -77,7 +85,7 @@ class StaticLimits:
     ``tension.t_max``, inf = no rating, a scalar or one per cable); a pose is singular when the gram ratio of the
     structure matrix is below ``rank_rtol``. ``scale`` (N) is the unit of the slack margin:
     the largest rating, or without one the magnitude of the force the cables balance (at least
-    1 N). Cable lengths are limited by the robot's own ``l_max``. ``n_wrenches``: the vertices of
+    1 N). Cable lengths are limited by the robot's own ``l_max``. ``n_wrenches``: the wrenches of
     a required wrench set (0: none)."""
 
     t_max: float | np.ndarray
@@ -110,8 +118,9 @@ class PoseStatics(PoseGeometry):
 
     @property
     def ranges_over_a_set(self) -> bool:
-        """Whether the cables balance a wrench set (``wrench.set``), else one wrench."""
-        return len(self.spec.wrench_set) > 0
+        """Whether the cables balance a wrench set (``wrench.set``, or the platform's motion), else
+        one wrench."""
+        return len(self.spec.wrench_set) > 0 or self.spec.moves
 
     @property
     def force_range(self) -> tuple[np.ndarray, np.ndarray]:
@@ -167,13 +176,22 @@ class PoseStatics(PoseGeometry):
         """A^+ (n, m, k) and the rank of A (n,)."""
         return batched_pinv(self.structure_matrix, self.spec.rank_rtol)
 
-    @property
+    @cached_property
     def required_wrenches(self) -> np.ndarray:
         """(K, k) the wrenches the cables must balance: :attr:`wrench`, plus each wrench of the
-        set (``wrench.set``) when there is one; (n, K, k) for a rotation per pose."""
-        if not self.ranges_over_a_set:
-            return self.wrench[..., None, :]
-        return self.wrench[..., None, :] + self.spec.wrench_set[:, list(self.robot.dofs)]
+        set (``wrench.set``) when there is one, each with the momentum's rate of each acceleration
+        of the platform's motion (``platform_motion``; K = their product); (n, K, k) for a
+        rotation per pose."""
+        rows = list(self.robot.dofs)
+        wrenches = self.wrench[..., None, :]
+        if len(self.spec.wrench_set):
+            wrenches = wrenches + self.spec.wrench_set[:, rows]
+        if not self.spec.moves:
+            return wrenches
+        accelerations = self.spec.accelerations if len(self.spec.accelerations) else np.zeros((1, 6))
+        moving = inertial_wrenches(self.spec.load, self.rotation, accelerations, self.spec.angular_velocity)[..., rows]
+        combined = wrenches[..., :, None, :] + moving[..., None, :, :]  # every wrench with every acceleration
+        return combined.reshape(*combined.shape[:-3], -1, combined.shape[-1])
 
     @cached_property
     def gram_ratio(self) -> np.ndarray:
