@@ -149,3 +149,51 @@ def test_other_analyses_have_no_platform_motion(tmp_path, analysis):
     lines = done.stderr.strip().splitlines()
     assert done.returncode == 2 and len(lines) == 1 and "platform_motion" in lines[0], lines
     assert not run.exists()
+
+
+def test_a_ball_of_accelerations_is_held_by_the_icosahedron_around_it(catalogue):
+    """``{linear: r, angular: r}``: each ball by 12 vertices whose hull contains it (its support
+    function is at least r in 20 000 random directions) and touches it (at least one direction
+    within 1e-9 of r: the faces are tangent); the job holds fewer poses than at rest and every
+    pose it holds holds the box's corners along the axes too (the ball contains them)."""
+    from conftest import make_cfg
+    from pipeline.app.problem import ball_vertices
+    from omegaconf import OmegaConf
+
+    vertices = ball_vertices(OmegaConf.create({"linear": 2.0, "angular": 3.0}))
+    assert vertices.shape == (144, 6)
+    rng = np.random.default_rng(0)
+    directions = rng.normal(size=(20000, 3))
+    directions /= np.linalg.norm(directions, axis=1, keepdims=True)
+    for part, radius in ((vertices[:, :3], 2.0), (vertices[:, 3:], 3.0)):
+        support = (directions @ part.T).max(axis=1)
+        assert support.min() >= radius * (1 - 1e-12)
+        normals = np.array([np.cross(b - a, c - a) for a, b, c in _faces(part)])
+        normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+        assert np.allclose(np.abs((normals[:, None, :] * part[None, :, :]).sum(-1)).max(axis=1), radius)
+    ball = ["platform_motion.acceleration={linear: 1.5}"]
+    moving, _ = compute_workspace(make_cfg(*MOVING, *ball), catalogue)
+    still, _ = compute_workspace(make_cfg(*MOVING), catalogue)
+    axes = "platform_motion.acceleration=[[1.5,0,0,0,0,0],[-1.5,0,0,0,0,0],[0,1.5,0,0,0,0],[0,-1.5,0,0,0,0]," \
+           "[0,0,1.5,0,0,0],[0,0,-1.5,0,0,0]]"
+    along, _ = compute_workspace(make_cfg(*MOVING, axes), catalogue)
+    assert moving.feasible.sum() < still.feasible.sum()
+    assert not (moving.feasible & ~along.feasible).any()
+
+
+def _faces(points):
+    from scipy.spatial import ConvexHull
+
+    hull = ConvexHull(points)
+    return [points[simplex] for simplex in hull.simplices]
+
+
+@pytest.mark.parametrize("value", ["{linear: -1}", "{linear: abc}", "{angular: 1e9}"])
+def test_a_ball_it_cannot_mean_is_one_line(tmp_path, value):
+    run = tmp_path / "run"
+    done = command(tmp_path, "pipeline", *SPREAD_ROBOT, "robot.search.step=0.5", "tension=feasible",
+                   "robot.platform.mass=1", "robot.platform.inertia=[0.01,0.01,0.01]",
+                   f"platform_motion.acceleration={value}", f"hydra.run.dir={run}")
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 2 and len(lines) == 1 and "platform_motion.acceleration." in lines[0], lines
+    assert not run.exists()

@@ -451,8 +451,9 @@ class PlatformMotionConfig:
     """``analysis=statics``: the motion the cables must hold the platform in at every pose (issue
     56: the dynamic workspace). ``acceleration``: the accelerations required, each with every
     wrench, a box ``{min: [6], max: [6]}`` (its vertices decide: the wrench is affine in the
-    acceleration) or a list of ``[ax, ay, az, alpha_x, alpha_y, alpha_z]`` (m/s^2 of the
-    platform's reference point and rad/s^2 of its turn, fixed axes); null: at rest.
+    acceleration), a list of ``[ax, ay, az, alpha_x, alpha_y, alpha_z]`` (m/s^2 of the
+    platform's reference point and rad/s^2 of its turn, fixed axes), or balls
+    ``{linear: r, angular: r}`` (each by the icosahedron around it); null: at rest.
     ``angular_velocity``: [wx, wy, wz], rad/s, the platform's (its centripetal and gyroscopic
     terms, quadratic in it: one velocity, not a set). The platform's mass, centre of mass and
     inertia are ``robot.platform`` and ``load``'s."""

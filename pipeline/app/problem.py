@@ -312,6 +312,30 @@ def vertex_set(value, key: str, parse: Callable, what: str, empty: str) -> tuple
     return vertices[first], tuple(int(i) + 1 for i in first)
 
 
+GOLDEN = (1 + 5 ** 0.5) / 2
+ICOSAHEDRON = np.array([p for a, b in ((1, GOLDEN), (-1, GOLDEN), (1, -GOLDEN), (-1, -GOLDEN))
+                        for p in ((0, a, b), (a, b, 0), (b, 0, a))], dtype=float)
+ICOSAHEDRON_INRADIUS = 0.7946544722917661  # of the icosahedron whose vertices lie on the unit sphere
+
+
+def ball_vertices(node) -> np.ndarray:
+    """(V, 6) the accelerations of ``platform_motion.acceleration={linear: r, angular: r}``: each
+    ball (m/s^2, rad/s^2; a missing one is 0) by the regular icosahedron around it, its faces
+    tangent to the ball (12 vertices at 1.258 r from the centre): it contains the ball, so a pose
+    holding its vertices holds every acceleration of the ball (and somewhat more); both balls
+    together, every pair of their vertices."""
+    radii = []
+    for key in ("linear", "angular"):
+        value = node.get(key, 0.0)
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 <= value <= MAX_ACCELERATION:
+            raise ConfigError(f"platform_motion.acceleration.{key}={value}: a ball's radius, a number from 0 to "
+                              f"{MAX_ACCELERATION:g} (m/s^2 or rad/s^2)")
+        radii.append(float(value))
+    unit = ICOSAHEDRON / np.linalg.norm(ICOSAHEDRON, axis=1, keepdims=True) / ICOSAHEDRON_INRADIUS
+    sets = [unit * r if r > 0 else np.zeros((1, 3)) for r in radii]
+    return np.array([np.concatenate([a, b]) for a in sets[0] for b in sets[1]])
+
+
 def platform_motion(cfg: DictConfig, load: Load) -> dict:
     """The statics' ``accelerations`` and ``angular_velocity`` of ``platform_motion`` (at rest
     without the node); refuses angular motion of a platform without its inertia and more
@@ -319,8 +343,12 @@ def platform_motion(cfg: DictConfig, load: Load) -> dict:
     if "platform_motion" not in cfg:
         return {}
     node = cfg.platform_motion
-    accelerations = vertex_set(node.acceleration, "platform_motion.acceleration", _acceleration,
-                               "[ax, ay, az, alpha_x, alpha_y, alpha_z] (m/s^2, rad/s^2)", "at rest")[0]
+    given = node.acceleration
+    if isinstance(given, DictConfig) and set(given) <= {"linear", "angular"} and len(given):
+        accelerations = ball_vertices(given)
+    else:
+        accelerations = vertex_set(given, "platform_motion.acceleration", _acceleration,
+                                   "[ax, ay, az, alpha_x, alpha_y, alpha_z] (m/s^2, rad/s^2)", "at rest")[0]
     omega = np.asarray(node.angular_velocity, dtype=float)
     if load.inertia is None and load.mass > 0 and (np.any(omega) or np.any(accelerations[:, 3:])):
         raise ConfigError("platform_motion: a platform that turns needs its inertia, robot.platform.inertia "
