@@ -20,7 +20,7 @@ from typing import Any, Callable, Optional
 import numpy as np
 import pandas as pd
 
-from pipeline.workspace.criteria import COLOURS, FEASIBLE_COLOUR
+from pipeline.workspace.criteria import COLOURS, FEASIBLE_COLOUR, TORQUE, VOLTAGE
 from pipeline.app.config import rule
 from pipeline.errors import ConfigError, one_line
 from pipeline.app.results import write_csv
@@ -314,8 +314,8 @@ def timeseries(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out
 
     written = []
     rows = [("theta_dot", "limit_speed", "shaft speed (rad/s)"),
-            ("torque", "limit_torque", "load torque (N m)"),
-            ("voltage", "limit_voltage", "control voltage (V)")]
+            (TORQUE, "limit_torque", "load torque (N m)"),
+            (VOLTAGE, "limit_voltage", "control voltage (V)")]
     for _, job in table.iterrows():
         samples = results.samples(job["job"])
         line = samples[samples["line"] == spec.line]

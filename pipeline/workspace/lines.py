@@ -27,7 +27,7 @@ from pipeline.workspace.verdict import classify
 from pipeline.workspace.compute import grid_workspace
 
 log = logging.getLogger("pipeline")
-QUANTITIES = ("theta_dot", "torque", "voltage")
+QUANTITIES = ("theta_dot", criteria.TORQUE, criteria.VOLTAGE)
 DT = 0.01  # s, time step of the simulated lines
 
 

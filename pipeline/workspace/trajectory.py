@@ -13,7 +13,7 @@ import numpy as np
 
 from pipeline.model.actuators import ActuatorModel
 from pipeline.model.dynamics import SampleDynamics
-from pipeline.workspace.criteria import force_families
+from pipeline.workspace.criteria import TORQUE, VOLTAGE, force_families
 from pipeline.workspace.criteria.forces import feasible_distribution, feasible_model
 
 
@@ -77,8 +77,8 @@ def inverse_dynamics(state: SampleDynamics, actuator: ActuatorModel) -> dict[str
     return {
         "theta_dot": theta_dot,
         "theta_ddot": theta_ddot,
-        "torque": torque,
-        "voltage": actuator.G_v * theta_ddot + actuator.L_v * theta_dot + actuator.load_gain * torque,
+        TORQUE: torque,  # the per-sample quantities the criteria of the same names read
+        VOLTAGE: actuator.G_v * theta_ddot + actuator.L_v * theta_dot + actuator.load_gain * torque,
         "wrench_residual": np.linalg.norm(reached - wrench, axis=1),
         "power_cables": np.einsum("nm,nm->n", torque, theta_dot),
         "power_load": np.einsum("nj,nj->n", wrench[:, :3], state.velocities),
