@@ -38,9 +38,9 @@ from pipeline.model.tensions import Family
 
 SETTLED_RTOL = 1e-12  # the fixed point has settled when w' moves by less than this share of |w| (at least 1 N)
 MAX_SETTLING = 30  # fixed-point iterations at most (a contraction of about w L0 / tau per step)
-TAUT_STEPS = 48  # golden-section steps for the least top tension's pull (a 1e-10 share of the bracket)
+TAUT_STEPS = 32  # golden-section steps for the least top tension's pull (a 2e-7 share of the bracket)
 MAX_CABLES = 12  # the proof checks 2^m wrenches per required wrench
-SAGGING_WORK = 10.0  # a pose's work against the straight statics' (SaggingSpec.work)
+SAGGING_WORK = 6.0  # a pose's work against the straight statics' (SaggingSpec.work)
 
 
 @dataclass(frozen=True)
@@ -58,9 +58,9 @@ class SaggingSpec(StaticsSpec):
         return "its cables are straight (robot.catenary: sagging cables)"
 
     def work(self) -> float:
-        """A pose with sagging cables costs about ten of the straight statics (catenaries solved
-        for the intervals, the settling and the proofs; benchmarks/LOG.md, 2026-11-28: 819 poses
-        of an 8-cable robot, 2.5 s against 0.25 s; 378 of a 4-cable crane, 0.27 s against 0.025 s)."""
+        """A pose with sagging cables costs three to nine of the straight statics (catenaries solved
+        for the intervals, the settling and the proofs; benchmarks/LOG.md, 2026-11-28: IPAnema 1
+        x3.0, 819 poses of an 8-cable robot with its cable output x5.2, a 4-cable crane x8.8)."""
         return SAGGING_WORK * super().work()
 
 
@@ -109,21 +109,37 @@ class SaggingStatics(PoseStatics):
 
     def variables_of(self, tensions) -> np.ndarray:
         """The chord tension tau on the taut branch whose top tension is ``tensions`` (N); below the
-        taut floor's top tension, a tau below the floor in proportion (the floor decides)."""
+        taut floor's top tension, a tau below the floor in proportion (the floor decides). Cached
+        per value: every gathering of the criteria's intervals asks for the same limits."""
         tensions = np.asarray(tensions, dtype=float)
-        found = self.catenaries("top_tension", tensions)
+        cache = self.__dict__.setdefault("_variables", {})
+        key = (tensions.shape, tensions.tobytes())
+        if key not in cache:
+            cache[key] = self._variables_of(tensions)
+        return cache[key]
+
+    def _variables_of(self, tensions: np.ndarray) -> np.ndarray:
         floor, floor_top = self.taut_floor, self.taut_top
         if tensions.ndim != 2:
             floor, floor_top = floor[:, None, :], floor_top[:, None, :]
-        tau = np.where(found.converged & (found.chord_tension >= floor), found.chord_tension, np.nan)
-        above = np.broadcast_to(tensions > floor_top, tau.shape)
-        missed = above & ~np.isfinite(tau)
-        if missed.any():  # Newton found the slack branch's root: the taut one by bisection
+        shape = np.broadcast_shapes(floor.shape, tensions.shape)
+        wanted, floor = np.broadcast_to(tensions, shape), np.broadcast_to(floor, shape)
+        tau = floor * np.clip(wanted, 0.0, None) / np.where(floor_top > 0, floor_top, 1.0)  # below the floor's top
+        above = np.isfinite(wanted) & (wanted > floor_top)
+        if above.any():  # the taut branch's root: Newton, else (the slack branch's found) bisection
+            span, rise = (np.broadcast_to(e if len(shape) == 2 else e[:, None, :], shape)[above] for e in self.ends)
+            weight, ea = (np.broadcast_to(v, shape)[above] for v in (self.weight, self.ea))
+            with np.errstate(all="ignore"):
+                found = solve(span, rise, weight, ea, "top_tension", wanted[above])
+            root = np.where(found.converged & (found.chord_tension >= floor[above]), found.chord_tension, np.nan)
+            missed = ~np.isfinite(root)
+            if missed.any():
+                where = np.zeros(shape, dtype=bool)
+                where[tuple(index[missed] for index in np.nonzero(above))] = True
+                root[missed] = self._bisected(where, wanted[where], floor[where])
             tau = tau.copy()
-            tau[missed] = self._bisected(missed, np.broadcast_to(tensions, tau.shape)[missed],
-                                         np.broadcast_to(floor, tau.shape)[missed])
-        tau = np.where(above, tau, floor * np.clip(tensions, 0.0, None) / np.where(floor_top > 0, floor_top, 1.0))
-        return np.where(np.isfinite(tensions), tau, np.inf)
+            tau[above] = root
+        return np.where(np.isfinite(wanted), tau, np.inf)
 
     def _top(self, where: np.ndarray, tau: np.ndarray) -> np.ndarray:
         """The top tensions of the cables ``where`` (a mask over (n, m) or (n, K, m)) at chord
@@ -219,15 +235,17 @@ class SaggingStatics(PoseStatics):
         pinv, rank = self.wrench_pinv
         weights = np.ones(lower.shape[-1])
         hanging = np.zeros(lower.shape)
+        active = np.arange(len(self.positions))  # the poses whose forces still move
         for _ in range(MAX_SETTLING):  # least-norm by the faces alone (a pose without any: the clipped S^+ w')
-            wrenches = self.shifted(hanging)
-            tau, found = face_distribution(self.structure, wrenches, lower, upper, weights, rank,
-                                           self.tension.residual_rtol)
-            tau = np.where(found[..., None], tau, np.einsum("nmr,nkr->nkm", pinv, wrenches))
-            moved = self.hanging(np.clip(tau, lower, upper))
-            change = np.abs(np.einsum("nrm,nkm->nkr", self.weight_columns, moved - hanging)).max()
-            hanging = moved
-            if change <= SETTLED_RTOL * size:
+            wrenches = self.shifted(hanging[active], active)
+            tau, found = face_distribution(self.structure[active], wrenches, lower[active], upper[active], weights,
+                                           rank[active], self.tension.residual_rtol)
+            tau = np.where(found[..., None], tau, np.einsum("nmr,nkr->nkm", pinv[active], wrenches))
+            moved = self.hanging(np.clip(tau, lower[active], upper[active]), active)
+            change = np.abs(np.einsum("nrm,nkm->nkr", self.weight_columns[active], moved - hanging[active]))
+            hanging[active] = moved
+            active = active[change.max(axis=(1, 2)) > SETTLED_RTOL * size]
+            if not len(active):
                 break
         cache[key] = self.shifted(hanging)
         return cache[key]
