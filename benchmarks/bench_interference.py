@@ -1,7 +1,7 @@
 """What the interference criteria, the connected reach, the per-pose metrics and the boundary
-mesh cost (issue 40), and the real cables' models (swivelling pulleys, the stiffness of elastic
-cables, the sag rule of heavy ones: issues 54, 55), in whole processes against the wrench-feasibility job without them, in the
-same run.
+mesh cost (issue 40), the real cables' models (swivelling pulleys, the stiffness of elastic
+cables, the sag rule of heavy ones: issues 54, 55) and the dynamic workspace (issue 56), in whole
+processes against the wrench-feasibility job without them, in the same run.
 
     python benchmarks/bench_interference.py [--repeat 3] [--n 40]
 
@@ -43,6 +43,8 @@ CABLE_MODELS = {
     "stiffness (robot.cable_ea, criteria.stiffness)": [
         "robot.cable_ea=1e5", "+criteria.stiffness={translational: 1000, rotational: 10, frequency: 0}"],
     "sag rule (robot.cable_mass, criteria.sag)": ["robot.cable_mass=0.05", "+criteria.sag={ratio: 0.02}"],
+    "dynamic workspace (platform_motion, +-1 m/s^2 in x, y, z)": [
+        "platform_motion.acceleration={min: [-1, -1, -1, 0, 0, 0], max: [1, 1, 1, 0, 0, 0]}"],
 }
 
 
