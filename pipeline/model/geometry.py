@@ -27,6 +27,7 @@ import numpy as np
 
 from pipeline.model.clearance import Obstacle, Polytope
 from pipeline.model.pulleys import Pulleys, pulley_exits
+from pipeline.model.stiffness import unstrained_lengths
 
 
 @dataclass(frozen=True)
@@ -335,6 +336,15 @@ class PoseGeometry:
         """The wrenches the forces balance within the families' intervals: the required ones
         (``pipeline.model.sagging`` moves them by the cables' own weight, which the forces decide)."""
         return self.required_wrenches
+
+    def shapes(self, variables: np.ndarray) -> dict[str, np.ndarray]:
+        """(n, m) per quantity of the cables' own shape at the forces ``variables`` (n, m, the
+        state's; ``output.cables``): elastic cables' unstrained length, ``unstrained`` (what each
+        winch must have paid out, with the cable towards it in series); none for rigid ones."""
+        if self.robot.cable_ea is None:
+            return {}
+        stretched = self.cable_lengths + self.robot.winch_lengths
+        return {"unstrained": unstrained_lengths(self.robot.cable_ea, stretched, self.forces_of(variables))}
 
     def sag_tensions(self, ratio: float) -> np.ndarray:
         """(n, m) the least tension of each cable at its platform end that keeps its sag within

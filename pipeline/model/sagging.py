@@ -90,16 +90,25 @@ class SaggingStatics(PoseStatics):
         """(m,) EA, N (inf: inextensible)."""
         return np.full(self.robot.n_cables, np.inf) if self.robot.cable_ea is None else self.robot.cable_ea
 
-    def catenaries(self, given: str, value) -> Catenary:
-        """The catenaries of every pose and cable meeting ``given`` = ``value`` (``catenary.solve``):
-        ``value`` (n, K, m), (n, m), or one per cable or for all (then (n, 1, m))."""
+    def catenaries(self, given: str, value, poses=slice(None)) -> Catenary:
+        """The catenaries of the ``poses`` (all: every pose) and their cables meeting ``given`` =
+        ``value`` (``catenary.solve``): ``value`` (p, K, m), (p, m), or one per cable or for all
+        (then (p, 1, m))."""
         value = np.asarray(value, dtype=float)
-        span, rise = self.ends
+        span, rise = (e[poses] for e in self.ends)
         if value.ndim != 2:
             span, rise = span[:, None, :], rise[:, None, :]
             value = value if value.ndim == 3 else np.broadcast_to(value, (self.robot.n_cables,))[None, None, :]
         with np.errstate(all="ignore"):
             return solve(span, rise, self.weight, self.ea, given, np.where(np.isfinite(value), value, 1.0))
+
+    def _picked(self, where: np.ndarray, given: str, value: np.ndarray) -> Catenary:
+        """The catenaries of the cables ``where`` (a mask over (n, m) or (n, K, m)) meeting
+        ``given`` = ``value`` (one per cable picked)."""
+        span, rise = (np.broadcast_to(e if where.ndim == 2 else e[:, None, :], where.shape)[where] for e in self.ends)
+        weight, ea = (np.broadcast_to(v, where.shape)[where] for v in (self.weight, self.ea))
+        with np.errstate(all="ignore"):
+            return solve(span, rise, weight, ea, given, value)
 
     def forces_of(self, tau) -> np.ndarray:
         """The top tension (N) of each cable pulled with chord tension tau (inf: inf)."""
@@ -127,10 +136,7 @@ class SaggingStatics(PoseStatics):
         tau = floor * np.clip(wanted, 0.0, None) / np.where(floor_top > 0, floor_top, 1.0)  # below the floor's top
         above = np.isfinite(wanted) & (wanted > floor_top)
         if above.any():  # the taut branch's root: Newton, else (the slack branch's found) bisection
-            span, rise = (np.broadcast_to(e if len(shape) == 2 else e[:, None, :], shape)[above] for e in self.ends)
-            weight, ea = (np.broadcast_to(v, shape)[above] for v in (self.weight, self.ea))
-            with np.errstate(all="ignore"):
-                found = solve(span, rise, weight, ea, "top_tension", wanted[above])
+            found = self._picked(above, "top_tension", wanted[above])
             root = np.where(found.converged & (found.chord_tension >= floor[above]), found.chord_tension, np.nan)
             missed = ~np.isfinite(root)
             if missed.any():
@@ -142,12 +148,8 @@ class SaggingStatics(PoseStatics):
         return np.where(np.isfinite(wanted), tau, np.inf)
 
     def _top(self, where: np.ndarray, tau: np.ndarray) -> np.ndarray:
-        """The top tensions of the cables ``where`` (a mask over (n, m) or (n, K, m)) at chord
-        tensions tau (one per cable picked)."""
-        span, rise = (np.broadcast_to(e if where.ndim == 2 else e[:, None, :], where.shape)[where] for e in self.ends)
-        weight, ea = (np.broadcast_to(v, where.shape)[where] for v in (self.weight, self.ea))
-        with np.errstate(all="ignore"):
-            return solve(span, rise, weight, ea, "chord_tension", tau).top_tension
+        """The top tensions of the cables ``where`` at chord tensions tau (one per cable picked)."""
+        return self._picked(where, "chord_tension", tau).top_tension
 
     def _bisected(self, where, tensions, floor):
         """tau in [floor, 2 tension + floor] with top tension ``tensions`` (T rises with tau there),
@@ -182,10 +184,15 @@ class SaggingStatics(PoseStatics):
         reach = np.hypot(*(e[where] for e in self.ends)) * np.broadcast_to(self.weight, where.shape)[where]
         low, high = floor.copy(), floor + 4 * reach
         ratio = (np.sqrt(5) - 1) / 2
-        for _ in range(TAUT_STEPS):
-            left, right = high - ratio * (high - low), low + ratio * (high - low)
-            lower_left = self._top(where, left) < self._top(where, right)
+        left, right = high - ratio * (high - low), low + ratio * (high - low)
+        at_left, at_right = self._top(where, left), self._top(where, right)
+        for _ in range(TAUT_STEPS):  # one new top tension a step: the other inner point is kept
+            lower_left = at_left < at_right
             low, high = np.where(lower_left, low, left), np.where(lower_left, right, high)
+            left, right = np.where(lower_left, high - ratio * (high - low), right), np.where(
+                lower_left, left, low + ratio * (high - low))
+            fresh = self._top(where, np.where(lower_left, left, right))
+            at_left, at_right = np.where(lower_left, fresh, at_right), np.where(lower_left, at_left, fresh)
         return high  # the bracket's upper end: on the taut side
 
     def sag_tensions(self, ratio: float) -> np.ndarray:
@@ -202,17 +209,11 @@ class SaggingStatics(PoseStatics):
         up = np.broadcast_to(self.robot.up, arms.shape)
         return np.transpose(np.concatenate([up, np.cross(arms, up)], axis=2), (0, 2, 1))[:, list(self.robot.dofs), :]
 
-    def chords(self, tau: np.ndarray, poses=slice(None)) -> Catenary:
-        """The catenaries of the ``poses`` (all: every pose) pulled with chord tensions tau (p, K, m)."""
-        span, rise = (e[poses][:, None, :] for e in self.ends)
-        with np.errstate(all="ignore"):
-            return solve(span, rise, self.weight, self.ea, "chord_tension", np.where(np.isfinite(tau), tau, 1.0))
-
     def hanging(self, tau: np.ndarray, poses=slice(None)) -> np.ndarray:
         """(p, K, m) g = V - tau h / l of each cable of the ``poses`` at chord tension tau (p, K, m):
         the upward force beyond the chord's that the cable's weight leaves on the platform (0 where
         undefined)."""
-        cables = self.chords(tau, poses)
+        cables = self.catenaries("chord_tension", tau, poses)
         g = cables.vertical - tau * cables.rise / np.where(cables.chord > 0, cables.chord, 1.0)
         return np.where(cables.converged & np.isfinite(g), g, 0.0)
 
@@ -268,12 +269,12 @@ class SaggingStatics(PoseStatics):
         return lower, upper
 
     def shapes(self, tau: np.ndarray) -> dict[str, np.ndarray]:
-        """(n, m) per quantity, of the cables pulled with chord tensions tau (n, m): ``sag`` (m, the
+        """(n, m) per quantity of the catenaries pulled with chord tensions tau (n, m): ``sag`` (m, the
         largest distance below the chord), ``angle_platform`` and ``angle_anchor`` (rad, the
         tangent's elevation leaving the platform and arriving at the anchor), ``unstrained`` (m,
         the unstrained length L0) and ``added_length`` (m, L0 minus the chord: what the winch pays
         out beyond a straight cable's length)."""
-        cables = self.chords(tau[:, None, :])
+        cables = self.catenaries("chord_tension", tau[:, None, :])
         first, last = cables.angles
         found = {"sag": cables.sag, "angle_platform": first, "angle_anchor": last, "unstrained": cables.length,
                  "added_length": cables.length - cables.chord}

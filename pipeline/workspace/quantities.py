@@ -15,8 +15,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipeline.model.sagging import SaggingStatics
-from pipeline.model.stiffness import unstrained_lengths
 
 from pipeline.workspace.criteria.forces import written_tensions
 
@@ -37,18 +35,15 @@ def cable_quantities(state, limits) -> dict[str, np.ndarray]:
             columns.update({f"exit_{axis}_{name}": state.exits[:, i, k] for k, axis in enumerate("xyz")})
     if state.tension.model == "pinv":
         high, low = state.force_range
+        written = state.variables_of(high)
     else:
         chosen = written_tensions(state, limits)  # (n, K, m) over the required wrenches
         high, low = state.forces_of(chosen.max(axis=1)), state.forces_of(chosen.min(axis=1))
+        written = chosen[:, 0, :]
     if not state.ranges_over_a_set:
         columns.update({f"tension_{name}": high[:, i] for i, name in enumerate(names)})
-        if isinstance(state, SaggingStatics):  # the catenaries' shapes and lengths
-            for quantity, values in state.shapes(chosen[:, 0, :]).items():
-                columns.update({f"{quantity}_{name}": values[:, i] for i, name in enumerate(names)})
-            return columns
-        if state.robot.cable_ea is not None:  # elastic cables: what each winch must have paid out
-            unstrained = unstrained_lengths(state.robot.cable_ea, state.cable_lengths + state.robot.winch_lengths, high)
-            columns.update({f"unstrained_{name}": unstrained[:, i] for i, name in enumerate(names)})
+        for quantity, values in state.shapes(written).items():  # elastic or sagging cables' lengths and shapes
+            columns.update({f"{quantity}_{name}": values[:, i] for i, name in enumerate(names)})
         return columns
     for i, name in enumerate(names):
         columns[f"tension_min_{name}"] = low[:, i]

@@ -63,7 +63,7 @@ def catenary(state, limits) -> np.ndarray:
         for part in np.array_split(np.arange(len(holds)), -(-len(holds) // PROOF_POSES)):
             proven[holds[part]] = _proven(state, holds[part], centre[part], lower[holds[part]], upper[holds[part]])
         shown = proven[holds]  # the proven equilibria's cables, at the centre of their box
-        cables = state.chords(centre[shown], holds[shown])
+        cables = state.catenaries("chord_tension", centre[shown], holds[shown])
         state.sag_share[holds[shown]] = (cables.sag / cables.chord).max(axis=(1, 2))
         state.added_length[holds[shown]] = (cables.length - cables.chord).max(axis=(1, 2))
     disproven = np.zeros(len(room), dtype=bool)
@@ -126,8 +126,8 @@ def hanging_bounds(state, poses, lower, upper) -> tuple[np.ndarray, np.ndarray]:
     r (slopes between the end angles of the cable pulled least, tensions up to the top tension
     pulled hardest): a density within a factor r puts the centroid between a / (1 + sqrt r) and
     a sqrt(r) / (1 + sqrt r) (the extreme densities are two steps meeting at the centroid)."""
-    slack = state.chords(lower, poses)  # the longest cable, the steepest ends
-    taut = state.chords(np.where(np.isfinite(upper), upper, 1.0), poses)
+    slack = state.catenaries("chord_tension", lower, poses)  # the longest cable, the steepest ends
+    taut = state.catenaries("chord_tension", np.where(np.isfinite(upper), upper, 1.0), poses)
     weight = np.broadcast_to(state.weight, lower.shape)
     heaviest = np.where(slack.converged, weight * slack.length, np.inf)
     inextensible = np.isinf(np.broadcast_to(state.ea, lower.shape))

@@ -58,20 +58,30 @@ def sag_bounds(state, limits, ratio: float) -> tuple:
 
 def contraction(state, limits, share: float) -> np.ndarray:
     """The contraction rule's margin, as :func:`sag`'s."""
-    return _floor_margin(state, limits, _least(state, state.lengths * _across(state) / np.sqrt(24.0 * share)))
+    return _floor_margin(state, limits, _contraction_tensions(state, share))
 
 
 def contraction_bounds(state, limits, share: float) -> tuple:
-    return _floor_bounds(state, limits, _least(state, state.lengths * _across(state) / np.sqrt(24.0 * share)))
+    return _floor_bounds(state, limits, _contraction_tensions(state, share))
 
 
 def frequency(state, limits, hz: float) -> np.ndarray:
     """The eigenfrequency rule's margin, as :func:`sag`'s."""
-    return _floor_margin(state, limits, _least(state, 4.0 * (state.lengths * hz) ** 2 / state.load.gravity))
+    return _floor_margin(state, limits, _frequency_tensions(state, hz))
 
 
 def frequency_bounds(state, limits, hz: float) -> tuple:
-    return _floor_bounds(state, limits, _least(state, 4.0 * (state.lengths * hz) ** 2 / state.load.gravity))
+    return _floor_bounds(state, limits, _frequency_tensions(state, hz))
+
+
+def _contraction_tensions(state, share: float) -> np.ndarray:
+    """(n, m) mu g (l cos(theta) / sqrt(24 share) + max(0, h))."""
+    return _least(state, state.lengths * _across(state) / np.sqrt(24.0 * share))
+
+
+def _frequency_tensions(state, hz: float) -> np.ndarray:
+    """(n, m) mu (4 l^2 f^2 + g max(0, h))."""
+    return _least(state, 4.0 * (state.lengths * hz) ** 2 / state.load.gravity)
 
 
 def _across(state) -> np.ndarray:
