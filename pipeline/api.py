@@ -41,13 +41,15 @@ __all__ = ["ConfigError", "Workspace", "Choice", "workspace", "actuator_choice",
 @dataclass(frozen=True)
 class Workspace:
     """One finished job: its folder, summary (one row as a dict), per-pose table (None for a
-    job run with ``output.points=false``), and the resolved config and code version recorded
-    in its files."""
+    job run with ``output.points=false`` and for a path), per-sample table (``samples``: the
+    samples of ``analysis=trajectory`` or ``lines``; None for the others), and the resolved
+    config and code version recorded in its files."""
     folder: Path
     summary: dict
     points: pd.DataFrame | None
     config: str
     version: str
+    samples: pd.DataFrame | None = None
 
     def figure(self, kind: str = "cloud", out: str | Path | None = None, **keys) -> list[Path]:
         """Draw this job as a study draws one (``pipeline.analyses.figures``): ``kind`` cloud, slices
@@ -82,9 +84,10 @@ class Workspace:
             changed.append(f"summary.parquet ({exc})")
         if changed:
             raise ConfigError(f"{folder}: {', '.join(changed)} changed since the job finished; run it again")
-        points = folder / "points.parquet"
+        points, samples = folder / "points.parquet", folder / "samples.parquet"
         return cls(folder, summary, pd.read_parquet(points) if points.exists() else None,
-                   meta.get("cdpr.config", ""), meta.get("cdpr.version", ""))
+                   meta.get("cdpr.config", ""), meta.get("cdpr.version", ""),
+                   pd.read_parquet(samples) if samples.exists() else None)
 
 
 @dataclass(frozen=True)

@@ -53,7 +53,6 @@ from __future__ import annotations
 import argparse
 import re
 import sys
-import xml.etree.ElementTree as ElementTree
 from pathlib import Path
 
 import numpy as np
@@ -62,6 +61,7 @@ from pipeline.errors import ConfigError
 from pipeline.app.config import MAX_FORCE, MAX_MASS
 from pipeline.app.resources import CONF_DIR
 from pipeline.app.results import code_version, write_text
+from pipeline.app.xmlfiles import parse_xml
 from pipeline.model.dynamics import inertia_tensor
 
 SHIPPED_ROBOTS = tuple(sorted(p.stem for p in (CONF_DIR / "robot").glob("*.yaml")))
@@ -97,7 +97,7 @@ def read_cables(path: Path, cable_set: str | None = None, number: bool = False) 
     """Anchors, attachments (link 1, as given), names, force limits and the attachment
     reference of every cable of one cable set (the file's default set unless named); ``number``:
     name the cables 1, 2, ... in the file's order instead (a file that names two alike)."""
-    root = _parse(path)
+    root = parse_xml(path)
     if root.tag != "cables":
         raise ConfigError(f"{path}: root element <{root.tag}>, a CASPR cables file has <cables>")
     wanted = cable_set or root.get("default_cable_set")
@@ -179,7 +179,7 @@ def read_body(path: Path) -> dict:
     """The single rigid link of a bodies file: name, joint type, position limits (first three
     values of ``q_min``/``q_max``, or None), mass (kg), centre of mass and the joint's origin in
     the frame (m)."""
-    root = _parse(path)
+    root = parse_xml(path)
     links = root.find("links") if root.tag == "bodies_system" else root if root.tag == "links" else None
     if links is None:
         raise ConfigError(f"{path}: root element <{root.tag}>, a CASPR bodies file has <bodies_system> "
@@ -297,15 +297,6 @@ def robot_yaml(cables: dict, body: dict | None, step: float, header: list[str], 
         *(["orientation: {convention: xyz}"] if xyz else []),
     ]
     return "\n".join(lines) + "\n"
-
-
-def _parse(path: Path) -> ElementTree.Element:
-    try:
-        return ElementTree.parse(path).getroot()
-    except OSError as exc:
-        raise ConfigError(f"{path}: cannot read ({exc.strerror or exc})") from None
-    except ElementTree.ParseError as exc:
-        raise ConfigError(f"{path}: not well-formed XML ({exc})") from None
 
 
 def _text(element, tag: str, where: str) -> str:

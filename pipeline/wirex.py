@@ -30,7 +30,8 @@ import numpy as np
 
 from pipeline.app.config import MAX_FORCE, MAX_MASS
 from pipeline.app.results import code_version
-from pipeline.caspr import JOINTS, _flow, _parse, given_box, target_arguments, write_robot
+from pipeline.app.xmlfiles import parse_xml
+from pipeline.caspr import JOINTS, _flow, given_box, target_arguments, write_robot
 from pipeline.errors import ConfigError
 
 # motion pattern -> the CASPR joint with the same freedoms and grid axes (pipeline.caspr.JOINTS)
@@ -58,7 +59,7 @@ def _floats(element, names, where: str) -> np.ndarray:
 
 def read_wirex(path: Path) -> tuple[dict, dict]:
     """The cables (the importers' dict of ``pipeline.caspr``) and the platform of a WireX file."""
-    root = _parse(path)
+    root = parse_xml(path)
     robot = root.find("robot")
     if root.tag != "models" or robot is None:
         raise ConfigError(f"{path}: root element <{root.tag}>, a WireX robot file has <models> with <robot>")

@@ -3,7 +3,7 @@
 ``analysis=lines`` computed its own margins beside the registry and ended in
 ``KeyError: 'cable_cable'`` with ``robot.cable_diameter``, ``robot.platform.shape`` or
 ``obstacles``. Each cell runs the command line in this process on a small grid of the
-CPR-8 and checks the outcome: a job that ran wrote its summary with a margin column for each
+CPR-8 (a short path for the trajectory) and checks the outcome: a job that ran wrote its summary with a margin column for each
 key's criterion; a refusal is one line naming the key, with nothing written."""
 
 import pandas as pd
@@ -12,7 +12,9 @@ import pytest
 from conftest import command
 
 ANALYSES = {"cpr_wwa": ["analysis=cpr_wwa", "grid.n=4"], "statics": ["analysis=statics", "grid.n=4"],
-            "payload": ["analysis=payload", "grid.n=4"], "lines": ["analysis=lines", "grid.n=4"]}
+            "payload": ["analysis=payload", "grid.n=4"], "lines": ["analysis=lines", "grid.n=4"],
+            "trajectory": ["analysis=trajectory", "trajectory.points=[[1.4,0.9,-1.3],[1.8,1.3,-1.0]]", "trajectory.times=0.5",
+                           "trajectory.dt=0.05"]}
 KEYS = {  # key -> (overrides, the criterion or column it adds when the job runs)
     "cable_diameter": (["robot.cable_diameter=0.01"], "margin_cable_cable"),
     "platform.shape": (["robot.platform.shape=hull"], "margin_cable_platform"),
@@ -34,12 +36,14 @@ KEYS = {  # key -> (overrides, the criterion or column it adds when the job runs
                      "+criteria.cable_frequency={hz: 2}"], "margin_cable_frequency"),
 }
 # the cells that are refused, with the key the one line names
-REFUSED = {("lines", "workspace.home"): "workspace.home", ("lines", "output.mesh"): "output.mesh",
+REFUSED = {**{(analysis, key): key for analysis in ("lines", "trajectory") for key in ("workspace.home", "output.mesh")},
+           ("trajectory", "output.metrics"): "output.metrics",
            ("cpr_wwa", "output.metrics"): "output.metrics", ("lines", "output.metrics"): "output.metrics",
            ("payload", "output.metrics"): "output.metrics",
            **{(analysis, "criteria"): "criteria.torque" for analysis in ANALYSES},
            **{(analysis, "pulleys with jdot"): "model.jdot" for analysis in ANALYSES},  # J-dot of fixed anchors
-           **{(analysis, "stiffness"): "criteria.stiffness" for analysis in ANALYSES if analysis != "statics"},
+           **{(analysis, "stiffness"): "criteria.stiffness" for analysis in ANALYSES
+              if analysis not in ("statics", "trajectory")},
            ("payload", "sag"): "criteria.sag", ("payload", "cable rules"): "criteria.cable_contraction",
            **{(analysis, "platform_motion"): "platform_motion" for analysis in ANALYSES if analysis != "statics"},
            **{(analysis, "catenary"): "robot.catenary" for analysis in ANALYSES if analysis != "statics"}}
@@ -60,7 +64,7 @@ def test_every_analysis_with_every_optional_key_gives_a_result_or_one_line(tmp_p
     assert done.returncode == 0, done.stderr[-2000:]
     assert (run / "summary.parquet").is_file()
     if column is not None and key != "output.points":
-        table = pd.read_parquet(run / "points.parquet")
+        table = pd.read_parquet(run / ("samples.parquet" if analysis == "trajectory" else "points.parquet"))
         assert column in table.columns, sorted(table.columns)
         if column.startswith("margin_"):
             assert table[column].notna().all()

@@ -6,7 +6,7 @@ import pytest
 
 from pipeline.app.problem import build_problem
 from pipeline.workspace.lines import simulate_lines
-from pipeline.workspace.trajectory import trapezoid
+from pipeline.model.path import trapezoid
 
 ROT = ["orientation.psi=0.5", "orientation.theta=0.5", "orientation.phi=0.5"]
 

@@ -173,6 +173,16 @@ class LineSamples(Enum):
     all = "all"
 
 
+class TimeLaw(Enum):
+    """How ``analysis=trajectory`` moves between way-points (``pipeline.model.path``): rest to rest
+    by a quintic per segment, one cubic spline through every way-point (at rest at both ends),
+    or the CPR-8 paper's trapezoidal speed profile per straight segment."""
+
+    quintic = "quintic"
+    spline = "spline"
+    trapezoid = "trapezoid"
+
+
 @dataclass
 class FrameConfig:
     """Frame d * s * v (m): the theoretical workspace of Fig. 2."""
@@ -512,6 +522,28 @@ class ComputeConfig:
 
 
 @dataclass
+class TrajectoryConfig:
+    """``analysis=trajectory`` (``pipeline.app.paths``): the platform's path. ``points``: its
+    way-points, [[x, y, z], ...] (m, at ``orientation.*``) or [[x, y, z, psi, theta, phi], ...]
+    (rad, ``orientation.convention``; a robot on a joint: [[psi, theta, phi], ...]); or ``file``, a
+    CASPR trajectories file (.xml; ``name``: its trajectory's id) or a CSV of timed way-points
+    (.csv: t,x,y,z[,psi,theta,phi]). ``law``: quintic (rest to rest per segment) or spline
+    (through every way-point, at rest at both ends), each segment in ``times`` (s: one value, or one
+    per segment); trapezoid (the CPR-8 paper's profile per straight segment: ``v_max`` m/s, ``t_acc``
+    and ``t_dec`` s). ``dt``: s between samples (null: 0.01, or a CASPR file's time_step)."""
+
+    points: Any = MISSING
+    times: Any = MISSING
+    law: TimeLaw = MISSING
+    v_max: Optional[float] = rule(positive)
+    t_acc: Optional[float] = rule(positive)
+    t_dec: Optional[float] = rule(positive)
+    dt: Optional[float] = rule(positive)
+    file: Optional[str] = MISSING
+    name: Optional[str] = MISSING
+
+
+@dataclass
 class LinesConfig:
     """Straight-line simulations (analysis=lines, section 3.1.3 of the CPR-8 paper): samples =
     first writes the samples of line O''-F'' only (what Fig. 6 draws, 0.13 MB a job), all those
@@ -555,7 +587,7 @@ class WorkspaceConfig:
 class Config:
     """The job: ``analysis``, a config group (cpr_wwa: dynamics and actuator limits; statics:
     wrench and tensions; lines: the paper's straight lines; payload: the largest payload per
-    pose; ``robot=irpm6`` and ``points`` pick statics), ``actuator`` (the id of a catalogue
+    pose; trajectory: the platform along a path; ``robot=irpm6`` and ``points`` pick statics), ``actuator`` (the id of a catalogue
     row), ``catalogue`` (a CSV or Parquet path; null = Table 1 of the CPR-8 paper, shipped in
     pipeline/data), ``poses`` (a list of [x, y, z] positions in m checked instead of the robot's
     grid, e.g. ``poses=[[0,0,5]]``; null = the grid; the summary's volume_m3 is then NaN),
@@ -586,6 +618,7 @@ class Config:
     workspace: WorkspaceConfig = field(default_factory=WorkspaceConfig)
     lines: LinesConfig = field(default_factory=LinesConfig)
     platform_motion: PlatformMotionConfig = field(default_factory=PlatformMotionConfig)
+    trajectory: TrajectoryConfig = field(default_factory=TrajectoryConfig)
     poses: Any = MISSING
     obstacles: Any = MISSING
     criteria: Any = MISSING

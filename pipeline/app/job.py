@@ -98,7 +98,8 @@ def _run_locked(cfg: DictConfig, problem: WorkspaceProblem, out: Path, sweep_pay
                     "in one plane touch at every pose; leave their attachments at staggered heights "
                     "(docs/robots.md)", ", ".join(crossing))
     files = JobFiles(out, config_yaml)
-    summary = ANALYSES[cfg.analysis].files(cfg, problem, build_grid(cfg, problem.robot), files, sweep_pays)
+    kind = ANALYSES[cfg.analysis]
+    summary = kind.files(cfg, problem, build_grid(cfg, problem.robot) if kind.gridded else None, files, sweep_pays)
     summary["robot_file"] = robot_file  # which of a study's robot files (robot.name: its kind)
     write_parquet(one_row(summary), out / "summary.parquet", config_yaml,
                   {DIGESTS_KEY: digests_json(files.written)})
@@ -109,13 +110,14 @@ def _run_locked(cfg: DictConfig, problem: WorkspaceProblem, out: Path, sweep_pay
                if "actuator_name" in summary else f"{cfg.robot.name} {summary['analysis']}")
     headroom = ", ".join(f"{key[len('least_margin_'):]} {100 * value:.1f}%" for key, value in summary.items()
                          if key.startswith("least_margin_") and value == value)  # NaN: none feasible
+    poses = "poses" if kind.gridded else "samples"
     log.info(
-        "%s: %d/%d feasible = %.2f%% (%.4f m^3); lost to %s%s", subject,
-        summary["n_feasible"], summary["n_points"], summary["feasible_pct"], summary["volume_m3"],
-        lost, f"; headroom of the feasible poses: {headroom}" if headroom else "",
+        "%s: %d/%d %s feasible = %.2f%%%s; lost to %s%s", subject, summary["n_feasible"], summary["n_points"], poses,
+        summary["feasible_pct"], f" ({summary['volume_m3']:.4f} m^3)" if kind.gridded else "",
+        lost, f"; headroom of the feasible {poses}: {headroom}" if headroom else "",
     )
     if summary["n_feasible"] == 0 and summary["n_points"] > 0:
-        log.warning("no pose is feasible: %s", zero_cause(summary))
+        log.warning("no %s is feasible: %s", poses[:-1], zero_cause(summary))
     return summary
 
 

@@ -12,7 +12,9 @@ refuses what it cannot mean:
 - ``statics``: static equilibrium under the applied wrench and the load's weight, tensions in
   [t_min, t_max] and lengths <= l_max (eqs. 7-10 of Hamed & Zohoor);
 - ``lines``: CPR-WWA's problem, whose grid the straight-line simulations are compared with;
-- ``payload``: the statics' problem and, per pose, the largest payload held (``max_payload_kg``).
+- ``payload``: the statics' problem and, per pose, the largest payload held (``max_payload_kg``);
+- ``trajectory``: the statics at each sample of a path in time, its wrench with the rate of change
+  of the platform's momentum (``pipeline.app.paths``; no grid).
 
 ``tension.model=feasible`` replaces the minimum-norm cable forces of both by pulling cables only
 (``pipeline.model.tensions``) and adds the criteria ``unreachable`` and ``slack``; under the
@@ -32,6 +34,7 @@ from typing import Callable
 import numpy as np
 from omegaconf import DictConfig, ListConfig, OmegaConf
 
+from pipeline.app.paths import path_samples
 from pipeline.app.config import (
     MAX_ACCELERATION, MAX_FORCE, Config, Cpr8Config, Irpm6Config, PointsConfig, check_values, masked, merged, shown,
     unknown_keys, vector,
@@ -46,7 +49,7 @@ from pipeline.model.pulleys import Pulleys
 from pipeline.model.sagging import MAX_CABLES, SaggingSpec
 from pipeline.model.motion import acceleration_set, cartesian_cube, extreme_points, velocity_set
 from pipeline.model.robots import PointsRobot, cpr8, irpm6, point_list
-from pipeline.model.statics import PayloadSpec, StaticLimits, StaticsSpec
+from pipeline.model.statics import PathSpec, PayloadSpec, StaticLimits, StaticsSpec
 from pipeline.model.tensions import TensionSpec
 from pipeline.workspace.compute import grid_workspace, name_of
 from pipeline.workspace.dispatch import fused_unfit
@@ -255,6 +258,31 @@ def _line_files(cfg: DictConfig, problem: WorkspaceProblem, grid: Grid, files, s
     return line_files(cfg, problem, grid, files, sweep_pays)
 
 
+def _trajectory(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
+    """The statics of a path's samples (``pipeline.model.statics.PathSpec``): the statics' spec
+    and limits at every sample, the path ``trajectory.*`` gives (``pipeline.app.paths``).
+    Refuses a platform's motion apart from its path's, an orientation set and listed poses."""
+    spec, limits = _statics(cfg, catalogue, robot)
+    if spec.moves:
+        raise ConfigError("platform_motion: analysis=trajectory takes the platform's motion from its path "
+                          "(trajectory.*); leave platform_motion at rest")
+    if orientation_count(cfg.orientation) > 1:
+        raise ConfigError("orientation.total: a path has its own orientation at every sample (the way-points' "
+                          "angles); leave orientation.total.n=1")
+    if cfg.poses is not None:
+        raise ConfigError("poses: analysis=trajectory checks its path's samples (trajectory.points or "
+                          "trajectory.file), not listed poses")
+    spec = PathSpec(**{f.name: getattr(spec, f.name) for f in fields(spec)}, samples=path_samples(cfg, robot),
+                    convention=name_of(cfg.orientation.convention))
+    return spec, limits
+
+
+def _path_files(cfg: DictConfig, problem: WorkspaceProblem, grid: Grid | None, files, sweep_pays: bool) -> dict:
+    from pipeline.workspace.samples import path_files  # pandas: only this analysis needs it
+
+    return path_files(cfg, problem, files)
+
+
 @dataclass(frozen=True)
 class AnalysisKind:
     """An analysis a config can name: the spec and limits of its workspace from the typed config,
@@ -266,6 +294,7 @@ class AnalysisKind:
 
     build: Callable[[DictConfig, Catalogue | None, CableRobot], tuple]
     files: Callable[..., dict]
+    gridded: bool = True  # whether it checks the robot's grid (False: its own samples, and ``files`` gets no grid)
 
 
 ANALYSES = {
@@ -273,6 +302,7 @@ ANALYSES = {
     "statics": AnalysisKind(_statics, _grid_files),
     "lines": AnalysisKind(_cpr_wwa, _line_files),
     "payload": AnalysisKind(_payload, _grid_files),
+    "trajectory": AnalysisKind(_trajectory, _path_files, gridded=False),
 }
 
 
@@ -445,16 +475,18 @@ def validate(cfg: DictConfig, catalogue: Catalogue | None,
         raise ConfigError("compute.backend=dask: needs Dask, pip install 'cdpr-studies[dask]'")
     if cfg.poses is not None:
         point_list("poses", cfg.poses)
-    elif cfg.robot.name == "points":
+    elif cfg.robot.name == "points" and ANALYSES[cfg.analysis].gridded:
         missing = [key for key in ("lo", "hi", "step") if cfg.robot.search[key] is None]
         if missing:
             raise ConfigError(f"robot.search.{missing[0]}: no value given (the box searched needs lo, hi and step; "
                               "or list the poses to check: poses=[[x, y, z], ...])")
-    _validate_size(cfg)  # before anything the size would make large is built
+    if ANALYSES[cfg.analysis].gridded:  # a path bounds its samples as it builds them
+        _validate_size(cfg)  # before anything the size would make large is built
     problem = build(cfg, catalogue)
     for key, asked in (("workspace.home", cfg.workspace.home is not None), ("output.mesh=true", cfg.output.mesh)):
-        if asked and cfg.analysis == "lines":
-            raise ConfigError(f"{key}: analysis=lines follows straight lines; the connected reach and the mesh are "
+        if asked and cfg.analysis in ("lines", "trajectory"):
+            follows = "straight lines" if cfg.analysis == "lines" else "its path"
+            raise ConfigError(f"{key}: analysis={cfg.analysis} follows {follows}; the connected reach and the mesh are "
                               "of a grid analysis (cpr_wwa, statics, payload)")
     if cfg.workspace.home is not None:
         home_node(build_grid(cfg, problem.robot), cfg.workspace.home)
@@ -716,7 +748,10 @@ def build_problem(cfg: DictConfig, catalogue: Catalogue | None) -> tuple[Workspa
 
 
 def grid_size(cfg: DictConfig) -> int:
-    """Poses a job checks, counted without building the grid (``compute.max_poses`` bounds it)."""
+    """Grid poses a job checks, counted without building the grid (``compute.max_poses`` bounds
+    it); 0 for an analysis without a grid (a path's samples are bounded as they are built)."""
+    if not ANALYSES[cfg.analysis].gridded:
+        return 0
     return len(cfg.poses) if cfg.poses is not None else ROBOTS[cfg.robot.name].size(cfg)
 
 

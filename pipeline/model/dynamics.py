@@ -336,18 +336,20 @@ def inertial_wrenches(load: Load, rotation: np.ndarray, accelerations: np.ndarra
 
         -[m a_c;  m c x a_c + I alpha + omega x (I omega)],   a_c = a + alpha x c + omega x (omega x c),
 
-    for each acceleration [a; alpha] (A, 6) of O (m/s^2) and of the platform's turn (rad/s^2),
-    at the angular velocity ``omega`` (3,), rad/s; c = R com and I = R I_c R^T, I_c the inertia
-    about the centre of mass (``load.inertia``; None: a point mass). Affine in [a; alpha]: the
-    vertices of a box of accelerations decide the whole box (the set of wrenches the cables
-    balance is convex); quadratic in omega."""
+    for each acceleration [a; alpha] (A, 6), or each pose's own (n, A, 6), of O (m/s^2) and of
+    the platform's turn (rad/s^2), at the angular velocity ``omega`` (3,), or each pose's (n, 3),
+    rad/s; c = R com and I = R I_c R^T, I_c the inertia about the centre of mass
+    (``load.inertia``; None: a point mass). Affine in [a; alpha]: the vertices of a box of
+    accelerations decide the whole box (the set of wrenches the cables balance is convex);
+    quadratic in omega."""
     arm = rotation @ np.asarray(load.com, dtype=float)  # (3,) or (n, 3)
     inertia = np.zeros((3, 3)) if load.inertia is None else load.inertia
     turned = rotation @ inertia @ np.swapaxes(rotation, -1, -2)  # (3, 3) or (n, 3, 3)
-    linear, angular = accelerations[:, :3], accelerations[:, 3:]
+    linear, angular = accelerations[..., :3], accelerations[..., 3:]
     arm_ = arm[..., None, :]
     centre = linear + np.cross(angular, arm_) + np.cross(omega, np.cross(omega, arm))[..., None, :]
-    spin = np.einsum("...ij,aj->...ai", turned, angular) + np.cross(omega, turned @ omega)[..., None, :]
+    momentum = np.einsum("...ij,...j->...i", turned, omega)  # I omega
+    spin = np.einsum("...ij,...aj->...ai", turned, angular) + np.cross(omega, momentum)[..., None, :]
     force = -load.mass * centre
     return np.concatenate([force, np.cross(arm_, force) - spin], axis=-1)
 

@@ -152,13 +152,19 @@ def rotation_partials(psi: float, theta: float, phi: float) -> np.ndarray:
 def rotation_matrices(angles: np.ndarray, convention: str = "zyx") -> np.ndarray:
     """(n, 3, 3) one rotation per row of ``angles`` (n, 3) = (psi, theta, phi), rad: eq. (9)'s
     Rz(phi) Ry(theta) Rx(psi) (``zyx``), or CASPR's Rx(psi) Ry(theta) Rz(phi) (``xyz``)."""
+    rx, ry, rz = elementary_rotations(angles)
+    return rz @ ry @ rx if convention == "zyx" else rx @ ry @ rz
+
+
+def elementary_rotations(angles: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(Rx(angles[:, 0]), Ry(angles[:, 1]), Rz(angles[:, 2])), each (n, 3, 3), for ``angles`` (n, 3), rad."""
     angles = np.asarray(angles, dtype=float)
     c, s = np.cos(angles), np.sin(angles)
     zero, one = np.zeros(len(angles)), np.ones(len(angles))
     rx = np.stack([one, zero, zero, zero, c[:, 0], -s[:, 0], zero, s[:, 0], c[:, 0]], axis=1).reshape(-1, 3, 3)
     ry = np.stack([c[:, 1], zero, s[:, 1], zero, one, zero, -s[:, 1], zero, c[:, 1]], axis=1).reshape(-1, 3, 3)
     rz = np.stack([c[:, 2], -s[:, 2], zero, s[:, 2], c[:, 2], zero, zero, zero, one], axis=1).reshape(-1, 3, 3)
-    return rz @ ry @ rx if convention == "zyx" else rx @ ry @ rz
+    return rx, ry, rz
 
 
 def attached_points(robot: CableRobot, rotation: np.ndarray) -> np.ndarray:
@@ -329,6 +335,40 @@ class PoseGeometry:
         """(n, 6, m) A = [u_i; (R b_i) x u_i] (``geometry.structure_matrix``): A t balances the
         wrench on the platform, moments about its reference point."""
         return structure_matrix(self.unit, self.arms)
+
+    def cable_rates(self, velocity: np.ndarray, omega: np.ndarray, acceleration: np.ndarray,
+                    alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(n, m) each cable's speed and acceleration, m/s and m/s^2 (paid out > 0), of the
+        platform moving at ``velocity``, ``omega``, ``acceleration`` and ``alpha`` (n, 3 each:
+        its reference point's, m/s and m/s^2, and its turn's, rad/s and rad/s^2, fixed axes).
+
+        The cable's platform end B = exit + vector (the attachment point, or the reference point
+        under ``cable_direction=centre``) moves at v_B = v + omega x r and accelerates at
+        a_B = a + alpha x r + omega x (omega x r), r = B - p. Its length from the anchor changes
+        at l' = u . v_B (with a pulley too: the arc's change cancels the exit point's motion),
+        and u' = (I - u u^T)(v_B - v_C) / l_f, l_f the free length, so
+        l'' = u . a_B + (|v_B|^2 - (u . v_B)^2 - (v_B . n)^2 c / rho) / l_f:
+        C, the exit point, slides along u and turns with the pulley about its axis at
+        (v_B . n) / rho, n the normal of the pulley's plane, rho the distance of B from the
+        axis, c = r_p (1 - cos beta) the distance of C from the axis (0 without pulleys)."""
+        ends = self.exits + self.vectors
+        arm = ends - self.positions[:, None, :]
+        spin = omega[:, None, :]
+        v_end = velocity[:, None, :] + np.cross(spin, arm)
+        a_end = acceleration[:, None, :] + np.cross(alpha[:, None, :], arm) + np.cross(spin, np.cross(spin, arm))
+        along = np.einsum("nmk,nmk->nm", self.unit, v_end)
+        across = np.einsum("nmk,nmk->nm", v_end, v_end) - along**2
+        pulleys = self.robot.pulleys
+        if pulleys is not None:
+            offset = ends - self.robot.anchors
+            radial = offset - np.einsum("nmk,mk->nm", offset, pulleys.axes)[..., None] * pulleys.axes
+            rho = np.linalg.norm(radial, axis=2)
+            normal = np.cross(pulleys.axes, radial)  # |a x radial| = rho
+            sideways = np.divide(np.einsum("nmk,nmk->nm", v_end, normal), rho, out=np.zeros_like(rho), where=rho > 0)
+            wrapped = np.einsum("nmk,nmk->nm", self.exits - self.robot.anchors, radial)  # c rho
+            across = across - sideways**2 * np.divide(wrapped, rho**2, out=np.zeros_like(rho), where=rho > 0)
+        curving = np.divide(across, self.lengths, out=np.zeros_like(across), where=self.lengths > 0)
+        return along, np.einsum("nmk,nmk->nm", self.unit, a_end) + curving
 
     settles = False  # whether the forces decide the wrench they balance (sagging cables: settled_forces)
 

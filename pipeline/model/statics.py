@@ -17,6 +17,7 @@ import numpy as np
 from pipeline.model.dynamics import Load, inertial_wrenches, load_wrench_terms
 from pipeline.model.linalg import batched_pinv, gram, gram_ratio
 from pipeline.model.geometry import CableRobot, PoseGeometry, structure_matrix
+from pipeline.model.path import Samples, angular_motion
 from pipeline.model.tensions import TensionSpec, payload_ranges, ray_interval
 
 
@@ -234,6 +235,60 @@ class PoseStatics(PoseGeometry):
     @cached_property
     def _gram(self) -> np.ndarray:
         return gram(self.structure_matrix)
+
+
+class PathStatics(PoseStatics):
+    """The statics of a path's samples (``analysis=trajectory``): each pose with its own rotation
+    (n, 3, 3), velocity [v; omega] (n, 6) and acceleration [a; alpha] (n, 6) (m/s, rad/s, m/s^2,
+    rad/s^2; the reference point's and the turn's, fixed axes). The wrench its cables balance is
+    the static one (:attr:`PoseStatics.wrench`) minus the rate of change of the platform's
+    momentum at the sample's own motion (:func:`pipeline.model.dynamics.inertial_wrenches`); with
+    ``wrench.set`` each of its wrenches is added to that. At rest it is the static wrench exactly
+    (plus zeros), so every verdict is the statics'."""
+
+    def __init__(self, robot: CableRobot, positions: np.ndarray, rotations: np.ndarray, spec: StaticsSpec,
+                 velocities: np.ndarray, accelerations: np.ndarray):
+        super().__init__(robot, positions, rotations, spec)
+        self.velocities, self.accelerations = velocities, accelerations
+
+    @cached_property
+    def full_wrench(self) -> np.ndarray:
+        """(n, 6) [f; M] the cables balance at each sample (moments about the reference point)."""
+        static = load_wrench_terms(self.spec.load, self.robot.up, self.rotation)[1]
+        moving = inertial_wrenches(self.spec.load, self.rotation, self.accelerations[:, None, :], self.velocities[:, 3:])
+        return static + moving[:, 0, :]
+
+    @cached_property
+    def wrench(self) -> np.ndarray:
+        """(n, k) :attr:`full_wrench` along the robot's freedoms."""
+        return self.full_wrench[:, list(self.robot.dofs)]
+
+    @cached_property
+    def rates(self) -> tuple[np.ndarray, np.ndarray]:
+        """(n, m) each cable's speed and acceleration (``PoseGeometry.cable_rates``)."""
+        return self.cable_rates(self.velocities[:, :3], self.velocities[:, 3:], self.accelerations[:, :3],
+                                self.accelerations[:, 3:])
+
+
+@dataclass(frozen=True)
+class PathSpec(StaticsSpec):
+    """``analysis=trajectory``: the statics of a path's ``samples`` (``pipeline.model.path.Samples``),
+    their angles in ``convention`` (``orientation.convention``)."""
+
+    samples: Samples | None = None
+    convention: str = "zyx"
+    kind: ClassVar[str] = "trajectory"
+
+    def fused_unfit(self) -> str | None:
+        return "it evaluates a grid; a path's samples are checked by the numpy criteria"
+
+    def state_of(self, robot: CableRobot, rows: slice) -> PathStatics:
+        """The :class:`PathStatics` of the samples ``rows``."""
+        s = self.samples
+        rotation, omega, alpha = angular_motion(s.q[rows, 3:], s.q_dot[rows, 3:], s.q_ddot[rows, 3:], self.convention)
+        velocities = np.concatenate([s.q_dot[rows, :3], omega], axis=1)
+        accelerations = np.concatenate([s.q_ddot[rows, :3], alpha], axis=1)
+        return PathStatics(robot, s.q[rows, :3], rotation, self, velocities, accelerations)
 
 
 PAYLOAD_LP_WORK = 2.7  # measured: 14 976 poses of an 8-cable robot, 2.15 s against 0.81 s for its statics

@@ -20,7 +20,7 @@ from pipeline.workspace.dispatch import announce_cost, decide
 from pipeline.workspace.grid import Grid
 from pipeline.workspace.kernel import WorkspaceProblem, evaluate_chunk
 from pipeline.workspace.parallel import iter_chunks
-from pipeline.workspace.verdict import classify
+from pipeline.workspace.verdict import Tally, classify
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -55,25 +55,18 @@ def grid_workspace(
         scheduler=cfg.compute.scheduler,
         estimate=run.seconds,
     )
-    parts, n_feasible, by_lp, undecided = [], 0, 0, 0
+    parts, by_lp, undecided = [], 0, 0
     degenerate = Degeneracy(problem)
-    lost = np.zeros(len(problem.criteria), dtype=np.int64)  # infeasible poses by limiting criterion
-    alone = np.zeros(len(problem.criteria), dtype=np.int64)  # poses that criterion alone removes
-    least = dict.fromkeys(problem.criteria, np.inf)
+    tally = Tally(problem.criteria)
     summarised = {key: [] for key in problem.spec.summarised}  # per-pose columns, 8 bytes a pose
     for span, raw in chunks:
         for key, values in summarised.items():
             values.append(raw[key])
         margins, feasible, limiting = classify(
             {name: raw[f"margin_{name}"] for name in problem.criteria}, problem.margin_atol)
-        n_feasible += int(np.count_nonzero(feasible))
-        for name in problem.criteria:  # the feasible poses' headroom to each limit
-            least[name] = np.min(margins[name], initial=least[name], where=feasible)
+        tally.add(margins, feasible, limiting)
         by_lp += int(np.count_nonzero(raw.get("lp_poses", False)))
         undecided += int(np.count_nonzero(raw.get("catenary_undecided", False)))
-        lost += np.bincount(limiting[~feasible], minlength=len(problem.criteria))
-        violated = np.column_stack([margins[name] < 0 for name in problem.criteria])
-        alone += violated[violated.sum(axis=1) == 1].sum(axis=0)
         positions = grid[span]  # computed again from the axes: no chunk's positions are kept
         degenerate.add(positions, raw, margins)
         points = tabulate(problem, positions, raw, margins, feasible, limiting)
@@ -81,9 +74,7 @@ def grid_workspace(
             parts.append(points)
         else:
             sink(points)
-    counts = {"n_points": grid.n_points, "n_feasible": n_feasible,
-              "lost": dict(zip(problem.criteria, lost.tolist())), "alone": dict(zip(problem.criteria, alone.tolist())),
-              "least": least, "undecided": undecided,
+    counts = {**tally.counts(grid.n_points), "undecided": undecided,
               "summarised": {key: np.concatenate(values) for key, values in summarised.items()},
               "degenerate": degenerate.summary()}
     if CATENARY in problem.criteria:

@@ -22,7 +22,8 @@ from pipeline.model.dynamics import SampleDynamics
 from pipeline.workspace import criteria
 from pipeline.workspace.grid import Grid
 from pipeline.workspace.kernel import WorkspaceProblem
-from pipeline.workspace.trajectory import inverse_dynamics, trapezoid
+from pipeline.model.path import trapezoid
+from pipeline.workspace.trajectory import inverse_dynamics
 from pipeline.workspace.verdict import classify
 from pipeline.workspace.compute import grid_workspace
 

@@ -1,13 +1,11 @@
 """Straight-line simulation experiments (section 3.1.3 of Filipovic & Kevac 2018): the carrier
-moves along a straight segment at constant orientation with a trapezoidal speed profile, and the
-actuator quantities of eqs. (19)-(21) are computed at every time sample. This is the paper's
-second, independent path to the feasible workspace (Figs. 4b, 5b, 6).
+moves along a straight segment at constant orientation with a trapezoidal speed profile
+(``pipeline.model.path.trapezoid``), and the actuator quantities of eqs. (19)-(21) are computed
+at every time sample. This is the paper's second, independent path to the feasible workspace
+(Figs. 4b, 5b, 6).
 """
 
 from __future__ import annotations
-
-import math
-from dataclasses import dataclass
 
 import numpy as np
 
@@ -15,44 +13,6 @@ from pipeline.model.actuators import ActuatorModel
 from pipeline.model.dynamics import SampleDynamics
 from pipeline.workspace.criteria import TORQUE, VOLTAGE, force_families
 from pipeline.workspace.criteria.forces import feasible_distribution, feasible_model
-
-
-@dataclass(frozen=True)
-class Profile:
-    """Path coordinate s(t) (m), speed v(t) (m/s) and acceleration a(t) (m/s^2) at times t (s)."""
-
-    t: np.ndarray
-    s: np.ndarray
-    v: np.ndarray
-    a: np.ndarray
-
-
-def trapezoid(distance: float, v_max: float, t_acc: float, t_dec: float, dt: float) -> Profile:
-    """Trapezoidal speed profile over ``distance``: accelerate at v_max / t_acc, cruise at v_max,
-    decelerate at v_max / t_dec (section 3, assumption 1). A segment too short to reach v_max
-    gets the triangular profile with the same accelerations and a lower peak speed."""
-    acc, dec = v_max / t_acc, v_max / t_dec
-    ramps = v_max**2 / (2 * acc) + v_max**2 / (2 * dec)
-    if distance >= ramps:
-        peak, cruise = v_max, (distance - ramps) / v_max
-    else:
-        peak, cruise = math.sqrt(2 * distance * acc * dec / (acc + dec)), 0.0
-    t1 = peak / acc
-    t2 = t1 + cruise
-    total = t2 + peak / dec
-    t = np.linspace(0.0, total, max(math.ceil(total / dt), 2) + 1)
-    accelerating, cruising = t < t1, (t >= t1) & (t < t2)
-    decelerating = ~(accelerating | cruising)
-    v = np.where(accelerating, acc * t, np.where(cruising, peak, peak - dec * (t - t2)))
-    a = np.where(accelerating, acc, np.where(cruising, 0.0, -dec))
-    s_t2 = peak * t1 / 2 + peak * cruise
-    s = np.where(
-        accelerating, acc * t**2 / 2,
-        np.where(cruising, peak * t1 / 2 + peak * (t - t1),
-                 s_t2 + peak * (t - t2) - dec * (t - t2) ** 2 / 2),
-    )
-    v[decelerating] = np.maximum(v[decelerating], 0.0)
-    return Profile(t=t, s=np.minimum(s, distance), v=v, a=a)
 
 
 def inverse_dynamics(state: SampleDynamics, actuator: ActuatorModel) -> dict[str, np.ndarray]:

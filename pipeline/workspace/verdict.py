@@ -47,3 +47,30 @@ def classify(
         if gate in snapped:
             limiting[snapped[gate] < 0] = names.index(gate)
     return snapped, feasible, limiting
+
+
+class Tally:
+    """A job's verdicts counted chunk by chunk (:meth:`add`, with what :func:`classify` returns):
+    the feasible poses, the infeasible ones by limiting criterion (``lost``), those one criterion
+    alone removes, every other holding there (``alone``: what relaxing it alone would win), and
+    each criterion's least margin over the feasible poses (``least``: the headroom kept)."""
+
+    def __init__(self, names):
+        self.names = list(names)
+        self.n_feasible = 0
+        self.lost = np.zeros(len(self.names), dtype=np.int64)
+        self.alone = np.zeros(len(self.names), dtype=np.int64)
+        self.least = dict.fromkeys(self.names, np.inf)
+
+    def add(self, margins: dict[str, np.ndarray], feasible: np.ndarray, limiting: np.ndarray) -> None:
+        self.n_feasible += int(np.count_nonzero(feasible))
+        for name in self.names:
+            self.least[name] = np.min(margins[name], initial=self.least[name], where=feasible)
+        self.lost += np.bincount(limiting[~feasible], minlength=len(self.names))
+        violated = np.column_stack([margins[name] < 0 for name in self.names])
+        self.alone += violated[violated.sum(axis=1) == 1].sum(axis=0)
+
+    def counts(self, n_points: int) -> dict:
+        """The counts ``pipeline.workspace.compute.summarize`` reads."""
+        return {"n_points": n_points, "n_feasible": self.n_feasible, "lost": dict(zip(self.names, self.lost.tolist())),
+                "alone": dict(zip(self.names, self.alone.tolist())), "least": self.least}

@@ -40,10 +40,13 @@ def _dynamics(analysis: str, spec=None, robot=None) -> bool:
     return analysis in ("cpr_wwa", "lines")
 
 
+HELD = ("statics", "trajectory")  # the analyses whose cables hold the platform's load: at a pose, along a path
+
+
 def _straight_heavy(analysis: str, spec, robot) -> bool:
     """Heavy straight cables (``robot.cable_mass`` without ``robot.catenary``): the rules of
     ``criteria.sag`` other than the sag itself apply to them."""
-    return analysis in ("statics", "cpr_wwa", "lines") and robot.cable_mass is not None and robot.catenary is None
+    return analysis in (*HELD, "cpr_wwa", "lines") and robot.cable_mass is not None and robot.catenary is None
 
 
 def _feasible(spec) -> bool:
@@ -58,15 +61,15 @@ for criterion in (
               "robot.dofs=[x,y,z] for a point platform (every attachment at one point), else anchors and "
               "attachments that give the cables independent directions (the log names the wrench they cannot "
               "produce), or tension=feasible",
-              lambda analysis, spec, robot: analysis in ("statics", "payload") and not _feasible(spec)),
+              lambda analysis, spec, robot: analysis in (*HELD, "payload") and not _feasible(spec)),
     Criterion(UNREACHABLE, tension.unreachable, ANY, 2, "#777777",
               "anchors and attachments that give the cables independent directions (the log names the "
               "wrench they cannot produce), or more cables",
-              lambda analysis, spec, robot: _dynamics(analysis) or (analysis == "statics" and _feasible(spec))),
+              lambda analysis, spec, robot: _dynamics(analysis) or (analysis in HELD and _feasible(spec))),
     Criterion(SLACK, tension.slack, ANY, 3, "#882255",
               "tension=feasible if the cables may not push (tension=pinv's minimum-norm forces often do), "
               "else a lower tension.t_min, more cables or anchors around the load",
-              lambda analysis, spec, robot: analysis == "statics" or (_dynamics(analysis) and _feasible(spec)),
+              lambda analysis, spec, robot: analysis in HELD or (_dynamics(analysis) and _feasible(spec)),
               bounds=tension.slack_bounds),
     Criterion(TENSION_MAX, tension.tension_max, ANY, None, "#0072B2",
               "stronger cables (a higher tension.t_max) or a lighter load",
@@ -102,13 +105,13 @@ for criterion in (
     Criterion("stiffness", stiffness.stiffness, STATICS, None, "#44AA99",
               "stiffer cables (robot.cable_ea), shorter cable to the winches (robot.winch_length), more "
               "pretension (a higher tension.t_min) or anchors around the pose",
-              lambda analysis, spec, robot: (analysis == "statics" and robot.cable_ea is not None and robot.pulleys is None
+              lambda analysis, spec, robot: (analysis in HELD and robot.cable_ea is not None and robot.pulleys is None
                                              and robot.catenary is None),
               keys={"translational": stiffness.required, "rotational": stiffness.required,
                     "frequency": stiffness.required}, refuses=stiffness.refuses),
     Criterion("sag", sag.sag, ANY, None, "#88CCEE",
               "more pretension (a higher tension.t_min), lighter cables (robot.cable_mass) or a larger sag allowed",
-              lambda analysis, spec, robot: analysis in ("statics", "cpr_wwa", "lines") and robot.cable_mass is not None,
+              lambda analysis, spec, robot: analysis in (*HELD, "cpr_wwa", "lines") and robot.cable_mass is not None,
               keys={"ratio": sag.ratio}, bounds=sag.sag_bounds),
     Criterion("cable_contraction", sag.contraction, ANY, None, "#117733",
               "more pretension (a higher tension.t_min), lighter cables (robot.cable_mass) or more cable allowed",
