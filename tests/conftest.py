@@ -149,6 +149,15 @@ SPREAD_ROBOT = ["robot=points", f"robot.anchors={SPREAD_ANCHORS}", f"robot.attac
                 "robot.search.lo=[-1.5,-1,0.25]", "robot.search.hi=[1.5,1,1.75]"]
 
 
+# The same frame with each upper cable crossed to the platform's far corner: its structure matrix
+# has full rank across the box (the spread robot's has rank 5: it holds only the wrenches in its
+# range), so the tensions balance every wrench of a moving platform exactly
+CROSSED_PLATFORM = [[0.1, 0.1, 0.05], [-0.1, 0.1, 0.05], [-0.1, -0.1, 0.05], [0.1, -0.1, 0.05],
+                    [0.1, 0.1, -0.05], [-0.1, 0.1, -0.05], [-0.1, -0.1, -0.05], [0.1, -0.1, -0.05]]
+CROSSED_ROBOT = ["robot=points", f"robot.anchors={SPREAD_ANCHORS}", f"robot.attachments={CROSSED_PLATFORM}",
+                 "robot.search.lo=[-1.5,-1,0.25]", "robot.search.hi=[1.5,1,1.75]", "robot.search.step=0.25"]
+
+
 def eq9_rotation(psi: float, theta: float, phi: float) -> np.ndarray:
     """Eq. (9), R = Rz(phi) Ry(theta) Rx(psi), written out for the independent references (no
     code of the model)."""

@@ -23,7 +23,7 @@ from pipeline.app.problem import build_problem
 FORCES = "model.pinv_columns=translational"  # forces only: the paper's reading of eq. (20) for Table 2
 
 MASS, GRAVITY, HALF, RADIUS = 2.0, 9.81, 1.0, 0.05
-ACTUATOR = ActuatorModel(id=0, name="test", power=1.0, G_v=0.0, L_v=0.0, S_v=2.0,
+ACTUATOR = ActuatorModel(id=0, name="test", power=1.0, G_v=0.0, L_v=0.0, S_v=2.0, R_r=1.0, C_E=0.0,
                          speed_limit=10.0, torque_limit=1.0, accel_limit=100.0,
                          voltage_limit=12.0, winch_radius=RADIUS)
 FEASIBLE_CPR_WWA = ("unreachable", "slack", "speed", "torque", "acceleration", "voltage")

@@ -18,7 +18,7 @@ from scipy.interpolate import BPoly, PPoly
 from scipy.optimize import linprog, minimize
 from scipy.spatial.transform import Rotation
 
-from conftest import SPREAD_ANCHORS, SPREAD_ROBOT, command, eq9_rotation
+from conftest import CROSSED_ROBOT, SPREAD_ANCHORS, SPREAD_ROBOT, command, eq9_rotation
 from pipeline.model.dynamics import Load
 from pipeline.model.geometry import CableRobot, PoseGeometry, euler_rate_axes
 from pipeline.model.path import angular_motion, hermite, rest_to_rest, spline, trapezoid, trapezoidal
@@ -359,7 +359,7 @@ def test_a_caspr_cubic_spline_is_its_hermite_cubic_and_a_linear_one_is_refused(o
 
 def test_a_csv_of_timed_way_points_is_the_same_path_as_the_listed_points(tmp_path):
     (tmp_path / "path.csv").write_text("t,x,y,z\n0,-0.5,0.3,0.7\n0.8,0.4,-0.2,1.2\n1.5,0.6,0.5,0.9\n")
-    common = [*ROBOT, "analysis=trajectory", "trajectory.law=spline", "robot.platform.mass=2"]
+    common = [*CROSSED_ROBOT, "analysis=trajectory", "trajectory.law=spline", "robot.platform.mass=2", "tension.t_max=40"]
     by_file = command(tmp_path, "pipeline", *common, "trajectory.file=path.csv", f"hydra.run.dir={tmp_path / 'a'}")
     listed = command(tmp_path, "pipeline", *common, "trajectory.points=[[-0.5,0.3,0.7],[0.4,-0.2,1.2],[0.6,0.5,0.9]]",
                      "trajectory.times=[0.8,0.7]", f"hydra.run.dir={tmp_path / 'b'}")
@@ -368,7 +368,13 @@ def test_a_csv_of_timed_way_points_is_the_same_path_as_the_listed_points(tmp_pat
     pd.testing.assert_frame_equal(a, b)
     summary = pd.read_parquet(tmp_path / "a" / "summary.parquet").iloc[0]
     assert summary["n_samples"] == len(a) and summary["duration_s"] == pytest.approx(1.5)
-    assert summary["cable_speed_peak"] == pytest.approx(np.abs(a[[c for c in a if c.startswith("speed_")]]).to_numpy().max())
+    held = a["feasible"].to_numpy()
+    assert 0 < held.sum() < len(a)  # the peaks are over the samples that hold
+    speeds = np.abs(a[[c for c in a if c.startswith("speed_")]].to_numpy())
+    assert summary["cable_speed_peak"] == pytest.approx(speeds[held].max())
+    tensions = a[[c for c in a if c.startswith("tension_")]].to_numpy()
+    assert summary["tension_peak_N"] == pytest.approx(tensions[held].max())
+    assert summary["tension_peak_N"] <= 40 < tensions.max()
 
 
 def test_the_first_failing_sample_is_named_with_its_criterion_and_remedy(tmp_path):

@@ -588,7 +588,7 @@ class Config:
     """The job: ``analysis``, a config group (cpr_wwa: dynamics and actuator limits; statics:
     wrench and tensions; lines: the paper's straight lines; payload: the largest payload per
     pose; trajectory: the platform along a path; ``robot=irpm6`` and ``points`` pick statics), ``actuator`` (the id of a catalogue
-    row), ``catalogue`` (a CSV or Parquet path; null = Table 1 of the CPR-8 paper, shipped in
+    row; a path's may be null: no drive), ``catalogue`` (a CSV or Parquet path; null = Table 1 of the CPR-8 paper, shipped in
     pipeline/data), ``poses`` (a list of [x, y, z] positions in m checked instead of the robot's
     grid, e.g. ``poses=[[0,0,5]]``; null = the grid; the summary's volume_m3 is then NaN),
     ``obstacles`` (the cell's obstacles no cable and not the platform may touch, criterion
@@ -602,7 +602,7 @@ class Config:
 
     robot: Any = MISSING
     analysis: str = MISSING
-    actuator: int = MISSING
+    actuator: Optional[int] = MISSING
     catalogue: Optional[str] = MISSING
     orientation: OrientationConfig = field(default_factory=OrientationConfig)
     grid: GridConfig = field(default_factory=GridConfig)

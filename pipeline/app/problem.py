@@ -49,7 +49,7 @@ from pipeline.model.pulleys import Pulleys
 from pipeline.model.sagging import MAX_CABLES, SaggingSpec
 from pipeline.model.motion import acceleration_set, cartesian_cube, extreme_points, velocity_set
 from pipeline.model.robots import PointsRobot, cpr8, irpm6, point_list
-from pipeline.model.statics import PathSpec, PayloadSpec, StaticLimits, StaticsSpec
+from pipeline.model.statics import PathLimits, PathSpec, PayloadSpec, StaticLimits, StaticsSpec
 from pipeline.model.tensions import TensionSpec
 from pipeline.workspace.compute import grid_workspace, name_of
 from pipeline.workspace.dispatch import fused_unfit
@@ -122,9 +122,7 @@ def _cpr_wwa(cfg: DictConfig, catalogue: Catalogue, robot: CableRobot):
     and the criteria; refuses an actuator id the catalogue lacks, a velocity grid that would not
     fit in memory, too few cables for the rows eq. (20) balances, and pushing cables under the
     minimum-norm model."""
-    if cfg.actuator not in set(catalogue.ids):
-        ids = ", ".join(str(i) for i in sorted(catalogue.ids))
-        raise ConfigError(f"actuator={cfg.actuator}: no such id in the catalogue (ids: {ids})")
+    _known_actuator(cfg, catalogue)
     model = cfg.model
     n_vel = cfg.grid.n_vel or cfg.grid.get("n") or DEFAULT_N_VEL
     if (n_vel + 1) ** 3 > MAX_VELOCITY_CANDIDATES:
@@ -167,6 +165,14 @@ def _cpr_wwa(cfg: DictConfig, catalogue: Catalogue, robot: CableRobot):
         tension=tension,
     )
     return motion, actuator
+
+
+def _known_actuator(cfg: DictConfig, catalogue: Catalogue) -> None:
+    if cfg.actuator is None:
+        raise ConfigError(f"actuator=null: analysis={cfg.analysis} checks a catalogue actuator; give its id (actuator=ID)")
+    if cfg.actuator not in set(catalogue.ids):
+        ids = ", ".join(str(i) for i in sorted(catalogue.ids))
+        raise ConfigError(f"actuator={cfg.actuator}: no such id in the catalogue (ids: {ids})")
 
 
 def _statics(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
@@ -260,8 +266,10 @@ def _line_files(cfg: DictConfig, problem: WorkspaceProblem, grid: Grid, files, s
 
 def _trajectory(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
     """The statics of a path's samples (``pipeline.model.statics.PathSpec``): the statics' spec
-    and limits at every sample, the path ``trajectory.*`` gives (``pipeline.app.paths``).
-    Refuses a platform's motion apart from its path's, an orientation set and listed poses."""
+    and limits at every sample, the path ``trajectory.*`` gives (``pipeline.app.paths``) and,
+    with ``actuator``, the catalogue actuator that drives every cable (``drive.*`` overriding its
+    winch radius and gear ratio; eq. (32) with xi, the default reading). Refuses a platform's
+    motion apart from its path's, an orientation set, listed poses and a drive without an actuator."""
     spec, limits = _statics(cfg, catalogue, robot)
     if spec.moves:
         raise ConfigError("platform_motion: analysis=trajectory takes the platform's motion from its path "
@@ -272,9 +280,18 @@ def _trajectory(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot)
     if cfg.poses is not None:
         raise ConfigError("poses: analysis=trajectory checks its path's samples (trajectory.points or "
                           "trajectory.file), not listed poses")
+    drive = None
+    if cfg.actuator is not None:  # the catalogue actuator drives every cable along the path
+        _known_actuator(cfg, catalogue)
+        drive = actuator_model(catalogue.row(cfg.actuator), cfg.drive.winch_radius, cfg.drive.gear_ratio)
+    elif any(value is not None for value in cfg.drive.values()):
+        given = next(key for key, value in cfg.drive.items() if value is not None)
+        raise ConfigError(f"drive.{given}={cfg.drive[given]}: a path's drive is a catalogue actuator's; give its id, "
+                          "actuator=ID")
     spec = PathSpec(**{f.name: getattr(spec, f.name) for f in fields(spec)}, samples=path_samples(cfg, robot),
-                    convention=name_of(cfg.orientation.convention))
-    return spec, limits
+                    convention=name_of(cfg.orientation.convention),
+                    winch_radius=None if drive is None else np.full(robot.n_cables, drive.winch_radius))
+    return spec, PathLimits(**{f.name: getattr(limits, f.name) for f in fields(limits)}, drive=drive)
 
 
 def _path_files(cfg: DictConfig, problem: WorkspaceProblem, grid: Grid | None, files, sweep_pays: bool) -> dict:

@@ -23,7 +23,8 @@ class ActuatorModel:
     positive, with u = G_v * theta_ddot + L_v * theta_dot - S_v * M (eq. 21 with the physical
     sign of the load term, :attr:`load_gain`; M = R t the cable's load torque). Limits: ``speed_limit`` (rad/s,
     eq. 30), ``torque_limit`` (N m, eq. 32), ``accel_limit`` (rad/s^2, eq. 33), ``voltage_limit``
-    (V, eq. 34). ``winch_radius`` R_i (m) of eq. (18).
+    (V, eq. 34). ``winch_radius`` R_i (m) of eq. (18). ``R_r`` (ohm) and ``C_E`` (V s/rad, behind
+    the gearbox) give the armature current i = (u - C_E theta_dot) / R_r of a path's samples.
     """
 
     id: int
@@ -32,6 +33,8 @@ class ActuatorModel:
     G_v: float
     L_v: float
     S_v: float
+    R_r: float
+    C_E: float
     speed_limit: float
     torque_limit: float
     accel_limit: float
@@ -88,6 +91,8 @@ def actuator_model(
         G_v=j_r * r_r / c_m,
         L_v=b_c * r_r / c_m + c_e,
         S_v=r_r / c_m,
+        R_r=float(r_r),
+        C_E=float(c_e),
         speed_limit=row["speed_rpm"] * RPM_TO_RAD_S / n_v,
         torque_limit=torque_limit,
         accel_limit=row["torque_Nm"] * n_m / j_r,

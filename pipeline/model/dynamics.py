@@ -155,6 +155,34 @@ class PoseDynamics(PoseGeometry):
         high, low = self.shaft_speed_range
         return act.L_v * high, act.L_v * low
 
+    @cached_property
+    def torque_range(self) -> tuple[np.ndarray, np.ndarray]:
+        """(n, m) largest and smallest load torque M of eq. (20) over the acceleration set."""
+        return self.acceleration_range(*self.torque_affine)
+
+    def torque_bounds(self, act: ActuatorModel) -> tuple:
+        """|M| <= M_mot N_M (eq. 32) on the ``feasible`` model's variables, M themselves."""
+        return -act.torque_limit, act.torque_limit, act.torque_limit
+
+    @cached_property
+    def shaft_acceleration_worst(self) -> np.ndarray:
+        """(n, m) the largest |theta_ddot| of eq. (33) over every (velocity, acceleration) pair:
+        J p_ddot (+ J-dot p_dot with ``motion.jdot``), the two parts separable."""
+        velocity = self.shaft_accel_from_velocity
+        from_velocity = (velocity.max(axis=-1), velocity.min(axis=-1)) if self.motion.jdot else (0.0, 0.0)
+        return max_abs_sum_of_ranges(from_velocity, self.acceleration_range(self.jacobian[:, :, :3], 0.0))
+
+    def voltage_worst(self, act: ActuatorModel) -> np.ndarray:
+        """(n, m) the largest |u| of eq. (21) over every (velocity, acceleration) pair: the
+        velocity part L_v theta_dot (+ G_v J-dot p_dot) and the acceleration part
+        G_v J a - S_v M (affine in a) are separable; without J-dot the velocity part's range is
+        L_v times theta_dot's, known from eq. (30)."""
+        torque_coefficients, torque_offset = self.torque_affine
+        from_acceleration = self.acceleration_range(  # G_v J a - S_v M, affine in a
+            act.G_v * self.jacobian[:, :, :3] + act.load_gain * torque_coefficients, act.load_gain * torque_offset
+        )
+        return max_abs_sum_of_ranges(self.voltage_from_velocity(act), from_acceleration)
+
     def diagnostics(self) -> dict[str, np.ndarray]:
         """The rank of J^T per pose, and the base's columns."""
         return {"jacobian_rank": self.jacobian_rank.astype(np.int8), **super().diagnostics()}
@@ -381,6 +409,13 @@ def acceleration_box(accelerations: np.ndarray) -> tuple[np.ndarray, np.ndarray]
         return None
     lo, hi = np.array([a[0] for a in axes]), np.array([a[-1] for a in axes])
     return (lo + hi) / 2, (hi - lo) / 2
+
+
+def max_abs_sum_of_ranges(a: tuple, b: tuple) -> np.ndarray:
+    """max over (j, k) of |a_j + b_k| from the (max, min) of each term over its own set, without
+    forming the j x k product: max(max_j a_j + max_k b_k, -(min_j a_j + min_k b_k)), because
+    |x| = max(x, -x) and a maximum of a sum of independent terms is the sum of maxima."""
+    return np.maximum(a[0] + b[0], -(a[1] + b[1]))
 
 
 def centripetal(speed2, along, length, radius):

@@ -243,7 +243,8 @@ class PoseGeometry:
       the largest and smallest over the state's wrench set (one wrench for the statics);
     - ``forces_of(x)`` and ``variables_of(t)``: the tensions (N) of the variables x of the
       ``feasible`` model, and back (the criteria's ``bounds`` are intervals on x);
-    - ``kind``: ``dynamics`` or ``statics``, what a criterion that reads it declares;
+    - ``kind``: ``dynamics`` or ``statics``, what a criterion that reads it declares (``kinds``:
+      every such kind it offers);
     - ``ranges_over_a_set``: whether the forces range over a set (per-cable min and max columns)
       or are one value per cable;
     - ``structure`` and ``rows``: the matrix S the forces balance the wrench with, and the freedoms
@@ -371,6 +372,12 @@ class PoseGeometry:
         return along, np.einsum("nmk,nmk->nm", self.unit, a_end) + curving
 
     settles = False  # whether the forces decide the wrench they balance (sagging cables: settled_forces)
+
+    @property
+    def kinds(self) -> tuple[str, ...]:
+        """What the criteria that read it may declare (``Criterion.reads``): its ``kind``; a
+        path's samples with a drive are both statics and dynamics."""
+        return (self.kind,)
 
     def balanced_wrenches(self, families) -> np.ndarray:
         """The wrenches the forces balance within the families' intervals: the required ones

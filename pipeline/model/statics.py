@@ -14,6 +14,7 @@ from functools import cached_property
 
 import numpy as np
 
+from pipeline.model.actuators import ActuatorModel, voltage_interval
 from pipeline.model.dynamics import Load, inertial_wrenches, load_wrench_terms
 from pipeline.model.linalg import batched_pinv, gram, gram_ratio
 from pipeline.model.geometry import CableRobot, PoseGeometry, structure_matrix
@@ -98,6 +99,26 @@ class StaticLimits:
         """What a job's summary says of its limits besides the config: the number of wrenches
         a wrench set requires (``n_wrenches``), when there is one."""
         return {"n_wrenches": self.n_wrenches} if self.n_wrenches else {}
+
+
+@dataclass(frozen=True)
+class PathLimits(StaticLimits):
+    """The statics' limits at every sample of a path and, with ``drive`` (the catalogue
+    actuator of every cable, ``pipeline.model.actuators.ActuatorModel``), the actuator's: its
+    constants and limits (``G_v``, ``speed_limit``, ...) read through these limits, so that one
+    limits object serves the statics' criteria and the actuator's."""
+
+    drive: ActuatorModel | None = None
+
+    def __getattr__(self, name: str):
+        drive = self.__dict__.get("drive")
+        if drive is None or name.startswith("__"):
+            raise AttributeError(name)
+        return getattr(drive, name)
+
+    def described(self) -> dict:
+        """The statics' description, and the actuator's name and power with a drive."""
+        return {**super().described(), **(self.drive.described() if self.drive is not None else {})}
 
 
 class PoseStatics(PoseGeometry):
@@ -269,14 +290,66 @@ class PathStatics(PoseStatics):
         return self.cable_rates(self.velocities[:, :3], self.velocities[:, 3:], self.accelerations[:, :3],
                                 self.accelerations[:, 3:])
 
+    # The drive along the path (``PathSpec.winch_radius``; the actuator criteria of eqs. 30-34):
+    # each winch turns by theta = l / R (eq. 18: theta > 0 pays the cable out), so its speed and
+    # acceleration are the cable's exact ones over R, and it holds the load torque M = R t.
+
+    @property
+    def kinds(self) -> tuple[str, ...]:
+        return ("statics", "dynamics") if self.spec.winch_radius is not None else ("statics",)
+
+    @cached_property
+    def shaft_speed_range(self) -> tuple[np.ndarray, np.ndarray]:
+        """(n, m) theta_dot = l_dot / R of each sample (its largest and smallest: the same)."""
+        speed = self.rates[0] / self.spec.winch_radius
+        return speed, speed
+
+    @cached_property
+    def shaft_acceleration(self) -> np.ndarray:
+        """(n, m) theta_ddot = l_ddot / R of each sample (with the cables' turn: exact)."""
+        return self.rates[1] / self.spec.winch_radius
+
+    @property
+    def shaft_acceleration_worst(self) -> np.ndarray:
+        return np.abs(self.shaft_acceleration)
+
+    @cached_property
+    def torque_range(self) -> tuple[np.ndarray, np.ndarray]:
+        """(n, m) M = R t of the tensions (the largest and smallest over a wrench set)."""
+        high, low = self.force_range
+        return self.spec.winch_radius * high, self.spec.winch_radius * low
+
+    def voltage_of(self, act, torques: np.ndarray) -> np.ndarray:
+        """(n, m) u = G_v theta_ddot + L_v theta_dot - S_v M of eq. (21) at load torques M (n, m)."""
+        return act.G_v * self.shaft_acceleration + act.L_v * self.shaft_speed_range[0] + act.load_gain * torques
+
+    def voltage_worst(self, act) -> np.ndarray:
+        high, low = self.torque_range
+        return np.maximum(np.abs(self.voltage_of(act, high)), np.abs(self.voltage_of(act, low)))
+
+    def torque_bounds(self, act) -> tuple:
+        """|R t| <= M_mot N_M (eq. 32) on the ``feasible`` model's variables, the tensions t."""
+        limit = act.torque_limit / self.spec.winch_radius
+        return -limit, limit, limit
+
+    def voltage_bounds(self, act) -> tuple:
+        """The interval on t that keeps |u| <= U (eq. 34) at each sample's speed and acceleration:
+        :func:`pipeline.model.actuators.voltage_interval` on M = R t, over R; (n, 1, m)."""
+        other = (act.G_v * self.shaft_acceleration + act.L_v * self.shaft_speed_range[0])[:, None, :]
+        lower, upper, scale = voltage_interval(act, other, other)
+        radius = self.spec.winch_radius
+        return lower / radius, upper / radius, scale / radius[0]
+
 
 @dataclass(frozen=True)
 class PathSpec(StaticsSpec):
     """``analysis=trajectory``: the statics of a path's ``samples`` (``pipeline.model.path.Samples``),
-    their angles in ``convention`` (``orientation.convention``)."""
+    their angles in ``convention`` (``orientation.convention``); ``winch_radius`` (m,) R of each
+    cable's winch where a catalogue actuator drives the cables (``actuator``; None: no drive)."""
 
     samples: Samples | None = None
     convention: str = "zyx"
+    winch_radius: np.ndarray | None = None
     kind: ClassVar[str] = "trajectory"
 
     def fused_unfit(self) -> str | None:

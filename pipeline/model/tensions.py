@@ -207,9 +207,12 @@ def _nested_lps(structure, wrenches, families) -> tuple[dict[str, np.ndarray], n
         bounds[:, m] = (-np.inf, 1.0)
         cost = np.zeros(blocks * width)
         cost[m::width] = -1.0
-        for options in ({}, {"presolve": False}):  # HiGHS's presolve has declared feasible
-            result = linprog(cost, A_ub=a_ub, b_ub=b_ub, A_eq=equality, b_eq=b_eq,  # LPs infeasible
-                             bounds=bounds.reshape(-1, 2), method="highs", options=options)
+        # HiGHS's presolve has declared feasible LPs infeasible, and its simplex has ended in an
+        # unknown status (numerical difficulties) on well-posed ones that its interior point solves
+        # (a path's drive families, tests/test_path_drive.py): each is tried in turn
+        for method, options in (("highs", {}), ("highs", {"presolve": False}), ("highs-ipm", {})):
+            result = linprog(cost, A_ub=a_ub, b_ub=b_ub, A_eq=equality, b_eq=b_eq,
+                             bounds=bounds.reshape(-1, 2), method=method, options=options)
             if result.status == 0:
                 break
         if result.status != 0:

@@ -15,7 +15,8 @@ eq. 10 or the feasible model's distribution, ``tension.distribution``; ``tension
 criterion's margin. The summary: the counts of the grid analyses over the samples, the path's
 duration and, where a sample fails, the first one (``first_failure_t``, ``_sample``,
 ``_criterion``, ``_margin``), and the peaks of the tensions and of the cables' speeds and
-accelerations.
+accelerations over the samples that hold; with ``actuator``, each winch's drive per sample and the
+drive's peaks and energy (:func:`drive_columns`).
 """
 
 from __future__ import annotations
@@ -78,6 +79,8 @@ def follow(cfg: DictConfig, problem: WorkspaceProblem) -> tuple[pd.DataFrame, di
                    **cable_quantities(state, problem.limits)}
         for i, cable in enumerate(robot.cable_names):
             columns[f"speed_{cable}"], columns[f"accel_{cable}"] = speeds[:, i], accelerations[:, i]
+        if spec.winch_radius is not None and not len(spec.wrench_set):
+            columns.update(drive_columns(state, problem.limits.drive, columns))
         columns["feasible"] = feasible
         columns["limiting"] = pd.Categorical.from_codes(limiting, categories=names)
         columns.update({f"margin_{name}": margins[name] for name in names})
@@ -90,19 +93,61 @@ def follow(cfg: DictConfig, problem: WorkspaceProblem) -> tuple[pd.DataFrame, di
     return table, summary
 
 
+DRIVE = ("theta_dot", "theta_ddot", "torque", "voltage", "current", "power")  # per cable, with an actuator
+
+
+def drive_columns(state, act, columns: dict) -> dict:
+    """Per cable, each winch's drive at the samples (eqs. 18-22): shaft speed and acceleration
+    ``theta_dot_<c>``, ``theta_ddot_<c>`` (rad/s, rad/s^2: the cable's over R), the load torque it
+    holds ``torque_<c>`` (M = R t, N m, of the written tension), the voltage ``voltage_<c>`` (V,
+    eq. 21), the armature current ``current_<c>`` = (u - C_E theta_dot) / R_r (A) and the
+    electrical power ``power_<c>`` = u i (W; < 0: the motor brakes and feeds back)."""
+    names = state.robot.cable_names
+    speed, accel = state.shaft_speed_range[0], state.shaft_acceleration
+    torque = state.spec.winch_radius * np.column_stack([columns[f"tension_{name}"] for name in names])
+    voltage = state.voltage_of(act, torque)
+    current = (voltage - act.C_E * speed) / act.R_r
+    values = dict(zip(DRIVE, (speed, accel, torque, voltage, current, voltage * current)))
+    return {f"{quantity}_{name}": values[quantity][:, i] for quantity in DRIVE for i, name in enumerate(names)}
+
+
+def _drive_summary(table: pd.DataFrame, cables, held: np.ndarray) -> dict:
+    """The drive's peaks over the samples that hold (``held``), and the electrical energy the
+    motors draw along the path (J, the trapezoidal rule over the samples; negative: more fed
+    back than drawn; NaN unless every sample holds)."""
+    if f"power_{cables[0]}" not in table:
+        return {}
+
+    def peak(quantity):
+        return _peak(np.abs(table[[f"{quantity}_{c}" for c in cables]].to_numpy()), held)
+
+    power = table[[f"power_{c}" for c in cables]].to_numpy()
+    energy = float(np.trapezoid(power.sum(axis=1), table["t"].to_numpy())) if held.all() else float("nan")
+    return {"shaft_speed_peak": peak("theta_dot"), "torque_peak_Nm": peak("torque"), "voltage_peak_V": peak("voltage"),
+            "current_peak_A": peak("current"), "power_peak_W": _peak(power, held), "energy_J": energy}
+
+
+def _peak(values: np.ndarray, held: np.ndarray) -> float:
+    """The largest of ``values`` (n, m) over the rows ``held`` (NaN when none)."""
+    return float(values[held].max()) if held.any() else float("nan")
+
+
 def _described(table: pd.DataFrame, cables, names: list[str], times: np.ndarray) -> dict:
-    """The path's duration and samples, its first failing sample and the peaks of its cables."""
+    """The path's duration and samples, its first failing sample and the peaks of its cables
+    over the samples that hold (NaN when none: a failing sample's forces are not a distribution)."""
     failing = np.flatnonzero(~table["feasible"].to_numpy())
     first = int(failing[0]) if len(failing) else -1
     name = str(table["limiting"].iloc[first]) if first >= 0 else ""
     tensions = [column for column in table if column.startswith("tension_")]
+    held = table["feasible"].to_numpy()
     return {
         "n_samples": len(table), "duration_s": float(times[-1] - times[0]),
         "first_failure_sample": first, "first_failure_t": float(times[first]) if first >= 0 else float("nan"),
         "first_failure_segment": int(table["segment"].iloc[first]) if first >= 0 else -1,
         "first_failure_criterion": name,
         "first_failure_margin": float(table[f"margin_{name}"].iloc[first]) if first >= 0 else float("nan"),
-        "tension_peak_N": float(table[tensions].to_numpy().max()) if tensions else float("nan"),
-        "cable_speed_peak": float(np.abs(table[[f"speed_{c}" for c in cables]].to_numpy()).max()),
-        "cable_accel_peak": float(np.abs(table[[f"accel_{c}" for c in cables]].to_numpy()).max()),
+        "tension_peak_N": _peak(table[tensions].to_numpy(), held) if tensions else float("nan"),
+        "cable_speed_peak": _peak(np.abs(table[[f"speed_{c}" for c in cables]].to_numpy()), held),
+        "cable_accel_peak": _peak(np.abs(table[[f"accel_{c}" for c in cables]].to_numpy()), held),
+        **_drive_summary(table, cables, held),
     }

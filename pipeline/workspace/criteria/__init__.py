@@ -35,9 +35,14 @@ CATENARY = "catenary"
 
 
 def _dynamics(analysis: str, spec=None, robot=None) -> bool:
-    """Whether the analysis moves the carrier (CPR-WWA, on the grid or on lines): the actuator's
-    criteria apply to exactly these."""
+    """Whether the analysis moves the carrier (CPR-WWA, on the grid or on lines)."""
     return analysis in ("cpr_wwa", "lines")
+
+
+def _driven(analysis: str, spec, robot=None) -> bool:
+    """Whether a catalogue actuator drives the cables: CPR-WWA's, or a path's with ``actuator``
+    (``PathSpec.winch_radius``); the actuator's criteria apply to exactly these."""
+    return _dynamics(analysis) or (analysis == "trajectory" and spec.winch_radius is not None)
 
 
 HELD = ("statics", "trajectory")  # the analyses whose cables hold the platform's load: at a pose, along a path
@@ -80,17 +85,19 @@ for criterion in (
     Criterion(LENGTH, geometry.length, ANY, None, "#CC79A7", "longer cables (robot.l_max) or a smaller box",
               lambda analysis, spec, robot: robot.l_max is not None),
     Criterion(SPEED, actuator.speed, DYNAMICS, None, "#0072B2",
-              "a lower motion.v_max, a larger drive.winch_radius or a smaller drive.gear_ratio",
-              _dynamics),
+              "a lower motion.v_max (on a path: longer trajectory.times), a larger drive.winch_radius or a smaller "
+              "drive.gear_ratio",
+              _driven),
     Criterion(TORQUE, actuator.torque, DYNAMICS, None, "#D55E00",
               "a stronger actuator, a higher drive.gear_ratio or a smaller drive.winch_radius",
-              _dynamics, bounds=actuator.torque_bounds),
+              _driven, bounds=actuator.torque_bounds),
     Criterion(ACCELERATION, actuator.acceleration, DYNAMICS, None, "#CC79A7",
-              "longer motion.t_acc and motion.t_dec, or a larger drive.winch_radius",
-              _dynamics),
+              "longer motion.t_acc and motion.t_dec (on a path: longer trajectory.times), or a larger drive.winch_radius",
+              _driven),
     Criterion(VOLTAGE, actuator.voltage, DYNAMICS, None, "#E69F00",
-              "a lower motion.v_max or another actuator (its voltage and speed constants)",
-              _dynamics, bounds=lambda dyn, act: dyn.voltage_bounds(act)),
+              "a lower motion.v_max (on a path: longer trajectory.times) or another actuator (its voltage and speed "
+              "constants)",
+              _driven, bounds=lambda dyn, act: dyn.voltage_bounds(act)),
     Criterion("cable_cable", interference.cable_cable, GEOMETRY, None, "#DDCC77",
               "thinner cables (robot.cable_diameter), anchors and attachments that keep the cables apart, "
               "or a smaller box",

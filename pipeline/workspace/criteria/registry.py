@@ -66,7 +66,7 @@ def force_families(state, limits) -> list[Family]:
     own where the problem gives them (``TensionSpec.bounded``), given them as keyword arguments."""
     found = []
     for criterion in REGISTRY.values():
-        if criterion.bounds is None or criterion.reads not in (ANY, state.kind):
+        if criterion.bounds is None or (criterion.reads != ANY and criterion.reads not in state.kinds):
             continue
         if criterion.keys and criterion.name not in state.tension.bounded:
             continue  # its keys are not given: not checked
