@@ -172,6 +172,11 @@ def test_the_actuator_to_buy_for_a_users_path(tmp_path):
     assert table.loc[1, "accepted"] and not table.loc[5, "accepted"]
     assert choice.verdict.startswith("actuator choice at x >= 100 %: accept 1")
     assert set(choice.workspaces) == {1, 2, 3, 4, 5} and choice.workspaces[1].samples is not None
+    failing = choice.workspaces[3]  # a path that fails: its figure against time marks the first failure
+    (png,) = failing.figure("path", out=tmp_path / "figures", title="actuator 3: {first_failure_criterion}")
+    assert png.name == "path.png" and png.stat().st_size > 20_000
+    with pytest.raises(api.ConfigError, match="no samples.parquet"):
+        api.workspace([*ROBOT, "analysis=statics", "robot.search.step=0.5"], folder=tmp_path / "grid").figure("path")
 
 
 @pytest.mark.parametrize("overrides, key", [

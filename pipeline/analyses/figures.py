@@ -340,6 +340,53 @@ def timeseries(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out
     return written
 
 
+PATH_PANELS = (("tension", "cable tension (N)", None), ("torque", "motor load torque (N m)", "limit_torque"),
+               ("voltage", "motor voltage (V)", "limit_voltage"), ("theta_dot", "shaft speed (rad/s)", "limit_speed"))
+
+
+def path_series(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
+    """A path's samples against time (``analysis=trajectory``), one file per selected job: every
+    cable's tension with ``tension.t_min``/``t_max`` dashed and, with an actuator, its motor's
+    load torque, voltage and shaft speed with the limits of eqs. (30), (32), (34) dashed; the
+    samples that fail shaded, the first one marked with its criterion."""
+    import matplotlib
+
+    written = []
+    for _, job in table.iterrows():
+        samples = results.samples(job["job"])
+        if "segment" not in samples:
+            raise ConfigError(f"{job['job']}: not a path's samples (kind path draws analysis=trajectory jobs)")
+        cables = [c[len("speed_"):] for c in samples.columns if c.startswith("speed_")]
+        panels = [panel for panel in PATH_PANELS if f"{panel[0]}_{cables[0]}" in samples]
+        fig = _figure(figsize=(6.4, 1.9 * len(panels) + 0.9))
+        axes = np.atleast_1d(fig.subplots(len(panels), 1, sharex=True))
+        failing = ~samples["feasible"].to_numpy()
+        for ax, (quantity, label, limit) in zip(axes, panels):
+            for number, cable in enumerate(cables):
+                ax.plot(samples["t"], samples[f"{quantity}_{cable}"], lw=1, label=cable,
+                        color=matplotlib.colormaps["tab10"](number % 10))
+            bounds = ([job[limit], -job[limit]] if limit else
+                      [job.get(key) for key in ("tension.t_min", "tension.t_max")])
+            for value in bounds:
+                if isinstance(value, (int, float)) and np.isfinite(value):
+                    ax.axhline(value, color="0.2", linestyle="--", lw=0.9)
+            ax.fill_between(samples["t"], 0, 1, where=failing, transform=ax.get_xaxis_transform(),
+                            color="#D55E00", alpha=0.12, lw=0)
+            if job["first_failure_sample"] >= 0:
+                ax.axvline(job["first_failure_t"], color="#D55E00", lw=1.0)
+            ax.set_ylabel(label)
+        if job["first_failure_sample"] >= 0:
+            axes[0].annotate(f"first failure: {job['first_failure_criterion']}", (job["first_failure_t"], 1.0),
+                             xycoords=("data", "axes fraction"), xytext=(3, -10), textcoords="offset points",
+                             fontsize=7, color="#D55E00")
+        axes[0].legend(title="cable", ncol=min(len(cables), 8), fontsize=7, loc="lower center",
+                       bbox_to_anchor=(0.5, 1.0))
+        axes[-1].set_xlabel("t (s)")
+        fig.suptitle(_fill(spec.title or "", job), fontsize=10, y=1.0)
+        written.append(_save(fig, spec, out_dir, job))
+    return written
+
+
 def survival_bar(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
     """Issue 8: per actuator, the minimum-norm (paper) and the physically valid feasible share,
     labelled with the share of the former that survives; one panel per case and wrench rows."""
@@ -521,6 +568,7 @@ KINDS: dict[str, Callable[[FigureSpec, pd.DataFrame, StudyResults, Path], list[P
     "map": value_map,
     "survival_bar": survival_bar,
     "timeseries": timeseries,
+    "path": path_series,
     "curve": curve,
     "heatmap": heatmap,
 }

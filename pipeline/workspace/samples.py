@@ -16,7 +16,8 @@ criterion's margin. The summary: the counts of the grid analyses over the sample
 duration and, where a sample fails, the first one (``first_failure_t``, ``_sample``,
 ``_criterion``, ``_margin``), and the peaks of the tensions and of the cables' speeds and
 accelerations over the samples that hold; with ``actuator``, each winch's drive per sample and the
-drive's peaks and energy (:func:`drive_columns`).
+drive's peaks, energy and limits (``limit_speed``, ``limit_torque``, ``limit_acceleration``,
+``limit_voltage``; :func:`drive_columns`).
 """
 
 from __future__ import annotations
@@ -90,6 +91,10 @@ def follow(cfg: DictConfig, problem: WorkspaceProblem) -> tuple[pd.DataFrame, di
     table = pd.concat(parts, ignore_index=True)
     summary = summarize(cfg, tally.counts(total), float("nan"), problem)
     summary.update(_described(table, robot.cable_names, names, samples.t))
+    drive = problem.limits.drive
+    if drive is not None:  # the limits a figure of the path draws
+        summary.update(limit_speed=drive.speed_limit, limit_torque=drive.torque_limit,
+                       limit_acceleration=drive.accel_limit, limit_voltage=drive.voltage_limit)
     return table, summary
 
 
