@@ -115,7 +115,24 @@ def test_every_acceleration_against_an_lp_per_pose(catalogue):
     assert bigger.feasible.sum() < points.feasible.sum() and not (bigger.feasible & ~points.feasible).any()
 
 
+def test_listed_angular_velocities_are_each_required(catalogue):
+    """Two angular velocities listed: a pose holds them when it holds each one (the jobs of one
+    velocity each, and in between: their product of wrenches, 2 x 4 here)."""
+    from conftest import make_cfg
+
+    box = "platform_motion.acceleration={min:[-1,0,0,0,0,0],max:[1,0,0,0,0,2]}"
+    first, second = "[0,0,2]", "[1.5,0,0]"
+    both, summary = compute_workspace(make_cfg(*MOVING, box, f"platform_motion.angular_velocity=[{first},{second}]"),
+                                      catalogue)
+    alone = [compute_workspace(make_cfg(*MOVING, box, f"platform_motion.angular_velocity={w}"), catalogue)[0]
+             for w in (first, second)]
+    assert summary["n_wrenches"] == 8
+    assert (both.feasible == (alone[0].feasible & alone[1].feasible)).all()
+    assert (alone[0].feasible != alone[1].feasible).any() and both.feasible.any()
+
+
 BAD = {
+    "listed velocity nan": ("platform_motion.angular_velocity=[[0,0,1],[0,nan,1]]", "platform_motion.angular_velocity"),
     "min above max": ("platform_motion.acceleration={min:[1,0,0,0,0,0],max:[0,0,0,0,0,0]}",
                       "platform_motion.acceleration.min=[1.0, 0.0, 0.0, 0.0, 0.0, 0.0]: must be <="),
     "five numbers": ("platform_motion.acceleration=[[1,2,3,4,5]]", "platform_motion.acceleration: vertex 1"),

@@ -527,3 +527,10 @@ def test_pulleys_elastic_and_heavy_cables_are_checked_along_the_path(tmp_path):
 def test_the_statics_spec_fields_all_reach_the_path_spec():
     """PathSpec is the statics' spec with the samples: no field of StaticsSpec is lost on the way."""
     assert {f.name for f in dataclasses.fields(StaticsSpec)} < {f.name for f in dataclasses.fields(PathSpec)}
+
+
+def test_the_help_page_lists_a_paths_keys_before_any_way_point_is_given(tmp_path):
+    done = command(tmp_path, "pipeline", "--help", "analysis=trajectory", "robot=points")
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "trajectory.points = null" in done.stdout and "trajectory.law = quintic" in done.stdout
+    assert "actuator = null" in done.stdout

@@ -43,9 +43,11 @@ def path_samples(cfg: DictConfig, robot: CableRobot) -> Samples:
     """The path ``cfg.trajectory`` gives (module doc), sampled."""
     node = cfg.trajectory
     law = node.law.name if hasattr(node.law, "name") else str(node.law)
-    if (node.points is None) == (node.file is None):
-        raise ConfigError("trajectory.points: give the way-points (trajectory.points) or a file of them "
-                          "(trajectory.file), one of the two")
+    if node.points is None and node.file is None:
+        raise ConfigError("trajectory.points: no value given (the way-points, or trajectory.file: a file of them)")
+    if node.points is not None and node.file is not None:
+        raise ConfigError("trajectory.points: the way-points come from trajectory.points or trajectory.file, "
+                          "not both")
     if node.file is not None:
         path, step = _from_file(node, law, robot, cfg.orientation)
     else:

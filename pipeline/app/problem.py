@@ -396,15 +396,29 @@ def platform_motion(cfg: DictConfig, load: Load) -> dict:
     else:
         accelerations = vertex_set(given, "platform_motion.acceleration", _acceleration,
                                    "[ax, ay, az, alpha_x, alpha_y, alpha_z] (m/s^2, rad/s^2)", "at rest")[0]
-    omega = np.asarray(node.angular_velocity, dtype=float)
+    omega = angular_velocities(node.angular_velocity)
     if load.inertia is None and load.mass > 0 and (np.any(omega) or np.any(accelerations[:, 3:])):
         raise ConfigError("platform_motion: a platform that turns needs its inertia, robot.platform.inertia "
                           "([Ixx, Iyy, Izz(, Ixy, Ixz, Iyz)] kg m^2 about its centre of mass)")
-    return {"accelerations": accelerations, "angular_velocity": omega}
+    return {"accelerations": accelerations, "angular_velocities": omega}
+
+
+MAX_ANGULAR_VELOCITIES = 64  # listed angular velocities: each multiplies the wrenches a pose holds
+
+
+def angular_velocities(value) -> np.ndarray:
+    """(V, 3) ``platform_motion.angular_velocity``: one [wx, wy, wz] (rad/s) or a list of them."""
+    key = "platform_motion.angular_velocity"
+    given = OmegaConf.to_container(value) if isinstance(value, ListConfig) else value
+    rows = given if isinstance(given, list) and given and all(isinstance(v, list) for v in given) else [given]
+    if len(rows) > MAX_ANGULAR_VELOCITIES:
+        raise ConfigError(f"{key}: {len(rows)} angular velocities, at most {MAX_ANGULAR_VELOCITIES}")
+    return np.array([_checked(row, key, OMEGA_RULE, "[wx, wy, wz] (rad/s), or a list of them") for row in rows])
 
 
 WRENCH_RULE = vector(6, "fx fy fz mx my mz, N and N m", MAX_FORCE)  # the rule of load.external
 ACCELERATION_RULE = vector(6, "ax ay az alpha_x alpha_y alpha_z, m/s^2 and rad/s^2", MAX_ACCELERATION)
+OMEGA_RULE = vector(3, "wx wy wz, rad/s", MAX_ACCELERATION)
 POINT_RULE = vector(3, "x, y, z, m", MAX_FORCE)  # an obstacle's or a platform box's corner, point, normal
 
 

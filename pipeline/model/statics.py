@@ -40,7 +40,9 @@ class StaticsSpec:
     required (``wrench.set``'s vertices, each once; none: the load's wrench alone), and
     ``vertex_numbers`` each one's number in the set as given (1 = its first). ``tension``:
     minimum-norm tensions (``pinv``, eq. 10) or pulling cables only (``feasible``,
-    ``pipeline.model.tensions``; for six cables the same verdict).
+    ``pipeline.model.tensions``; for six cables the same verdict). ``accelerations`` (A, 6) and
+    ``angular_velocities`` (V, 3): the platform's motion (``platform_motion``), every
+    acceleration at every angular velocity required with every wrench.
     """
 
     moment_arm: str = "platform"
@@ -51,7 +53,7 @@ class StaticsSpec:
     wrench_set: np.ndarray = field(default_factory=lambda: np.zeros((0, 6)))
     vertex_numbers: tuple[int, ...] = ()
     accelerations: np.ndarray = field(default_factory=lambda: np.zeros((0, 6)))
-    angular_velocity: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    angular_velocities: np.ndarray = field(default_factory=lambda: np.zeros((1, 3)))
     kind: ClassVar[str] = "statics"  # which compiled kernel evaluates it (pipeline.workspace.fused)
     summarised: ClassVar[tuple[str, ...]] = ()  # per-pose columns the summary gives min, median, max of
 
@@ -61,12 +63,12 @@ class StaticsSpec:
     @property
     def moves(self) -> bool:
         """Whether the platform moves (``platform_motion``): its momentum's rate joins every wrench."""
-        return bool(len(self.accelerations)) or bool(np.any(self.angular_velocity))
+        return bool(len(self.accelerations)) or bool(np.any(self.angular_velocities))
 
     def set_size(self) -> int:
         """Largest per-pose, per-cable set a criterion holds in memory: the wrench set's vertices
-        times the accelerations'."""
-        return max(1, len(self.wrench_set)) * max(1, len(self.accelerations))
+        times the accelerations' times the angular velocities'."""
+        return max(1, len(self.wrench_set)) * max(1, len(self.accelerations)) * len(self.angular_velocities)
 
     def work(self) -> float:
         """A pose's work against the statics of one wrench (the cost model's reference,
@@ -202,8 +204,8 @@ class PoseStatics(PoseGeometry):
     def required_wrenches(self) -> np.ndarray:
         """(K, k) the wrenches the cables must balance: :attr:`wrench`, plus each wrench of the
         set (``wrench.set``) when there is one, each with the momentum's rate of each acceleration
-        of the platform's motion (``platform_motion``; K = their product); (n, K, k) for a
-        rotation per pose."""
+        of the platform's motion at each of its angular velocities (``platform_motion``; K = their
+        product); (n, K, k) for a rotation per pose."""
         rows = list(self.robot.dofs)
         wrenches = self.wrench[..., None, :]
         if len(self.spec.wrench_set):
@@ -211,7 +213,8 @@ class PoseStatics(PoseGeometry):
         if not self.spec.moves:
             return wrenches
         accelerations = self.spec.accelerations if len(self.spec.accelerations) else np.zeros((1, 6))
-        moving = inertial_wrenches(self.spec.load, self.rotation, accelerations, self.spec.angular_velocity)[..., rows]
+        moving = np.concatenate([inertial_wrenches(self.spec.load, self.rotation, accelerations, omega)
+                                 for omega in self.spec.angular_velocities], axis=-2)[..., rows]
         combined = wrenches[..., :, None, :] + moving[..., None, :, :]  # every wrench with every acceleration
         return combined.reshape(*combined.shape[:-3], -1, combined.shape[-1])
 
