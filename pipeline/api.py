@@ -33,7 +33,7 @@ from pipeline.app.results import read_metadata
 from pipeline.study import OUTPUT_DIR, available, first_actuator_job, study_dir
 
 API_DIR = Path("outputs") / "api"
-FIGURE_KINDS = ("cloud", "slices", "map", "path")  # the figure kinds of one job's poses or path
+FIGURE_KINDS = ("cloud", "slices", "map", "path", "path_view")  # the figure kinds of one job's poses or path
 
 __all__ = ["ConfigError", "Workspace", "Choice", "workspace", "actuator_choice", "load_study"]
 
@@ -54,7 +54,8 @@ class Workspace:
     def figure(self, kind: str = "cloud", out: str | Path | None = None, **keys) -> list[Path]:
         """Draw this job as a study draws one (``pipeline.analyses.figures``): ``kind`` cloud, slices
         or map, with a figure's keys (e.g. ``axis="z", layers=4``, ``value="max_payload_kg"``,
-        ``invert_z=True``), or a path's samples against time (``path``), into ``out`` (default
+        ``invert_z=True``), or a path's samples against time (``path``) or inside its robot
+        (``path_view``), into ``out`` (default
         ``<folder>/figures``); returns the PNG files. A cloud also writes its interactive 3-D view
         beside it (with the report extra)."""
         from pipeline.analyses.figures import FigureSpec, render
@@ -62,9 +63,9 @@ class Workspace:
         from pipeline.app.config import check_declared
 
         if kind not in FIGURE_KINDS:
-            raise ConfigError(f"kind={kind!r}: a job draws as a cloud, slices, map or path (a study's other kinds "
-                              "compare jobs)")
-        drawn, name = (self.samples, "samples") if kind == "path" else (self.points, "points")
+            raise ConfigError(f"kind={kind!r}: a job draws as a cloud, slices, map, path or path_view (a study's "
+                              "other kinds compare jobs)")
+        drawn, name = (self.samples, "samples") if kind.startswith("path") else (self.points, "points")
         if drawn is None:
             raise ConfigError(f"{self.folder}: no {name}.parquet (a path's with analysis=trajectory; run with "
                               "output.points=true) to draw")

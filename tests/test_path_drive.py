@@ -175,6 +175,8 @@ def test_the_actuator_to_buy_for_a_users_path(tmp_path):
     failing = choice.workspaces[3]  # a path that fails: its figure against time marks the first failure
     (png,) = failing.figure("path", out=tmp_path / "figures", title="actuator 3: {first_failure_criterion}")
     assert png.name == "path.png" and png.stat().st_size > 20_000
+    (view,) = failing.figure("path_view", out=tmp_path / "figures", title="actuator 3 along the path")
+    assert view.name == "path_view.png" and view.stat().st_size > 20_000
     with pytest.raises(api.ConfigError, match="no samples.parquet"):
         api.workspace([*ROBOT, "analysis=statics", "robot.search.step=0.5"], folder=tmp_path / "grid").figure("path")
 

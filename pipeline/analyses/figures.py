@@ -387,6 +387,45 @@ def path_series(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, ou
     return written
 
 
+def path_view(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
+    """A path inside its robot (``analysis=trajectory``), one 3-D picture per selected job: the
+    reference point's path, green where the samples hold and red where they fail, the way-points
+    as dots, and the robot (frame, anchors, cables, platform) at the first failing sample (the
+    first sample when every one holds)."""
+    from pipeline.analyses.views import robot_traces
+    from pipeline.app.problem import ROBOTS, surroundings
+    from pipeline.model.geometry import rotation_matrices
+
+    written = []
+    for _, job in table.iterrows():
+        samples = results.samples(job["job"])
+        if "segment" not in samples:
+            raise ConfigError(f"{job['job']}: not a path's samples (kind path_view draws analysis=trajectory jobs)")
+        cfg = results.config(job["job"])
+        robot = surroundings(cfg, ROBOTS[cfg.robot.name].build(cfg.robot))
+        at = samples.iloc[max(int(job["first_failure_sample"]), 0)]
+        rotation = rotation_matrices(at[["psi", "theta", "phi"]].to_numpy(float)[None, :],
+                                     str(cfg.orientation.convention))[0]
+        fig = _figure(figsize=(6.0, 5.0))
+        ax = fig.add_subplot(projection="3d")
+        _draw_robot(ax, robot_traces(robot, at[["x", "y", "z"]].to_numpy(float), rotation))
+        xyz = samples[["x", "y", "z"]].to_numpy(float)
+        held = samples["feasible"].to_numpy()
+        for ok, colour, label in ((True, FEASIBLE_COLOUR, "samples that hold"), (False, "#D55E00", "samples that fail")):
+            path = np.where((held == ok)[:, None], xyz, np.nan)  # gaps where the other verdict holds
+            if not np.isnan(path).all():
+                ax.plot(*path.T, color=colour, lw=2.0, label=label)
+        ends = samples.drop_duplicates("segment", keep="first")[["x", "y", "z"]].to_numpy(float)
+        ax.scatter(*np.vstack([ends, xyz[-1:]]).T, s=18, c="black", depthshade=False, label="way-points")
+        ax.set_xlabel("x (m)")
+        ax.set_ylabel("y (m)")
+        ax.set_zlabel("z (m)")
+        ax.legend(loc="upper left", fontsize=7)
+        fig.suptitle(_fill(spec.title or "", job), fontsize=10)
+        written.append(_save(fig, spec, out_dir, job))
+    return written
+
+
 def survival_bar(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
     """Issue 8: per actuator, the minimum-norm (paper) and the physically valid feasible share,
     labelled with the share of the former that survives; one panel per case and wrench rows."""
@@ -569,6 +608,7 @@ KINDS: dict[str, Callable[[FigureSpec, pd.DataFrame, StudyResults, Path], list[P
     "survival_bar": survival_bar,
     "timeseries": timeseries,
     "path": path_series,
+    "path_view": path_view,
     "curve": curve,
     "heatmap": heatmap,
 }
