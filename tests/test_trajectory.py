@@ -420,6 +420,8 @@ BAD = [  # (overrides, what the one line names)
     (["trajectory.points=[[0,0,1],[0,1,1]]", "trajectory.times=1", "trajectory.v_max=-1"], "trajectory.v_max"),
     (["trajectory.points=[[0,0,1],[0,1,1]]", "trajectory.times=1", "trajectory.dt=0"], "trajectory.dt"),
     (["trajectory.points=[[0,0,1],[0,1,1]]", "trajectory.times=1000", "trajectory.dt=1e-6"], "trajectory.dt"),
+    (["trajectory.points=[[0,0,1],[0,1,1]]", "trajectory.times=20000", "trajectory.dt=0.01"], "1,000,000"),
+    (["trajectory.points=[[0,0,1],[0,1,1]]", "trajectory.times=2", "compute.max_poses=100"], "compute.max_poses=100"),
     (["trajectory.points=[[0,0,1],[0,1,1]]", "trajectory.times=1", "trajectory.law=straight"], "trajectory.law"),
     (["trajectory.points=[[0,0,1],[0,1,1]]", "trajectory.times=1", "trajectory.name=tour"], "trajectory.name"),
     (["trajectory.points=[[0,0,1],[0,1,1]]", "trajectory.file=path.csv"], "trajectory.points"),

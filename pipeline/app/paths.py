@@ -16,7 +16,7 @@ The way-points come from ``trajectory.points`` or ``trajectory.file``, one of th
   by ``quintic`` or ``spline``.
 
 Samples every ``trajectory.dt`` or less (null: 0.01 s, or a CASPR file's ``time_step``); at most
-``compute.max_poses`` of them. Anything else is refused in one line naming the key.
+``compute.max_poses`` of them, and 10^6 (the samples table is built whole). Anything else is refused in one line naming the key.
 """
 
 from __future__ import annotations
@@ -34,6 +34,7 @@ from pipeline.model.path import Path, Samples, hermite, rest_to_rest, spline, tr
 
 DEFAULT_DT = 0.01  # s between samples, when neither trajectory.dt nor a CASPR file gives one
 MAX_WAY_POINTS = 1_000_000
+MAX_SAMPLES = 1_000_000  # the samples table is built whole (about 0.5 GB at 64 columns): a path's largest
 MAX_COORDINATE = 1e6  # m or rad: past any cable robot's workspace, a unit typed wrong
 TIMED = ("quintic", "spline")  # the laws that take each segment's duration
 SPEEDS = ("v_max", "t_acc", "t_dec")  # the keys of the trapezoidal law
@@ -56,9 +57,11 @@ def path_samples(cfg: DictConfig, robot: CableRobot) -> Samples:
         path, step = _from_points(node, law, robot, cfg.orientation), None
     dt = float(node.dt) if node.dt is not None else (step or DEFAULT_DT)
     count = int(path.counts(dt).sum())
-    if count > cfg.compute.max_poses:
+    if count > min(cfg.compute.max_poses, MAX_SAMPLES):
+        bound = (f"compute.max_poses={cfg.compute.max_poses}" if cfg.compute.max_poses < MAX_SAMPLES else
+                 f"{MAX_SAMPLES:,} (a path's samples are held whole: about 0.5 kB each)")
         raise ConfigError(f"trajectory.dt={dt:g}: {count:.3g} samples over the path's {path.duration:g} s, more than "
-                          f"compute.max_poses={cfg.compute.max_poses}; a longer step, or raise compute.max_poses knowingly")
+                          f"{bound}; a longer step, or the path in parts")
     return path.sample(dt)
 
 
