@@ -520,11 +520,13 @@ def _check_figure_keys(study: StudySpec, cfg) -> None:
 
 
 def _check_searchable(cfg, name: str) -> None:
-    """The search is exact for CPR-WWA with minimum-norm tensions (``pipeline.analyses.search``) and
-    reads every job's margins: ConfigError otherwise."""
-    if cfg.analysis != "cpr_wwa":
+    """The search is exact for a drive with minimum-norm tensions (``pipeline.analyses.search``):
+    CPR-WWA's, or a path's with an actuator (each sample's shaft speed and acceleration scale with
+    the ratio, its load torque with the inverse, its tensions do not move), and it reads every
+    job's margins: ConfigError otherwise."""
+    if cfg.analysis not in ("cpr_wwa", "trajectory") or cfg.get("actuator") is None:
         raise ConfigError(f"analysis={cfg.analysis}: study {name} searches the drive train; "
-                          "only analysis=cpr_wwa has one")
+                          "analysis=cpr_wwa has one, and analysis=trajectory with actuator=ID")
     if cfg.tension.model.name != "pinv":
         raise ConfigError(f"tension.model={cfg.tension.model.name}: study {name}'s search is exact for "
                           "minimum-norm tensions only (tension=pinv); use an optimise block")
@@ -566,7 +568,8 @@ def _designs(study: StudySpec, extra: list[str], jobs_dir: Path, catalogue,
             ("r" if key == "drive.winch_radius" else "n") + value
             for key, value in (o.split("=", 1) for o in overrides))])
         searched_rows.append(run(folder, [f"actuator={actuator}", *overrides]))
-        return searched_rows[-1], pd.read_parquet(folder / "points.parquet")
+        samples = folder / "samples.parquet"  # a path's, whose samples the search reads as poses
+        return searched_rows[-1], pd.read_parquet(samples if samples.exists() else folder / "points.parquet")
 
     levels = quiet.level, progress.level
     quiet.setLevel(logging.WARNING)  # one line per 20 trials or per actuator, not three per job

@@ -199,3 +199,34 @@ def test_a_drive_it_cannot_mean_is_refused_in_one_line(tmp_path, overrides, key)
 def test_cpr_wwa_without_an_actuator_is_refused(tmp_path):
     done = command(tmp_path, "pipeline", "actuator=null", "grid.n=4", f"hydra.run.dir={tmp_path / 'run'}")
     assert done.returncode == 2 and "actuator=null" in done.stderr and not (tmp_path / "run").exists()
+
+
+def test_the_smallest_gear_ratio_that_holds_a_path_is_found_exactly(tmp_path):
+    """The search of the drive train (``pipeline.analyses.search``) on a path: under minimum-norm
+    tensions each sample's speed and acceleration scale with the ratio N_V / R_i and its torque
+    with the inverse, so each sample holds on one interval of it. The IRPM carrying 30 kg along a
+    path with actuator 1: the search's smallest gear ratio (every sample held) is brute force's,
+    with fewer jobs."""
+    import yaml
+
+    from pipeline import api
+
+    path = ["robot=irpm6", "analysis=trajectory", "wrench.fz=0", "robot.platform.mass=30",
+            "trajectory.points=[[0,0,4],[1,0.5,5],[-0.5,1,4.5]]", "trajectory.times=2"]
+    folder = tmp_path / "mine"
+    (folder / "studies").mkdir(parents=True)
+    (folder / "studies" / "path_gear.yaml").write_text(yaml.safe_dump({
+        "title": "The smallest gear ratio that holds a path", "source": "test", "overrides": path,
+        "search": {"variables": {"drive.gear_ratio": {"low": 10, "high": 40, "step": 3}}, "actuators": [1],
+                   "objective": "gear_ratio"}}))
+    done = command(tmp_path, "pipeline.study", "--config-dir", str(folder), "path_gear")
+    assert done.returncode == 0, done.stderr[-3000:]
+    table = pd.read_parquet(tmp_path / "outputs" / "studies" / "path_gear" / "search.parquet")
+    found = table[table["meets"]]["gear_ratio"].min()
+    ratios = np.arange(10, 41, 3)
+    shares = {g: api.workspace([*path, "actuator=1", f"drive.gear_ratio={g}"], folder=tmp_path / f"g{g}").summary[
+        "feasible_pct"] for g in ratios}
+    assert found == min(g for g in ratios if shares[g] >= 100)
+    assert shares[ratios[0]] < 100 and table["evaluated"].sum() < len(ratios)
+    for _, row in table[table["evaluated"]].iterrows():  # its jobs are the jobs run alone
+        assert row["feasible_pct"] == pytest.approx(shares[round(row["gear_ratio"])])
