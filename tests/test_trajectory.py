@@ -60,6 +60,20 @@ def test_the_samples_and_their_derivatives_are_the_polynomials(law):
     np.testing.assert_allclose(samples.q[-1], POINTS[-1], atol=1e-9)
 
 
+def test_a_segment_shorter_than_the_step_is_still_checked_where_it_accelerates(tmp_path):
+    """A rest-to-rest segment of 1 ms sampled at the default 10 ms: at rest at both ends, it
+    accelerates at up to 5.77 dq / T^2 inside; its samples must see that (a 30 kg platform whose
+    cables cannot follow), not only the two ends at rest."""
+    samples = rest_to_rest(POINTS[:2], [1e-3]).sample(0.01)
+    assert len(samples.t) >= 11 and np.abs(samples.q_ddot).max() > 0.9 * 5.77 * np.abs(POINTS[1] - POINTS[0]).max() / 1e-6
+    done = command(tmp_path, "pipeline", "robot=irpm6", "analysis=trajectory", "wrench.fz=0", "robot.platform.mass=30",
+                   "tension=feasible", "trajectory.points=[[0,0,4],[1,0.5,5]]", "trajectory.times=1e-3",
+                   f"hydra.run.dir={tmp_path / 'run'}")
+    assert done.returncode == 0, done.stderr[-2000:]
+    summary = pd.read_parquet(tmp_path / "run" / "summary.parquet").iloc[0]
+    assert summary["n_samples"] >= 11 and 0 < summary["first_failure_sample"]
+
+
 def test_the_quintic_law_is_rest_to_rest_and_scipys_hermite_polynomial():
     """q_i + (10 s^3 - 15 s^4 + 6 s^5) dq, written here, and BPoly.from_derivatives with zero rates."""
     path = rest_to_rest(POINTS, [1.3, 0.9])
@@ -358,7 +372,9 @@ def test_a_caspr_cubic_spline_is_its_hermite_cubic_and_a_linear_one_is_refused(o
 
 
 def test_a_csv_of_timed_way_points_is_the_same_path_as_the_listed_points(tmp_path):
-    (tmp_path / "path.csv").write_text("t,x,y,z\n0,-0.5,0.3,0.7\n0.8,0.4,-0.2,1.2\n1.5,0.6,0.5,0.9\n")
+    # as a spreadsheet saves it: a byte-order mark, CRLF line ends, a blank last line
+    (tmp_path / "path.csv").write_bytes("\ufefft,x,y,z\r\n0,-0.5,0.3,0.7\r\n0.8,0.4,-0.2,1.2\r\n1.5,0.6,0.5,0.9\r\n\r\n"
+                                        .encode("utf-8"))
     common = [*CROSSED_ROBOT, "analysis=trajectory", "trajectory.law=spline", "robot.platform.mass=2", "tension.t_max=40"]
     by_file = command(tmp_path, "pipeline", *common, "trajectory.file=path.csv", f"hydra.run.dir={tmp_path / 'a'}")
     listed = command(tmp_path, "pipeline", *common, "trajectory.points=[[-0.5,0.3,0.7],[0.4,-0.2,1.2],[0.6,0.5,0.9]]",

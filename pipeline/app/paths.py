@@ -277,7 +277,7 @@ def _read_csv(path: FilePath, robot: CableRobot, key: str) -> tuple[np.ndarray, 
     headers = ([["t", "psi", "theta", "phi"]] if robot.fixed_point
                else [["t", "x", "y", "z"], ["t", "x", "y", "z", "psi", "theta", "phi"]])
     try:
-        with open(path, newline="", encoding="utf-8") as handle:
+        with open(path, newline="", encoding="utf-8-sig") as handle:  # a spreadsheet's byte-order mark too
             rows = [row for row in csv.reader(handle) if any(cell.strip() for cell in row)]
     except (OSError, UnicodeDecodeError, csv.Error) as exc:
         raise ConfigError(f"{key}: cannot read it as CSV text ({exc})") from None

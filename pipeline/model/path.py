@@ -23,7 +23,8 @@ Time laws, per segment between two way-points (each at rest at both ends, except
 A path is sampled piece by piece (``Path.sample``): each polynomial piece (a segment, or a phase
 of a trapezoid) on its own closed interval, both ends included and evaluated by that piece, so
 an acceleration that jumps between pieces (a trapezoid's phases, a way-point between two
-rest-to-rest segments) is checked on both sides of the jump.
+rest-to-rest segments) is checked on both sides of the jump; every piece in ``MIN_STEPS`` steps
+at least, so a segment shorter than the step is still checked where it accelerates.
 """
 
 from __future__ import annotations
@@ -36,6 +37,7 @@ import numpy as np
 from pipeline.model.geometry import elementary_rotations, rotation_matrices
 
 COORDINATES = ("x", "y", "z", "psi", "theta", "phi")  # q's columns (the angles in orientation.convention)
+MIN_STEPS = 10  # steps a piece is sampled in, at least, whatever trajectory.dt
 
 
 @dataclass(frozen=True)
@@ -124,9 +126,11 @@ class Path:
         return float(self.breaks[-1] - self.breaks[0])
 
     def counts(self, dt: float) -> np.ndarray:
-        """(P,) samples per piece: both ends, at most ``dt`` apart."""
+        """(P,) samples per piece: both ends, at most ``dt`` apart, and at least ``MIN_STEPS``
+        steps a piece (a piece shorter than ``dt`` is still sampled inside, where its acceleration
+        peaks: a rest-to-rest quintic is at rest at both ends)."""
         spans = np.diff(self.breaks)
-        return np.maximum(np.ceil(spans / dt - 1e-9), 1).astype(np.int64) + 1
+        return np.maximum(np.ceil(spans / dt - 1e-9), MIN_STEPS).astype(np.int64) + 1
 
     def sample(self, dt: float) -> Samples:
         """Every piece at equal steps of at most ``dt`` (s), both ends included (module doc), in

@@ -90,7 +90,7 @@ def follow(cfg: DictConfig, problem: WorkspaceProblem) -> tuple[pd.DataFrame, di
             log.info("path: %d of %d samples checked", rows.stop, total)
     table = pd.concat(parts, ignore_index=True)
     summary = summarize(cfg, tally.counts(total), float("nan"), problem)
-    summary.update(_described(table, robot.cable_names, names, samples.t))
+    summary.update(_described(table, robot.cable_names, samples.t))
     drive = problem.limits.drive
     if drive is not None:  # the limits a figure of the path draws
         summary.update(limit_speed=drive.speed_limit, limit_torque=drive.torque_limit,
@@ -137,7 +137,7 @@ def _peak(values: np.ndarray, held: np.ndarray) -> float:
     return float(values[held].max()) if held.any() else float("nan")
 
 
-def _described(table: pd.DataFrame, cables, names: list[str], times: np.ndarray) -> dict:
+def _described(table: pd.DataFrame, cables, times: np.ndarray) -> dict:
     """The path's duration and samples, its first failing sample and the peaks of its cables
     over the samples that hold (NaN when none: a failing sample's forces are not a distribution)."""
     failing = np.flatnonzero(~table["feasible"].to_numpy())
