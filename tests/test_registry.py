@@ -135,7 +135,7 @@ def test_a_job_builds_its_robot_once_from_its_kind_and_runs_that_problem(tmp_pat
     assert len(built) == 2 and [s["n_feasible"] for s in summaries] == [216, 208]  # Table 2: 100, 96.30 %
     (tmp_path / "conf" / "robot").mkdir(parents=True)
     (tmp_path / "conf" / "robot" / "odd.yaml").write_text("# @package _global_\ndefaults: [cpr8, _self_]\nanalysis: dynamics\n")
-    known = r"\(cpr_wwa, statics, lines, payload, trajectory\)"
+    known = r"\(cpr_wwa, statics, lines, payload, trajectory, certified\)"
     with pytest.raises(ConfigError, match=rf"^analysis=dynamics: unknown analysis {known}$"):
         plan(["--config-dir", str(tmp_path / "conf"), "robot=odd"])
 

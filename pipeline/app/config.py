@@ -545,6 +545,18 @@ class TrajectoryConfig:
 
 
 @dataclass
+class CertifiedConfig:
+    """``analysis=certified`` (``pipeline.workspace.paving``): branch and prune from the robot's
+    search box, at most ``depth`` levels of bisection and ``time`` seconds."""
+
+    depth: int = rule(lambda value: None if 0 <= value <= MAX_DEPTH else f"must be in [0, {MAX_DEPTH}]")
+    time: float = rule(positive)
+
+
+MAX_DEPTH = 40  # levels of bisection: 2^40 boxes, past any memory
+
+
+@dataclass
 class LinesConfig:
     """Straight-line simulations (analysis=lines, section 3.1.3 of the CPR-8 paper): samples =
     first writes the samples of line O''-F'' only (what Fig. 6 draws, 0.13 MB a job), all those
@@ -588,7 +600,8 @@ class WorkspaceConfig:
 class Config:
     """The job: ``analysis``, a config group (cpr_wwa: dynamics and actuator limits; statics:
     wrench and tensions; lines: the paper's straight lines; payload: the largest payload per
-    pose; trajectory: the platform along a path; ``robot=irpm6`` and ``points`` pick statics), ``actuator`` (the id of a catalogue
+    pose; trajectory: the platform along a path; certified: boxes of poses proven feasible or not;
+    ``robot=irpm6`` and ``points`` pick statics), ``actuator`` (the id of a catalogue
     row; a path's may be null: no drive), ``catalogue`` (a CSV or Parquet path; null = Table 1 of the CPR-8 paper, shipped in
     pipeline/data), ``poses`` (a list of [x, y, z] positions in m checked instead of the robot's
     grid, e.g. ``poses=[[0,0,5]]``; null = the grid; the summary's volume_m3 is then NaN),
@@ -620,6 +633,7 @@ class Config:
     lines: LinesConfig = field(default_factory=LinesConfig)
     platform_motion: PlatformMotionConfig = field(default_factory=PlatformMotionConfig)
     trajectory: TrajectoryConfig = field(default_factory=TrajectoryConfig)
+    certified: CertifiedConfig = field(default_factory=CertifiedConfig)
     poses: Any = MISSING
     obstacles: Any = MISSING
     criteria: Any = MISSING

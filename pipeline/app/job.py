@@ -77,7 +77,8 @@ def folder_lock(out: Path, busy: str = "another run is writing this folder; wait
             fcntl.flock(handle, fcntl.LOCK_UN)
 
 
-JOB_FILES = ("summary.parquet", "points.parquet", "samples.parquet", "boundary.stl", "boundary.ply")  # what a job writes
+# what a job writes
+JOB_FILES = ("summary.parquet", "points.parquet", "samples.parquet", "boxes.parquet", "boundary.stl", "boundary.ply")
 
 
 def _run_locked(cfg: DictConfig, problem: WorkspaceProblem, out: Path, sweep_pays: bool, robot_file: str) -> dict:
@@ -103,6 +104,8 @@ def _run_locked(cfg: DictConfig, problem: WorkspaceProblem, out: Path, sweep_pay
     summary["robot_file"] = robot_file  # which of a study's robot files (robot.name: its kind)
     write_parquet(one_row(summary), out / "summary.parquet", config_yaml,
                   {DIGESTS_KEY: digests_json(files.written)})
+    if kind.certified:  # its own line: the volume's bracket (pipeline.workspace.paving)
+        return summary
     lost = ", ".join(
         f"{key[len('lost_'):]} {value}" for key, value in summary.items() if key.startswith("lost_")
     )

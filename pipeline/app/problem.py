@@ -300,6 +300,38 @@ def _path_files(cfg: DictConfig, problem: WorkspaceProblem, grid: Grid | None, f
     return path_files(cfg, problem, files)
 
 
+def _certified(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
+    """The statics' spec and limits over boxes of positions (``pipeline.workspace.paving``):
+    refuses in one line what the certificates cannot bound yet or a paving does not write."""
+    spec, limits = _statics(cfg, catalogue, robot)
+    refused = (
+        (spec.tension.model != "feasible", "tension.model=pinv", "the certificates are of cables that pull; "
+         "use tension=feasible"),
+        (robot.fixed_point, "robot.dofs", "a robot on a joint has orientations to pave, not positions; not certified yet"),
+        (not (np.isfinite(robot.box_lo).all() and np.isfinite(robot.box_hi).all()), "robot.search",
+         "the paving starts from the search box; give robot.search.lo and hi"),
+        (robot.pulleys is not None, "robot.pulleys", "a pulley's exit point moves with the pose; no certified bound yet"),
+        (spec.moment_arm == "base", "model.moment_arm=base", "moments about the base move the wrench with the pose; "
+         "not certified yet"),
+        (cfg.poses is not None, "poses", "a paving proves boxes of the search box, not listed poses"),
+        (cfg.workspace.home is not None, "workspace.home", "the connected reach is of a grid analysis"),
+        (cfg.output.mesh, "output.mesh=true", "the mesh is of a grid analysis; boxes.parquet holds the certified boxes"),
+        (cfg.output.metrics, "output.metrics=true", "the metrics are per pose, of analysis=statics"),
+        (cfg.output.cables, "output.cables=true", "the cables' forces are per pose, of analysis=statics"),
+        (name_of(cfg.compute.kernel) == "fused", "compute.kernel=fused", "the certificates have one kernel; use auto"),
+    )
+    for asked, key, why in refused:
+        if asked:
+            raise ConfigError(f"{key}: analysis=certified: {why}")
+    return spec, limits
+
+
+def _paving_files(cfg: DictConfig, problem: WorkspaceProblem, grid: Grid | None, files, sweep_pays: bool) -> dict:
+    from pipeline.workspace.paving import paving_files  # pandas: only this analysis needs it
+
+    return paving_files(cfg, problem, files)
+
+
 @dataclass(frozen=True)
 class AnalysisKind:
     """An analysis a config can name: the spec and limits of its workspace from the typed config,
@@ -312,6 +344,7 @@ class AnalysisKind:
     build: Callable[[DictConfig, Catalogue | None, CableRobot], tuple]
     files: Callable[..., dict]
     gridded: bool = True  # whether it checks the robot's grid (False: its own samples, and ``files`` gets no grid)
+    certified: bool = False  # whether its verdicts are proofs: every criterion it checks has a certified bound
 
 
 ANALYSES = {
@@ -320,6 +353,7 @@ ANALYSES = {
     "lines": AnalysisKind(_cpr_wwa, _line_files),
     "payload": AnalysisKind(_payload, _grid_files),
     "trajectory": AnalysisKind(_trajectory, _path_files, gridded=False),
+    "certified": AnalysisKind(_certified, _paving_files, gridded=False, certified=True),
 }
 
 
@@ -541,6 +575,10 @@ def build(cfg: DictConfig, catalogue: Catalogue | None) -> WorkspaceProblem:
         spec = sagging(cfg, spec, robot)
     settings = checked_settings(OmegaConf.to_container(cfg.criteria)) if "criteria" in cfg else {}
     criteria = selected(cfg.analysis, spec, robot, settings)  # the registry's, by what each applies to
+    uncertified = [name for name in criteria if not REGISTRY[name].certified]
+    if ANALYSES[cfg.analysis].certified and uncertified:
+        raise ConfigError(f"analysis={cfg.analysis}: this problem checks {uncertified[0]}, which has no certified "
+                          "bound yet; remove the key that adds it, or use analysis=statics")
     refused = [name for name in settings if name not in criteria]
     if refused:
         raise ConfigError(f"criteria.{refused[0]}: analysis={cfg.analysis} does not check it on this robot; "

@@ -132,14 +132,14 @@ class PointsRobot:
         if not given:  # a job that lists its poses (``poses``) searches no box
             lo = hi = np.full(3, np.nan)
         else:
-            missing = [key for key in ("lo", "hi", "step") if key not in given]
+            missing = [key for key in ("lo", "hi") if key not in given]  # step: a grid's (checked by pipeline.app.problem)
             if missing:
                 raise ConfigError(f"robot.search.{missing[0]}: no value given (the searched box needs lo, hi and step)")
             lo, hi = _vector("robot.search.lo", search.lo), _vector("robot.search.hi", search.hi)
             for axis, a, b in zip("xyz", lo, hi):
                 if not a <= b:
                     raise ConfigError(f"robot.search: {axis} from {a} to {b}: lo must be <= hi")
-            if not 0 < search.step < np.inf:
+            if search.step is not None and not 0 < search.step < np.inf:
                 raise ConfigError(f"robot.search.step={search.step}: must be > 0 and finite")
         if search.spacing not in ("faces", "centres"):
             raise ConfigError(f"robot.search.spacing={search.spacing}: must be faces or centres")
@@ -148,7 +148,8 @@ class PointsRobot:
             raise ConfigError(f"robot.dofs={dofs}: must be distinct freedoms among {', '.join(FREEDOMS)}")
         return cls(anchors, attachments, tuple(str(n) for n in names), up / np.linalg.norm(up),
                    None if robot.l_max is None else float(robot.l_max), lo, hi,
-                   float(search.step) if given else np.nan, str(search.spacing), tuple(sorted(FREEDOMS.index(d) for d in dofs)))
+                   np.nan if search.step is None else float(search.step), str(search.spacing),
+                   tuple(sorted(FREEDOMS.index(d) for d in dofs)))
 
     def build(self) -> CableRobot:
         return CableRobot(name="points", anchors=self.anchors, attachments=self.attachments,

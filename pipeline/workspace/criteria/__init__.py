@@ -45,7 +45,8 @@ def _driven(analysis: str, spec, robot=None) -> bool:
     return _dynamics(analysis) or (analysis == "trajectory" and spec.winch_radius is not None)
 
 
-HELD = ("statics", "trajectory")  # the analyses whose cables hold the platform's load: at a pose, along a path
+# the analyses whose cables hold the platform's load: at a pose, along a path, over a box of poses
+HELD = ("statics", "trajectory", "certified")
 
 
 def _straight_heavy(analysis: str, spec, robot) -> bool:
@@ -61,29 +62,29 @@ def _feasible(spec) -> bool:
 for criterion in (
     Criterion(ZERO_LENGTH, geometry.zero_length, ANY, 0, "#999933",
               "a search box that does not reach the anchors (robot.search.lo, hi)",
-              lambda analysis, spec, robot: True),
+              lambda analysis, spec, robot: True, certified=True),
     Criterion(SINGULAR, geometry.singular, STATICS, 1, "#000000",
               "robot.dofs=[x,y,z] for a point platform (every attachment at one point), else anchors and "
               "attachments that give the cables independent directions (the log names the wrench they cannot "
               "produce), or tension=feasible",
-              lambda analysis, spec, robot: analysis in (*HELD, "payload") and not _feasible(spec)),
+              lambda analysis, spec, robot: analysis in (*HELD, "payload") and not _feasible(spec), certified=True),
     Criterion(UNREACHABLE, tension.unreachable, ANY, 2, "#777777",
               "anchors and attachments that give the cables independent directions (the log names the "
               "wrench they cannot produce), or more cables",
-              lambda analysis, spec, robot: _dynamics(analysis) or (analysis in HELD and _feasible(spec))),
+              lambda analysis, spec, robot: _dynamics(analysis) or (analysis in HELD and _feasible(spec)), certified=True),
     Criterion(SLACK, tension.slack, ANY, 3, "#882255",
               "tension=feasible if the cables may not push (tension=pinv's minimum-norm forces often do), "
               "else a lower tension.t_min, more cables or anchors around the load",
               lambda analysis, spec, robot: analysis in HELD or (_dynamics(analysis) and _feasible(spec)),
-              bounds=tension.slack_bounds),
+              bounds=tension.slack_bounds, certified=True),
     Criterion(TENSION_MAX, tension.tension_max, ANY, None, "#0072B2",
               "stronger cables (a higher tension.t_max) or a lighter load",
               lambda analysis, spec, robot: analysis != "payload" and spec.tension.t_max is not None,
-              bounds=tension.tension_max_bounds),
+              bounds=tension.tension_max_bounds, certified=True),
     Criterion("payload", payload.payload, STATICS, None, "#56B4E9", "a lighter payload (load.mass) or stronger cables",
               lambda analysis, spec, robot: analysis == "payload"),
     Criterion(LENGTH, geometry.length, ANY, None, "#CC79A7", "longer cables (robot.l_max) or a smaller box",
-              lambda analysis, spec, robot: robot.l_max is not None),
+              lambda analysis, spec, robot: robot.l_max is not None, certified=True),
     Criterion(SPEED, actuator.speed, DYNAMICS, None, "#0072B2",
               "a lower motion.v_max (on a path: longer trajectory.times), a larger drive.winch_radius or a smaller "
               "drive.gear_ratio",

@@ -32,7 +32,9 @@ class Criterion:
     ``feasible`` tension model, None where it puts none on that state; there its margin is the
     model's nested capacity margin of that interval (``criteria.forces``), and ``function``
     gives the minimum-norm model's. ``refuses(spec, robot, keys)``: why a problem cannot evaluate it
-    with the keys given (one line: the job is refused before it runs), None when it can."""
+    with the keys given (one line: the job is refused before it runs), None when it can.
+    ``certified``: whether ``analysis=certified`` proves it on boxes of poses
+    (``pipeline.model.certificates``); a certified problem that checks a criterion without one is refused."""
 
     name: str
     function: Callable[[Any, Any], np.ndarray]
@@ -44,6 +46,7 @@ class Criterion:
     keys: dict[str, Callable[[Any], str | None]] = field(default_factory=dict)
     bounds: Callable[[Any, Any], tuple | None] | None = None
     refuses: Callable[[Any, Any, dict], str | None] | None = None
+    certified: bool = False
 
 
 REGISTRY: dict[str, Criterion] = {}

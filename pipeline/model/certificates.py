@@ -1,0 +1,336 @@
+"""Certified verdicts on boxes of positions: every pose of a box feasible, or none (issue 57).
+
+Gouttefarde, Daney and Merlet (IEEE T-RO 27(1), 2011) certify boxes of poses inside or outside
+the wrench-feasible workspace by interval analysis. Here, for a box B of platform positions at
+one orientation, with pulling cables t in [t_min, t_max] that must balance every wrench w_k of
+the required set (A(p) t = w_k, ``pipeline.model.statics``):
+
+- the structure matrix over the box is enclosed by the mean-value form
+  u(p) in u(c) + J(B) (B - c), J = (I - u u^T) / l the derivative of the unit vector u = d / |d|
+  of a cable's vector d = p + R b_i - a_i, c the box's centre (:func:`structure_enclosure`),
+  and any product of A(p) with a vector through A(c) and dA/dp over the box
+  (:meth:`BoxEnclosure.times`), which keeps the cables' cancellations at first order;
+- **inside** (:func:`inside`): tensions t0 feasible at the centre, their first-order motion D
+  (A(c) D_l = -(dA/dp_l) t0) and a right inverse K of A(c) give, for every p in B, the tensions
+  t = t0 + D (p - c) + K e with (A(p) K) e = w - A(p) (t0 + D (p - c)) =: -r(p), r of second
+  order in the box's width. With M = A(B) K - I, every such e lies in [-beta v, beta v],
+  beta = |r|_v / (1 - |M|_v) (a contraction when |M|_v < 1, in the norm weighted by v, the
+  Perron vector of |M|), and in -r - M [-beta v, beta v]; if t stays in [t_min, t_max] for all
+  of them, every pose of the box is feasible: the tensions are exhibited;
+- **outside** (:func:`outside`): Farkas' lemma for a box of tensions: no t in [t_min, t_max]
+  gives A t = w when some y has y.w > sum_i max(a_i t_min_i, a_i t_max_i), a_i = y.A_i; the y
+  that separates best over the whole box to first order (an LP, :func:`robust_separators`) and
+  still separates over the enclosure proves every pose of the box infeasible.
+
+Cable lengths are enclosed exactly (the nearest and farthest points of a box from a point):
+inside needs every cable between the collapse length and ``l_max``, outside one cable longer
+than ``l_max`` everywhere.
+
+Everything is computed in :mod:`pipeline.model.intervals` (outward rounding), from the anchors,
+attachments and tension limits as given (doubles, exact), the rotation enclosed from its angles,
+and the required wrenches as the statics forms them, widened by ``WRENCH_RTOL`` of the terms
+that form them (their round-off is a few units in the last place of those). The floats chosen
+at the centre (t0, D, K, y) need no rigour: the interval tests check them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from pipeline.model.intervals import Interval, cross, down, stack, up
+
+WRENCH_RTOL = 1e-12  # the required wrenches' enclosure, relative to the size of the terms forming them
+INSIDE, OUTSIDE, UNDECIDED = 1, -1, 0  # a box's verdict
+
+
+@dataclass(frozen=True)
+class BoxStatics:
+    """What the certificates read at one orientation: ``offsets`` (m, 3) the enclosure of
+    R b_i - a_i (or -a_i when every cable runs to the reference point, ``cable_direction=centre``),
+    so that a cable's vector is p + offset; ``arms`` (m, 3) the enclosure of R b_i; ``rows`` the
+    freedoms the cables balance (``CableRobot.dofs``); ``wrenches`` (K, k) the required wrenches'
+    enclosure; ``lower`` and ``upper`` (m,) the tension limits (N, upper may be inf); ``l_max``
+    (m, or inf) and ``shortest`` (m): a cable must be between them."""
+
+    offsets: Interval
+    arms: Interval
+    rows: tuple[int, ...]
+    wrenches: Interval
+    lower: np.ndarray
+    upper: np.ndarray
+    l_max: float
+    shortest: float
+
+
+@dataclass(frozen=True)
+class BoxEnclosure:
+    """The enclosures over N boxes: ``centre`` (N, k, m) of A(c) at each box's centre point c;
+    ``slopes`` (N, 3, k, m) of dA/dp_l over the box; ``step`` (N, 3) of B - c, so that
+    A(p) - A(c) lies in sum_l slopes_l step_l (the mean-value theorem, entry by entry) and a
+    product of A(p) with a vector keeps the cancellations between the cables at first order;
+    ``structure`` (N, k, m) of A(p) entry by entry; ``lengths`` (N, m) of the cables' lengths;
+    ``regular`` (N,) whether no cable can collapse in the box (where one can, the structure's
+    enclosures are not valid and only the lengths decide)."""
+
+    centre: Interval
+    slopes: Interval
+    step: Interval
+    structure: Interval
+    lengths: Interval
+    regular: np.ndarray
+
+    def rows(self, index) -> BoxEnclosure:
+        return BoxEnclosure(*(part[index] for part in (self.centre, self.slopes, self.step, self.structure,
+                                                        self.lengths)), self.regular[index])
+
+    def times(self, points: np.ndarray, combine) -> Interval:
+        """An enclosure of ``combine(A(p), points)`` over the box for a product ``combine``
+        linear in A: ``combine(A(c)) + sum_l combine(dA/dp_l) (p_l - c_l)``."""
+        total = combine(self.centre, points)
+        for axis in range(3):
+            step = self.step[:, axis][(slice(None),) + (None,) * (total.lo.ndim - 1)]
+            total = total + combine(self.slopes[:, axis], points) * step
+        return total
+
+
+def structure_enclosure(statics: BoxStatics, lo: np.ndarray, hi: np.ndarray, centre: np.ndarray) -> BoxEnclosure:
+    """Enclosures of A(p), its derivatives and the lengths over the boxes [lo, hi] (N, 3), by
+    the mean-value form about ``centre`` (N, 3), a point of each box."""
+    box = Interval(lo, hi)[:, None, :]  # (N, 1, 3)
+    vectors = box + statics.offsets  # (N, m, 3): d(B), exact up to rounding
+    lengths = vectors.square().sum(axis=-1).sqrt()
+    regular = (lengths.lo > statics.shortest).all(axis=1)
+    safe = Interval(np.maximum(lengths.lo, statics.shortest), np.maximum(lengths.hi, statics.shortest))
+    naive = (vectors / safe[..., None]).intersect(Interval(np.full(vectors.shape, -1.0), np.full(vectors.shape, 1.0)))
+    at_centre = Interval.point(centre)[:, None, :] + statics.offsets
+    centre_length = at_centre.square().sum(axis=-1).sqrt()
+    centre_length = Interval(np.maximum(centre_length.lo, statics.shortest), np.maximum(centre_length.hi, statics.shortest))
+    unit_centre = at_centre / centre_length[..., None]
+    step = Interval(down(lo - centre), up(hi - centre))  # B - c, (N, 3)
+    unit = naive
+    for _ in range(2):  # the derivative's enclosure from the unit vectors', then again from the tighter ones
+        slopes, change = [], None
+        for axis in range(3):  # du/dp_axis = (e_axis - u u_axis) / l over the box
+            column = -(unit * unit[..., axis:axis + 1])
+            own = -(unit[..., axis].square())
+            column = Interval(column.lo.copy(), column.hi.copy())
+            column.lo[..., axis], column.hi[..., axis] = own.lo, own.hi
+            column = (column + np.eye(3)[axis]) / safe[..., None]
+            slopes.append(_columns(statics, column))
+            term = column * step[:, None, axis:axis + 1]
+            change = term if change is None else change + term
+        unit = (unit_centre + change).intersect(unit)
+    return BoxEnclosure(_columns(statics, unit_centre), stack(slopes, axis=1), step, _columns(statics, unit), lengths, regular)
+
+
+def _columns(statics: BoxStatics, unit: Interval) -> Interval:
+    """(N, k, m) the structure matrix's rows of the freedoms from the cables' unit vectors (N, m, 3)
+    (or their derivatives: the arms are fixed): columns [u_i; arm_i x u_i]."""
+    moment = cross(statics.arms, unit)
+    rows = list(statics.rows)
+    return Interval(np.swapaxes(np.concatenate([unit.lo, moment.lo], axis=-1), 1, 2)[:, rows],
+                    np.swapaxes(np.concatenate([unit.hi, moment.hi], axis=-1), 1, 2)[:, rows])
+
+
+def _matmul(a: Interval, points: np.ndarray) -> Interval:
+    """a (..., r, j) @ points (..., j, c), an interval matrix times doubles, rounded outward."""
+    total = None
+    for j in range(a.shape[-1]):
+        term = a[..., :, j:j + 1] * Interval.point(points[..., j:j + 1, :])
+        total = term if total is None else total + term
+    return total
+
+
+def _matvec(points: np.ndarray, a: Interval) -> Interval:
+    """points (..., r, c) @ a (..., c), doubles times an interval vector, rounded outward."""
+    total = None
+    for c in range(points.shape[-1]):
+        term = Interval.point(points[..., :, c]) * a[..., c:c + 1]
+        total = term if total is None else total + term
+    return total
+
+
+def _upper_row_sums(values: np.ndarray) -> np.ndarray:
+    """Upper bounds of the row sums (last axis) of non-negative doubles."""
+    return Interval(values, values).sum(axis=-1).hi
+
+
+def inside(statics: BoxStatics, enclosure: BoxEnclosure, tensions: np.ndarray, rates: np.ndarray,
+           right_inverse: np.ndarray) -> np.ndarray:
+    """(N,) whether every pose of each box is proven feasible: for every required wrench k, the
+    tensions t0 + K e of the module's argument stay within the limits. ``tensions`` (N, K, m):
+    t0 per box and wrench (any doubles; good ones have room to both limits), ``right_inverse``
+    (N, m, k): K with A(c) K close to I (the pseudo-inverse at the centre)."""
+    n_rows = enclosure.centre.shape[1]
+    size = (enclosure.times(right_inverse, _matmul) - np.eye(n_rows)).magnitude()  # |M|, M = A(B) K - I, (N, k, k)
+    weights = _perron(size)  # (N, k) > 0: |M| contracts in the norm max_i |x_i| / v_i when (|M| v)_i < v_i
+    contraction = up(_upper_row_sums(up(size * weights[:, None, :])) / weights).max(axis=-1)  # (N,)
+    # the tensions follow the boxes' poses to first order, t(p) = t0 + D (p - c) with A(c) D_l = -(dA/dp_l) t0,
+    # so that r(p) = A(p) t(p) - w is of second order in the box's width:
+    # r(B) in [A(c) t0 - w] + sum_l [(dA/dp_l)(B) t0 + A(B) D_l] (p_l - c_l)
+    residual = _tension_wrench(enclosure.centre, tensions) - statics.wrenches  # (N, K, k)
+    moved = Interval.point(tensions)
+    for axis in range(3):
+        rate = (_tension_wrench(enclosure.slopes[:, axis], tensions)
+                + _tension_wrench(enclosure.structure, rates[..., axis]))
+        residual = residual + rate * enclosure.step[:, None, None, axis]
+        moved = moved + Interval.point(rates[..., axis]) * enclosure.step[:, None, None, axis]
+    room = down(1.0 - contraction)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        scaled = up(residual.magnitude() / weights[:, None, :]).max(axis=-1)  # |r|_v, (N, K)
+        beta = np.where(room[:, None] > 0, up(scaled / np.where(room > 0, room, 1.0)[:, None]), np.inf)  # |e|_v <= beta
+        bound = up(beta[..., None] * weights[:, None, :])  # |e_i| <= beta v_i, (N, K, k)
+        spread = _upper_row_sums(up(size[:, None] * bound[:, :, None, :]))  # |M| |e|, (N, K, k)
+    solution = (-residual + Interval(-spread, spread)).intersect(Interval(-bound, bound))
+    change = _matvec(right_inverse[:, None], solution)  # K e, (N, K, m)
+    reached = moved + change
+    held = (reached.lo >= statics.lower) & (reached.hi <= statics.upper)
+    return enclosure.regular & (contraction < 1.0) & np.isfinite(beta).all(axis=1) & held.all(axis=(1, 2)) \
+        & (enclosure.lengths.lo > statics.shortest).all(axis=1) & (enclosure.lengths.hi <= statics.l_max).all(axis=1)
+
+
+def _perron(size: np.ndarray, rounds: int = 12) -> np.ndarray:
+    """(N, k) positive weights v near the Perron vector of each non-negative |M| (N, k, k), by
+    power iteration from ones: the weighted norm in which |M| contracts best (any positive v is
+    sound: the contraction is then computed, with upward rounding, in that norm)."""
+    weights = np.ones(size.shape[:2])
+    for _ in range(rounds):
+        weights = np.einsum("nij,nj->ni", size, weights) + 1e-3 * weights.max(axis=1, keepdims=True)
+        weights /= weights.max(axis=1, keepdims=True)
+    return weights
+
+
+def _tension_wrench(structure: Interval, tensions: np.ndarray) -> Interval:
+    """A(B) t0 per wrench: (N, k, m) times (N, K, m) -> (N, K, k)."""
+    total = None
+    for i in range(structure.shape[-1]):
+        term = structure[:, None, :, i] * Interval.point(tensions[:, :, None, i])
+        total = term if total is None else total + term
+    return total
+
+
+def outside(statics: BoxStatics, enclosure: BoxEnclosure, separators: np.ndarray) -> np.ndarray:
+    """(N,) whether every pose of each box is proven infeasible: a cable longer than ``l_max``
+    over the whole box, or a required wrench k whose ``separators`` y (N, K, k) separates it
+    from the cable wrenches at every A in the enclosure (Farkas), a_i = y.A_i bounded as below."""
+    too_long = (enclosure.lengths.lo > statics.l_max).any(axis=1)
+    lower, upper = statics.lower, statics.upper
+    a = enclosure.times(separators, _separated)  # y.A_i over the box, (N, K, m)
+    rising, falling = a.lo > 0, a.hi < 0
+    blocked = (np.isinf(upper) & ~falling).any(axis=-1)  # an unrated cable that may pull along y: no bound
+    # max(a t_min, a t_max) = a t_min + (t_max - t_min) max(a, 0), and on [a_lo, a_hi] the convex
+    # (t_max - t_min) max(a, 0) lies under the line c a + nu through its values at both ends (the
+    # secant; c = t_max - t_min where a > 0 throughout, 0 where a < 0): the sum over the cables is
+    # then y.A(p) t_min + y.A(p) c + sum nu, linear in A, and its enclosure keeps the cancellations
+    finite_upper = np.where(np.isinf(upper), lower, upper)
+    spare = Interval.point(finite_upper) - lower  # t_max - t_min, (m,)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        share = np.where(rising, 1.0, np.where(falling, 0.0, a.hi / (a.hi - a.lo)))
+    slope = share * (finite_upper - lower)  # c, any doubles: nu makes the line a bound
+    ends = [Interval.point(np.maximum(end, 0.0)) * spare - Interval.point(slope) * end for end in (a.lo, a.hi)]
+    offset = np.maximum(ends[0].hi, ends[1].hi)  # nu >= (t_max - t_min) max(e, 0) - c e at both ends e
+    pulled = (enclosure.times((separators, np.broadcast_to(lower, slope.shape)), _pulled)
+              + enclosure.times((separators, slope), _pulled) + Interval(offset, offset).sum(axis=-1))
+    reach = (statics.wrenches[None] * Interval.point(separators)).sum(axis=-1).lo  # lower bound of y.w
+    separated = ~blocked & (down(reach - pulled.hi) > 0)
+    return too_long | (enclosure.regular & separated.any(axis=1))
+
+
+def _separated(structure: Interval, separators: np.ndarray) -> Interval:
+    """y.A_i: (N, k, m) with (N, K, k) -> (N, K, m)."""
+    total = None
+    for row in range(structure.shape[1]):
+        term = structure[:, None, row, :] * Interval.point(separators[:, :, row:row + 1])
+        total = term if total is None else total + term
+    return total
+
+
+def _pulled(structure: Interval, given: tuple[np.ndarray, np.ndarray]) -> Interval:
+    """y.(A T): (N, k, m) with y (N, K, k) and T (N, K, m) -> (N, K)."""
+    separators, limit = given
+    return (_tension_wrench(structure, limit) * Interval.point(separators)).sum(axis=-1)
+
+
+# The floats a certificate tries, chosen for the whole box to first order (any doubles are sound:
+# the interval tests above check them). Each is a small LP per box and wrench, solved by HiGHS as
+# one block-diagonal LP per ``LP_BLOCKS`` of them.
+
+LP_BLOCKS = 256
+
+
+def robust_separators(structure: np.ndarray, slopes: np.ndarray, half: np.ndarray, wrenches: np.ndarray,
+                      lower: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(N, K, k) a y per box and wrench, and (N, K) its first-order separation over the box: the
+    largest y.w - sum_i max(b_i t_min_i, b_i t_max_i) with b_i = y.A_i(c) + sum_l h_l |y.G_il|,
+    what a_i = y.A_i(p) may reach in the box, over |y|_inf <= 1. The LP, per box and wrench:
+
+        max y.w - sum_i [t_min_i (y.A_i + sum_l h_l Z_il) + (t_max_i - t_min_i) S_i]
+        subject to  |y.G_il| <= Z_il,  y.A_i + sum_l h_l Z_il <= S_i,  S_i >= 0,  -1 <= y <= 1
+
+    (an unrated cable, t_max = inf, must keep b_i <= 0: S_i = 0). A positive separation is what
+    the interval test (:func:`outside`) then proves, up to second order."""
+    n, k, m = structure.shape
+    count = wrenches.shape[0]
+    width = k + m + 3 * m  # y, S, Z (m x 3, cable-major)
+    blocks = n * count
+    a = np.swapaxes(np.repeat(structure, count, axis=0), 1, 2)  # (B, m, k): rows y.A_i
+    g = np.repeat(slopes, count, axis=0)  # (B, 3, k, m)
+    h = np.repeat(half, count, axis=0)
+    rated = np.isfinite(upper)
+    spare = np.where(rated, upper - lower, 0.0)
+    cost = np.zeros((blocks, width))
+    w = np.tile(wrenches, (n, 1))
+    cost[:, :k] = -w + np.einsum("bmk,m->bk", a, lower)
+    cost[:, k:k + m] = spare
+    for axis in range(3):
+        cost[:, k + m + axis::3] = lower * h[:, axis:axis + 1]
+    reach = np.zeros((blocks, m, width))  # y.A_i + sum_l h_l Z_il - S_i <= 0
+    reach[:, :, :k] = a
+    reach[:, np.arange(m), k + np.arange(m)] = -1.0
+    for axis in range(3):
+        reach[:, np.arange(m), k + m + 3 * np.arange(m) + axis] = h[:, axis:axis + 1]
+    spread = np.zeros((blocks, 6 * m, width))  # +-y.G_il - Z_il <= 0
+    for sign, offset in ((1.0, 0), (-1.0, 3 * m)):
+        for axis in range(3):
+            rows = offset + 3 * np.arange(m) + axis
+            spread[:, rows, :k] = sign * np.swapaxes(g[:, axis], 1, 2)
+            spread[:, rows, k + m + 3 * np.arange(m) + axis] = -1.0
+    a_ub = np.concatenate([reach, spread], axis=1)
+    b_ub = np.zeros((blocks, 7 * m))
+    bounds = np.tile(np.array([[-1.0, 1.0]] * k + [[0.0, np.inf]] * m + [[0.0, np.inf]] * (3 * m)), (blocks, 1, 1))
+    bounds[:, k:k + m][:, ~rated] = (0.0, 0.0)
+    x, ok = _block_lps(cost, a_ub, b_ub, None, None, bounds)
+    value = np.where(ok, -np.einsum("bj,bj->b", cost, x), -np.inf)
+    return x[:, :k].reshape(n, count, k), value.reshape(n, count)
+
+
+def _block_lps(cost, a_ub, b_ub, a_eq, b_eq, bounds) -> tuple[np.ndarray, np.ndarray]:
+    """Solve B small LPs (min cost.x, A_ub x <= b_ub, A_eq x = b_eq, bounds; dense per-block
+    arrays) as block-diagonal LPs of ``LP_BLOCKS``; (B, width) solutions and (B,) which solved
+    (a batch HiGHS does not solve is halved until its blocks solve alone or fail alone)."""
+    blocks, width = cost.shape
+    x, ok = np.zeros((blocks, width)), np.zeros(blocks, dtype=bool)
+    pending = [np.arange(start, min(start + LP_BLOCKS, blocks)) for start in range(0, blocks, LP_BLOCKS)]
+    while pending:
+        rows = pending.pop()
+        solved = _solve_blocks(cost[rows], a_ub[rows], b_ub[rows], None if a_eq is None else a_eq[rows],
+                               None if b_eq is None else b_eq[rows], bounds[rows])
+        if solved is not None:
+            x[rows], ok[rows] = solved, True
+        elif len(rows) > 1:
+            pending += [rows[:len(rows) // 2], rows[len(rows) // 2:]]
+    return x, ok
+
+
+def _solve_blocks(cost, a_ub, b_ub, a_eq, b_eq, bounds):
+    import scipy.sparse as sparse
+    from scipy.optimize import linprog
+
+    blocks, width = cost.shape
+    def diagonal(parts):
+        return sparse.block_diag(list(parts), format="csr") if parts is not None else None
+    result = linprog(cost.ravel(), A_ub=diagonal(a_ub), b_ub=b_ub.ravel(), A_eq=diagonal(a_eq),
+                     b_eq=None if b_eq is None else b_eq.ravel(), bounds=bounds.reshape(-1, 2), method="highs")
+    return result.x.reshape(blocks, width) if result.status == 0 else None

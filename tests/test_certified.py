@@ -1,0 +1,282 @@
+"""Certified workspaces (issue 57): interval enclosures with outward rounding, boxes proven inside
+or outside, and branch and prune.
+
+Oracles: exact rational arithmetic (fractions) and mpmath at 50 digits for the enclosures (a
+computation without outward rounding fails them); the project's exact per-pose test
+(``evaluate_chunk``, itself checked against LPs elsewhere) at random poses of every certified box,
+on five robots (spatial, tilted with an off-centre payload and a length limit, a set of
+orientations, a planar body with a wrench set, a planar point and a point in space); the volume
+of a fine grid inside the certified bracket."""
+
+from fractions import Fraction
+
+import mpmath
+import numpy as np
+import pandas as pd
+import pytest
+
+from conftest import CROSSED_ROBOT, SPREAD_ANCHORS, command, eq9_rotation
+from pipeline.app.problem import build
+from pipeline.model import certificates
+from pipeline.model.certificates import INSIDE, OUTSIDE, UNDECIDED
+from pipeline.model.geometry import rotation_matrix
+from pipeline.model.intervals import Interval, rotation_enclosure
+from pipeline.workspace import paving
+from pipeline.workspace.kernel import evaluate_chunk
+
+IPANEMA = ["robot=points", f"robot.anchors={SPREAD_ANCHORS}",
+           "robot.attachments=[[-0.06,0.06,0],[0.06,0.06,0],[0.06,-0.06,0],[-0.06,-0.06,0],"
+           "[-0.06,0.06,0],[0.06,0.06,0],[0.06,-0.06,0],[-0.06,-0.06,0]]",
+           "robot.search.lo=[-2,-1.5,0]", "robot.search.hi=[2,1.5,2]", "tension.t_min=1", "tension.t_max=10"]
+PLANAR_BODY = ["robot=points", "robot.anchors=[[-1,-1,0],[1,-1,0],[1,1,0],[-1,1,0]]",
+               "robot.attachments=[[-0.1,0.05,0],[0.1,0.05,0],[0.1,-0.05,0],[-0.1,-0.05,0]]",
+               "robot.dofs=[x,y,rz]", "robot.search.lo=[-0.9,-0.9,0]", "robot.search.hi=[0.9,0.9,0]",
+               "tension.t_min=2", "tension.t_max=60", "wrench.set={min: [-5, 0, 0, 0, 0, -0.2], max: [5, 0, 0, 0, 0, 0.2]}",
+               "orientation.phi=0.3"]
+PLANAR_POINT = ["robot=points", "robot.anchors=[[-1,0,0],[1,0,0],[1.2,2,0],[-0.8,2,0]]",
+                "robot.attachments=[[0,0,0],[0,0,0],[0,0,0],[0,0,0]]", "robot.up=[0,1,0]", "robot.dofs=[x,y]",
+                "robot.search.lo=[-1,0.1,0]", "robot.search.hi=[1.2,1.9,0]", "robot.platform.mass=2",
+                "tension.t_min=0", "tension.t_max=40"]
+CRANE = ["robot=points", "robot.anchors=[[-1,-1,3],[1,-1,3],[1,1,3],[-1,1,3]]",
+         "robot.attachments=[[0,0,0],[0,0,0],[0,0,0],[0,0,0]]", "robot.dofs=[x,y,z]",
+         "robot.search.lo=[-1.5,-1.5,0]", "robot.search.hi=[1.5,1.5,2.8]", "robot.platform.mass=5",
+         "tension.t_min=1", "tension.t_max=40", "wrench.fx=3"]
+QUARTER = [o for o in IPANEMA if not o.startswith("robot.search")]  # IPAnema 1 in a corner of its frame
+ROBOTS = {
+    "ipanema": ([*QUARTER, "robot.search.lo=[0,0,0]", "robot.search.hi=[2,1.5,2]"], 12),
+    "tilted payload": ([*CROSSED_ROBOT, "tension.t_min=0", "tension.t_max=150", "load.mass=3", "load.com=[0.04,-0.03,0.02]",
+                        "orientation.psi=0.1", "orientation.theta=-0.08", "orientation.phi=0.25", "robot.l_max=3.2"], 14),
+    "orientation set": ([*QUARTER, "robot.search.lo=[0.5,0.3,0.5]", "robot.search.hi=[1.9,1.4,1.5]",
+                         "orientation.total={bound: 0.03, n: 2}"], 11),
+    "planar body": (PLANAR_BODY, 12),
+    "planar point": (PLANAR_POINT, 12),
+    "crane": (CRANE, 11),
+}
+
+
+def _problem(make_cfg, overrides, *more):
+    return build(make_cfg(*overrides, "tension=feasible", "analysis=certified", *more), None)
+
+
+def _min_margins(problem, positions: np.ndarray) -> np.ndarray:
+    """The exact per-pose test: the least margin over the criteria (>= 0: feasible)."""
+    margins = evaluate_chunk(problem, positions)
+    return np.min([value for key, value in margins.items() if key.startswith("margin_")], axis=0)
+
+
+# -- interval arithmetic: exact rationals and 50-digit references ---------------------------------
+
+def _exact(values) -> list[Fraction]:
+    return [Fraction(float(v)) for v in np.ravel(values)]
+
+
+def test_outward_rounding_contains_the_exact_results_of_every_operation():
+    rng = np.random.default_rng(0)
+    a = rng.uniform(-3, 3, 2000) * 10.0 ** rng.integers(-5, 5, 2000)
+    b = rng.uniform(0.1, 3, 2000) * 10.0 ** rng.integers(-5, 5, 2000)
+    x, y = Interval.point(a), Interval.point(b)
+    results = {"+": (x + y, lambda p, q: p + q), "-": (x - y, lambda p, q: p - q), "*": (x * y, lambda p, q: p * q),
+               "/": (x / y, lambda p, q: p / q)}
+    for name, (found, exact) in results.items():
+        for lo, hi, p, q in zip(found.lo, found.hi, _exact(a), _exact(b)):
+            assert Fraction(lo) <= exact(p, q) <= Fraction(hi), name
+    roots = Interval.point(b).sqrt()
+    with mpmath.workdps(50):
+        for lo, hi, q in zip(roots.lo, roots.hi, b):
+            exact = mpmath.sqrt(mpmath.mpf(q))
+            assert mpmath.mpf(lo) <= exact <= mpmath.mpf(hi)
+    # without the step outward, 0.1 + 0.2 rounds above the exact sum of the two doubles
+    assert Fraction(0.1 + 0.2) > Fraction(0.1) + Fraction(0.2)
+    assert Fraction((Interval.point(0.1) + 0.2).lo) < Fraction(0.1) + Fraction(0.2)
+
+
+def test_interval_square_and_products_hold_every_member():
+    rng = np.random.default_rng(1)
+    lo = rng.uniform(-2, 2, (500, 2))
+    hi = lo + rng.uniform(0, 2, (500, 2))
+    x, y = Interval(lo[:, 0], hi[:, 0]), Interval(lo[:, 1], hi[:, 1])
+    t = rng.uniform(0, 1, (50, 500, 2))
+    px, py = lo[:, 0] + t[..., 0] * (hi[:, 0] - lo[:, 0]), lo[:, 1] + t[..., 1] * (hi[:, 1] - lo[:, 1])
+    assert ((x * y).lo <= px * py).all() and (px * py <= (x * y).hi).all()
+    assert (x.square().lo <= px**2).all() and (px**2 <= x.square().hi).all()
+    assert (x.square().lo >= 0).all()
+
+
+@pytest.mark.parametrize("angles", [(0.0, 0.0, 0.0), (0.3, -0.7, 2.1), (1e-9, 3.0, -1.2)])
+def test_rotation_enclosure_contains_eq9_at_fifty_digits(angles):
+    found = rotation_enclosure(*angles)
+    with mpmath.workdps(50):
+        a, b, c = (mpmath.mpf(v) for v in angles)
+        rx = mpmath.matrix([[1, 0, 0], [0, mpmath.cos(a), -mpmath.sin(a)], [0, mpmath.sin(a), mpmath.cos(a)]])
+        ry = mpmath.matrix([[mpmath.cos(b), 0, mpmath.sin(b)], [0, 1, 0], [-mpmath.sin(b), 0, mpmath.cos(b)]])
+        rz = mpmath.matrix([[mpmath.cos(c), -mpmath.sin(c), 0], [mpmath.sin(c), mpmath.cos(c), 0], [0, 0, 1]])
+        exact = rz * ry * rx
+        for i in range(3):
+            for j in range(3):
+                assert mpmath.mpf(found.lo[i, j]) <= exact[i, j] <= mpmath.mpf(found.hi[i, j])
+    assert np.allclose(found.lo, rotation_matrix(*angles), atol=1e-15)
+    assert np.allclose(found.hi, eq9_rotation(*angles), atol=1e-15)
+
+
+# -- the structure matrix's enclosure ---------------------------------------------------------
+
+def _enclosure(problem, lo, hi):
+    statics = paving.box_statics(problem, problem.orientations[0])
+    return certificates.structure_enclosure(statics, lo, hi, lo + (hi - lo) / 2)
+
+
+def test_structure_enclosure_holds_the_structure_matrix_at_random_points_of_its_box(make_cfg):
+    problem = _problem(make_cfg, ROBOTS["tilted payload"][0])
+    rng = np.random.default_rng(2)
+    lo = rng.uniform([-1.4, -0.9, 0.3], [1.2, 0.7, 1.4], (100, 3))
+    hi = lo + rng.uniform(0.01, 0.3, (100, 3))
+    enclosure = _enclosure(problem, lo, hi)
+    points = lo[:, None] + rng.uniform(0, 1, (100, 1000, 3)) * (hi - lo)[:, None]  # 10^5 points
+    structure = problem.spec.state(problem.robot, points.reshape(-1, 3), tuple(problem.orientations[0])).structure
+    structure = structure.reshape(100, 1000, *structure.shape[1:])
+    assert (enclosure.structure.lo[:, None] <= structure).all() and (structure <= enclosure.structure.hi[:, None]).all()
+    lengths = np.linalg.norm(problem.spec.state(problem.robot, points.reshape(-1, 3), tuple(problem.orientations[0]))
+                             .vectors, axis=2).reshape(100, 1000, -1)
+    assert (enclosure.lengths.lo[:, None] <= lengths).all() and (lengths <= enclosure.lengths.hi[:, None]).all()
+    # the mean-value enclosure is of second order: a box 10 times smaller is about 10 times narrower
+    small = _enclosure(problem, lo, lo + (hi - lo) / 10)
+    ratio = np.median((enclosure.structure.hi - enclosure.structure.lo) / (small.structure.hi - small.structure.lo))
+    assert 8 < ratio < 12, ratio
+
+
+def test_structure_enclosure_of_a_point_contains_the_exact_matrix(make_cfg):
+    """Boxes of zero width: the enclosure is a few doubles wide and must hold the matrix computed
+    at 50 digits (without outward rounding it is one double, off the exact value)."""
+    problem = _problem(make_cfg, ROBOTS["tilted payload"][0])
+    rng = np.random.default_rng(3)
+    points = rng.uniform([-1.4, -0.9, 0.3], [1.4, 0.9, 1.7], (40, 3))
+    enclosure = _enclosure(problem, points, points)
+    robot, angles = problem.robot, problem.orientations[0]
+    outside_float = 0
+    with mpmath.workdps(50):
+        a, b, c = (mpmath.mpf(float(v)) for v in angles)
+        rx = mpmath.matrix([[1, 0, 0], [0, mpmath.cos(a), -mpmath.sin(a)], [0, mpmath.sin(a), mpmath.cos(a)]])
+        ry = mpmath.matrix([[mpmath.cos(b), 0, mpmath.sin(b)], [0, 1, 0], [-mpmath.sin(b), 0, mpmath.cos(b)]])
+        rz = mpmath.matrix([[mpmath.cos(c), -mpmath.sin(c), 0], [mpmath.sin(c), mpmath.cos(c), 0], [0, 0, 1]])
+        rotation = rz * ry * rx
+        for n, point in enumerate(points):
+            for i in range(robot.n_cables):
+                arm = rotation * mpmath.matrix([mpmath.mpf(float(v)) for v in robot.attachments[i]])
+                d = [mpmath.mpf(float(point[k])) + arm[k] - mpmath.mpf(float(robot.anchors[i, k])) for k in range(3)]
+                length = mpmath.sqrt(sum(v * v for v in d))
+                u = [v / length for v in d]
+                column = u + [arm[1] * u[2] - arm[2] * u[1], arm[2] * u[0] - arm[0] * u[2], arm[0] * u[1] - arm[1] * u[0]]
+                for row in range(6):
+                    lo, hi = enclosure.structure.lo[n, row, i], enclosure.structure.hi[n, row, i]
+                    assert mpmath.mpf(lo) <= column[row] <= mpmath.mpf(hi)
+                    assert hi - lo <= 1e-13
+                    nearest = float(column[row])
+                    outside_float += mpmath.mpf(nearest) != column[row]
+    assert outside_float > 1000  # the exact values are not doubles: a one-double enclosure would miss them
+
+
+# -- certified boxes against the exact per-pose test -------------------------------------------
+
+@pytest.mark.parametrize("name", sorted(ROBOTS))
+def test_no_pose_of_a_certified_box_contradicts_the_exact_test(make_cfg, name):
+    overrides, depth = ROBOTS[name]
+    problem = _problem(make_cfg, overrides, "compute.n_jobs=1")
+    found, _ = paving.pave(problem, depth, 600.0, make_cfg(*overrides, "compute.n_jobs=1").compute)
+    rng = np.random.default_rng(4)
+    checked = {}
+    for verdict in (INSIDE, OUTSIDE):
+        rows = np.flatnonzero(found.verdict == verdict)
+        assert len(rows) > 0, (name, verdict)
+        weights = found.volumes(np.flatnonzero(problem.robot.box_hi > problem.robot.box_lo))[rows]
+        pick = rng.choice(rows, 4000, p=weights / weights.sum())
+        points = found.lo[pick] + rng.uniform(0, 1, (4000, 3)) * (found.hi[pick] - found.lo[pick])
+        corners = np.where(rng.uniform(size=(1000, 3)) < 0.5, found.lo[pick[:1000]], found.hi[pick[:1000]])
+        checked[verdict] = _min_margins(problem, np.concatenate([points, corners]))
+    atol = problem.margin_atol
+    assert (checked[INSIDE] >= -atol).all(), np.sort(checked[INSIDE])[:5]
+    assert (checked[OUTSIDE] < atol).all(), np.sort(checked[OUTSIDE])[-5:]
+    assert (checked[OUTSIDE] < -atol).mean() > 0.99  # (a corner may sit on the boundary of an outside box)
+
+
+def test_the_bracket_holds_a_fine_grid_and_narrows_with_depth(make_cfg):
+    problem = _problem(make_cfg, PLANAR_BODY, "compute.n_jobs=1")
+    compute = make_cfg(*PLANAR_BODY, "compute.n_jobs=1").compute
+    axes = np.array([0, 1])
+    brackets = []
+    for depth in (8, 11, 14):
+        found, ended = paving.pave(problem, depth, 600.0, compute)
+        volumes = found.volumes(axes)
+        inside, undecided = volumes[found.verdict == INSIDE].sum(), volumes[found.verdict == UNDECIDED].sum()
+        assert np.isclose(volumes.sum(), 1.8 * 1.8)  # the boxes tile the search box
+        brackets.append((inside, inside + undecided))
+        assert ended["depth_reached"] == depth
+    steps = np.linspace(-0.9, 0.9, 301)
+    grid = np.stack(np.meshgrid(steps, steps, [0.0], indexing="ij"), axis=-1).reshape(-1, 3)
+    area = (_min_margins(problem, grid) >= -problem.margin_atol).mean() * 1.8 * 1.8
+    for low, high in brackets:
+        assert low - 0.02 <= area <= high + 0.02, (low, area, high)
+    assert brackets[0][0] < brackets[1][0] < brackets[2][0] and brackets[0][1] > brackets[1][1] > brackets[2][1]
+    assert brackets[2][1] - brackets[2][0] < 0.5 * (brackets[0][1] - brackets[0][0])
+
+
+def test_a_load_no_cable_can_hold_is_outside_everywhere(make_cfg):
+    """A weight the cables cannot hold anywhere (100 kg on cables rated 40 N): the whole search
+    box certified outside within a few levels."""
+    compute = make_cfg(*PLANAR_POINT, "compute.n_jobs=1").compute
+    heavy = _problem(make_cfg, PLANAR_POINT, "robot.platform.mass=100", "compute.n_jobs=1")
+    found, ended = paving.pave(heavy, 6, 60.0, compute)
+    assert (found.verdict == OUTSIDE).all() and ended["stopped"] == "decided" and ended["depth_reached"] <= 3
+
+
+# -- the command line ----------------------------------------------------------------------
+
+def test_a_certified_job_writes_its_boxes_and_the_bracket(tmp_path):
+    run = tmp_path / "run"
+    done = command(tmp_path, "pipeline", *PLANAR_BODY, "tension=feasible", "analysis=certified", "certified.depth=9",
+                   f"hydra.run.dir={run}")
+    assert done.returncode == 0, done.stderr[-2000:]
+    boxes = pd.read_parquet(run / "boxes.parquet")
+    assert list(boxes.columns) == ["lo_x", "lo_y", "lo_z", "hi_x", "hi_y", "hi_z", "verdict", "depth", "volume"]
+    assert set(boxes.verdict) <= {"inside", "outside", "undecided"}
+    summary = pd.read_parquet(run / "summary.parquet").iloc[0]
+    assert summary.analysis == "certified" and summary.stopped == "depth" and summary.depth_reached == 9
+    assert np.isclose(summary.inside_m3 + summary.outside_m3 + summary.undecided_m3, summary.box_m3)
+    assert np.isclose(summary.inside_m3, boxes.volume[boxes.verdict == "inside"].sum())
+    assert np.isclose(summary.undecided_pct, 100 * summary.undecided_m3 / summary.box_m3)
+    assert "certified:" in done.stdout and "undecided" in done.stdout
+
+
+def test_the_time_budget_leaves_the_rest_undecided(make_cfg):
+    problem = _problem(make_cfg, IPANEMA, "compute.n_jobs=1")
+    found, ended = paving.pave(problem, 30, 1e-9, make_cfg(*IPANEMA, "compute.n_jobs=1").compute)
+    assert ended["stopped"] == "time" and (found.verdict == UNDECIDED).all() and len(found.verdict) == 1
+
+
+REFUSALS = {  # overrides -> what the one line names
+    ("tension=pinv",): "tension.model=pinv",
+    ("robot.dofs=[rx,ry,rz]", "robot.search.lo=[-0.3,-0.3,-0.3]", "robot.search.hi=[0.3,0.3,0.3]"): "robot.dofs",
+    ("poses=[[0,0,1]]",): "poses",
+    ("robot.pulleys={axis: [0, 0, 1], radius: 0.05}",): "robot.pulleys",
+    ("model.moment_arm=base",): "model.moment_arm=base",
+    ("output.mesh=true",): "output.mesh",
+    ("output.cables=true",): "output.cables",
+    ("compute.kernel=fused",): "compute.kernel=fused",
+    ("workspace.home=[0,0,1]",): "workspace.home",
+    ("robot.cable_diameter=0.01",): "cable_cable",
+    ("certified.depth=-1",): "certified.depth",
+    ("certified.depth=41",): "certified.depth",
+    ("certified.time=0",): "certified.time",
+    ("certified.time=inf",): "certified.time",
+    ("robot.search.lo=null", "robot.search.hi=null"): "robot.search",
+}
+
+
+@pytest.mark.parametrize("overrides", sorted(REFUSALS))
+def test_what_a_paving_cannot_prove_is_refused_in_one_line(tmp_path, overrides):
+    run = tmp_path / "run"
+    base = [o for o in IPANEMA if not (o.startswith("robot.search") and any(x.startswith("robot.search") for x in overrides))]
+    done = command(tmp_path, "pipeline", *base, "tension=feasible", "analysis=certified", *overrides,
+                   f"hydra.run.dir={run}")
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 2 and len(lines) == 1 and REFUSALS[overrides] in lines[0], done.stderr[-1500:]
+    assert not run.exists()
