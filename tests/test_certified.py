@@ -42,7 +42,7 @@ CRANE = ["robot=points", "robot.anchors=[[-1,-1,3],[1,-1,3],[1,1,3],[-1,1,3]]",
          "robot.search.lo=[-1.5,-1.5,0]", "robot.search.hi=[1.5,1.5,2.8]", "robot.platform.mass=5",
          "tension.t_min=1", "tension.t_max=40", "wrench.fx=3"]
 QUARTER = [o for o in IPANEMA if not o.startswith("robot.search")]  # IPAnema 1 in a corner of its frame
-ROBOTS = {
+ROBOTS = {  # name -> (overrides, depth)
     "ipanema": ([*QUARTER, "robot.search.lo=[0,0,0]", "robot.search.hi=[2,1.5,2]"], 12),
     "tilted payload": ([*CROSSED_ROBOT, "tension.t_min=0", "tension.t_max=150", "load.mass=3", "load.com=[0.04,-0.03,0.02]",
                         "orientation.psi=0.1", "orientation.theta=-0.08", "orientation.phi=0.25", "robot.l_max=3.2"], 14),
@@ -268,6 +268,10 @@ REFUSALS = {  # overrides -> what the one line names
     ("certified.time=0",): "certified.time",
     ("certified.time=inf",): "certified.time",
     ("robot.search.lo=null", "robot.search.hi=null"): "robot.search",
+    ("robust.anchors=-0.01",): "robust.anchors",
+    ("robust.com=nan",): "robust.com",
+    ("robust.mass=2",): "robust.mass=2",  # more than the load's mass (massless here)
+    ("robot.platform.mass=1", "robust.mass=0.1", "platform_motion.acceleration=[[1,0,0,0,0,0]]"): "robust.mass",
 }
 
 
@@ -280,3 +284,76 @@ def test_what_a_paving_cannot_prove_is_refused_in_one_line(tmp_path, overrides):
     lines = done.stderr.strip().splitlines()
     assert done.returncode == 2 and len(lines) == 1 and REFUSALS[overrides] in lines[0], done.stderr[-1500:]
     assert not run.exists()
+
+
+# -- robust workspaces: build tolerances ---------------------------------------------------------
+
+ROBUST = {  # name -> (overrides, depth, tolerances, what the perturbed robots change)
+    "planar body": (PLANAR_BODY, 11, paving.Tolerances(anchors=0.01, attachments=0.005)),
+    "crane": (CRANE, 12, paving.Tolerances(anchors=0.01, mass=0.2, com=0.01)),
+}
+
+
+def _perturbed(overrides, robot, tolerances, rng, corner: bool) -> list[str]:
+    """The overrides of a robot drawn within the tolerances (a corner of their box, or inside)."""
+    def draw(shape, half):
+        values = rng.choice([-1.0, 1.0], shape) if corner else rng.uniform(-1.0, 1.0, shape)
+        return half * values
+    anchors = robot.anchors + draw(robot.anchors.shape, tolerances.anchors)
+    attachments = robot.attachments + draw(robot.attachments.shape, tolerances.attachments)
+    mass = float(next(o for o in overrides if o.startswith("robot.platform.mass")).split("=")[1]) if any(
+        o.startswith("robot.platform.mass") for o in overrides) else 0.0
+    return [*[o for o in overrides if not o.startswith(("robot.anchors", "robot.attachments", "robot.platform.mass"))],
+            f"robot.anchors={anchors.tolist()}", f"robot.attachments={attachments.tolist()}",
+            f"robot.platform.mass={mass + float(draw((), tolerances.mass))}",
+            f"robot.platform.com={draw(3, tolerances.com).tolist()}"]
+
+
+@pytest.mark.parametrize("name", sorted(ROBUST))
+def test_no_robot_within_the_tolerances_contradicts_a_robust_box(make_cfg, name):
+    """Monte-Carlo falsification: 300 robots drawn within the tolerances (a third at corners of
+    their box), each at 40 random poses of the robust inside boxes: all feasible by the exact test
+    of that robot; the robust inside set lies in the nominal one and shrinks as they grow."""
+    overrides, depth, tolerances = ROBUST[name]
+    problem = _problem(make_cfg, overrides, "compute.n_jobs=1")
+    compute = make_cfg(*overrides, "compute.n_jobs=1").compute
+    axes = np.flatnonzero(problem.robot.box_hi > problem.robot.box_lo)
+    nominal, _ = paving.pave(problem, depth, 600.0, compute)
+    robust, _ = paving.pave(problem, depth, 600.0, compute, tolerances)
+    half = paving.Tolerances(**{k: v / 2 for k, v in vars(tolerances).items()})
+    between, _ = paving.pave(problem, depth, 600.0, compute, half)
+    volume = {key: found.volumes(axes)[found.verdict == INSIDE].sum() for key, found in
+              (("nominal", nominal), ("half", between), ("robust", robust))}
+    assert 0 < volume["robust"] < volume["half"] < volume["nominal"], volume
+    outside = [found.volumes(axes)[found.verdict == OUTSIDE].sum() for found in (robust, nominal)]
+    assert np.isclose(*outside)  # outside is the nominal robot's
+    rng = np.random.default_rng(5)
+    rows = np.flatnonzero(robust.verdict == INSIDE)
+    weights = robust.volumes(axes)[rows]
+    least = []
+    for number in range(300):
+        drawn = _problem(make_cfg, _perturbed(overrides, problem.robot, tolerances, rng, corner=number % 3 == 0),
+                         "compute.n_jobs=1")
+        pick = rng.choice(rows, 40, p=weights / weights.sum())
+        points = robust.lo[pick] + rng.uniform(0, 1, (40, 3)) * (robust.hi[pick] - robust.lo[pick])
+        least.append(_min_margins(drawn, points))
+    least = np.concatenate(least)
+    assert (least >= -problem.margin_atol).all(), np.sort(least)[:5]
+
+
+def test_a_vanishing_tolerance_gives_the_nominal_paving(make_cfg):
+    problem = _problem(make_cfg, PLANAR_BODY, "compute.n_jobs=1")
+    compute = make_cfg(*PLANAR_BODY, "compute.n_jobs=1").compute
+    nominal, _ = paving.pave(problem, 10, 600.0, compute)
+    tiny, _ = paving.pave(problem, 10, 600.0, compute, paving.Tolerances(anchors=1e-12, attachments=1e-12))
+    assert np.array_equal(nominal.verdict, tiny.verdict) and np.array_equal(nominal.lo, tiny.lo)
+
+
+@pytest.mark.parametrize("analysis", ["statics", "payload", "cpr_wwa", "lines", "trajectory"])
+def test_the_paving_keys_belong_to_it_alone(tmp_path, analysis):
+    for key in ("certified.depth=3", "robust.anchors=0.01"):
+        run = tmp_path / "run"
+        done = command(tmp_path, "pipeline", f"analysis={analysis}", key, f"hydra.run.dir={run}")
+        lines = done.stderr.strip().splitlines()
+        assert done.returncode == 2 and len(lines) == 1 and key in lines[0], done.stderr[-1500:]
+        assert not run.exists()

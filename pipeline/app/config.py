@@ -557,6 +557,18 @@ MAX_DEPTH = 40  # levels of bisection: 2^40 boxes, past any memory
 
 
 @dataclass
+class RobustConfig:
+    """``analysis=certified``: build tolerances, each the half-width of a box around the nominal
+    value on every coordinate (m; kg for ``mass``): a box is inside when every pose in it is feasible
+    for every robot within them (``pipeline.workspace.paving``)."""
+
+    anchors: float = rule(non_negative)
+    attachments: float = rule(non_negative)
+    mass: float = rule(non_negative)
+    com: float = rule(non_negative)
+
+
+@dataclass
 class LinesConfig:
     """Straight-line simulations (analysis=lines, section 3.1.3 of the CPR-8 paper): samples =
     first writes the samples of line O''-F'' only (what Fig. 6 draws, 0.13 MB a job), all those
@@ -634,6 +646,7 @@ class Config:
     platform_motion: PlatformMotionConfig = field(default_factory=PlatformMotionConfig)
     trajectory: TrajectoryConfig = field(default_factory=TrajectoryConfig)
     certified: CertifiedConfig = field(default_factory=CertifiedConfig)
+    robust: RobustConfig = field(default_factory=RobustConfig)
     poses: Any = MISSING
     obstacles: Any = MISSING
     criteria: Any = MISSING

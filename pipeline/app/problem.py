@@ -319,6 +319,10 @@ def _certified(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
         (cfg.output.metrics, "output.metrics=true", "the metrics are per pose, of analysis=statics"),
         (cfg.output.cables, "output.cables=true", "the cables' forces are per pose, of analysis=statics"),
         (name_of(cfg.compute.kernel) == "fused", "compute.kernel=fused", "the certificates have one kernel; use auto"),
+        (spec.moves and (cfg.robust.mass > 0 or cfg.robust.com > 0), "robust.mass, robust.com",
+         "the moving platform's inertia changes with its mass and centre of mass; give them without platform_motion"),
+        (cfg.robust.mass > cfg.robot.platform.mass + cfg.load.mass, f"robust.mass={cfg.robust.mass}",
+         "a tolerance on the mass larger than the mass itself"),
     )
     for asked, key, why in refused:
         if asked:

@@ -97,32 +97,50 @@ class BoxEnclosure:
 
 def structure_enclosure(statics: BoxStatics, lo: np.ndarray, hi: np.ndarray, centre: np.ndarray) -> BoxEnclosure:
     """Enclosures of A(p), its derivatives and the lengths over the boxes [lo, hi] (N, 3), by
-    the mean-value form about ``centre`` (N, 3), a point of each box."""
+    the mean-value form about ``centre`` (N, 3), a point of each box, for every offset R b_i - a_i
+    in ``statics.offsets`` (a robot within build tolerances: the unit vectors at the centre by the
+    same form about the offsets' midpoints)."""
     box = Interval(lo, hi)[:, None, :]  # (N, 1, 3)
-    vectors = box + statics.offsets  # (N, m, 3): d(B), exact up to rounding
-    lengths = vectors.square().sum(axis=-1).sqrt()
+    vectors, lengths, unit = _directions(box + statics.offsets, statics.shortest)  # over B: d(B), |d(B)|, d/|d|
     regular = (lengths.lo > statics.shortest).all(axis=1)
-    safe = Interval(np.maximum(lengths.lo, statics.shortest), np.maximum(lengths.hi, statics.shortest))
-    naive = (vectors / safe[..., None]).intersect(Interval(np.full(vectors.shape, -1.0), np.full(vectors.shape, 1.0)))
-    at_centre = Interval.point(centre)[:, None, :] + statics.offsets
-    centre_length = at_centre.square().sum(axis=-1).sqrt()
-    centre_length = Interval(np.maximum(centre_length.lo, statics.shortest), np.maximum(centre_length.hi, statics.shortest))
-    unit_centre = at_centre / centre_length[..., None]
+    middle = (statics.offsets.lo + statics.offsets.hi) / 2  # (m, 3), doubles
+    unit_centre = _directions(Interval.point(centre)[:, None, :] + Interval.point(middle), statics.shortest)[2]
+    _, reach, near = _directions(Interval.point(centre)[:, None, :] + statics.offsets, statics.shortest)
+    change = None
+    for axis, column in enumerate(_unit_slopes(near, reach)):
+        term = column * (statics.offsets[..., axis:axis + 1] - middle[..., axis:axis + 1])
+        change = term if change is None else change + term
+    unit_centre = (unit_centre + change).intersect(near)
     step = Interval(down(lo - centre), up(hi - centre))  # B - c, (N, 3)
-    unit = naive
     for _ in range(2):  # the derivative's enclosure from the unit vectors', then again from the tighter ones
         slopes, change = [], None
-        for axis in range(3):  # du/dp_axis = (e_axis - u u_axis) / l over the box
-            column = -(unit * unit[..., axis:axis + 1])
-            own = -(unit[..., axis].square())
-            column = Interval(column.lo.copy(), column.hi.copy())
-            column.lo[..., axis], column.hi[..., axis] = own.lo, own.hi
-            column = (column + np.eye(3)[axis]) / safe[..., None]
+        for axis, column in enumerate(_unit_slopes(unit, lengths)):
             slopes.append(_columns(statics, column))
             term = column * step[:, None, axis:axis + 1]
             change = term if change is None else change + term
         unit = (unit_centre + change).intersect(unit)
     return BoxEnclosure(_columns(statics, unit_centre), stack(slopes, axis=1), step, _columns(statics, unit), lengths, regular)
+
+
+def _directions(vectors: Interval, shortest: float) -> tuple[Interval, Interval, Interval]:
+    """The cable vectors d, their lengths |d| (at least ``shortest``: a cable that may collapse
+    makes its box irregular) and the naive enclosure of d / |d| within [-1, 1]."""
+    lengths = vectors.square().sum(axis=-1).sqrt()
+    safe = Interval(np.maximum(lengths.lo, shortest), np.maximum(lengths.hi, shortest))
+    unit = (vectors / safe[..., None]).intersect(Interval(np.full(vectors.shape, -1.0), np.full(vectors.shape, 1.0)))
+    return vectors, safe, unit
+
+
+def _unit_slopes(unit: Interval, lengths: Interval) -> list[Interval]:
+    """du/dd_axis = (e_axis - u u_axis) / l, per axis, from enclosures of u and l (N, m)."""
+    columns = []
+    for axis in range(3):
+        column = -(unit * unit[..., axis:axis + 1])
+        own = -(unit[..., axis].square())
+        column = Interval(column.lo.copy(), column.hi.copy())
+        column.lo[..., axis], column.hi[..., axis] = own.lo, own.hi
+        columns.append((column + np.eye(3)[axis]) / lengths[..., None])
+    return columns
 
 
 def _columns(statics: BoxStatics, unit: Interval) -> Interval:

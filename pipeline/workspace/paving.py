@@ -16,9 +16,10 @@ and its pseudo-inverse, the LP's tensions with the most room to both limits
 
 from __future__ import annotations
 
+import itertools
 import logging
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pandas as pd
@@ -52,47 +53,77 @@ class Paving:
         return np.prod((self.hi - self.lo)[:, axes], axis=1)
 
 
-def box_statics(problem: WorkspaceProblem, angles: np.ndarray) -> BoxStatics:
-    """The certificates' data at one orientation (eq. 9's angles): enclosures of R b_i - a_i and
-    R b_i, the required wrenches widened by ``WRENCH_RTOL`` of the terms that form them, the
-    tension limits and the cables' lengths."""
+@dataclass(frozen=True)
+class Tolerances:
+    """Build tolerances (``robust.*``), each a half-width on every coordinate: ``anchors`` and
+    ``attachments`` (m), the load's ``mass`` (kg) and centre of mass ``com`` (m)."""
+
+    anchors: float = 0.0
+    attachments: float = 0.0
+    mass: float = 0.0
+    com: float = 0.0
+
+    @property
+    def nominal(self) -> bool:
+        return not (self.anchors or self.attachments or self.mass or self.com)
+
+
+def box_statics(problem: WorkspaceProblem, angles: np.ndarray, tolerances: Tolerances = Tolerances()) -> BoxStatics:
+    """The certificates' data at one orientation (eq. 9's angles), for every robot within
+    ``tolerances``: enclosures of R b_i - a_i and R b_i, the required wrenches (each the hull of its
+    values at the corners of the mass and centre-of-mass box, where a wrench affine in each is
+    extreme) widened by ``WRENCH_RTOL`` of the terms that form them, the tension limits and the
+    cables' lengths."""
     robot, spec = problem.robot, problem.spec
     rotation = rotation_enclosure(*angles)
-    arms = (rotation[None] * robot.attachments[:, None, :]).sum(axis=-1)  # (m, 3)
-    offsets = (-Interval.point(robot.anchors)) if spec.cable_direction == "centre" else arms - robot.anchors
-    state = spec.state(robot, ((robot.box_lo + robot.box_hi) / 2)[None], tuple(angles))
-    wrenches = np.asarray(state.required_wrenches, dtype=float).reshape(-1, len(robot.dofs))
+    def within(points: np.ndarray, tolerance: float) -> Interval:
+        return Interval.point(points) + Interval(np.full(3, -tolerance), np.full(3, tolerance))
+
+    attachments, anchors = within(robot.attachments, tolerances.attachments), within(robot.anchors, tolerances.anchors)
+    arms = (rotation[None] * attachments[:, None, :]).sum(axis=-1)  # (m, 3)
+    offsets = -anchors if spec.cable_direction == "centre" else arms - anchors
+    centre = ((robot.box_lo + robot.box_hi) / 2)[None]
     load = spec.load
+    corners = [replace(spec, load=replace(load, mass=load.mass + dm, com=np.asarray(load.com) + np.array(dc)))
+               for dm in sorted({-tolerances.mass, tolerances.mass})
+               for dc in itertools.product(*[sorted({-tolerances.com, tolerances.com})] * 3)]
+    wrenches = np.stack([np.asarray(corner.state(robot, centre, tuple(angles)).required_wrenches, dtype=float)
+                         .reshape(-1, len(robot.dofs)) for corner in corners])  # (corners, K, k)
     size = (1.0 + np.abs(wrenches).max() + np.abs(load.external).max() + np.abs(spec.wrench_set).max(initial=0.0)
-            + load.mass * (load.gravity + np.abs(spec.accelerations).max(initial=0.0)) * (1.0 + np.linalg.norm(load.com))
+            + (load.mass + tolerances.mass) * (load.gravity + np.abs(spec.accelerations).max(initial=0.0))
+            * (1.0 + np.linalg.norm(load.com) + 2 * tolerances.com)
             + (0.0 if load.inertia is None else np.abs(load.inertia).max())
             * (np.abs(spec.accelerations).max(initial=0.0) + np.abs(spec.angular_velocities).max() ** 2))
     radius = WRENCH_RTOL * size
     m = robot.n_cables
     lower = np.broadcast_to(np.asarray(spec.tension.t_min, dtype=float), (m,)).copy()
     upper = np.broadcast_to(np.asarray(problem.limits.t_max, dtype=float), (m,)).copy()
-    return BoxStatics(offsets, arms, tuple(robot.dofs), Interval(wrenches - radius, wrenches + radius), lower, upper,
-                      np.inf if robot.l_max is None else float(robot.l_max), robot.shortest_cable)
+    return BoxStatics(offsets, arms, tuple(robot.dofs), Interval(wrenches.min(axis=0) - radius, wrenches.max(axis=0) + radius),
+                      lower, upper, np.inf if robot.l_max is None else float(robot.l_max), robot.shortest_cable)
 
 
-def certify(problem: WorkspaceProblem, statics: list[BoxStatics], lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    """(N,) the verdict of each box [lo, hi] (N, 3): inside at every orientation, outside at one."""
+def certify(problem: WorkspaceProblem, statics: list[tuple[BoxStatics, BoxStatics]], lo: np.ndarray,
+            hi: np.ndarray) -> np.ndarray:
+    """(N,) the verdict of each box [lo, hi] (N, 3): inside at every orientation for every robot
+    within the tolerances, outside at one for the nominal robot (then for none within them).
+    ``statics``: (nominal, within the tolerances) per orientation of ``problem.orientations``."""
     centre = np.clip(lo + (hi - lo) / 2, lo, hi)
     verdict = np.full(len(lo), INSIDE)
-    for angles, box in zip(problem.orientations, statics):
+    for angles, boxes in zip(problem.orientations, statics):
         open_ = np.flatnonzero(verdict != OUTSIDE)
         if not len(open_):
             break
-        found = _certified(problem, box, tuple(angles), lo[open_], hi[open_], centre[open_])
+        found = _certified(problem, *boxes, tuple(angles), lo[open_], hi[open_], centre[open_])
         verdict[open_] = np.where(found == OUTSIDE, OUTSIDE, np.minimum(verdict[open_], found))
     return verdict
 
 
-def _certified(problem: WorkspaceProblem, box: BoxStatics, angles, lo, hi, centre) -> np.ndarray:
+def _certified(problem: WorkspaceProblem, box: BoxStatics, robust: BoxStatics, angles, lo, hi, centre) -> np.ndarray:
     state = problem.spec.state(problem.robot, centre, angles)
     structure = state.structure
     pinv, rank = state.wrench_pinv
     enclosure = certificates.structure_enclosure(box, lo, hi, centre)
+    within = enclosure if robust is box else certificates.structure_enclosure(robust, lo, hi, centre)
     wrenches = (box.wrenches.lo + box.wrenches.hi) / 2
     family = Family("tension", box.lower, box.upper, np.full(len(box.lower), problem.limits.scale))
     every = np.broadcast_to(wrenches, (len(lo), *wrenches.shape))
@@ -105,7 +136,7 @@ def _certified(problem: WorkspaceProblem, box: BoxStatics, angles, lo, hi, centr
     if len(rows):  # the centre holds: the LP's tensions with the most room, moved to first order by A(c)^+
         tensions = capacity_margins(structure[rows], pinv[rows], rank[rows], projected[rows], [family], distribution=True)[1]
         rates = -np.einsum("nmk,nlkj,nKj->nKml", pinv[rows], slopes[rows], tensions)  # A(c) D_l = -(dA/dp_l) t0
-        proven = certificates.inside(box, enclosure.rows(rows), tensions, rates, pinv[rows])
+        proven = certificates.inside(robust, within.rows(rows), tensions, rates, pinv[rows])
         verdict[rows[proven]] = INSIDE
     rows = np.flatnonzero(~held)
     if len(rows):  # the centre fails: the separating direction that holds best over the box, to first order
@@ -117,12 +148,17 @@ def _certified(problem: WorkspaceProblem, box: BoxStatics, angles, lo, hi, centr
     return np.where(too_long, OUTSIDE, verdict)
 
 
-def pave(problem: WorkspaceProblem, depth: int, seconds: float, compute: DictConfig) -> tuple[Paving, dict]:
+def pave(problem: WorkspaceProblem, depth: int, seconds: float, compute: DictConfig,
+         tolerances: Tolerances = Tolerances()) -> tuple[Paving, dict]:
     """Branch and prune from the robot's search box: the paving and how it ended. A level's boxes
     are certified in chunks (``pipeline.workspace.parallel``: ``compute.n_jobs`` workers); past
     ``seconds`` the chunks not yet certified stay undecided."""
     robot = problem.robot
-    given = (problem, [box_statics(problem, angles) for angles in problem.orientations])
+    statics = []
+    for angles in problem.orientations:
+        nominal = box_statics(problem, angles)
+        statics.append((nominal, nominal if tolerances.nominal else box_statics(problem, angles, tolerances)))
+    given = (problem, statics)
     axes = np.flatnonzero(robot.box_hi > robot.box_lo)
     boxes = np.concatenate([robot.box_lo, robot.box_hi])[None].astype(float)  # (B, 6): lo, hi
     kept: list[tuple] = []
@@ -172,7 +208,8 @@ def _bisected(boxes: np.ndarray, axes: np.ndarray) -> np.ndarray:
 
 def paving_files(cfg: DictConfig, problem: WorkspaceProblem, files) -> dict:
     """A certified job's boxes.parquet and summary (module doc)."""
-    paving, ended = pave(problem, int(cfg.certified.depth), float(cfg.certified.time), cfg.compute)
+    tolerances = Tolerances(**{key: float(value) for key, value in cfg.robust.items()})
+    paving, ended = pave(problem, int(cfg.certified.depth), float(cfg.certified.time), cfg.compute, tolerances)
     robot = problem.robot
     axes = np.flatnonzero(robot.box_hi > robot.box_lo)
     volumes = paving.volumes(axes)
