@@ -357,3 +357,23 @@ def test_the_paving_keys_belong_to_it_alone(tmp_path, analysis):
         lines = done.stderr.strip().splitlines()
         assert done.returncode == 2 and len(lines) == 1 and key in lines[0], done.stderr[-1500:]
         assert not run.exists()
+
+
+def test_the_paving_figure_cuts_the_boxes_and_its_areas_tile_the_plane(tmp_path):
+    """A study of a planar body's paving: the figure kind ``paving`` draws its plane and its CSV
+    gives the areas inside, outside and undecided, which add up to the search box and match the
+    summary's volumes (areas for a planar robot)."""
+    (tmp_path / "studies").mkdir()
+    (tmp_path / "studies" / "plane.yaml").write_text(
+        "title: a planar paving\nsource: test\noverrides:\n" + "".join(f"  - \"{o}\"\n" for o in PLANAR_BODY)
+        + "  - tension=feasible\n  - analysis=certified\n  - certified.depth=9\n"
+        "figures:\n  - kind: paving\n    file: plane.png\n    axis: z\n    layers: 2\n    title: plane\n")
+    done = command(tmp_path, "pipeline.study", "--config-dir", str(tmp_path), "plane", "--out", str(tmp_path / "out"))
+    assert done.returncode == 0, done.stderr[-2000:]
+    series = pd.read_csv(tmp_path / "out" / "plane" / "series" / "plane.csv")
+    assert len(series) == 1  # a plane: one section
+    row = series.iloc[0]
+    assert np.isclose(row.inside_m2 + row.outside_m2 + row.undecided_m2, 1.8 * 1.8)
+    summary = pd.read_parquet(next((tmp_path / "out" / "plane").glob("**/summary.parquet"))).iloc[0]
+    assert np.isclose(row.inside_m2, summary.inside_m3) and np.isclose(row.undecided_m2, summary.undecided_m3)
+    assert (tmp_path / "out" / "plane" / "figures" / "plane.png").stat().st_size > 10_000

@@ -49,7 +49,7 @@ class FigureSpec:
     curve's legend (default: the ``hue`` key in words); ``table`` draws from an analysis table
     of the study (e.g. ``exact_drive``: its rows name their jobs) instead of the summary;
     ``slices`` cuts each job's grid across ``axis`` (x, y or z) at ``layers`` evenly spaced
-    levels."""
+    levels, ``paving`` each certified job's boxes the same way."""
 
     kind: str = rule(lambda kind: None if kind in KINDS else f"unknown kind {kind!r} (known: {', '.join(KINDS)})")
     file: str = rule(lambda file: file_error(file))
@@ -426,6 +426,52 @@ def path_view(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_
     return written
 
 
+def paving_slices(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
+    """Sections of each selected certified job's boxes (``analysis=certified``) across ``axis`` at
+    the middles of ``layers`` equal slabs: each box the level cuts, green where it is proven inside, red
+    outside, grey undecided; the areas of the three per level as CSV in ``series/``. A planar
+    robot's paving is its plane, one section."""
+    from matplotlib.collections import PolyCollection
+    from matplotlib.patches import Patch
+
+    colours = {"inside": FEASIBLE_COLOUR, "outside": "#D55E00", "undecided": "#BBBBBB"}
+    written = []
+    across = [a for a in "xyz" if a != spec.axis]
+    for _, job in table.iterrows():
+        boxes = results.boxes(job["job"])
+        low, high = boxes[f"lo_{spec.axis}"].to_numpy(float), boxes[f"hi_{spec.axis}"].to_numpy(float)
+        span = high.max() - low.min()  # the levels: the middles of ``layers`` equal slabs (a plane's: its own)
+        levels = low.min() + (np.arange(spec.layers) + 0.5) * span / spec.layers if span > 0 else low[:1]
+        fig = _figure(figsize=(3.0 * len(levels) + 1.2, 3.3), layout="constrained")
+        axes = fig.subplots(1, len(levels), squeeze=False, sharey=True)[0]
+        rows = []
+        for ax, level in zip(axes, levels):
+            cut = boxes[(low <= level) & ((level < high) | (high == low))]
+            verdicts = cut["verdict"].astype(str).to_numpy()
+            u0, v0 = cut[f"lo_{across[0]}"].to_numpy(float), cut[f"lo_{across[1]}"].to_numpy(float)
+            u1, v1 = cut[f"hi_{across[0]}"].to_numpy(float), cut[f"hi_{across[1]}"].to_numpy(float)
+            corners = np.stack([np.stack(pair, 1) for pair in ((u0, v0), (u1, v0), (u1, v1), (u0, v1))], 1)
+            ax.add_collection(PolyCollection(corners, facecolors=[colours[v] for v in verdicts],
+                                             edgecolors="white", linewidths=0.1))
+            ax.set_xlim(boxes[f"lo_{across[0]}"].min(), boxes[f"hi_{across[0]}"].max())
+            ax.set_ylim(boxes[f"lo_{across[1]}"].min(), boxes[f"hi_{across[1]}"].max())
+            ax.set_aspect("equal")
+            ax.set_title(f"{spec.axis} = {round(float(level), 3):g} m", fontsize=8)
+            ax.set_xlabel(f"{across[0]} (m)")
+            areas = (u1 - u0) * (v1 - v0)
+            rows.append({spec.axis: float(level), **{f"{v}_m2": float(areas[verdicts == v].sum()) for v in colours}})
+        axes[0].set_ylabel(f"{across[1]} (m)")
+        fig.legend(handles=[Patch(color=colour, label=verdict) for verdict, colour in colours.items()],
+                   loc="outside right center", fontsize=7)
+        fig.suptitle(_fill(spec.title or "", job), fontsize=10)
+        png = _save(fig, spec, out_dir, job)
+        series = out_dir.parent / SERIES_DIR / png.with_suffix(".csv").name
+        series.parent.mkdir(parents=True, exist_ok=True)
+        write_csv(pd.DataFrame(rows).round(9), series)
+        written += [png, series]
+    return written
+
+
 def survival_bar(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:
     """Issue 8: per actuator, the minimum-norm (paper) and the physically valid feasible share,
     labelled with the share of the former that survives; one panel per case and wrench rows."""
@@ -609,6 +655,7 @@ KINDS: dict[str, Callable[[FigureSpec, pd.DataFrame, StudyResults, Path], list[P
     "timeseries": timeseries,
     "path": path_series,
     "path_view": path_view,
+    "paving": paving_slices,
     "curve": curve,
     "heatmap": heatmap,
 }

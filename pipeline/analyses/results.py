@@ -33,6 +33,9 @@ class StudyResults:
     def samples(self, job: str) -> pd.DataFrame:
         return self._data(job, "samples.parquet")
 
+    def boxes(self, job: str) -> pd.DataFrame:
+        return self._data(job, "boxes.parquet")
+
     def config(self, job: str) -> DictConfig:
         """The resolved config ``job`` ran with, as its summary records it."""
         return OmegaConf.create(read_metadata(self.folder(job) / "summary.parquet")[CONFIG_KEY])
