@@ -33,7 +33,7 @@ from pipeline.app.results import read_metadata
 from pipeline.study import OUTPUT_DIR, available, first_actuator_job, study_dir
 
 API_DIR = Path("outputs") / "api"
-FIGURE_KINDS = ("cloud", "slices", "map", "path", "path_view")  # the figure kinds of one job's poses or path
+FIGURE_KINDS = ("cloud", "slices", "map", "path", "path_view", "paving")  # the kinds of one job's poses, path or boxes
 
 __all__ = ["ConfigError", "Workspace", "Choice", "workspace", "actuator_choice", "load_study"]
 
@@ -42,20 +42,22 @@ __all__ = ["ConfigError", "Workspace", "Choice", "workspace", "actuator_choice",
 class Workspace:
     """One finished job: its folder, summary (one row as a dict), per-pose table (None for a
     job run with ``output.points=false`` and for a path), per-sample table (``samples``: the
-    samples of ``analysis=trajectory`` or ``lines``; None for the others), and the resolved
-    config and code version recorded in its files."""
+    samples of ``analysis=trajectory`` or ``lines``; None for the others), certified boxes
+    (``boxes``: ``analysis=certified``'s; None for the others), and the resolved config and code
+    version recorded in its files."""
     folder: Path
     summary: dict
     points: pd.DataFrame | None
     config: str
     version: str
     samples: pd.DataFrame | None = None
+    boxes: pd.DataFrame | None = None
 
     def figure(self, kind: str = "cloud", out: str | Path | None = None, **keys) -> list[Path]:
         """Draw this job as a study draws one (``pipeline.analyses.figures``): ``kind`` cloud, slices
         or map, with a figure's keys (e.g. ``axis="z", layers=4``, ``value="max_payload_kg"``,
-        ``invert_z=True``), or a path's samples against time (``path``) or inside its robot
-        (``path_view``), into ``out`` (default
+        ``invert_z=True``), a path's samples against time (``path``) or inside its robot
+        (``path_view``), or a certified job's boxes in sections (``paving``), into ``out`` (default
         ``<folder>/figures``); returns the PNG files. A cloud also writes its interactive 3-D view
         beside it (with the report extra)."""
         from pipeline.analyses.figures import FigureSpec, render
@@ -63,12 +65,13 @@ class Workspace:
         from pipeline.app.config import check_declared
 
         if kind not in FIGURE_KINDS:
-            raise ConfigError(f"kind={kind!r}: a job draws as a cloud, slices, map, path or path_view (a study's "
-                              "other kinds compare jobs)")
-        drawn, name = (self.samples, "samples") if kind.startswith("path") else (self.points, "points")
+            raise ConfigError(f"kind={kind!r}: a job draws as a cloud, slices, map, path, path_view or paving (a "
+                              "study's other kinds compare jobs)")
+        drawn, name = ((self.samples, "samples") if kind.startswith("path") else (self.boxes, "boxes")
+                       if kind == "paving" else (self.points, "points"))
         if drawn is None:
-            raise ConfigError(f"{self.folder}: no {name}.parquet (a path's with analysis=trajectory; run with "
-                              "output.points=true) to draw")
+            raise ConfigError(f"{self.folder}: no {name}.parquet (a path's with analysis=trajectory, boxes with "
+                              "analysis=certified; run with output.points=true) to draw")
         try:
             spec = FigureSpec(kind=kind, file=f"{kind}.png", **keys)
         except TypeError as exc:  # a key no figure has
@@ -88,10 +91,11 @@ class Workspace:
             changed.append(f"summary.parquet ({exc})")
         if changed:
             raise ConfigError(f"{folder}: {', '.join(changed)} changed since the job finished; run it again")
-        points, samples = folder / "points.parquet", folder / "samples.parquet"
-        return cls(folder, summary, pd.read_parquet(points) if points.exists() else None,
-                   meta.get("cdpr.config", ""), meta.get("cdpr.version", ""),
-                   pd.read_parquet(samples) if samples.exists() else None)
+        def written(name: str) -> pd.DataFrame | None:
+            return pd.read_parquet(folder / name) if (folder / name).exists() else None
+
+        return cls(folder, summary, written("points.parquet"), meta.get("cdpr.config", ""), meta.get("cdpr.version", ""),
+                   written("samples.parquet"), written("boxes.parquet"))
 
 
 @dataclass(frozen=True)

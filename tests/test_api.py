@@ -142,7 +142,7 @@ def test_a_workspace_draws_itself_with_the_studies_figure_code(tmp_path, monkeyp
     assert any(t["name"] == "feasible set (184)" for t in view["data"])  # Table 2: 184 of 216
     slices = ws.figure("slices", out=tmp_path / "mine", axis="x", layers=2)
     assert [p.name for p in slices if p.suffix == ".png"] == ["slices.png"]
-    for kind, keys, message in [("curve", {}, "kind='curve': a job draws as a cloud, slices, map, path or path_view"),
+    for kind, keys, message in [("curve", {}, "kind='curve': a job draws as a cloud, slices, map, path, path_view or paving"),
                                 ("slices", {"axis": "w"}, "figure: axis='w': slices cut across x, y or z"),
                                 ("map", {}, "a map colours the poses by a points column"),
                                 ("slices", {"colour": "red"}, "unexpected keyword argument 'colour'")]:

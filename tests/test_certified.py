@@ -377,3 +377,16 @@ def test_the_paving_figure_cuts_the_boxes_and_its_areas_tile_the_plane(tmp_path)
     summary = pd.read_parquet(next((tmp_path / "out" / "plane").glob("**/summary.parquet"))).iloc[0]
     assert np.isclose(row.inside_m2, summary.inside_m3) and np.isclose(row.undecided_m2, summary.undecided_m3)
     assert (tmp_path / "out" / "plane" / "figures" / "plane.png").stat().st_size > 10_000
+
+
+def test_the_api_runs_a_paving_and_draws_it(tmp_path, monkeypatch):
+    from pipeline import api
+
+    monkeypatch.chdir(tmp_path)
+    ws = api.workspace([*PLANAR_BODY, "tension=feasible", "analysis=certified", "certified.depth=8"])
+    assert ws.points is None and ws.samples is None and set(ws.boxes.verdict) <= {"inside", "outside", "undecided"}
+    assert np.isclose(ws.boxes.volume.sum(), ws.summary["box_m3"]) and ws.summary["depth_reached"] == 8
+    drawn = ws.figure("paving", out=tmp_path / "mine", layers=1)
+    assert [p.name for p in drawn if p.suffix == ".png"] == ["paving.png"]
+    with pytest.raises(api.ConfigError, match="no boxes.parquet"):
+        api.workspace([*PLANAR_BODY, "tension=feasible", "analysis=statics", "robot.search.step=0.3"]).figure("paving")
