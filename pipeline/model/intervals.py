@@ -109,9 +109,6 @@ class Interval:
         """max |x| over each interval."""
         return np.maximum(np.abs(self.lo), np.abs(self.hi))
 
-    def contains(self, values) -> np.ndarray:
-        return (self.lo <= values) & (values <= self.hi)
-
 
 def _interval(value) -> Interval:
     return value if isinstance(value, Interval) else Interval.point(value)

@@ -133,12 +133,8 @@ def summarize(cfg: DictConfig, counts: dict, cell_volume: float, problem) -> dic
     margin over the feasible poses: ``least_margin_*``, the headroom the feasible workspace
     keeps to each limit; NaN when no pose is feasible)."""
     n_points, n_feasible = counts["n_points"], counts["n_feasible"]
-    row = flatten(OmegaConf.to_container(cfg, resolve=True, enum_to_str=True))
-    row.update(problem.limits.described())  # the actuator's name and power, for CPR-WWA
-    row["n_orientations"] = len(problem.orientations)
+    row = described_job(cfg, problem)
     row["kernel"] = "fused" if problem.fused else "numpy"  # which code computed the margins
-    for axis, lo, hi in zip("xyz", problem.robot.box_lo, problem.robot.box_hi):
-        row[f"box.{axis}_min"], row[f"box.{axis}_max"] = float(lo), float(hi)
     row.update(
         n_points=n_points,
         n_feasible=n_feasible,
@@ -159,6 +155,18 @@ def summarize(cfg: DictConfig, counts: dict, cell_volume: float, problem) -> dic
         known = values[~np.isnan(values)]
         for stat, value in (("min", np.min), ("median", np.median), ("max", np.max)):
             row[f"{key}_{stat}"] = float(value(known)) if len(known) else np.nan
+    return row
+
+
+def described_job(cfg: DictConfig, problem) -> dict:
+    """What every summary begins with: the flattened config (every swept key a column), what the
+    limits say of themselves (the actuator's name and power, for CPR-WWA), the orientations'
+    count and the search box."""
+    row = flatten(OmegaConf.to_container(cfg, resolve=True, enum_to_str=True))
+    row.update(problem.limits.described())
+    row["n_orientations"] = len(problem.orientations)
+    for axis, lo, hi in zip("xyz", problem.robot.box_lo, problem.robot.box_hi):
+        row[f"box.{axis}_min"], row[f"box.{axis}_max"] = float(lo), float(hi)
     return row
 
 

@@ -23,13 +23,13 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 import pandas as pd
-from omegaconf import DictConfig, OmegaConf
+from omegaconf import DictConfig
 
 from pipeline.model import certificates
 from pipeline.model.certificates import INSIDE, OUTSIDE, UNDECIDED, WRENCH_RTOL, BoxStatics
 from pipeline.model.intervals import Interval, rotation_enclosure
 from pipeline.model.tensions import Family, capacity_margins, reachability
-from pipeline.workspace.compute import flatten, name_of
+from pipeline.workspace.compute import described_job, name_of
 from pipeline.workspace.kernel import WorkspaceProblem
 from pipeline.workspace.parallel import iter_chunks
 
@@ -222,11 +222,7 @@ def paving_files(cfg: DictConfig, problem: WorkspaceProblem, files) -> dict:
                                                         categories=list(VERDICTS.values())),
                               "depth": paving.depth, "volume": volumes})
         files.write("boxes", table)
-    row = flatten(OmegaConf.to_container(cfg, resolve=True, enum_to_str=True))
-    row.update(problem.limits.described())
-    row["n_orientations"] = len(problem.orientations)
-    for axis, lo, hi in zip("xyz", robot.box_lo, robot.box_hi):
-        row[f"box.{axis}_min"], row[f"box.{axis}_max"] = float(lo), float(hi)
+    row = described_job(cfg, problem)
     counts = {name: int((paving.verdict == v).sum()) for v, name in VERDICTS.items()}
     row.update(
         n_points=len(paving.verdict), n_feasible=counts["inside"], feasible_pct=100.0 * shares["inside"] / total,
