@@ -40,7 +40,8 @@ from types import ModuleType
 
 log = logging.getLogger(__name__)
 # numba's first compile of each loops module on a machine (docs/performance.md; benchmarks/LOG.md, 2026-11-26)
-COMPILE_S = {"pipeline.workspace.fused_loops": 17.0, "pipeline.model.crossings": 9.0, "pipeline.model.faces": 2.5}
+COMPILE_S = {"pipeline.workspace.fused_loops": 17.0, "pipeline.model.crossings": 9.0, "pipeline.model.faces": 2.5,
+             "pipeline.model.nullspace": 4.0}
 
 
 def compile_seconds(name: str) -> float:

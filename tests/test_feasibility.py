@@ -1,0 +1,102 @@
+"""The fast verdict (issue 58): the null-space test against an independent LP, and
+``feasible_flags`` against the registry's verdicts pose by pose."""
+
+import numpy as np
+import pytest
+from scipy.optimize import linprog
+
+from conftest import CROSSED_ROBOT, SPREAD_ROBOT
+from pipeline.app.problem import build_problem
+from pipeline.model.jit import compiled_loops
+from pipeline.workspace.feasibility import PIVOT_RTOL, feasible_flags
+from pipeline.workspace.kernel import evaluate_chunk
+from pipeline.workspace.verdict import classify
+
+
+def lp_margin(structure, wrench, lower, upper):
+    """max s with S x = w, lower + s <= x <= upper - s (an LP of its own: HiGHS), or -inf."""
+    r, m = structure.shape
+    a_ub = np.block([[-np.eye(m), np.ones((m, 1))], [np.eye(m), np.ones((m, 1))]])
+    b_ub = np.concatenate([-lower, upper])
+    result = linprog(np.r_[np.zeros(m), -1.0], A_ub=a_ub, b_ub=b_ub, A_eq=np.c_[structure, np.zeros(r)], b_eq=wrench,
+                     bounds=[(None, None)] * m + [(None, 10.0)], method="highs")
+    return -result.fun if result.status == 0 else -np.inf
+
+
+@pytest.mark.parametrize("r, m", [(6, 6), (6, 7), (6, 8), (6, 9), (3, 4), (3, 5), (2, 4)])
+def test_the_null_space_verdict_equals_an_lp_on_random_structure_matrices(r, m):
+    """Random S with unit columns and moment rows at the platform's scale, random wrenches: the
+    verdict of every decided pose is the LP's (poses within 1e-7 of the boundary excluded, where
+    either may round), and about half the poses are feasible, so both answers are exercised."""
+    rng = np.random.default_rng(r * 10 + m)
+    n = 600
+    structure = rng.normal(size=(n, r, m))
+    structure[:, r // 2:] *= 0.1
+    spread = rng.uniform(0.0, 14.0, (n, m)) - rng.uniform(0.0, 4.0, (n, 1))  # forces some of them outside [1, 10]
+    wrenches = np.einsum("nrm,nm->nr", structure, spread)[:, None, :]
+    lower, upper = np.full(m, 1.0), np.full(m, 10.0)
+    verdicts = np.empty(n, dtype=np.int8)
+    compiled_loops("pipeline.model.nullspace").pulling_verdicts(structure, wrenches, lower, upper, PIVOT_RTOL, verdicts)
+    margin = np.array([lp_margin(structure[p], wrenches[p, 0], lower, upper) for p in range(n)])
+    clear = np.abs(margin) > 1e-7
+    decided = verdicts >= 0
+    assert decided.mean() > 0.99
+    assert 0.05 < (margin >= 0).mean() < 0.95
+    np.testing.assert_array_equal(verdicts[clear & decided] == 1, margin[clear & decided] >= 0)
+
+
+def test_rank_short_and_wide_null_spaces_are_left_to_the_exact_model():
+    rng = np.random.default_rng(3)
+    short = rng.normal(size=(5, 6, 8))
+    short[:, 5] = short[:, 4]  # two equal rows: rank 5 of 6
+    wide = rng.normal(size=(5, 3, 7))  # null space of dimension 4
+    for structure in (short, wide):
+        verdicts = np.empty(5, dtype=np.int8)
+        compiled_loops("pipeline.model.nullspace").pulling_verdicts(
+            structure, np.zeros((5, 1, structure.shape[1])), np.ones(structure.shape[2]),
+            np.full(structure.shape[2], 10.0), PIVOT_RTOL, verdicts)
+        assert (verdicts == -1).all()
+
+
+def registry_verdicts(problem, rows):
+    raw = evaluate_chunk(problem, rows)
+    return classify({name: raw[f"margin_{name}"] for name in problem.criteria}, problem.margin_atol)[1]
+
+
+IPANEMA = ["robot=points", "robot.anchors=[[-2,1.5,2],[2,1.5,2],[2,-1.5,2],[-2,-1.5,2],[-2,1.5,0],[2,1.5,0],"
+           "[2,-1.5,0],[-2,-1.5,0]]", "robot.attachments=[[-0.06,0.06,0],[0.06,0.06,0],[0.06,-0.06,0],[-0.06,-0.06,0],"
+           "[-0.06,0.06,0],[0.06,0.06,0],[0.06,-0.06,0],[-0.06,-0.06,0]]", "robot.search.lo=[-2,-1.5,0]",
+           "robot.search.hi=[2,1.5,2]", "robot.search.step=0.1", "robot.search.spacing=centres",
+           "tension=feasible", "tension.t_min=1", "tension.t_max=10"]
+CASES = {
+    "IPAnema 1, [1, 10] N": IPANEMA,
+    "off-centre payload, tilted": [*IPANEMA, "robot.search.step=0.25", "orientation.psi=0.3", "orientation.theta=-0.2",
+                                   "load.mass=0.2", "load.com=[0.02,-0.01,0]", "tension.t_max=30"],
+    "orientation set and wrench box": [*IPANEMA, "robot.search.step=0.4", "orientation.total.bound=0.1",
+                                       "orientation.total.n=2", "wrench.set={min:[-1,-1,-2,0,0,0],max:[1,1,1,0,0,0]}",
+                                       "tension.t_max=40"],
+    "crossed, 50 kg, per-cable limits": [*CROSSED_ROBOT, "tension=feasible", "load.mass=50",
+                                         "tension.t_min=[10,10,10,10,20,20,20,20]", "tension.t_max=800"],
+    "spread, length and cable diameter": [*SPREAD_ROBOT, "tension=feasible", "load.mass=5", "tension.t_max=300",
+                                          "robot.l_max=4", "robot.cable_diameter=0.02", "robot.search.step=0.25"],
+    "planar point": ["robot=points", "robot.dofs=[x,y]", "robot.anchors=[[0,0,0],[3,0,0],[3,2,0],[0,2,0]]",
+                     "robot.attachments=[[0,0,0],[0,0,0],[0,0,0],[0,0,0]]", "robot.search.lo=[0,0,0]",
+                     "robot.search.hi=[3,2,0]", "robot.search.step=0.1", "tension=feasible", "tension.t_min=1",
+                     "tension.t_max=10", "wrench.fy=-3"],
+    "minimum-norm forces (the registry alone)": [*SPREAD_ROBOT, "robot.search.step=0.25", "load.mass=5",
+                                                 "tension.t_max=300"],
+}
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_fast_flags_equal_the_registry_verdicts_pose_by_pose(make_cfg, catalogue, case):
+    problem, grid = build_problem(make_cfg(*CASES[case]), catalogue)
+    rows = grid[0:len(grid)]
+    expected = registry_verdicts(problem, rows)
+    np.testing.assert_array_equal(feasible_flags(problem, rows), expected)
+    assert 0 < expected.sum() < len(rows)
+
+
+def test_ipanema_fast_count_is_the_readme_count(make_cfg, catalogue):
+    problem, grid = build_problem(make_cfg(*IPANEMA), catalogue)
+    assert int(feasible_flags(problem, grid[0:len(grid)]).sum()) == 9752
