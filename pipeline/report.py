@@ -399,13 +399,15 @@ def _jobs(summary: pd.DataFrame) -> list[str]:
     """A user study's jobs as a table: the settings its sweep varied, the feasible share and the
     volumes (by cells and by the boundary surface), the median largest payload where computed;
     then each robot file's description (anchors, attachments, platform mass, tension limits:
-    what its jobs share)."""
+    what its jobs share). A design study's trials: those on its Pareto front first."""
+    if "pareto" in summary:
+        summary = summary.sort_values("pareto", ascending=False, kind="stable")
     settings = varying_settings({c: summary[c].tolist() for c in summary.columns}, ignore=("job",))
     shown = [(c, name, form) for c, name, form in JOB_COLUMNS if c in summary and summary[c].notna().any()]
     lines = ["| " + " | ".join([*(md(label(s)) for s in settings), "poses", *(name for _, name, _ in shown)]) + " |",
              "|" + " --- |" * (len(settings) + 1 + len(shown))]
     for _, row in summary.head(MAX_JOB_ROWS).iterrows():
-        cells = [md(row[s]) for s in settings] + [f"{int(row['n_points'])}"]
+        cells = [md(f"{row[s]:.6g}" if isinstance(row[s], float) else row[s]) for s in settings] + [f"{int(row['n_points'])}"]
         cells += [form.format(row[c]) if row[c] == row[c] else "–" for c, _, form in shown]
         lines.append("| " + " | ".join(cells) + " |")
     more = len(summary) - MAX_JOB_ROWS

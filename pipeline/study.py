@@ -40,6 +40,7 @@ from pipeline.analyses.choice import acceptance, choose, verdict
 from pipeline.app.config import check_declared, rule
 from pipeline.errors import ConfigError, one_line
 from pipeline.analyses.evidence import evidence, scores
+from pipeline.analyses.layout import LayoutSpec, best_layout, best_trial, check_robot, placed, search_layouts
 from pipeline.analyses.figures import SERIES_DIR, FigureSpec, render
 from pipeline.analyses.results import StudyResults, table as read_table
 from pipeline.app.job import changed_files, execute, folder_lock
@@ -76,6 +77,7 @@ ANALYSES: dict[str, Callable[[StudyResults], pd.DataFrame]] = {
     "evidence": lambda results: evidence(results.summary),
     "best_drive": lambda results: best_drive(results.summary),
     "exact_drive": lambda results: exact_drive(results.table("search"), results.summary),
+    "best_layout": best_layout,
 }
 log = logging.getLogger("pipeline.study")
 
@@ -93,6 +95,8 @@ class StudySpec:
     ``optimise`` (:class:`pipeline.analyses.optimise.OptimiseSpec`) replaces the sweep by trials that an
     optimiser proposes; ``search`` (:class:`pipeline.analyses.search.SearchSpec`), alone or with it, by
     the exact search over the drive train (``search.parquet``): no ``sweep`` or ``cases`` then.
+    ``layout`` (:class:`pipeline.analyses.layout.LayoutSpec`), alone, by a search over the anchors and
+    attachments of the robot the overrides build (its trials in this process).
     ``name`` and ``config_dir`` are not read from the file: the study's name, and the user's
     folder it came from (its jobs read that folder's robots), None for the package's studies."""
 
@@ -107,6 +111,7 @@ class StudySpec:
     extra_overrides: bool = True
     optimise: Optional[OptimiseSpec] = None
     search: Optional[SearchSpec] = None
+    layout: Optional[LayoutSpec] = None
     analyses: list[str] = rule(lambda analyses: _strings_error(analyses) or next(
         (f"unknown {a!r} (known: {', '.join(ANALYSES)})" for a in analyses if a not in ANALYSES), None), default_factory=list)
     figures: list[FigureSpec] = field(default_factory=list)
@@ -114,7 +119,9 @@ class StudySpec:
     config_dir: Optional[str] = None
 
     def check_across(self, where: str) -> None:
-        designs = [name for name in ("optimise", "search") if getattr(self, name) is not None]
+        designs = [name for name in ("optimise", "search", "layout") if getattr(self, name) is not None]
+        if "layout" in designs and len(designs) > 1:
+            raise ConfigError(f"{where}: layout: a layout study searches the anchors alone (drop {designs[0]})")
         if designs and (self.sweep or self.cases):
             raise ConfigError(f"{where}: {designs[0]}: a study either sweeps or optimises and searches "
                               "(drop sweep and cases)")
@@ -144,7 +151,7 @@ class StudySpec:
     @property
     def designs(self) -> bool:
         """Whether trials or a search replace the sweep (jobs run one after another here)."""
-        return self.optimise is not None or self.search is not None
+        return self.optimise is not None or self.search is not None or self.layout is not None
 
 
 def _strings_error(values) -> str | None:
@@ -295,7 +302,10 @@ def _run_study(study: StudySpec, extra: list[str], out: Path, figures_only: bool
         commands = [command for command, _ in checked]
         write_text(out / "study.yaml", provenance)
         log.info("study %s: %s", name, study.title)
-        if study.designs:
+        if study.layout is not None:
+            _start_or_resume(out / "jobs", [[OmegaConf.to_yaml({"layout": asdict(study.layout), "extra_overrides": extra})]])
+            summary = _layouts(study, extra, out, checked[0][1].jobs[0])
+        elif study.designs:
             _start_or_resume(out / "jobs", [[OmegaConf.to_yaml({
                 "optimise": study.optimise and asdict(study.optimise),
                 "search": study.search and asdict(study.search), "extra_overrides": extra})]])
@@ -445,6 +455,8 @@ def checked_commands(name: str, extra: list[str], out_root: Path | None = None,
         raise ConfigError(f"{changed[0]}: study {name} checks the papers' published facts on "
                           "their own settings; it takes compute.* overrides only")
     out = study_dir(name, extra, out_root)
+    if study.layout is not None:
+        return [(["layout"], _layout_plan(study, extra, out))]
     if study.designs:  # the lowest and highest designs
         job = first_actuator_job([*study.arguments, *extra], out)
         cfg, catalogue = job.cfg, job.catalogue
@@ -584,6 +596,54 @@ def _designs(study: StudySpec, extra: list[str], jobs_dir: Path, catalogue,
         quiet.setLevel(levels[0])
         progress.setLevel(levels[1])
     return (pd.DataFrame(searched_rows) if summary is None else summary), searched
+
+
+def _layout_plan(study: StudySpec, extra: list[str], out: Path) -> Plan:
+    """The plan of a layout study's robot as the overrides build it (the job its best layout runs
+    as, ``jobs/best``), refused in one line where a layout cannot be searched."""
+    planned = plan([*study.arguments, *extra, f"hydra.run.dir={quoted(out / 'jobs' / 'best')}"])
+    job = planned.jobs[0]
+    if job.cfg.robot.name != "points":
+        raise ConfigError(f"robot={job.robot_file}: study {study.name} moves the anchors of a robot given by its "
+                          "points (robot=points, or a robot file of points); this one is built from parameters")
+    if job.cfg.analysis not in ("statics", "cpr_wwa") or job.problem.angles is not None:
+        raise ConfigError(f"analysis={job.cfg.analysis}: study {study.name} counts a grid of positions "
+                          "(analysis=statics or cpr_wwa)")
+    check_robot(study.layout, job.problem.robot)
+    return planned
+
+
+def _layouts(study: StudySpec, extra: list[str], out: Path, job: Job) -> pd.DataFrame:
+    """A layout study's trials (:func:`pipeline.analyses.layout.search_layouts`, in this process);
+    the best one run again as an ordinary job (``jobs/best``, its count checked against the
+    search's) and written as a robot file, ``layout_best.yaml``."""
+    from pipeline.app.problem import build_grid
+    from pipeline.app.yamltext import to_yaml
+
+    grid = build_grid(job.cfg, job.problem.robot)
+    table = search_layouts(study.layout, job.problem, grid[0:len(grid)], grid.cell_volume, int(job.cfg.compute.n_jobs))
+    table["job"] = None
+    best = best_trial(table, study.layout)
+    if best is None:
+        log.warning("layout: no trial holds the required box; no robot file written")
+        return table
+    anchors, attachments = placed(study.layout, job.problem.robot, best.to_dict())
+    points = {"anchors": anchors.tolist(), "attachments": attachments.tolist()}
+    (rerun,) = plan([*study.arguments, *extra, *(f"robot.{key}={value}" for key, value in points.items()),
+                     f"hydra.run.dir={quoted(out / 'jobs' / 'best')}"]).jobs
+    found = execute(rerun)
+    if found["n_feasible"] != best["n_feasible"]:
+        raise RuntimeError(f"layout: the best trial's job found {found['n_feasible']} feasible poses, "
+                           f"its search {best['n_feasible']}")
+    table.loc[table["trial"] == best["trial"], "job"] = "best"
+    robot = OmegaConf.to_container(rerun.config.robot, resolve=True)
+    robot.update(points)
+    write_text(out / "layout_best.yaml", "# the best layout of study " f"{study.name}, trial {int(best['trial'])}: "
+               f"{best['n_feasible']} of {best['n_points']} poses feasible\n"
+               + to_yaml(OmegaConf.create({"defaults": ["points", "_self_"], **robot})))
+    log.info("layout: the best, trial %d: %d/%d poses feasible (%.3f m^3); robot file %s", best["trial"],
+             best["n_feasible"], best["n_points"], best["volume_m3"], out / "layout_best.yaml")
+    return table
 
 
 def _gather(jobs_dir: Path, cases: dict[str, list[str]], labels: dict[str, str]) -> pd.DataFrame:

@@ -83,6 +83,10 @@ CASES = {
                      "robot.attachments=[[0,0,0],[0,0,0],[0,0,0],[0,0,0]]", "robot.search.lo=[0,0,0]",
                      "robot.search.hi=[3,2,0]", "robot.search.step=0.1", "tension=feasible", "tension.t_min=1",
                      "tension.t_max=10", "wrench.fy=-3"],
+    "collinear anchors: a freedom of round-off": [  # rows of 1e-16 at x = 0, which scaling would inflate
+        "robot=points", "robot.dofs=[x,y]", "robot.anchors=[[0,1,0],[0,0,0],[0,-1,0]]",
+        "robot.attachments=[[0,0,0],[0,0,0],[0,0,0]]", "robot.search.lo=[-0.9,-0.9,0]", "robot.search.hi=[0.9,0.9,0]",
+        "robot.search.step=0.15", "tension=feasible", "tension.t_min=1", "tension.t_max=10", "wrench.fy=-3"],
     "minimum-norm forces (the registry alone)": [*SPREAD_ROBOT, "robot.search.step=0.25", "load.mass=5",
                                                  "tension.t_max=300"],
 }

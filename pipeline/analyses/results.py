@@ -43,6 +43,10 @@ class StudyResults:
     def folder(self, job: str) -> Path:
         return self.directory / "jobs" / job
 
+    def job_summary(self, job: str) -> pd.DataFrame:
+        """One job's own summary row (its settings, box and counts), with ``job``."""
+        return table(self.folder(job) / "summary.parquet").assign(job=job)
+
     def _data(self, job: str, name: str) -> pd.DataFrame:
         folder = self.folder(job)
         try:

@@ -72,7 +72,8 @@ def _eliminate(a, b, pivots, pivot_rtol):
 
 @njit(cache=True)
 def _affine(a, b, pivots, m):
-    """x = c + g lam: ``c`` (m,), ``g`` (m, d) from the eliminated system, and the free columns."""
+    """x = c + g lam: ``c`` (m,), ``g`` (m, d) from the eliminated system, and the free columns
+    ``free`` (d,), whose forces are lam."""
     r = a.shape[0]
     d = m - r
     free = np.empty(d, dtype=np.int64)
@@ -92,7 +93,7 @@ def _affine(a, b, pivots, m):
             g[pivots[t], f] = -a[t, free[f]]
     for f in range(d):
         g[free[f], f] = 1.0
-    return c, g
+    return c, g, free
 
 
 @njit(cache=True)
@@ -141,13 +142,26 @@ def _solve(matrix, rhs):
 
 
 @njit(cache=True)
-def _vertex(c, g, lower, upper):
-    """A point of Q (the cable forces x, m) and True, else False: the candidates in turn (d
+def _vertex(c, g, free, lower, upper):
+    """A point of Q (the cable forces x, m) and True, else False: first the box test (each force
+    over lam's own box, lower_F <= lam <= upper_F, which holds Q), then the candidates in turn (d
     cables, each at one side), the first that satisfies every bound."""
     m, d = g.shape
     x = c.copy()
     if d == 0:
         return x, _holds(x, lower, upper)
+    for j in range(m):  # a force that cannot reach its bounds over lam's box: Q is empty (Q lies in that box)
+        least, most = c[j], c[j]
+        for f in range(d):
+            low, high = lower[free[f]], upper[free[f]]
+            if not np.isfinite(high):
+                least, most = -np.inf, np.inf
+                break
+            least += min(g[j, f] * low, g[j, f] * high)
+            most += max(g[j, f] * low, g[j, f] * high)
+        if (most < lower[j] - CHECK_RTOL * (abs(lower[j]) + abs(most))
+                or least > upper[j] + CHECK_RTOL * (abs(upper[j]) + abs(least))):
+            return x, False
     chosen = np.arange(d)
     matrix = np.empty((d, d))
     rhs = np.empty(d)
@@ -166,12 +180,17 @@ def _vertex(c, g, lower, upper):
             lam, regular = _solve(matrix, rhs)
             if not regular:
                 break  # the d cables' hyperplanes are parallel on every side
-            for j in range(m):
+            holds = True
+            for j in range(m):  # each force, stopping at the first out of its bounds
                 total = c[j]
                 for f in range(d):
                     total += g[j, f] * lam[f]
                 x[j] = total
-            if _holds(x, lower, upper):
+                if (total < lower[j] - CHECK_RTOL * (abs(lower[j]) + abs(total))
+                        or total > upper[j] + CHECK_RTOL * (abs(upper[j]) + abs(total))):
+                    holds = False
+                    break
+            if holds:
                 return x, True
         k = d - 1  # the next d cables in lexicographic order
         while k >= 0 and chosen[k] == m - d + k:
@@ -203,11 +222,15 @@ def pulling_verdicts(structure, wrenches, lower, upper, pivot_rtol, verdicts):
         verdict = 1
         for k in range(wrenches.shape[1]):
             regular = True
+            largest = 0.0
+            for i in range(r):
+                for j in range(m):
+                    largest = max(largest, abs(structure[p, i, j]))
             for i in range(r):
                 size = 0.0
                 for j in range(m):
                     size = max(size, abs(structure[p, i, j]))
-                if size == 0.0:
+                if size <= pivot_rtol * largest:  # a row of round-off: the rank is the exact model's to judge
                     regular = False
                     break
                 for j in range(m):
@@ -216,8 +239,8 @@ def pulling_verdicts(structure, wrenches, lower, upper, pivot_rtol, verdicts):
             if not regular or not _eliminate(a, b, pivots, pivot_rtol):
                 verdict = -1
                 continue
-            c, g = _affine(a, b, pivots, m)
-            x, found = _vertex(c, g, lower, upper)
+            c, g, free = _affine(a, b, pivots, m)
+            x, found = _vertex(c, g, free, lower, upper)
             if not found:
                 verdict = 0
                 break

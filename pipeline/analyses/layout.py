@@ -1,0 +1,276 @@
+"""Layout synthesis (a study's ``layout`` block, issue 58): where to put the anchors (and the
+attachments) of a ``points`` robot so that its workspace is largest.
+
+The study's overrides build one problem (its robot, analysis, tensions, load and grid), planned
+and checked as ``python -m pipeline`` would. Each trial moves the anchors inside the
+installation box (``anchors``) and, when ``attachments`` is given, the attachments inside the
+platform's box, and counts the grid's feasible poses in this process
+(:func:`pipeline.workspace.feasibility.feasible_flags`: the exact verdict of every pose, by the
+null-space test where it applies; no Hydra composition, no process per trial), on
+``n_jobs`` of joblib's workers, a batch of trials at a time (Optuna's ask and tell, seeded). With
+``symmetry: quadrants`` the frame's mirror planes x = 0 and y = 0 hold: the robot's cables come
+in fours, (-x, +y), (+x, +y), (+x, -y), (-x, -y) (IPAnema 1's order), and each four is one
+designed anchor in the quarter x, y >= 0 and one designed attachment, mirrored with it.
+
+Objectives (:data:`OBJECTIVES`): ``volume_m3`` (the feasible poses' cells), ``feasible_pct`` and
+``longest_cable_m`` (the longest cable over the feasible poses: the drum a design needs). A
+``required`` box of positions must be feasible at every grid pose inside it (a constraint; the
+grid's verdicts, not a certificate). With ``step`` the variables lie on a lattice, and a lattice
+no larger than the budget is searched exhaustively (every layout once, in order), so its best
+is the best. The best trial is then run again as an ordinary job (``jobs/best``), whose count
+must equal the search's, and written as a robot file the user runs (``layout_best.yaml``).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from itertools import product
+from dataclasses import dataclass, field
+from typing import Optional
+
+import numpy as np
+import pandas as pd
+
+from pipeline.errors import ConfigError, require
+
+log = logging.getLogger("pipeline.study")
+SAMPLERS = ("tpe", "nsga2")
+SYMMETRIES = ("none", "quadrants")
+QUADRANTS = np.array([[-1.0, 1.0, 1.0], [1.0, 1.0, 1.0], [1.0, -1.0, 1.0], [-1.0, -1.0, 1.0]])  # IPAnema 1's order
+OBJECTIVES = {"volume_m3": ("maximize", "feasible volume (m^3)"),
+              "feasible_pct": ("maximize", "feasible share of the grid (%)"),
+              "longest_cable_m": ("minimize", "longest cable over the feasible poses (m)")}
+AXES = "xyz"
+
+
+@dataclass
+class Box:
+    """An axis-aligned box, ``lo`` <= ``hi`` (3 numbers each, m)."""
+
+    lo: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
+    hi: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
+
+    def check(self, where: str) -> None:
+        for name in ("lo", "hi"):
+            value = getattr(self, name)
+            if len(value) != 3 or not all(math.isfinite(v) and abs(v) <= 1e4 for v in value):
+                raise ConfigError(f"{where}.{name}={value}: three finite coordinates (m, at most 1e4)")
+        if any(lo > hi for lo, hi in zip(self.lo, self.hi)):
+            raise ConfigError(f"{where}: lo={self.lo} exceeds hi={self.hi}")
+
+    def contains(self, points: np.ndarray) -> np.ndarray:
+        return np.all((points >= np.asarray(self.lo) - 1e-12) & (points <= np.asarray(self.hi) + 1e-12), axis=-1)
+
+
+@dataclass
+class LayoutSpec:
+    """``anchors``: the installation box every anchor stays in; ``attachments``: the platform's
+    box the attachments stay in (None: the robot's attachments kept); ``symmetry``: ``none`` or
+    ``quadrants`` (see the module); ``step``: the variables' lattice (m; None: continuous);
+    ``objectives``: one or two of :data:`OBJECTIVES`; ``required``: a box of positions that
+    must be feasible (None: none); ``budget``: trials; ``seed``; ``sampler``: ``tpe`` (one
+    objective) or ``nsga2``; ``best``: how many of the best trials become robot files."""
+
+    anchors: Box = field(default_factory=Box)
+    attachments: Optional[Box] = None
+    symmetry: str = "none"
+    step: Optional[float] = None
+    objectives: list[str] = field(default_factory=lambda: ["volume_m3"])
+    required: Optional[Box] = None
+    budget: int = 200
+    seed: int = 0
+    sampler: str = "tpe"
+
+    def check_across(self, where: str) -> None:
+        """ConfigError naming the first field that cannot be used."""
+        where = f"{where}: layout"
+        for name in ("anchors", "attachments", "required"):
+            if getattr(self, name) is not None:
+                getattr(self, name).check(f"{where}.{name}")
+        if self.symmetry not in SYMMETRIES:
+            raise ConfigError(f"{where}.symmetry={self.symmetry!r}: one of {', '.join(SYMMETRIES)}")
+        if self.symmetry == "quadrants":
+            for name in ("anchors", "attachments"):
+                box = getattr(self, name)
+                if box is not None and (box.lo[0] != -box.hi[0] or box.lo[1] != -box.hi[1]):
+                    raise ConfigError(f"{where}.{name}: symmetry=quadrants mirrors x and y: the box must be "
+                                      f"symmetric about x = 0 and y = 0 (lo={box.lo}, hi={box.hi})")
+        if self.step is not None:
+            if not (math.isfinite(self.step) and self.step > 0):
+                raise ConfigError(f"{where}.step={self.step}: a positive length (m), or null (continuous)")
+            for name, (lo, hi) in self.ranges().items():
+                if abs((hi - lo) / self.step - round((hi - lo) / self.step)) > 1e-9:
+                    raise ConfigError(f"{where}.step={self.step}: {name} spans [{lo}, {hi}], not a whole number of steps")
+        unknown = [o for o in self.objectives if o not in OBJECTIVES]
+        if unknown or not 1 <= len(self.objectives) <= 2 or len(set(self.objectives)) < len(self.objectives):
+            raise ConfigError(f"{where}.objectives={self.objectives}: one or two of {', '.join(OBJECTIVES)}")
+        if not 0 < self.budget <= 100_000:
+            raise ConfigError(f"{where}.budget={self.budget}: must be in [1, 100000]")
+        if self.sampler not in SAMPLERS:
+            raise ConfigError(f"{where}.sampler={self.sampler!r}: one of {', '.join(SAMPLERS)}")
+
+    def ranges(self, n_cables: int = 4) -> dict[str, tuple[float, float]]:
+        """Each design variable's range: ``anchor{c}_{axis}`` (and ``attachment{c}_{axis}``) for
+        every designed cable c (all of them; with quadrants the second of each four)."""
+        cables = range(1, n_cables + 1, 4) if self.symmetry == "quadrants" else range(n_cables)
+        found = {}
+        for name, box in (("anchor", self.anchors), ("attachment", self.attachments)):
+            if box is None:
+                continue
+            lo = list(box.lo)
+            if self.symmetry == "quadrants" and name == "anchor":
+                lo[:2] = [0.0, 0.0]  # the quarter x, y >= 0; the mirror images cover the rest
+            for cable in cables:
+                for axis in range(3):
+                    found[f"{name}{cable + 1}_{AXES[axis]}"] = (float(lo[axis]), float(box.hi[axis]))
+        return found
+
+    def layouts(self, n_cables: int) -> int | None:
+        """The number of points of the lattice (None when continuous)."""
+        if self.step is None:
+            return None
+        return math.prod(int(round((hi - lo) / self.step)) + 1 for lo, hi in self.ranges(n_cables).values())
+
+
+def check_robot(spec: LayoutSpec, robot) -> None:
+    """ConfigError unless ``robot`` (a built ``CableRobot``) can take the layout's variables."""
+    if spec.symmetry == "quadrants" and robot.n_cables % 4:
+        raise ConfigError(f"layout.symmetry=quadrants: the robot has {robot.n_cables} cables; quadrants take them "
+                          "in fours, (-x, +y), (+x, +y), (+x, -y), (-x, -y)")
+    if robot.pulleys is not None:
+        raise ConfigError("layout: the robot has pulleys at its anchors; a layout search moves bare anchors")
+
+
+def placed(spec: LayoutSpec, robot, values: dict[str, float]) -> tuple[np.ndarray, np.ndarray]:
+    """The anchors and attachments (m, 3) of a trial's ``values``."""
+    anchors, attachments = robot.anchors.copy(), robot.attachments.copy()
+    for name, points in (("anchor", anchors), ("attachment", attachments)):
+        for cable in range(robot.n_cables):
+            designed = cable - cable % 4 + 1 if spec.symmetry == "quadrants" else cable
+            key = f"{name}{designed + 1}_x"
+            if key not in values:
+                continue
+            point = np.array([values[f"{name}{designed + 1}_{axis}"] for axis in AXES])
+            points[cable] = point * QUADRANTS[cable % 4] if spec.symmetry == "quadrants" else point
+    return anchors, attachments
+
+
+def evaluate(problem, positions: np.ndarray, cell_volume: float, required: np.ndarray | None) -> dict:
+    """A layout's numbers over the grid ``positions``: feasible poses, volume, share, the longest
+    cable over them and the required poses that fail."""
+    from pipeline.model.geometry import cable_vectors, rotation_matrices
+    from pipeline.workspace.dispatch import bounded_chunk_size
+    from pipeline.workspace.feasibility import feasible_flags
+
+    chunk = bounded_chunk_size(problem, None)
+    flags = np.concatenate([feasible_flags(problem, positions[start:start + chunk])
+                            for start in range(0, len(positions), chunk)])
+    longest = 0.0
+    if flags.any() and problem.angles is None:
+        for orientation in problem.orientations:
+            rotation = rotation_matrices(orientation[None, :])[0]
+            lengths = np.linalg.norm(cable_vectors(problem.robot, positions[flags], rotation), axis=-1)
+            longest = max(longest, float(lengths.max()))
+    n = int(flags.sum())
+    return {"n_feasible": n, "n_points": len(positions), "volume_m3": n * cell_volume,
+            "feasible_pct": 100.0 * n / len(positions), "longest_cable_m": longest if n else math.nan,
+            "required_failing": int((~flags[required]).sum()) if required is not None else 0}
+
+
+def search_layouts(spec: LayoutSpec, problem, positions: np.ndarray, cell_volume: float, n_jobs: int) -> pd.DataFrame:
+    """Run the trials; one row per trial: its variables, :func:`evaluate`'s numbers, ``meets``
+    (the required box holds) and ``pareto`` (not dominated among those that meet it)."""
+    from dataclasses import replace
+
+    from joblib import Parallel, delayed
+
+    optuna = require("optuna", "design", "a layout study")
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    ranges = spec.ranges(problem.robot.n_cables)
+    lattice = spec.layouts(problem.robot.n_cables)
+    exhaustive = lattice is not None and lattice <= spec.budget
+    sampler = (optuna.samplers.NSGAIISampler(seed=spec.seed) if spec.sampler == "nsga2" else
+               optuna.samplers.TPESampler(seed=spec.seed, multivariate=True))
+    study = optuna.create_study(directions=[OBJECTIVES[o][0] for o in spec.objectives], sampler=sampler)
+    current = designed(spec, problem.robot, ranges)
+    if current is not None:
+        study.enqueue_trial(current)  # the robot as the overrides give it: the search starts from it
+    if exhaustive:  # every other layout of the lattice, in order
+        axes = [np.linspace(lo, hi, int(round((hi - lo) / spec.step)) + 1) for lo, hi in ranges.values()]
+        for point in product(*axes):
+            values = dict(zip(ranges, map(float, point)))
+            if values != current:
+                study.enqueue_trial(values)
+    required = None if spec.required is None else spec.required.contains(positions)
+    budget = min(spec.budget, lattice) if exhaustive else spec.budget
+    rows = []
+    log.info("layout: %d trials of %d poses (%s%s), %d variables, %d worker(s)", budget, len(positions),
+             "every layout of the lattice" if exhaustive else spec.sampler, f", step {spec.step} m" if spec.step else "",
+             len(ranges), n_jobs)
+    with Parallel(n_jobs=n_jobs) as parallel:
+        while len(rows) < budget:
+            trials = [study.ask() for _ in range(min(n_jobs, budget - len(rows)))]
+            values = [{key: trial.suggest_float(key, lo, hi, step=spec.step) for key, (lo, hi) in ranges.items()}
+                      for trial in trials]
+            layouts = [placed(spec, problem.robot, v) for v in values]
+            found = parallel(delayed(evaluate)(replace(problem, robot=replace(problem.robot, anchors=a, attachments=b)),
+                                               positions, cell_volume, required) for a, b in layouts)
+            for trial, value, numbers in zip(trials, values, found):
+                study.tell(trial, [_objective(numbers, o) for o in spec.objectives])
+                rows.append({"trial": trial.number, **value, **numbers})
+                if len(rows) % 50 == 0 or len(rows) == budget:
+                    first = spec.objectives[0]
+                    best = (min if OBJECTIVES[first][0] == "minimize" else max)(r[first] for r in rows)
+                    log.info("layout: trial %d/%d, best %s %.6g", len(rows), budget, first, best)
+    table = pd.DataFrame(rows)
+    table["symmetry"] = spec.symmetry
+    table["meets"] = table["required_failing"] == 0
+    signs = np.array([1.0 if OBJECTIVES[o][0] == "minimize" else -1.0 for o in spec.objectives])
+    costs = np.nan_to_num(table[spec.objectives].to_numpy(dtype=float) * signs, nan=np.inf)
+    meets = table["meets"].to_numpy()
+    table["pareto"] = [bool(meets[i]) and not ((costs[meets] <= costs[i]).all(axis=1)
+                                              & (costs[meets] < costs[i]).any(axis=1)).any() for i in range(len(table))]
+    return table
+
+
+def designed(spec: LayoutSpec, robot, ranges: dict[str, tuple[float, float]]) -> dict[str, float] | None:
+    """The robot's own layout as the search's variables, when it is one of the space's layouts
+    (inside the ranges, on the lattice, and with quadrants mirror-symmetric); else None."""
+    values = {}
+    for key in ranges:
+        name, axis = key.rsplit("_", 1)
+        points = robot.anchors if name.startswith("anchor") else robot.attachments
+        values[key] = float(points[int(name.removeprefix("anchor").removeprefix("attachment")) - 1, AXES.index(axis)])
+    for key, (lo, hi) in ranges.items():
+        lattice = spec.step is None or abs((values[key] - lo) / spec.step - round((values[key] - lo) / spec.step)) < 1e-9
+        if not (lo <= values[key] <= hi and lattice):
+            return None
+    anchors, attachments = placed(spec, robot, values)
+    same = np.array_equal(anchors, robot.anchors) and np.array_equal(attachments, robot.attachments)
+    return values if same else None
+
+
+def _objective(numbers: dict, name: str) -> float:
+    value = numbers[name]
+    return (math.inf if OBJECTIVES[name][0] == "minimize" else -math.inf) if value != value else value
+
+
+def best_trial(table: pd.DataFrame, spec: LayoutSpec) -> pd.Series | None:
+    """The trial that meets the requirement with the best first objective (ties: the earliest)."""
+    met = table[table["meets"]]
+    if met.empty:
+        return None
+    first = spec.objectives[0]
+    return met.sort_values([first, "trial"], ascending=[OBJECTIVES[first][0] == "minimize", True]).iloc[0]
+
+
+def best_layout(results) -> pd.DataFrame:
+    """A layout study's analysis ``best_layout``: the best trial's own job summary (``jobs/best``:
+    its settings, box and counts, what a ``cloud`` figure of it reads) with its ``trial``; no row
+    when no trial met the requirement."""
+    summary = results.summary
+    best = summary[summary["job"] == "best"]
+    if best.empty:
+        return pd.DataFrame({"job": pd.Series(dtype=str), "trial": pd.Series(dtype=int)})
+    return results.job_summary("best").assign(trial=int(best["trial"].iloc[0]))
