@@ -43,8 +43,9 @@ class Workspace:
     """One finished job: its folder, summary (one row as a dict), per-pose table (None for a
     job run with ``output.points=false`` and for a path), per-sample table (``samples``: the
     samples of ``analysis=trajectory`` or ``lines``; None for the others), certified boxes
-    (``boxes``: ``analysis=certified``'s; None for the others), and the resolved config and code
-    version recorded in its files."""
+    (``boxes``: ``analysis=certified``'s; None for the others), a certified path's pieces
+    (``segments``: with ``certified.path``), and the resolved config and code version recorded in
+    its files."""
     folder: Path
     summary: dict
     points: pd.DataFrame | None
@@ -52,6 +53,7 @@ class Workspace:
     version: str
     samples: pd.DataFrame | None = None
     boxes: pd.DataFrame | None = None
+    segments: pd.DataFrame | None = None
 
     def figure(self, kind: str = "cloud", out: str | Path | None = None, **keys) -> list[Path]:
         """Draw this job as a study draws one (``pipeline.analyses.figures``): ``kind`` cloud, slices
@@ -95,7 +97,7 @@ class Workspace:
             return pd.read_parquet(folder / name) if (folder / name).exists() else None
 
         return cls(folder, summary, written("points.parquet"), meta.get("cdpr.config", ""), meta.get("cdpr.version", ""),
-                   written("samples.parquet"), written("boxes.parquet"))
+                   written("samples.parquet"), written("boxes.parquet"), written("segments.parquet"))
 
 
 @dataclass(frozen=True)

@@ -272,6 +272,12 @@ REFUSALS = {  # overrides -> what the one line names
     ("robust.com=nan",): "robust.com",
     ("robust.mass=2",): "robust.mass=2",  # more than the load's mass (massless here)
     ("robot.platform.mass=1", "robust.mass=0.1", "platform_motion.acceleration=[[1,0,0,0,0,0]]"): "robust.mass",
+    ("certified.path=[[0,0,1]]",): "certified.path",
+    ("certified.path=[[0,0,1],[0,0,1]]",): "way-point 2 repeats way-point 1",
+    ("certified.path=[[0,0,1],[1,nan,1]]",): "way-point 2",
+    ("certified.path=[[0,0,1],[1,1]]",): "way-point 2: needs 3 values",
+    ("certified.path=[[0,0,1],[1e5,0,1]]",): "way-point 2",
+    ("certified.path=[0,0,1]",): "certified.path",
 }
 
 
@@ -351,7 +357,7 @@ def test_a_vanishing_tolerance_gives_the_nominal_paving(make_cfg):
 
 @pytest.mark.parametrize("analysis", ["statics", "payload", "cpr_wwa", "lines", "trajectory"])
 def test_the_paving_keys_belong_to_it_alone(tmp_path, analysis):
-    for key in ("certified.depth=3", "robust.anchors=0.01"):
+    for key in ("certified.depth=3", "robust.anchors=0.01", "certified.path=[[0,0,1],[1,0,1]]"):
         run = tmp_path / "run"
         done = command(tmp_path, "pipeline", f"analysis={analysis}", key, f"hydra.run.dir={run}")
         lines = done.stderr.strip().splitlines()
@@ -390,3 +396,84 @@ def test_the_api_runs_a_paving_and_draws_it(tmp_path, monkeypatch):
     assert [p.name for p in drawn if p.suffix == ".png"] == ["paving.png"]
     with pytest.raises(api.ConfigError, match="no boxes.parquet"):
         api.workspace([*PLANAR_BODY, "tension=feasible", "analysis=statics", "robot.search.step=0.3"]).figure("paving")
+
+
+# -- certified paths: every point of a segment proven -------------------------------------------
+
+PATHS = {  # name -> (overrides, way-points, depth)
+    "ipanema": (IPANEMA, [[-1, -0.5, 0.5], [1, 0.5, 1.5], [0.5, -1, 1], [1.9, 1.4, 1.9]], 12),
+    "tilted payload": (ROBOTS["tilted payload"][0], [[-1.2, -0.8, 0.3], [1.2, 0.7, 1.6], [-0.5, 0.9, 1.2]], 12),
+    "planar point": (PLANAR_POINT, [[-0.9, 0.2, 0], [1.1, 1.8, 0], [0, 1.0, 0]], 12),
+}
+
+
+@pytest.mark.parametrize("name", sorted(PATHS))
+def test_a_certified_path_agrees_with_the_exact_test_along_it(make_cfg, name):
+    """Every point sampled on a piece proven inside holds, none on a piece proven outside does,
+    and the exact test's first failing sample lies after the last piece before the first one not
+    proven inside and no later than where the first outside piece starts (within a sample)."""
+    overrides, points, depth = PATHS[name]
+    problem = _problem(make_cfg, overrides, "compute.n_jobs=1")
+    points = np.asarray(points, dtype=float)
+    pieces, verdict, _, ended = paving.certify_path(problem, points, depth, 600.0,
+                                                    make_cfg(*overrides, "compute.n_jobs=1").compute)
+    starts, ends = points[:-1], points[1:]
+    segment = pieces[:, 0].astype(int)
+    rng = np.random.default_rng(7)
+    for kind in (INSIDE, OUTSIDE):
+        rows = np.flatnonzero(verdict == kind)
+        if not len(rows):
+            assert kind == OUTSIDE and name != "ipanema"
+            continue
+        pick = rng.choice(rows, 3000)
+        t = rng.uniform(pieces[pick, 1], pieces[pick, 2])
+        t[:200] = pieces[pick[:200], 1]  # the pieces' own ends too
+        samples = starts[segment[pick]] + t[:, None] * (ends[segment[pick]] - starts[segment[pick]])
+        least = _min_margins(problem, samples)
+        if kind == INSIDE:
+            assert (least >= -problem.margin_atol).all(), np.sort(least)[:5]
+        else:
+            assert (least < problem.margin_atol).all(), np.sort(least)[-5:]
+    lengths = np.linalg.norm(ends - starts, axis=1)
+    assert np.isclose(((pieces[:, 2] - pieces[:, 1]) * lengths[segment]).sum(), lengths.sum())  # the pieces tile the path
+    step = 2e-3
+    parts = [np.arange(0.0, 1.0, step / length) for length in lengths]
+    along = np.concatenate(parts)[:, None]
+    owner = np.concatenate([np.full(len(part), k) for k, part in enumerate(parts)])
+    samples = starts[owner] + along * (ends[owner] - starts[owner])
+    failing = np.flatnonzero(_min_margins(problem, samples) < -problem.margin_atol)
+    position = np.concatenate([[0.0], np.cumsum(lengths)])[owner] + along[:, 0] * lengths[owner]
+    before = np.concatenate([[0.0], np.cumsum(lengths)])[segment] + pieces[:, 1] * lengths[segment]
+    open_ = before[verdict != INSIDE]
+    if len(failing):
+        assert position[failing[0]] >= open_.min() - 1e-9
+        if (verdict == OUTSIDE).any():
+            assert position[failing[0]] <= before[verdict == OUTSIDE].min() + step
+    else:
+        assert not (verdict == OUTSIDE).any()
+
+
+def test_a_certified_path_job_writes_its_pieces_and_the_shares(tmp_path):
+    run = tmp_path / "run"
+    done = command(tmp_path, "pipeline", *IPANEMA, "tension=feasible", "analysis=certified", "certified.depth=12",
+                   "certified.path=[[-1,-0.5,0.5],[1,0.5,1.5],[0.5,-1,1],[1.9,1.4,1.9]]", f"hydra.run.dir={run}")
+    assert done.returncode == 0, done.stderr[-2000:]
+    pieces = pd.read_parquet(run / "segments.parquet")
+    summary = pd.read_parquet(run / "summary.parquet").iloc[0]
+    assert list(pieces.segment.unique()) == [1, 2, 3]
+    assert np.isclose(pieces.length_m.sum(), summary.path_m) and np.isclose(summary.path_m, 7.028419, atol=1e-6)
+    assert np.isclose(summary.inside_m + summary.outside_m + summary.undecided_m, summary.path_m)
+    assert not summary.path_certified and summary.outside_m > 0.5  # the last segment runs into the frame's corner
+    assert np.isclose(summary.first_outside_m, pieces.from_m[pieces.verdict == "outside"].min())
+    assert (pieces.verdict[pieces.segment < 3] == "inside").all()  # the first two segments: every point proven
+    assert np.allclose(pieces.from_m.to_numpy()[1:], (pieces.from_m + pieces.length_m).to_numpy()[:-1])  # in order
+    assert "certified path:" in done.stdout
+
+
+def test_a_path_off_a_planar_robots_plane_is_refused(tmp_path):
+    run = tmp_path / "run"
+    done = command(tmp_path, "pipeline", *PLANAR_POINT, "tension=feasible", "analysis=certified",
+                   "certified.path=[[0,0.5,0],[0.5,1,0.2]]", f"hydra.run.dir={run}")
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 2 and len(lines) == 1 and "way-point 2 leaves the robot's plane z = 0" in lines[0], lines
+    assert not run.exists()

@@ -547,10 +547,29 @@ class TrajectoryConfig:
 @dataclass
 class CertifiedConfig:
     """``analysis=certified`` (``pipeline.workspace.paving``): branch and prune from the robot's
-    search box, at most ``depth`` levels of bisection and ``time`` seconds."""
+    search box, at most ``depth`` levels of bisection and ``time`` seconds; with ``path`` (way-points
+    [[x, y, z], ...], m) the straight segments between them instead, each piece proven feasible at
+    every point or at none."""
 
     depth: int = rule(lambda value: None if 0 <= value <= MAX_DEPTH else f"must be in [0, {MAX_DEPTH}]")
     time: float = rule(positive)
+    path: Any = rule(lambda value: _path_error(value))
+
+
+def _path_error(value) -> str | None:
+    """Why ``certified.path`` is not at least two way-points of three finite coordinates, each
+    apart from the one before it."""
+    points = list(value) if isinstance(value, (list, ListConfig)) else None
+    if points is None or len(points) < 2:
+        return "at least two way-points [[x, y, z], [x, y, z], ...] (m)"
+    for number, point in enumerate(points, 1):
+        broken = vector(3, "x, y, z, m", 1e4)(point) if isinstance(point, (list, ListConfig)) else "needs 3 values"
+        if broken:
+            return f"way-point {number}: {broken}"
+    for number in range(1, len(points)):
+        if list(points[number]) == list(points[number - 1]):
+            return f"way-point {number + 1} repeats way-point {number}: a segment needs two ends"
+    return None
 
 
 MAX_DEPTH = 40  # levels of bisection: 2^40 boxes, past any memory

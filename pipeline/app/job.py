@@ -78,7 +78,8 @@ def folder_lock(out: Path, busy: str = "another run is writing this folder; wait
 
 
 # what a job writes
-JOB_FILES = ("summary.parquet", "points.parquet", "samples.parquet", "boxes.parquet", "boundary.stl", "boundary.ply")
+JOB_FILES = ("summary.parquet", "points.parquet", "samples.parquet", "boxes.parquet", "segments.parquet", "boundary.stl",
+             "boundary.ply")
 
 
 def _run_locked(cfg: DictConfig, problem: WorkspaceProblem, out: Path, sweep_pays: bool, robot_file: str) -> dict:

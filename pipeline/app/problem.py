@@ -327,6 +327,14 @@ def _certified(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
     for asked, key, why in refused:
         if asked:
             raise ConfigError(f"{key}: analysis=certified: {why}")
+    if cfg.certified.path is not None:
+        points = np.asarray(OmegaConf.to_container(cfg.certified.path), dtype=float)
+        flat = np.flatnonzero(robot.box_lo == robot.box_hi)  # a planar robot's plane
+        off = np.flatnonzero((points[:, flat] != robot.box_lo[flat]).any(axis=1))
+        if len(off):
+            axis = "xyz"[flat[0]]
+            raise ConfigError(f"certified.path: way-point {off[0] + 1} leaves the robot's plane {axis} = "
+                              f"{robot.box_lo[flat[0]]:g} (robot.dofs={[FREEDOMS[i] for i in robot.dofs]})")
     return spec, limits
 
 

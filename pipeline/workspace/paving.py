@@ -23,7 +23,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 import pandas as pd
-from omegaconf import DictConfig
+from omegaconf import DictConfig, OmegaConf
 
 from pipeline.model import certificates
 from pipeline.model.certificates import INSIDE, OUTSIDE, UNDECIDED, WRENCH_RTOL, BoxStatics
@@ -150,24 +150,63 @@ def _certified(problem: WorkspaceProblem, box: BoxStatics, robust: BoxStatics, a
 
 def pave(problem: WorkspaceProblem, depth: int, seconds: float, compute: DictConfig,
          tolerances: Tolerances = Tolerances()) -> tuple[Paving, dict]:
-    """Branch and prune from the robot's search box: the paving and how it ended. A level's boxes
-    are certified in chunks (``pipeline.workspace.parallel``: ``compute.n_jobs`` workers); past
-    ``seconds`` the chunks not yet certified stay undecided."""
+    """Branch and prune from the robot's search box: the paving and how it ended."""
     robot = problem.robot
+    axes = np.flatnonzero(robot.box_hi > robot.box_lo)
+    boxes = np.concatenate([robot.box_lo, robot.box_hi])[None].astype(float)  # (B, 6): lo, hi
+    found, verdict, level, ended = _branch_and_prune(
+        problem, tolerances, boxes, lambda items: items, lambda items: _bisected(items, axes),
+        lambda items: np.prod((items[:, 3:] - items[:, :3])[:, axes], axis=1), depth, seconds, compute, "of the search box")
+    return Paving(found[:, :3], found[:, 3:], verdict, level), ended
+
+
+def certify_path(problem: WorkspaceProblem, points: np.ndarray, depth: int, seconds: float, compute: DictConfig,
+                 tolerances: Tolerances = Tolerances()) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict]:
+    """The straight segments between the way-points ``points`` (P, 3) in pieces, each proven
+    feasible at every point or at none through the box that holds it (its ends' bounding box,
+    widened by a few ulps so that it holds the exact segment, not only the rounded ends), an
+    undecided piece halved again: the pieces (N, 3) [segment, t0, t1] (t along the segment), their
+    verdicts, levels and how it ended."""
+    starts, ends = points[:-1], points[1:]
+
+    def bounds(items):
+        segment = items[:, 0].astype(int)
+        first = starts[segment] + items[:, 1:2] * (ends[segment] - starts[segment])
+        last = starts[segment] + items[:, 2:3] * (ends[segment] - starts[segment])
+        slack = 8 * np.finfo(float).eps * np.maximum(1.0, np.maximum(np.abs(first), np.abs(last)))
+        return np.concatenate([np.minimum(first, last) - slack, np.maximum(first, last) + slack], axis=1)
+
+    def halves(items):
+        middle = items[:, 1] + (items[:, 2] - items[:, 1]) / 2
+        return np.concatenate([np.column_stack([items[:, 0], items[:, 1], middle]),
+                               np.column_stack([items[:, 0], middle, items[:, 2]])])
+
+    lengths = np.linalg.norm(ends - starts, axis=1)
+    pieces = np.column_stack([np.arange(len(starts)), np.zeros(len(starts)), np.ones(len(starts))]).astype(float)
+    return _branch_and_prune(problem, tolerances, pieces, bounds, halves,
+                             lambda items: (items[:, 2] - items[:, 1]) * lengths[items[:, 0].astype(int)],
+                             depth, seconds, compute, "of the path's length")
+
+
+def _branch_and_prune(problem: WorkspaceProblem, tolerances: Tolerances, items: np.ndarray, bounds, split, size,
+                      depth: int, seconds: float, compute: DictConfig, what: str):
+    """Certify ``items`` (boxes or pieces of a path: ``bounds(items)`` their boxes (N, 6) [lo, hi])
+    level by level, splitting the undecided ones (``split``), until ``depth`` levels or ``seconds``:
+    every item kept, its verdict and level, and how it ended. A level's boxes are certified in
+    chunks (``pipeline.workspace.parallel``: ``compute.n_jobs`` workers); past ``seconds`` the
+    chunks not yet certified stay undecided. ``size``: each item's volume or length, for the log."""
     statics = []
     for angles in problem.orientations:
         nominal = box_statics(problem, angles)
         statics.append((nominal, nominal if tolerances.nominal else box_statics(problem, angles, tolerances)))
     given = (problem, statics)
-    axes = np.flatnonzero(robot.box_hi > robot.box_lo)
-    boxes = np.concatenate([robot.box_lo, robot.box_hi])[None].astype(float)  # (B, 6): lo, hi
     kept: list[tuple] = []
     start, level = time.perf_counter(), 0
-    total, decided = float(np.prod((robot.box_hi - robot.box_lo)[axes])), 0.0
+    total, decided = float(size(items).sum()), 0.0
     while True:
-        verdict = np.full(len(boxes), UNDECIDED)
+        verdict = np.full(len(items), UNDECIDED)
         late = False
-        for rows, part in iter_chunks(_verdicts, given, boxes, compute.n_jobs, name_of(compute.backend), CHUNK,
+        for rows, part in iter_chunks(_verdicts, given, bounds(items), compute.n_jobs, name_of(compute.backend), CHUNK,
                                       compute.scheduler):
             verdict[rows] = part["verdict"]
             if time.perf_counter() - start > seconds:
@@ -176,17 +215,17 @@ def pave(problem: WorkspaceProblem, depth: int, seconds: float, compute: DictCon
         done = verdict != UNDECIDED
         last = late or level >= depth or not (~done).any()
         keep = done | last
-        kept.append((boxes[keep, :3], boxes[keep, 3:], verdict[keep], np.full(int(keep.sum()), level)))
-        decided += float(np.prod((boxes[done, 3:] - boxes[done, :3])[:, axes], axis=1).sum())
-        log.info("certified level %d: %d boxes, %.2f%% of the search box decided (%.1f s)", level, len(boxes),
-                 100.0 * decided / total, time.perf_counter() - start)
+        kept.append((items[keep], verdict[keep], np.full(int(keep.sum()), level)))
+        decided += float(size(items[done]).sum())
+        log.info("certified level %d: %d boxes, %.2f%% %s decided (%.1f s)", level, len(items),
+                 100.0 * decided / total, what, time.perf_counter() - start)
         if last:
             stopped = "decided" if not (~done).any() else "time" if late else "depth"
             break
-        boxes = _bisected(boxes[~done], axes)
+        items = split(items[~done])
         level += 1
-    paving = Paving(*(np.concatenate(parts) for parts in zip(*kept)))
-    return paving, {"stopped": stopped, "depth_reached": level, "seconds": time.perf_counter() - start}
+    found, verdict, levels = (np.concatenate(parts) for parts in zip(*kept))
+    return found, verdict, levels, {"stopped": stopped, "depth_reached": level, "seconds": time.perf_counter() - start}
 
 
 def _verdicts(given: tuple, boxes: np.ndarray) -> dict[str, np.ndarray]:
@@ -207,8 +246,11 @@ def _bisected(boxes: np.ndarray, axes: np.ndarray) -> np.ndarray:
 
 
 def paving_files(cfg: DictConfig, problem: WorkspaceProblem, files) -> dict:
-    """A certified job's boxes.parquet and summary (module doc)."""
+    """A certified job's boxes.parquet and summary (module doc), or with ``certified.path`` its
+    segments.parquet and summary (:func:`path_files`)."""
     tolerances = Tolerances(**{key: float(value) for key, value in cfg.robust.items()})
+    if cfg.certified.path is not None:
+        return path_files(cfg, problem, files, tolerances)
     paving, ended = pave(problem, int(cfg.certified.depth), float(cfg.certified.time), cfg.compute, tolerances)
     robot = problem.robot
     axes = np.flatnonzero(robot.box_hi > robot.box_lo)
@@ -233,4 +275,48 @@ def paving_files(cfg: DictConfig, problem: WorkspaceProblem, files) -> dict:
     log.info("%s certified: %.4g to %.4g m^3 feasible (inside %.2f%%, undecided %.2f%% of the search box), %d boxes "
              "in %.1f s (%s)", robot.name, shares["inside"], shares["inside"] + shares["undecided"], row["inside_pct"],
              row["undecided_pct"], len(paving.verdict), ended["seconds"], ended["stopped"])
+    return row
+
+
+def path_files(cfg: DictConfig, problem: WorkspaceProblem, files, tolerances: Tolerances) -> dict:
+    """A certified path's segments.parquet (one row per piece: its segment, its parameters t0, t1
+    and ends, where along the path it starts, its length, verdict and level) and summary: the path's
+    length, the shares of it proven feasible, infeasible and undecided, ``path_certified`` (every
+    point proven) and ``first_outside_m`` (where along the path the first piece proven infeasible
+    starts; NaN when none)."""
+    points = np.asarray(OmegaConf.to_container(cfg.certified.path), dtype=float)
+    pieces, verdict, level, ended = certify_path(problem, points, int(cfg.certified.depth), float(cfg.certified.time),
+                                                 cfg.compute, tolerances)
+    order = np.lexsort((pieces[:, 1], pieces[:, 0]))  # along the path
+    pieces, verdict, level = pieces[order], verdict[order], level[order]
+    segment = pieces[:, 0].astype(int)
+    starts, ends = points[:-1], points[1:]
+    lengths = np.linalg.norm(ends - starts, axis=1)
+    before = np.concatenate([[0.0], np.cumsum(lengths)])[segment]
+    first = starts[segment] + pieces[:, 1:2] * (ends[segment] - starts[segment])
+    last = starts[segment] + pieces[:, 2:3] * (ends[segment] - starts[segment])
+    length = (pieces[:, 2] - pieces[:, 1]) * lengths[segment]
+    from_m = before + pieces[:, 1] * lengths[segment]
+    if cfg.output.points:
+        files.write("segments", pd.DataFrame({
+            "segment": segment + 1, "t0": pieces[:, 1], "t1": pieces[:, 2],
+            **{f"start_{a}": first[:, k] for k, a in enumerate("xyz")}, **{f"end_{a}": last[:, k] for k, a in enumerate("xyz")},
+            "from_m": from_m, "length_m": length,
+            "verdict": pd.Categorical([VERDICTS[v] for v in verdict], categories=list(VERDICTS.values())), "depth": level}))
+    total = float(lengths.sum())
+    shares = {VERDICTS[v]: float(length[verdict == v].sum()) for v in VERDICTS}
+    outside = np.flatnonzero(verdict == OUTSIDE)
+    row = described_job(cfg, problem)
+    row.update(
+        n_points=len(verdict), n_feasible=int((verdict == INSIDE).sum()), feasible_pct=100.0 * shares["inside"] / total,
+        volume_m3=float("nan"), path_m=total, inside_m=shares["inside"], outside_m=shares["outside"],
+        undecided_m=shares["undecided"], inside_pct=100.0 * shares["inside"] / total,
+        outside_pct=100.0 * shares["outside"] / total, undecided_pct=100.0 * shares["undecided"] / total,
+        path_certified=bool((verdict == INSIDE).all()),
+        first_outside_m=float(from_m[outside[0]]) if len(outside) else float("nan"), **ended,
+    )
+    log.info("%s certified path: %.4g of %.4g m proven feasible at rest (%.2f%%), %.4g m infeasible%s, %.4g m undecided; "
+             "%d pieces in %.1f s (%s)", problem.robot.name, shares["inside"], total, row["inside_pct"], shares["outside"],
+             f" from {row['first_outside_m']:.4g} m" if len(outside) else "", shares["undecided"], len(verdict),
+             ended["seconds"], ended["stopped"])
     return row
