@@ -456,7 +456,7 @@ def checked_commands(name: str, extra: list[str], out_root: Path | None = None,
                           "their own settings; it takes compute.* overrides only")
     out = study_dir(name, extra, out_root)
     if study.layout is not None:
-        return [(["layout"], _layout_plan(study, extra, out))]
+        return [(["layout"], _layout_plan(study, extra, out, launcher))]
     if study.designs:  # the lowest and highest designs
         job = first_actuator_job([*study.arguments, *extra], out)
         cfg, catalogue = job.cfg, job.catalogue
@@ -598,10 +598,13 @@ def _designs(study: StudySpec, extra: list[str], jobs_dir: Path, catalogue,
     return (pd.DataFrame(searched_rows) if summary is None else summary), searched
 
 
-def _layout_plan(study: StudySpec, extra: list[str], out: Path) -> Plan:
+def _layout_plan(study: StudySpec, extra: list[str], out: Path, launcher: str) -> Plan:
     """The plan of a layout study's robot as the overrides build it (the job its best layout runs
-    as, ``jobs/best``), refused in one line where a layout cannot be searched."""
-    planned = plan([*study.arguments, *extra, f"hydra.run.dir={quoted(out / 'jobs' / 'best')}"])
+    as, ``jobs/best``), refused in one line where a layout cannot be searched. Its trials run on
+    ``compute.n_jobs`` workers; on one core under the ``one_core`` launcher (``--all`` runs studies
+    side by side: one level of parallelism)."""
+    one_core = ["compute.n_jobs=1"] if launcher == "one_core" else []
+    planned = plan([*study.arguments, *extra, *one_core, f"hydra.run.dir={quoted(out / 'jobs' / 'best')}"])
     job = planned.jobs[0]
     if job.cfg.robot.name != "points":
         raise ConfigError(f"robot={job.robot_file}: study {study.name} moves the anchors of a robot given by its "
@@ -630,7 +633,7 @@ def _layouts(study: StudySpec, extra: list[str], out: Path, job: Job) -> pd.Data
     anchors, attachments = placed(study.layout, job.problem.robot, best.to_dict())
     points = {"anchors": anchors.tolist(), "attachments": attachments.tolist()}
     (rerun,) = plan([*study.arguments, *extra, *(f"robot.{key}={value}" for key, value in points.items()),
-                     f"hydra.run.dir={quoted(out / 'jobs' / 'best')}"]).jobs
+                     f"compute.n_jobs={job.cfg.compute.n_jobs}", f"hydra.run.dir={quoted(out / 'jobs' / 'best')}"]).jobs
     found = execute(rerun)
     if found["n_feasible"] != best["n_feasible"]:
         raise RuntimeError(f"layout: the best trial's job found {found['n_feasible']} feasible poses, "

@@ -11,7 +11,7 @@ import pytest
 import yaml
 
 from conftest import command
-from pipeline.analyses.layout import Box, LayoutSpec, evaluate, placed, search_layouts
+from pipeline.analyses.layout import Box, LayoutSpec, best_trial, evaluate, placed, search_layouts
 from pipeline.app.problem import build_problem
 from pipeline.errors import ConfigError
 from pipeline.workspace.kernel import evaluate_chunk
@@ -49,21 +49,29 @@ def test_an_exhaustive_lattice_search_finds_the_brute_force_best(make_cfg, catal
     problem, grid = build_problem(make_cfg(*PLANAR, "robot.anchors=[[-1,-1,0],[1,-1,0],[0,1,0]]",
                                            "robot.attachments=[[0,0,0],[0,0,0],[0,0,0]]", "wrench.fy=-3"), catalogue)
     positions = grid[0:len(grid)]
-    spec = LayoutSpec(anchors=Box([-1, -1, 0], [1, 1, 0]), step=1.0, objectives=["feasible_pct"], budget=729)
+    required = Box([-0.3, 0.6, 0], [0.3, 0.9, 0])  # the top middle of the grid must hold
+    spec = LayoutSpec(anchors=Box([-1, -1, 0], [1, 1, 0]), step=1.0, objectives=["feasible_pct"], budget=729,
+                      required=required)
     spec.check_across("test")
     table = search_layouts(spec, problem, positions, grid.cell_volume, n_jobs=1)
     keys = [f"anchor{c}_{axis}" for c in (1, 2, 3) for axis in "xy"]
     assert len(table) == 729 and not table.duplicated(keys).any()
-    lattice = [-1.0, 0.0, 1.0]
-    counts = {}
-    for point in itertools.product(lattice, repeat=6):
-        anchors = np.c_[np.reshape(point, (3, 2)), np.zeros(3)]
-        counts[point] = registry_count(moved(problem, anchors), positions)
+    corner = required.contains(positions)
+    counts, meeting = {}, {}
+    for point in itertools.product([-1.0, 0.0, 1.0], repeat=6):
+        moved_problem = moved(problem, np.c_[np.reshape(point, (3, 2)), np.zeros(3)])
+        raw = evaluate_chunk(moved_problem, positions)
+        flags = classify({n: raw[f"margin_{n}"] for n in problem.criteria}, problem.margin_atol)[1]
+        counts[point], meeting[point] = int(flags.sum()), bool(flags[corner].all())
     best = max(counts.values())
     assert 0 < best < len(positions)
     assert table["n_feasible"].max() == best
-    searched = table.set_index(keys)["n_feasible"]
-    assert all(searched.loc[point] == count for point, count in list(counts.items())[::37])
+    searched = table.set_index(keys)
+    assert all(searched.loc[point, "n_feasible"] == count for point, count in list(counts.items())[::37])
+    assert searched["meets"].sum() == sum(meeting.values()) > 0
+    best_meeting = max(count for point, count in counts.items() if meeting[point])
+    assert best_meeting < best  # the requirement costs poses: a real constraint
+    assert best_trial(table, spec)["n_feasible"] == best_meeting
 
 
 def test_a_search_without_symmetry_recovers_the_symmetric_optimum(make_cfg, catalogue):
@@ -181,6 +189,8 @@ def test_a_layout_study_from_a_users_folder_writes_a_robot_file_that_runs(tmp_pa
                     "robot.attachments=[[0,0,0],[0,0,0],[0,0,0]]", *PLANAR[4:]]}, "the robot has 3 cables"),
     ({"sweep": {"load.mass": "1,2"}}, "a study either sweeps or optimises"),
     ({"layout": {"anchors": {"lo": [-1, -1, 0], "hi": [1, 1, 0]}, "budget": -1}}, "budget=-1"),
+    ({"layout": {"anchors": {"lo": [-1, -1, 0], "hi": [1, 1, 0]}, "objectives": ["volume_m3"]}},
+     "volume_m3: a planar robot's grid has no volume"),
 ])
 def test_a_layout_study_it_cannot_run_exits_2_in_one_line_and_writes_nothing(tmp_path, change, message):
     write_study(tmp_path / "myconf", {**STUDY, **change})

@@ -26,7 +26,7 @@ from __future__ import annotations
 import logging
 import math
 from itertools import product
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Optional
 
 import numpy as np
@@ -140,6 +140,8 @@ def check_robot(spec: LayoutSpec, robot) -> None:
                           "in fours, (-x, +y), (+x, +y), (+x, -y), (-x, -y)")
     if robot.pulleys is not None:
         raise ConfigError("layout: the robot has pulleys at its anchors; a layout search moves bare anchors")
+    if "volume_m3" in spec.objectives and (robot.box_lo == robot.box_hi).any():
+        raise ConfigError("layout.objectives: volume_m3: a planar robot's grid has no volume; use feasible_pct")
 
 
 def placed(spec: LayoutSpec, robot, values: dict[str, float]) -> tuple[np.ndarray, np.ndarray]:
@@ -181,8 +183,6 @@ def evaluate(problem, positions: np.ndarray, cell_volume: float, required: np.nd
 def search_layouts(spec: LayoutSpec, problem, positions: np.ndarray, cell_volume: float, n_jobs: int) -> pd.DataFrame:
     """Run the trials; one row per trial: its variables, :func:`evaluate`'s numbers, ``meets``
     (the required box holds) and ``pareto`` (not dominated among those that meet it)."""
-    from dataclasses import replace
-
     from joblib import Parallel, delayed
 
     optuna = require("optuna", "design", "a layout study")
@@ -217,6 +217,7 @@ def search_layouts(spec: LayoutSpec, problem, positions: np.ndarray, cell_volume
             found = parallel(delayed(evaluate)(replace(problem, robot=replace(problem.robot, anchors=a, attachments=b)),
                                                positions, cell_volume, required) for a, b in layouts)
             for trial, value, numbers in zip(trials, values, found):
+                trial.set_constraint("required_failing", float(numbers["required_failing"]))  # <= 0: met
                 study.tell(trial, [_objective(numbers, o) for o in spec.objectives])
                 rows.append({"trial": trial.number, **value, **numbers})
                 if len(rows) % 50 == 0 or len(rows) == budget:
