@@ -141,6 +141,9 @@ def test_the_longest_cable_and_the_required_box(make_cfg, catalogue):
     ({"anchors": {"lo": [0, 0, 0], "hi": [1, 1, 1]}, "objectives": ["speed"]}, "one or two of"),
     ({"anchors": {"lo": [0, 0, 0], "hi": [1, 1, 1]}, "budget": 0}, "budget=0"),
     ({"anchors": {"lo": [0, 0, 0], "hi": [1, 1, 1]}, "symmetry": "radial"}, "symmetry='radial'"),
+    ({"anchors": {"lo": [0, 0, 0], "hi": [1, 1, 1]}, "anchors_on": "walls"}, "anchors_on='walls'"),
+    ({"anchors": {"lo": [0, 0, 0], "hi": [1, 1, 1]}, "anchors_on": "faces", "step": 0.5}, "anchors on its faces"),
+    ({"anchors": {"lo": [0, 0, 0], "hi": [0, 0, 1]}, "anchors_on": "edges"}, "has no edges"),
 ])
 def test_a_layout_block_that_cannot_be_searched_is_refused(fields, message):
     spec = LayoutSpec(anchors=Box(**fields.pop("anchors")), **fields)
@@ -222,3 +225,36 @@ def test_ipanema_1_is_a_local_optimum_of_its_own_family(make_cfg, catalogue):
         step = {**own, key: own[key] + (inward if key == "anchor6_z" else -inward)}
         count = evaluate(moved(problem, *placed(spec, problem.robot, step)), positions, grid.cell_volume, None)["n_feasible"]
         assert count < 9752, key
+
+
+def test_anchors_on_the_frames_faces_and_edges():
+    """A frame's walls and ceiling (faces) or its posts and beams (edges): 6 and 12 of a box, 4 and
+    5 of the quarter with quadrants (its parts on the mirror planes are not the frame's), and a
+    planar robot's rectangle has 4 sides and 4 corners."""
+    frame = Box([-2, -1.5, 0], [2, 1.5, 2])
+    counts = {(on, symmetry): len(LayoutSpec(anchors=frame, anchors_on=on, symmetry=symmetry).pieces())
+              for on in ("faces", "edges") for symmetry in ("none", "quadrants")}
+    assert counts == {("faces", "none"): 6, ("edges", "none"): 12, ("faces", "quadrants"): 4, ("edges", "quadrants"): 5}
+    plane = Box([-1, -1, 0], [1, 1, 0])
+    assert len(LayoutSpec(anchors=plane, anchors_on="faces").pieces()) == 4
+    corners = {tuple(origin) for origin, spans in LayoutSpec(anchors=plane, anchors_on="edges").pieces()}
+    assert corners == {(-1.0, -1.0, 0.0), (-1.0, 1.0, 0.0), (1.0, -1.0, 0.0), (1.0, 1.0, 0.0)}
+
+
+@pytest.mark.parametrize("on, held", [("edges", 2), ("faces", 1)])
+def test_a_search_on_the_frame_keeps_every_anchor_on_it(make_cfg, catalogue, on, held):
+    """Every trial's eight anchors hold at least ``held`` coordinates at the frame's bounds (an
+    edge: two, a face: one); IPAnema 1's corners are on both, so it is the first trial."""
+    problem, grid = build_problem(make_cfg(*IPANEMA_CASE, "robot.search.step=0.5"), catalogue)
+    spec = LayoutSpec(anchors=Box([-2, -1.5, 0], [2, 1.5, 2]), symmetry="quadrants", anchors_on=on, budget=12,
+                      objectives=["volume_m3"])
+    spec.check_across("test")
+    table = search_layouts(spec, problem, grid[0:len(grid)], grid.cell_volume, n_jobs=1)
+    assert table.iloc[0]["n_feasible"] == registry_count(problem, grid[0:len(grid)])
+    bounds = np.array([[-2, -1.5, 0], [2, 1.5, 2]])
+    for _, row in table.iterrows():
+        anchors, _ = placed(spec, problem.robot, row.to_dict())
+        at_bounds = (np.isclose(anchors[:, None, :], bounds[None]).any(axis=1)).sum(axis=1)
+        assert (at_bounds >= held).all(), anchors
+        assert np.allclose(anchors[1], [row["anchor2_x"], row["anchor2_y"], row["anchor2_z"]])
+    np.testing.assert_array_equal(placed(spec, problem.robot, table.iloc[0].to_dict())[0], problem.robot.anchors)

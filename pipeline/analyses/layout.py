@@ -10,7 +10,10 @@ null-space test where it applies; no Hydra composition, no process per trial), o
 ``n_jobs`` of joblib's workers, a batch of trials at a time (Optuna's ask and tell, seeded). With
 ``symmetry: quadrants`` the frame's mirror planes x = 0 and y = 0 hold: the robot's cables come
 in fours, (-x, +y), (+x, +y), (+x, -y), (-x, -y) (IPAnema 1's order), and each four is one
-designed anchor in the quarter x, y >= 0 and one designed attachment, mirrored with it.
+designed anchor in the quarter x, y >= 0 and one designed attachment, mirrored with it. With
+``anchors_on: faces`` or ``edges`` the anchors stay on the installation box's faces (a frame's walls,
+ceiling and floor) or edges (its posts and beams): each designed anchor is a face or edge (a
+categorical variable) and a place on it.
 
 Objectives (:data:`OBJECTIVES`): ``volume_m3`` (the feasible poses' cells), ``feasible_pct`` and
 ``longest_cable_m`` (the longest cable over the feasible poses: the drum a design needs). A
@@ -25,7 +28,7 @@ from __future__ import annotations
 
 import logging
 import math
-from itertools import product
+from itertools import combinations, product
 from dataclasses import dataclass, field, replace
 from typing import Optional
 
@@ -37,6 +40,7 @@ from pipeline.errors import ConfigError, require
 log = logging.getLogger("pipeline.study")
 SAMPLERS = ("tpe", "nsga2")
 SYMMETRIES = ("none", "quadrants")
+PLACES = ("box", "faces", "edges")
 QUADRANTS = np.array([[-1.0, 1.0, 1.0], [1.0, 1.0, 1.0], [1.0, -1.0, 1.0], [-1.0, -1.0, 1.0]])  # IPAnema 1's order
 OBJECTIVES = {"volume_m3": ("maximize", "feasible volume (m^3)"),
               "feasible_pct": ("maximize", "feasible share of the grid (%)"),
@@ -70,7 +74,9 @@ class LayoutSpec:
     ``quadrants`` (see the module); ``step``: the variables' lattice (m; None: continuous);
     ``objectives``: one or two of :data:`OBJECTIVES`; ``required``: a box of positions that
     must be feasible (None: none); ``budget``: trials; ``seed``; ``sampler``: ``tpe`` (one
-    objective) or ``nsga2``; ``best``: how many of the best trials become robot files."""
+    objective) or ``nsga2``; ``anchors_on``: ``box`` (anywhere in the installation box),
+    ``faces`` (on its faces: a frame's walls, ceiling and floor; a planar robot's: the rectangle's
+    sides) or ``edges`` (on its edges: a frame's posts and beams; a planar robot's: its corners)."""
 
     anchors: Box = field(default_factory=Box)
     attachments: Optional[Box] = None
@@ -81,6 +87,7 @@ class LayoutSpec:
     budget: int = 200
     seed: int = 0
     sampler: str = "tpe"
+    anchors_on: str = "box"
 
     def check_across(self, where: str) -> None:
         """ConfigError naming the first field that cannot be used."""
@@ -96,6 +103,14 @@ class LayoutSpec:
                 if box is not None and (box.lo[0] != -box.hi[0] or box.lo[1] != -box.hi[1]):
                     raise ConfigError(f"{where}.{name}: symmetry=quadrants mirrors x and y: the box must be "
                                       f"symmetric about x = 0 and y = 0 (lo={box.lo}, hi={box.hi})")
+        if self.anchors_on not in PLACES:
+            raise ConfigError(f"{where}.anchors_on={self.anchors_on!r}: one of {', '.join(PLACES)}")
+        if self.anchors_on != "box" and self.step is not None:
+            raise ConfigError(f"{where}.step={self.step}: a lattice of the box's coordinates; anchors on its "
+                              f"{self.anchors_on} are continuous (step: null)")
+        if self.anchors_on != "box" and not self.pieces():
+            raise ConfigError(f"{where}.anchors_on={self.anchors_on}: the box {self.anchors.lo}..{self.anchors.hi} has no "
+                              f"{self.anchors_on}")
         if self.step is not None:
             if not (math.isfinite(self.step) and self.step > 0):
                 raise ConfigError(f"{where}.step={self.step}: a positive length (m), or null (continuous)")
@@ -110,21 +125,64 @@ class LayoutSpec:
         if self.sampler not in SAMPLERS:
             raise ConfigError(f"{where}.sampler={self.sampler!r}: one of {', '.join(SAMPLERS)}")
 
-    def ranges(self, n_cables: int = 4) -> dict[str, tuple[float, float]]:
-        """Each design variable's range: ``anchor{c}_{axis}`` (and ``attachment{c}_{axis}``) for
-        every designed cable c (all of them; with quadrants the second of each four)."""
-        cables = range(1, n_cables + 1, 4) if self.symmetry == "quadrants" else range(n_cables)
-        found = {}
-        for name, box in (("anchor", self.anchors), ("attachment", self.attachments)):
-            if box is None:
-                continue
-            lo = list(box.lo)
-            if self.symmetry == "quadrants" and name == "anchor":
-                lo[:2] = [0.0, 0.0]  # the quarter x, y >= 0; the mirror images cover the rest
-            for cable in cables:
-                for axis in range(3):
-                    found[f"{name}{cable + 1}_{AXES[axis]}"] = (float(lo[axis]), float(box.hi[axis]))
+    def designed_cables(self, n_cables: int) -> range:
+        """The cables whose points are variables (all; with quadrants the second of each four)."""
+        return range(1, n_cables, 4) if self.symmetry == "quadrants" else range(n_cables)
+
+    def anchor_box(self) -> tuple[np.ndarray, np.ndarray]:
+        """Where a designed anchor may be: the installation box, with quadrants its quarter x, y >= 0
+        (the mirror images cover the rest)."""
+        lo, hi = np.array(self.anchors.lo, dtype=float), np.array(self.anchors.hi, dtype=float)
+        if self.symmetry == "quadrants":
+            lo[:2] = 0.0
+        return lo, hi
+
+    def pieces(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        """The faces or edges of the installation box a designed anchor may be on, each as its
+        origin (3,) and its spans (3, k): the point origin + spans @ p for p in [0, 1]^k. Faces hold
+        one of the box's own axes at a bound, edges two (a flat axis is not counted: a planar
+        robot's faces are its rectangle's sides); with quadrants only the quarter's parts that lie on
+        the box's boundary (not on the mirror planes)."""
+        lo, hi = self.anchor_box()
+        spread = [axis for axis in range(3) if self.anchors.hi[axis] > self.anchors.lo[axis]]
+        fixed_count = 1 if self.anchors_on == "faces" else 2
+        found = []
+        for fixed in combinations(spread, fixed_count):
+            for bounds in product(*[[(axis, self.anchors.lo[axis]), (axis, self.anchors.hi[axis])] for axis in fixed]):
+                if any(not lo[axis] <= value <= hi[axis] for axis, value in bounds):
+                    continue  # a bound outside the quarter: its mirror image is one of the quarter's
+                origin = lo.copy()
+                for axis, value in bounds:
+                    origin[axis] = value
+                free = [axis for axis in spread if axis not in fixed]
+                spans = np.zeros((3, len(free)))
+                for column, axis in enumerate(free):
+                    spans[axis, column] = hi[axis] - lo[axis]
+                found.append((origin, spans))
         return found
+
+    def ranges(self, n_cables: int = 4) -> dict[str, tuple[float, float]]:
+        """Each continuous design variable's range, for every designed cable c: ``anchor{c}_{axis}``
+        (m; with anchors on faces or edges ``anchor{c}_p1``, ``_p2`` in [0, 1], along the piece
+        :meth:`choices` picks), and ``attachment{c}_{axis}`` (m)."""
+        found = {}
+        lo, hi = self.anchor_box()
+        width = max((spans.shape[1] for _, spans in self.pieces()), default=0) if self.anchors_on != "box" else 0
+        for cable in self.designed_cables(n_cables):
+            if self.anchors_on == "box":
+                found.update({f"anchor{cable + 1}_{AXES[axis]}": (float(lo[axis]), float(hi[axis])) for axis in range(3)})
+            else:
+                found.update({f"anchor{cable + 1}_p{k + 1}": (0.0, 1.0) for k in range(width)})
+            if self.attachments is not None:
+                found.update({f"attachment{cable + 1}_{AXES[axis]}": (float(self.attachments.lo[axis]),
+                                                                       float(self.attachments.hi[axis])) for axis in range(3)})
+        return found
+
+    def choices(self, n_cables: int) -> dict[str, list[int]]:
+        """The categorical variables: ``anchor{c}_piece``, which face or edge (:meth:`pieces`)."""
+        if self.anchors_on == "box":
+            return {}
+        return {f"anchor{cable + 1}_piece": list(range(len(self.pieces()))) for cable in self.designed_cables(n_cables)}
 
     def layouts(self, n_cables: int) -> int | None:
         """The number of points of the lattice (None when continuous)."""
@@ -144,17 +202,23 @@ def check_robot(spec: LayoutSpec, robot) -> None:
         raise ConfigError("layout.objectives: volume_m3: a planar robot's grid has no volume; use feasible_pct")
 
 
-def placed(spec: LayoutSpec, robot, values: dict[str, float]) -> tuple[np.ndarray, np.ndarray]:
-    """The anchors and attachments (m, 3) of a trial's ``values``."""
+def placed(spec: LayoutSpec, robot, values: dict) -> tuple[np.ndarray, np.ndarray]:
+    """The anchors and attachments (m, 3) of a trial's ``values`` (with quadrants, each designed
+    cable's points mirrored into its four)."""
     anchors, attachments = robot.anchors.copy(), robot.attachments.copy()
-    for name, points in (("anchor", anchors), ("attachment", attachments)):
-        for cable in range(robot.n_cables):
-            designed = cable - cable % 4 + 1 if spec.symmetry == "quadrants" else cable
-            key = f"{name}{designed + 1}_x"
-            if key not in values:
-                continue
-            point = np.array([values[f"{name}{designed + 1}_{axis}"] for axis in AXES])
-            points[cable] = point * QUADRANTS[cable % 4] if spec.symmetry == "quadrants" else point
+    pieces = spec.pieces() if spec.anchors_on != "box" else []
+    quadrants = spec.symmetry == "quadrants"
+    for cable in range(robot.n_cables):
+        designed = cable - cable % 4 + 1 if quadrants else cable
+        sign = QUADRANTS[cable % 4] if quadrants else 1.0
+        if f"anchor{designed + 1}_x" in values:
+            anchors[cable] = np.array([values[f"anchor{designed + 1}_{axis}"] for axis in AXES]) * sign
+        elif f"anchor{designed + 1}_piece" in values:
+            origin, spans = pieces[int(values[f"anchor{designed + 1}_piece"])]
+            along = [values[f"anchor{designed + 1}_p{k + 1}"] for k in range(spans.shape[1])]
+            anchors[cable] = (origin + spans @ np.asarray(along, dtype=float)) * sign
+        if f"attachment{designed + 1}_x" in values:
+            attachments[cable] = np.array([values[f"attachment{designed + 1}_{axis}"] for axis in AXES]) * sign
     return anchors, attachments
 
 
@@ -193,7 +257,8 @@ def search_layouts(spec: LayoutSpec, problem, positions: np.ndarray, cell_volume
     sampler = (optuna.samplers.NSGAIISampler(seed=spec.seed) if spec.sampler == "nsga2" else
                optuna.samplers.TPESampler(seed=spec.seed, multivariate=True))
     study = optuna.create_study(directions=[OBJECTIVES[o][0] for o in spec.objectives], sampler=sampler)
-    current = designed(spec, problem.robot, ranges)
+    choices = spec.choices(problem.robot.n_cables)
+    current = designed(spec, problem.robot)
     if current is not None:
         study.enqueue_trial(current)  # the robot as the overrides give it: the search starts from it
     if exhaustive:  # every other layout of the lattice, in order
@@ -211,7 +276,8 @@ def search_layouts(spec: LayoutSpec, problem, positions: np.ndarray, cell_volume
     with Parallel(n_jobs=n_jobs) as parallel:
         while len(rows) < budget:
             trials = [study.ask() for _ in range(min(n_jobs, budget - len(rows)))]
-            values = [{key: trial.suggest_float(key, lo, hi, step=spec.step) for key, (lo, hi) in ranges.items()}
+            values = [{**{key: trial.suggest_categorical(key, options) for key, options in choices.items()},
+                       **{key: trial.suggest_float(key, lo, hi, step=spec.step) for key, (lo, hi) in ranges.items()}}
                       for trial in trials]
             layouts = [placed(spec, problem.robot, v) for v in values]
             found = parallel(delayed(evaluate)(replace(problem, robot=replace(problem.robot, anchors=a, attachments=b)),
@@ -219,7 +285,7 @@ def search_layouts(spec: LayoutSpec, problem, positions: np.ndarray, cell_volume
             for trial, value, numbers in zip(trials, values, found):
                 trial.set_constraint("required_failing", float(numbers["required_failing"]))  # <= 0: met
                 study.tell(trial, [_objective(numbers, o) for o in spec.objectives])
-                rows.append({"trial": trial.number, **value, **numbers})
+                rows.append({"trial": trial.number, **value, **_coordinates(spec, problem.robot, value), **numbers})
                 if len(rows) % 50 == 0 or len(rows) == budget:
                     first = spec.objectives[0]
                     best = (min if OBJECTIVES[first][0] == "minimize" else max)(r[first] for r in rows)
@@ -235,21 +301,48 @@ def search_layouts(spec: LayoutSpec, problem, positions: np.ndarray, cell_volume
     return table
 
 
-def designed(spec: LayoutSpec, robot, ranges: dict[str, tuple[float, float]]) -> dict[str, float] | None:
+def designed(spec: LayoutSpec, robot) -> dict[str, float] | None:
     """The robot's own layout as the search's variables, when it is one of the space's layouts
-    (inside the ranges, on the lattice, and with quadrants mirror-symmetric); else None."""
-    values = {}
-    for key in ranges:
-        name, axis = key.rsplit("_", 1)
-        points = robot.anchors if name.startswith("anchor") else robot.attachments
-        values[key] = float(points[int(name.removeprefix("anchor").removeprefix("attachment")) - 1, AXES.index(axis)])
+    (inside the ranges, on the lattice, on a face or edge where the anchors must be, and with
+    quadrants mirror-symmetric); else None."""
+    ranges, values = spec.ranges(robot.n_cables), {}
+    for cable in spec.designed_cables(robot.n_cables):
+        if spec.anchors_on == "box":
+            values.update({f"anchor{cable + 1}_{axis}": float(robot.anchors[cable, k]) for k, axis in enumerate(AXES)})
+        else:
+            on = _on_piece(spec.pieces(), robot.anchors[cable])
+            if on is None:
+                return None
+            values[f"anchor{cable + 1}_piece"] = on[0]
+            values.update({f"anchor{cable + 1}_p{k + 1}": float(p) for k, p in enumerate(on[1])})
+        if spec.attachments is not None:
+            values.update({f"attachment{cable + 1}_{axis}": float(robot.attachments[cable, k])
+                           for k, axis in enumerate(AXES)})
     for key, (lo, hi) in ranges.items():
         lattice = spec.step is None or abs((values[key] - lo) / spec.step - round((values[key] - lo) / spec.step)) < 1e-9
         if not (lo <= values[key] <= hi and lattice):
             return None
     anchors, attachments = placed(spec, robot, values)
-    same = np.array_equal(anchors, robot.anchors) and np.array_equal(attachments, robot.attachments)
+    same = np.allclose(anchors, robot.anchors, rtol=0, atol=1e-12) and np.array_equal(attachments, robot.attachments)
     return values if same else None
+
+
+def _on_piece(pieces: list, point: np.ndarray) -> tuple[int, np.ndarray] | None:
+    """The first face or edge holding ``point``, and its parameters there (None: on none)."""
+    for number, (origin, spans) in enumerate(pieces):
+        along = np.linalg.lstsq(spans, point - origin, rcond=None)[0] if spans.shape[1] else np.zeros(0)
+        if np.allclose(origin + spans @ along, point, rtol=0, atol=1e-12) and ((along >= -1e-12) & (along <= 1 + 1e-12)).all():
+            return number, np.clip(along, 0.0, 1.0)
+    return None
+
+
+def _coordinates(spec: LayoutSpec, robot, values: dict) -> dict[str, float]:
+    """With anchors on faces or edges, each designed anchor's coordinates (m), for the summary."""
+    if spec.anchors_on == "box":
+        return {}
+    anchors = placed(spec, robot, values)[0]
+    return {f"anchor{cable + 1}_{axis}": float(anchors[cable, k])
+            for cable in spec.designed_cables(robot.n_cables) for k, axis in enumerate(AXES)}
 
 
 def _objective(numbers: dict, name: str) -> float:
