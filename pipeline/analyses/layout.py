@@ -272,7 +272,7 @@ def search_layouts(spec: LayoutSpec, problem, positions: np.ndarray, cell_volume
     rows = []
     log.info("layout: %d trials of %d poses (%s%s), %d variables, %d worker(s)", budget, len(positions),
              "every layout of the lattice" if exhaustive else spec.sampler, f", step {spec.step} m" if spec.step else "",
-             len(ranges), n_jobs)
+             len(ranges) + len(choices), n_jobs)
     with Parallel(n_jobs=n_jobs) as parallel:
         while len(rows) < budget:
             trials = [study.ask() for _ in range(min(n_jobs, budget - len(rows)))]
@@ -298,6 +298,8 @@ def search_layouts(spec: LayoutSpec, problem, positions: np.ndarray, cell_volume
     meets = table["meets"].to_numpy()
     table["pareto"] = [bool(meets[i]) and not ((costs[meets] <= costs[i]).all(axis=1)
                                               & (costs[meets] < costs[i]).any(axis=1)).any() for i in range(len(table))]
+    first = np.where(meets, costs[:, 0], np.inf)  # the search's progress: its best so far, in trial order
+    table["best_so_far"] = np.where(np.isfinite(np.minimum.accumulate(first)), np.minimum.accumulate(first) * signs[0], np.nan)
     return table
 
 
