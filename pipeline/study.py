@@ -31,6 +31,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Callable, Optional
 
+import numpy as np
 import pandas as pd
 import yaml
 from omegaconf import DictConfig, OmegaConf
@@ -40,7 +41,8 @@ from pipeline.analyses.choice import acceptance, choose, verdict
 from pipeline.app.config import check_declared, rule
 from pipeline.errors import ConfigError, one_line
 from pipeline.analyses.evidence import evidence, scores
-from pipeline.analyses.layout import LayoutSpec, best_layout, best_trial, check_robot, placed, search_layouts
+from pipeline.analyses.layout import (LayoutSpec, best_layout, best_trial, check_robot, placed, prove_required,
+                                      search_layouts)
 from pipeline.analyses.figures import SERIES_DIR, FigureSpec, render
 from pipeline.analyses.results import StudyResults, table as read_table
 from pipeline.app.job import changed_files, execute, folder_lock
@@ -639,6 +641,10 @@ def _layouts(study: StudySpec, extra: list[str], out: Path, job: Job) -> pd.Data
         raise RuntimeError(f"layout: the best trial's job found {found['n_feasible']} feasible poses, "
                            f"its search {best['n_feasible']}")
     table.loc[table["trial"] == best["trial"], "job"] = "best"
+    proven, said = prove_required(study.layout, rerun.problem, rerun.cfg.compute)
+    if study.layout.required is not None:
+        table["required_proven_pct"] = np.where(table["job"] == "best", np.nan if proven is None else proven, np.nan)
+        log.info("layout: the best layout: %s", said)
     robot = OmegaConf.to_container(rerun.config.robot, resolve=True)
     robot.update(points)
     write_text(out / "layout_best.yaml", "# the best layout of study " f"{study.name}, trial {int(best['trial'])}: "

@@ -11,7 +11,7 @@ import pytest
 import yaml
 
 from conftest import command
-from pipeline.analyses.layout import Box, LayoutSpec, best_trial, evaluate, placed, search_layouts
+from pipeline.analyses.layout import Box, LayoutSpec, best_trial, evaluate, placed, prove_required, search_layouts
 from pipeline.app.problem import build_problem
 from pipeline.errors import ConfigError
 from pipeline.workspace.kernel import evaluate_chunk
@@ -156,7 +156,8 @@ STUDY = {
     "title": "My frame", "source": "mine",
     "overrides": [*PLANAR[:-3], "tension=feasible", "tension.t_min=1", "tension.t_max=10", "wrench.fy=-2"],
     "layout": {"anchors": {"lo": [-1, -1, 0], "hi": [1, 1, 0]}, "symmetry": "quadrants",
-               "objectives": ["feasible_pct", "longest_cable_m"], "budget": 10, "sampler": "nsga2"},
+               "objectives": ["feasible_pct", "longest_cable_m"], "budget": 10, "sampler": "nsga2",
+               "required": {"lo": [-0.1, -0.1, 0], "hi": [0.1, 0.1, 0]}},
     "analyses": ["best_layout"],
     "figures": [{"kind": "cloud", "table": "best_layout", "file": "best.png", "title": "best {n_feasible}"}],
 }
@@ -175,7 +176,8 @@ def test_a_layout_study_from_a_users_folder_writes_a_robot_file_that_runs(tmp_pa
     summary = pd.read_parquet(out / "summary.parquet")
     assert len(summary) == 10 and (summary["job"] == "best").sum() == 1
     best = summary[summary["job"] == "best"].iloc[0]
-    assert best["feasible_pct"] == summary["feasible_pct"].max()
+    assert best["feasible_pct"] == summary.loc[summary["meets"], "feasible_pct"].max()
+    assert best["required_proven_pct"] > 50 and summary["required_proven_pct"].notna().sum() == 1
     assert (out / "figures" / "best.png").stat().st_size > 0
     robot = tmp_path / "myconf" / "robot"
     robot.mkdir()
@@ -271,3 +273,22 @@ def test_a_search_on_the_frame_keeps_every_anchor_on_it(make_cfg, catalogue, on,
         assert (at_bounds >= held).all(), anchors
         assert np.allclose(anchors[1], [row["anchor2_x"], row["anchor2_y"], row["anchor2_z"]])
     np.testing.assert_array_equal(placed(spec, problem.robot, table.iloc[0].to_dict())[0], problem.robot.anchors)
+
+
+def test_the_best_layouts_required_box_is_proven_where_the_certificates_speak(make_cfg, catalogue):
+    """The required box of the best layout paved as analysis=certified paves a search box: a box
+    well inside the workspace of the square frame mostly proven; a robot with a criterion the
+    certificates cannot bound (cables that must not touch) says so instead of a number."""
+    problem, _ = build_problem(make_cfg(*PLANAR), catalogue)
+    compute = make_cfg(*PLANAR).compute
+    spec = LayoutSpec(anchors=Box([-1, -1, 0], [1, 1, 0]), required=Box([-0.3, -0.3, 0], [0.3, 0.3, 0]))
+    share, said = prove_required(spec, problem, compute)
+    assert share > 90.0 and "of the required box proven feasible" in said
+    positions = np.random.default_rng(3).uniform([-0.3, -0.3, 0], [0.3, 0.3, 0], (500, 3))
+    assert registry_count(problem, positions) == 500  # the grid agrees: it holds everywhere sampled
+    touching, _ = build_problem(make_cfg(*PLANAR, "robot.dofs=[x,y,rz]", "robot.cable_diameter=0.01",
+                                         "robot.attachments=[[-0.1,-0.1,0],[0.1,-0.1,0],[0.1,0.1,0],[-0.1,0.1,0]]"),
+                                catalogue)
+    assert prove_required(spec, touching, compute) == (None, "the required box is not proven: criterion cable_cable "
+                                                              "has no certified bound")
+    assert prove_required(LayoutSpec(anchors=Box([-1, -1, 0], [1, 1, 0])), problem, compute) == (None, "no required box")

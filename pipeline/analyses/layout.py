@@ -370,3 +370,31 @@ def best_layout(results) -> pd.DataFrame:
     if best.empty:
         return pd.DataFrame({"job": pd.Series(dtype=str), "trial": pd.Series(dtype=int)})
     return results.job_summary("best").assign(trial=int(best["trial"].iloc[0]))
+
+
+PROVE_DEPTH, PROVE_SECONDS = 15, 120.0  # the required box's paving for the best layout
+
+
+def prove_required(spec: LayoutSpec, problem, compute) -> tuple[float | None, str]:
+    """The share (%) of the ``required`` box proven feasible for the best layout's ``problem``
+    (``analysis=certified``'s branch and prune over that box, ``PROVE_DEPTH`` levels or
+    ``PROVE_SECONDS``), and what it says; None where the certificates cannot speak: no required box,
+    another analysis or tension model than statics with pulling cables, or a criterion without a
+    certified bound (``Criterion.certified``)."""
+    from pipeline.workspace.criteria import REGISTRY
+    from pipeline.model.certificates import INSIDE
+    from pipeline.workspace.paving import pave
+
+    if spec.required is None:
+        return None, "no required box"
+    unproven = [name for name in problem.criteria if not REGISTRY[name].certified]
+    if problem.spec.kind != "statics" or problem.spec.tension.model != "feasible" or unproven:
+        why = f"criterion {unproven[0]} has no certified bound" if unproven else "certified for pulling cables at rest only"
+        return None, f"the required box is not proven: {why}"
+    lo, hi = np.asarray(spec.required.lo, dtype=float), np.asarray(spec.required.hi, dtype=float)
+    box = replace(problem, robot=replace(problem.robot, box_lo=lo, box_hi=hi))
+    paving, ended = pave(box, PROVE_DEPTH, PROVE_SECONDS, compute)
+    axes = np.flatnonzero(hi > lo)
+    volumes = paving.volumes(axes)
+    share = 100.0 * float(volumes[paving.verdict == INSIDE].sum() / volumes.sum())
+    return share, f"{share:.2f}% of the required box proven feasible ({ended['depth_reached']} levels, {ended['stopped']})"
