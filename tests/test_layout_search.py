@@ -194,6 +194,8 @@ def test_a_layout_study_from_a_users_folder_writes_a_robot_file_that_runs(tmp_pa
     ({"overrides": [*PLANAR[:2], "robot.anchors=[[-1,-1,0],[1,-1,0],[1,1,0]]",
                     "robot.attachments=[[0,0,0],[0,0,0],[0,0,0]]", *PLANAR[4:]]}, "the robot has 3 cables"),
     ({"sweep": {"load.mass": "1,2"}}, "a study either sweeps or optimises"),
+    ({"overrides": [*PLANAR[:3], "robot.attachments=[[0.1,0,0],[0,0,0],[0,0,0],[0,0,0]]", *PLANAR[4:]]},
+     "the robot's attachments, which the search keeps, are not mirrored"),
     ({"layout": {"anchors": {"lo": [-1, -1, 0], "hi": [1, 1, 0]}, "budget": -1}}, "budget=-1"),
     ({"layout": {"anchors": {"lo": [-1, -1, 0], "hi": [1, 1, 0]}, "objectives": ["volume_m3"]}},
      "volume_m3: a planar robot's grid has no volume"),

@@ -196,6 +196,12 @@ def check_robot(spec: LayoutSpec, robot) -> None:
     if spec.symmetry == "quadrants" and robot.n_cables % 4:
         raise ConfigError(f"layout.symmetry=quadrants: the robot has {robot.n_cables} cables; quadrants take them "
                           "in fours, (-x, +y), (+x, +y), (+x, -y), (-x, -y)")
+    if spec.symmetry == "quadrants" and spec.attachments is None:
+        kept = robot.attachments.reshape(-1, 4, 3)
+        if not np.allclose(kept, kept[:, 1:2, :] * QUADRANTS[None], rtol=0, atol=1e-12):
+            raise ConfigError("layout.symmetry=quadrants: the robot's attachments, which the search keeps, are not "
+                              "mirrored in the cables' order (-x, +y), (+x, +y), (+x, -y), (-x, -y); order the cables "
+                              "so, or give layout.attachments to design them too")
     if robot.pulleys is not None:
         raise ConfigError("layout: the robot has pulleys at its anchors; a layout search moves bare anchors")
     if "volume_m3" in spec.objectives and (robot.box_lo == robot.box_hi).any():
