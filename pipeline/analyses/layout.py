@@ -204,6 +204,9 @@ def check_robot(spec: LayoutSpec, robot) -> None:
                               "so, or give layout.attachments to design them too")
     if robot.pulleys is not None:
         raise ConfigError("layout: the robot has pulleys at its anchors; a layout search moves bare anchors")
+    if spec.attachments is not None and robot.platform_shape is not None:
+        raise ConfigError("layout.attachments: the robot's platform has a shape (robot.platform.shape) whose surface "
+                          "holds the attachments; moving them inside a box would leave it: not searched yet")
     if "volume_m3" in spec.objectives and (robot.box_lo == robot.box_hi).any():
         raise ConfigError("layout.objectives: volume_m3: a planar robot's grid has no volume; use feasible_pct")
 
