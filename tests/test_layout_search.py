@@ -145,6 +145,8 @@ def test_the_longest_cable_and_the_required_box(make_cfg, catalogue):
     ({"anchors": {"lo": [0, 0, 0], "hi": [1, 1, 1]}, "anchors_on": "walls"}, "anchors_on='walls'"),
     ({"anchors": {"lo": [0, 0, 0], "hi": [1, 1, 1]}, "anchors_on": "faces", "step": 0.5}, "anchors on its faces"),
     ({"anchors": {"lo": [0, 0, 0], "hi": [0, 0, 1]}, "anchors_on": "edges"}, "has no edges"),
+    ({"anchors": {"lo": [0, 0, 0], "hi": [1, 1, 1]}, "refine": 1.0}, "refine=1.0"),
+    ({"anchors": {"lo": [0, 0, 0], "hi": [1, 1, 1]}, "refine": 0.5, "step": 0.5}, "refine takes continuous"),
 ])
 def test_a_layout_block_that_cannot_be_searched_is_refused(fields, message):
     spec = LayoutSpec(anchors=Box(**fields.pop("anchors")), **fields)
@@ -298,3 +300,41 @@ def test_the_best_layouts_required_box_is_proven_where_the_certificates_speak(ma
     assert prove_required(spec, touching, compute) == (None, "the required box is not proven: criterion cable_cable "
                                                               "has no certified bound")
     assert prove_required(LayoutSpec(anchors=Box([-1, -1, 0], [1, 1, 0])), problem, compute) == (None, "no required box")
+
+
+def test_refinement_steps_around_the_best_and_is_reproducible(make_cfg, catalogue):
+    """``refine``: the last share of the budget is spent around the best trial so far: each of
+    those trials keeps the best's edge, moves its continuous variables by bounded normal steps
+    inside their ranges, and the step shrinks after batches that do not improve; a rerun with the
+    same seed gives the same trials."""
+    problem, grid = build_problem(make_cfg(*IPANEMA_CASE, "robot.search.step=0.5"), catalogue)
+    spec = LayoutSpec(anchors=Box([-2, -1.5, 0], [2, 1.5, 2]), attachments=Box([-0.06, -0.06, 0], [0.06, 0.06, 0]),
+                      symmetry="quadrants", anchors_on="edges", budget=24, refine=0.5, objectives=["volume_m3"])
+    spec.check_across("test")
+    table = search_layouts(spec, problem, grid[0:len(grid)], grid.cell_volume, n_jobs=2)
+    again = search_layouts(spec, problem, grid[0:len(grid)], grid.cell_volume, n_jobs=2)
+    pd.testing.assert_frame_equal(table, again)
+    ranges = spec.ranges(8)
+    for number in range(12, 24):
+        row, before = table.iloc[number], table.iloc[:number - number % 2]  # a batch of two sees the trials before it
+        best = before.loc[before["volume_m3"].idxmax()]
+        assert row["anchor2_piece"] == best["anchor2_piece"] and row["anchor6_piece"] == best["anchor6_piece"]
+        for key, (lo, hi) in ranges.items():
+            assert lo <= row[key] <= hi
+            assert abs(row[key] - best[key]) <= 0.5 * 6 * (hi - lo) + 1e-12  # at most six of the largest steps
+
+
+def test_the_refinement_rule():
+    from pipeline.analyses.layout import Steps
+
+    steps = Steps(0)
+    steps.adapt(False)
+    assert steps.size == pytest.approx(0.04)
+    for _ in range(20):
+        steps.adapt(True)
+    assert steps.size == Steps.LARGEST
+    for _ in range(200):
+        steps.adapt(False)
+    assert steps.size == Steps.SMALLEST
+    moved = steps.nearby({"a": 0.5, "p": 3}, {"a": (0.0, 1.0)})
+    assert moved["p"] == 3 and 0.0 <= moved["a"] <= 1.0
