@@ -477,3 +477,28 @@ def test_a_path_off_a_planar_robots_plane_is_refused(tmp_path):
     lines = done.stderr.strip().splitlines()
     assert done.returncode == 2 and len(lines) == 1 and "way-point 2 leaves the robot's plane z = 0" in lines[0], lines
     assert not run.exists()
+
+
+def test_a_robust_path_proves_no_more_than_the_nominal_one(make_cfg):
+    """Anchors within +-10 mm: every piece proven inside holds for the robot as designed too, so the
+    robust path's proven length is at most the nominal one's, and the nominal robot's exact test
+    holds at points sampled on the robust inside pieces."""
+    overrides, points, depth = PATHS["ipanema"]
+    problem = _problem(make_cfg, overrides, "compute.n_jobs=1")
+    compute = make_cfg(*overrides, "compute.n_jobs=1").compute
+    points = np.asarray(points, dtype=float)
+    lengths = np.linalg.norm(np.diff(points, axis=0), axis=1)
+
+    def inside_length(tolerances):
+        pieces, verdict, _, _ = paving.certify_path(problem, points, depth, 600.0, compute, tolerances)
+        rows = verdict == INSIDE
+        return ((pieces[rows, 2] - pieces[rows, 1]) * lengths[pieces[rows, 0].astype(int)]).sum(), pieces[rows]
+
+    nominal, _ = inside_length(paving.Tolerances())
+    robust, pieces = inside_length(paving.Tolerances(anchors=0.01))
+    assert 0 < robust <= nominal + 1e-12
+    rng = np.random.default_rng(11)
+    t = rng.uniform(pieces[:, 1], pieces[:, 2])
+    segment = pieces[:, 0].astype(int)
+    samples = points[segment] + t[:, None] * (points[segment + 1] - points[segment])
+    assert (_min_margins(problem, samples) >= -problem.margin_atol).all()
