@@ -5,6 +5,7 @@ layout study from a user's own folder (its best layout run again as a robot file
 import itertools
 from dataclasses import replace
 
+import joblib
 import numpy as np
 import pandas as pd
 import pytest
@@ -111,6 +112,9 @@ def test_the_robots_own_layout_is_the_first_trial(make_cfg, catalogue):
     positions = grid[0:len(grid)]
     spec = LayoutSpec(anchors=Box([-1, -1, 0], [1, 1, 0]), objectives=["feasible_pct"], budget=6, sampler="tpe")
     table = search_layouts(spec, problem, positions, grid.cell_volume, n_jobs=1)
+    every = search_layouts(spec, problem, positions, grid.cell_volume, n_jobs=-1)  # joblib's -1: every core
+    pd.testing.assert_frame_equal(every, search_layouts(spec, problem, positions, grid.cell_volume,
+                                                        n_jobs=joblib.effective_n_jobs(-1)))
     first = table.iloc[0]
     own = np.asarray(problem.robot.anchors)
     assert [first[f"anchor{c + 1}_{a}"] for c in range(4) for a in "xyz"] == own.ravel().tolist()

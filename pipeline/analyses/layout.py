@@ -266,8 +266,9 @@ def evaluate(problem, positions: np.ndarray, cell_volume: float, required: np.nd
 def search_layouts(spec: LayoutSpec, problem, positions: np.ndarray, cell_volume: float, n_jobs: int) -> pd.DataFrame:
     """Run the trials; one row per trial: its variables, :func:`evaluate`'s numbers, ``meets``
     (the required box holds) and ``pareto`` (not dominated among those that meet it)."""
-    from joblib import Parallel, delayed
+    from joblib import Parallel, delayed, effective_n_jobs
 
+    n_jobs = max(1, effective_n_jobs(n_jobs))  # compute.n_jobs=-1: every core, in batches of that many trials
     optuna = require("optuna", "design", "a layout study")
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     ranges = spec.ranges(problem.robot.n_cables)
