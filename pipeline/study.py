@@ -614,7 +614,9 @@ def _layout_plan(study: StudySpec, extra: list[str], out: Path, launcher: str) -
     if job.cfg.analysis not in ("statics", "cpr_wwa") or job.problem.angles is not None:
         raise ConfigError(f"analysis={job.cfg.analysis}: study {study.name} counts a grid of positions "
                           "(analysis=statics or cpr_wwa)")
-    check_robot(study.layout, job.problem.robot)
+    from pipeline.app.problem import build_grid
+
+    check_robot(study.layout, job.problem.robot, build_grid(job.cfg, job.problem.robot).cell_volume)
     return planned
 
 

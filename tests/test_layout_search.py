@@ -208,7 +208,11 @@ def test_a_layout_study_from_a_users_folder_writes_a_robot_file_that_runs(tmp_pa
      "the robot's attachments, which the search keeps, are not mirrored"),
     ({"layout": {"anchors": {"lo": [-1, -1, 0], "hi": [1, 1, 0]}, "budget": -1}}, "budget=-1"),
     ({"layout": {"anchors": {"lo": [-1, -1, 0], "hi": [1, 1, 0]}, "objectives": ["volume_m3"]}},
-     "volume_m3: a planar robot's grid has no volume"),
+     "volume_m3: the grid has no volume"),
+    ({"overrides": [*PLANAR[:4], "robot.dofs=[x,y,z]", "robot.anchors=[[-1,-1,1],[1,-1,1],[1,1,1],[-1,1,1]]",
+                    "poses=[[0,0,0.5],[0.2,0,0.5]]", *PLANAR[7:]],
+      "layout": {"anchors": {"lo": [-1, -1, 1], "hi": [1, 1, 1]}, "objectives": ["volume_m3"]}},
+     "volume_m3: the grid has no volume"),
 ])
 def test_a_layout_study_it_cannot_run_exits_2_in_one_line_and_writes_nothing(tmp_path, change, message):
     write_study(tmp_path / "myconf", {**STUDY, **change})

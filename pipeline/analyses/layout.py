@@ -201,8 +201,12 @@ class LayoutSpec:
         return math.prod(int(round((hi - lo) / self.step)) + 1 for lo, hi in self.ranges(n_cables).values())
 
 
-def check_robot(spec: LayoutSpec, robot) -> None:
-    """ConfigError unless ``robot`` (a built ``CableRobot``) can take the layout's variables."""
+def check_robot(spec: LayoutSpec, robot, cell_volume: float) -> None:
+    """ConfigError unless ``robot`` (a built ``CableRobot``) can take the layout's variables and its
+    grid (each point's ``cell_volume``) the objectives."""
+    if "volume_m3" in spec.objectives and not math.isfinite(cell_volume):
+        raise ConfigError("layout.objectives: volume_m3: the grid has no volume (a planar robot's plane, or listed "
+                          "poses); use feasible_pct")
     if spec.symmetry == "quadrants" and robot.n_cables % 4:
         raise ConfigError(f"layout.symmetry=quadrants: the robot has {robot.n_cables} cables; quadrants take them "
                           "in fours, (-x, +y), (+x, +y), (+x, -y), (-x, -y)")
@@ -217,8 +221,6 @@ def check_robot(spec: LayoutSpec, robot) -> None:
     if spec.attachments is not None and robot.platform_shape is not None:
         raise ConfigError("layout.attachments: the robot's platform has a shape (robot.platform.shape) whose surface "
                           "holds the attachments; moving them inside a box would leave it: not searched yet")
-    if "volume_m3" in spec.objectives and (robot.box_lo == robot.box_hi).any():
-        raise ConfigError("layout.objectives: volume_m3: a planar robot's grid has no volume; use feasible_pct")
 
 
 def placed(spec: LayoutSpec, robot, values: dict) -> tuple[np.ndarray, np.ndarray]:
