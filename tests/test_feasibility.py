@@ -104,3 +104,24 @@ def test_fast_flags_equal_the_registry_verdicts_pose_by_pose(make_cfg, catalogue
 def test_ipanema_fast_count_is_the_readme_count(make_cfg, catalogue):
     problem, grid = build_problem(make_cfg(*IPANEMA), catalogue)
     assert int(feasible_flags(problem, grid[0:len(grid)]).sum()) == 9752
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3, 4])
+def test_fast_flags_equal_the_registry_on_random_robots(make_cfg, catalogue, seed):
+    """Random 7- to 9-cable robots (anchors in a 4 m cube, attachments on a 0.3 m platform), a
+    random load at a random tilt, random per-cable limits: the same verdict pose by pose."""
+    rng = np.random.default_rng(seed)
+    m = int(rng.integers(7, 10))
+    anchors = np.round(rng.uniform(-2, 2, (m, 3)) + [0, 0, 2], 3).tolist()
+    attachments = np.round(rng.uniform(-0.15, 0.15, (m, 3)), 3).tolist()
+    angles = np.round(rng.uniform(-0.3, 0.3, 3), 3)
+    problem, grid = build_problem(make_cfg(
+        "robot=points", f"robot.anchors={anchors}", f"robot.attachments={attachments}", "robot.search.lo=[-1,-1,1]",
+        "robot.search.hi=[1,1,3]", "robot.search.step=0.2", "tension=feasible",
+        f"tension.t_min={np.round(rng.uniform(0.5, 5, m), 2).tolist()}", f"tension.t_max={float(rng.uniform(150, 600)):.1f}",
+        f"load.mass={float(rng.uniform(1, 20)):.2f}", f"load.com={np.round(rng.uniform(-0.05, 0.05, 3), 3).tolist()}",
+        f"orientation.psi={angles[0]}", f"orientation.theta={angles[1]}", f"orientation.phi={angles[2]}"), catalogue)
+    rows = grid[0:len(grid)]
+    expected = registry_verdicts(problem, rows)
+    np.testing.assert_array_equal(feasible_flags(problem, rows), expected)
+    assert 0 < expected.sum() < len(rows)
