@@ -125,3 +125,25 @@ def test_fast_flags_equal_the_registry_on_random_robots(make_cfg, catalogue, see
     expected = registry_verdicts(problem, rows)
     np.testing.assert_array_equal(feasible_flags(problem, rows), expected)
     assert 0 < expected.sum() < len(rows)
+
+
+KEYS = {  # a key of the statics each: the fast flags meet it through the registry's families and margins
+    "acceleration box": ["robot.platform.mass=2", "platform_motion.acceleration={min:[-2,-2,-2,0,0,0],max:[2,2,2,0,0,0]}"],
+    "spinning platform": ["robot.platform.mass=2", "robot.platform.inertia=[0.1,0.1,0.2]",
+                          "platform_motion.acceleration=[[1,0,0,0,0,3]]", "platform_motion.angular_velocity=[0,0,2]"],
+    "sag rule": ["robot.cable_mass=0.05", "+criteria.sag={ratio: 0.02}", "load.mass=3"],
+    "stiffness": ["robot.cable_ea=1e4", "+criteria.stiffness={translational: 5000, rotational: 10, frequency: 0}",
+                  "load.mass=3"],
+    "cable length": ["robot.l_max=3.0", "wrench.fz=-20"],
+    "pulleys": ["robot.pulleys={axis: [0,0,-1], radius: 0.05}", "load.mass=3"],
+}
+
+
+@pytest.mark.parametrize("key", KEYS)
+def test_fast_flags_meet_every_statics_key(make_cfg, catalogue, key):
+    problem, grid = build_problem(make_cfg(*CROSSED_ROBOT, "tension=feasible", "tension.t_min=1", "tension.t_max=300",
+                                           *KEYS[key]), catalogue)
+    rows = grid[0:len(grid)]
+    expected = registry_verdicts(problem, rows)
+    np.testing.assert_array_equal(feasible_flags(problem, rows), expected)
+    assert 0 < expected.sum() < len(rows)
