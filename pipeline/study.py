@@ -623,7 +623,8 @@ def _layout_plan(study: StudySpec, extra: list[str], out: Path, launcher: str) -
 def _layouts(study: StudySpec, extra: list[str], out: Path, job: Job) -> pd.DataFrame:
     """A layout study's trials (:func:`pipeline.analyses.layout.search_layouts`, in this process);
     the best one run again as an ordinary job (``jobs/best``, its count checked against the
-    search's) and written as a robot file, ``layout_best.yaml``."""
+    search's) and written as a robot file, ``layout_best.yaml``; each layout of the Pareto front as
+    ``layouts/trial_NNNN.yaml``."""
     from pipeline.app.problem import build_grid
     from pipeline.app.yamltext import to_yaml
 
@@ -648,12 +649,22 @@ def _layouts(study: StudySpec, extra: list[str], out: Path, job: Job) -> pd.Data
         table["required_proven_pct"] = np.where(table["job"] == "best", np.nan if proven is None else proven, np.nan)
         log.info("layout: the best layout: %s", said)
     robot = OmegaConf.to_container(rerun.config.robot, resolve=True)
-    robot.update(points)
-    write_text(out / "layout_best.yaml", "# the best layout of study " f"{study.name}, trial {int(best['trial'])}: "
-               f"{best['n_feasible']} of {best['n_points']} poses feasible\n"
-               + to_yaml(OmegaConf.create({"defaults": ["points", "_self_"], **robot})))
-    log.info("layout: the best, trial %d: %d/%d poses feasible (%.3f m^3); robot file %s", best["trial"],
-             best["n_feasible"], best["n_points"], best["volume_m3"], out / "layout_best.yaml")
+
+    def robot_file(path: Path, row: pd.Series, what: str) -> None:
+        anchors, attachments = placed(study.layout, job.problem.robot, row.to_dict())
+        text = to_yaml(OmegaConf.create({"defaults": ["points", "_self_"], **robot, "anchors": anchors.tolist(),
+                                         "attachments": attachments.tolist()}))
+        write_text(path, f"# {what} of study {study.name}, trial {int(row['trial'])}: {row['n_feasible']} of "
+                         f"{row['n_points']} poses feasible\n" + text)
+
+    robot_file(out / "layout_best.yaml", best, "the best layout")
+    front = table[table["pareto"]]
+    shutil.rmtree(out / "layouts", ignore_errors=True)  # no file of an earlier run lingers
+    (out / "layouts").mkdir()
+    for _, row in front.iterrows():  # the Pareto front's layouts, for a designer to choose along it
+        robot_file(out / "layouts" / f"trial_{int(row['trial']):04d}.yaml", row, "a layout on the Pareto front")
+    log.info("layout: the best, trial %d: %d/%d poses feasible (%.3f m^3); robot files %s and %d in %s", best["trial"],
+             best["n_feasible"], best["n_points"], best["volume_m3"], out / "layout_best.yaml", len(front), out / "layouts")
     return table
 
 

@@ -185,6 +185,15 @@ def test_a_layout_study_from_a_users_folder_writes_a_robot_file_that_runs(tmp_pa
     assert best["feasible_pct"] == summary.loc[summary["meets"], "feasible_pct"].max()
     assert best["required_proven_pct"] > 50 and summary["required_proven_pct"].notna().sum() == 1
     assert (out / "figures" / "best.png").stat().st_size > 0
+    front = summary[summary["pareto"]]
+    files = sorted((out / "layouts").glob("*.yaml"))
+    assert [f.name for f in files] == [f"trial_{int(t):04d}.yaml" for t in sorted(front["trial"])] and len(files) >= 1
+    for path in files:  # each the trial's own points: eight columns of the summary mirrored into the robot's cables
+        row = front[front["trial"] == int(path.stem[6:])].iloc[0]
+        written = yaml.safe_load(path.read_text())
+        assert written["defaults"] == ["points", "_self_"] and written["dofs"] == ["x", "y"]
+        assert written["anchors"][1][:2] == [row["anchor2_x"], row["anchor2_y"]]
+        assert written["anchors"][3][:2] == [-row["anchor2_x"], -row["anchor2_y"]]  # (-x, -y) mirrors (+x, +y)
     robot = tmp_path / "myconf" / "robot"
     robot.mkdir()
     (robot / "layout_best.yaml").write_text((out / "layout_best.yaml").read_text())
