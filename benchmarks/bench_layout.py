@@ -28,13 +28,10 @@ import time  # noqa: E402
 from dataclasses import replace  # noqa: E402
 
 import numpy as np  # noqa: E402
-from hydra import compose, initialize_config_dir  # noqa: E402
 from joblib.externals.loky import get_reusable_executor  # noqa: E402
 
+from bench_feasible import composed, random_robot  # noqa: E402  (the same robots as the tension margins' bench)
 from pipeline.analyses.layout import Box, LayoutSpec, search_layouts  # noqa: E402
-from pipeline.app.problem import build_problem, typed_config  # noqa: E402
-from pipeline.app.resources import CONF_DIR  # noqa: E402
-from pipeline.model.catalogue import load_catalogue  # noqa: E402
 from pipeline.workspace.feasibility import feasible_flags  # noqa: E402
 from pipeline.workspace.kernel import evaluate_chunk  # noqa: E402
 from pipeline.workspace.verdict import classify  # noqa: E402
@@ -46,21 +43,6 @@ IPANEMA = ["robot=points", "robot.anchors=[[-2,1.5,2],[2,1.5,2],[2,-1.5,2],[-2,-
            "tension=feasible", "tension.t_min=1", "tension.t_max=10"]
 REGISTRY_SAMPLE = 5  # the registry's verdicts on every 5th pose: they are slow
 CHUNK = 4096
-
-
-def composed(*overrides: str):
-    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
-        cfg = typed_config(compose("config", overrides=list(overrides)))
-    return build_problem(cfg, load_catalogue())
-
-
-def random_robot(seed: int = 8) -> list[str]:
-    rng = np.random.default_rng(seed)
-    anchors = np.round(rng.uniform(-2.0, 2.0, (8, 3)) + [0, 0, 2.0], 3).tolist()
-    attachments = np.round(rng.uniform(-0.15, 0.15, (8, 3)), 3).tolist()
-    return ["robot=points", f"robot.anchors={anchors}", f"robot.attachments={attachments}",
-            "robot.search.lo=[-1,-1,1]", "robot.search.hi=[1,1,3]", "robot.search.step=0.05", "load.mass=30",
-            "tension=feasible", "tension.t_min=1", "tension.t_max=500", "orientation.psi=0.2", "orientation.theta=-0.1"]
 
 
 def in_chunks(function, positions: np.ndarray) -> np.ndarray:
@@ -105,7 +87,7 @@ def main() -> None:
     positions = grid[0:len(grid)]
     rng = np.random.default_rng(1)
     pulled = replace(problem, robot=replace(problem.robot, anchors=problem.robot.anchors * rng.uniform(0.6, 1.0, (8, 1))))
-    other, other_grid = composed(*random_robot())
+    other, other_grid = composed(*random_robot(), "robot.search.step=0.05", "orientation.psi=0.2", "orientation.theta=-0.1")
     print(f"{'case':40s} {'poses':>7s} {'fast poses/s (range)':>30s} {'registry poses/s (range)':>26s} {'ratio':>6s} "
           "differ")
     for name, case, rows in (("IPAnema 1 as built", problem, positions), ("IPAnema 1, anchors pulled in", pulled, positions),
