@@ -43,7 +43,8 @@ Override any key on the command line (`python -m pipeline load.mass=3`), sweep i
 (`python -m pipeline -m actuator=1,2,3`), and list the keys of one composition with their
 current values by `python -m pipeline --help robot=irpm6`. A job has the keys of
 `conf/config.yaml` and of its `tension`, `analysis` and `robot` files, and only those: a key
-another robot or analysis has is refused with one line. "From" names the composition whose files
+another robot or analysis has is refused with one line, also one added with `+` (`+actuator=3` on
+a statics job, which does not read it: `pipeline/app/problem.py`, `AnalysisKind.keys`). "From" names the composition whose files
 give the value: `default` is `robot=cpr8 analysis=cpr_wwa tension=pinv`.
 """
 

@@ -79,3 +79,57 @@ def test_every_analysis_with_every_optional_key_gives_a_result_or_one_line(tmp_p
         assert column in table.columns, sorted(table.columns)
         if column.startswith("margin_"):
             assert table[column].notna().all()
+
+
+def _leaves(node, prefix=""):
+    """{dotted key: value} of a composed config's leaves (a list is a leaf)."""
+    if not isinstance(node, dict):
+        return {prefix: node}
+    return {key: value for name, child in node.items() for key, value in _leaves(child, f"{prefix}{name}.").items()} \
+        if node else {prefix: node}
+
+
+def _analysis_files():
+    """Per analysis, the leaves its own files compose on the CPR-8 (conf/analysis/*.yaml with
+    conf/config.yaml; read from the YAML through Hydra, not from the code's declaration)."""
+    from omegaconf import OmegaConf
+
+    from conftest import make_cfg
+
+    composed = {analysis: _leaves(OmegaConf.to_container(make_cfg(f"analysis={analysis}"), enum_to_str=True))
+                for analysis in ANALYSES}
+    common = set.intersection(*(set(leaves) for leaves in composed.values()))
+    return {analysis: {key.rstrip("."): value for key, value in leaves.items() if key not in common}
+            for analysis, leaves in composed.items()}
+
+
+OWN = _analysis_files()
+FOREIGN = sorted({(analysis, key, repr(value)) for owner, leaves in OWN.items() for key, value in leaves.items()
+                  if value is not None for analysis in ANALYSES
+                  if not any(mine == key or mine.startswith(key + ".") or key.startswith(mine + ".")
+                             for mine in OWN[analysis])})
+
+
+def test_the_foreign_cells_cover_every_analysis_files_keys():
+    """The cells below are the keys each analysis file sets and another one's does not."""
+    assert {analysis for analysis, _, _ in FOREIGN} == set(ANALYSES)
+    assert {"actuator", "motion.v_max", "lines.samples", "model.moment_arm", "trajectory.law",
+            "certified.depth", "platform_motion.angular_velocity"} <= {key for _, key, _ in FOREIGN}
+
+
+@pytest.mark.parametrize("analysis, key, value", FOREIGN)
+def test_a_key_of_another_analysis_file_is_refused_not_ignored(tmp_path, analysis, key, value):
+    """``+motion.v_max=2`` on a statics job, ``+actuator=3`` on a statics job, ``+model.moment_arm=base``
+    on CPR-WWA: the analysis would not read the key, so the job would silently answer another
+    question; one line naming the key, exit 2, nothing written."""
+    import ast
+    import json
+
+    given = ast.literal_eval(value)
+    run = tmp_path / "run"
+    done = command(tmp_path, "pipeline", *ANALYSES[analysis], f"+{key}={json.dumps(given)}", f"hydra.run.dir={run}")
+    assert done.returncode == 2, done.stderr[-2000:]
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: ") and key.split(".")[0] in lines[0], lines
+    assert f"analysis={analysis}" in lines[0], lines
+    assert not run.exists()

@@ -355,18 +355,35 @@ class AnalysisKind:
 
     build: Callable[[DictConfig, Catalogue | None, CableRobot], tuple]
     files: Callable[..., dict]
+    keys: tuple[str, ...]  # the keys of its analysis file it reads (dotted), beyond conf/config.yaml's
     gridded: bool = True  # whether it checks the robot's grid (False: its own samples, and ``files`` gets no grid)
     certified: bool = False  # whether its verdicts are proofs: every criterion it checks has a certified bound
 
 
+STATICS_KEYS = ("model.moment_arm", "model.cable_direction", "platform_motion")
+DRIVE_KEYS = ("actuator", "catalogue", "drive", "choice")
+CPR_WWA_KEYS = (*DRIVE_KEYS, "motion", "grid.n_vel", "model.pinv_columns", "model.velocity_boundary",
+                "model.acceleration_set", "model.jdot", "model.xi_in_torque_limit")
 ANALYSES = {
-    "cpr_wwa": AnalysisKind(_cpr_wwa, _grid_files),
-    "statics": AnalysisKind(_statics, _grid_files),
-    "lines": AnalysisKind(_cpr_wwa, _line_files),
-    "payload": AnalysisKind(_payload, _grid_files),
-    "trajectory": AnalysisKind(_trajectory, _path_files, gridded=False),
-    "certified": AnalysisKind(_certified, _paving_files, gridded=False, certified=True),
+    "cpr_wwa": AnalysisKind(_cpr_wwa, _grid_files, CPR_WWA_KEYS),
+    "statics": AnalysisKind(_statics, _grid_files, STATICS_KEYS),
+    "lines": AnalysisKind(_cpr_wwa, _line_files, (*CPR_WWA_KEYS, "lines")),
+    "payload": AnalysisKind(_payload, _grid_files, STATICS_KEYS),
+    "trajectory": AnalysisKind(_trajectory, _path_files, (*STATICS_KEYS, *DRIVE_KEYS, "trajectory"), gridded=False),
+    "certified": AnalysisKind(_certified, _paving_files, (*STATICS_KEYS, "certified", "robust"), gridded=False,
+                              certified=True),
 }
+
+
+def foreign_key(cfg: DictConfig) -> None:
+    """ConfigError on a key of another analysis's file that ``cfg`` has (one added with ``+``, or
+    kept by a study or robot file): its analysis would not read it, so a job would ignore it."""
+    reads = ANALYSES[cfg.analysis].keys
+    for key in dict.fromkeys(key for kind in ANALYSES.values() for key in kind.keys):
+        if key not in reads and OmegaConf.select(cfg, key, default=None, throw_on_missing=False) is not None:
+            readers = ", ".join(name for name, kind in ANALYSES.items() if key in kind.keys)
+            raise ConfigError(f"{key}: analysis={cfg.analysis} does not read it (a key of analysis={readers}); "
+                              "remove it or choose that analysis")
 
 
 MAX_SET_VERTICES = 4096  # wrenches of a wrench.set: each is an LP block or a solve per pose
@@ -545,6 +562,7 @@ def validate(cfg: DictConfig, catalogue: Catalogue | None,
         raise ConfigError(f"robot.name={cfg.robot.name}: the robot's file has keys the robot kind {cfg.robot.name} "
                           f"does not ({', '.join(foreign)}); choose a robot with robot=NAME, not robot.name")
     check_values(cfg.robot, schema, "robot.")
+    foreign_key(cfg)
     if cfg.output.cables and not cfg.output.points:
         raise ConfigError("output.cables=true: the cables go into points.parquet, which "
                           "output.points=false does not write")
