@@ -101,6 +101,18 @@ def test_fast_flags_equal_the_registry_verdicts_pose_by_pose(make_cfg, catalogue
     assert 0 < expected.sum() < len(rows)
 
 
+@pytest.mark.parametrize("case", ["IPAnema 1, [1, 10] N", "orientation set and wrench box"])
+def test_one_pose_at_a_time_gets_the_registry_verdict(make_cfg, catalogue, case):
+    """A chunk of one pose (a broadcast wrench is then a read-only view the compiled test must not get)."""
+    problem, grid = build_problem(make_cfg(*CASES[case]), catalogue)
+    rows = grid[0:len(grid)]
+    expected = registry_verdicts(problem, rows)
+    held, failed = np.flatnonzero(expected), np.flatnonzero(~expected)
+    assert len(held) and len(failed)
+    picked = np.concatenate([found[np.linspace(0, len(found) - 1, min(30, len(found))).astype(int)] for found in (held, failed)])
+    assert [bool(feasible_flags(problem, rows[k:k + 1])[0]) for k in picked] == expected[picked].tolist()
+
+
 def test_ipanema_fast_count_is_the_readme_count(make_cfg, catalogue):
     problem, grid = build_problem(make_cfg(*IPANEMA), catalogue)
     assert int(feasible_flags(problem, grid[0:len(grid)]).sum()) == 9752

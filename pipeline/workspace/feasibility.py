@@ -47,7 +47,8 @@ def feasible_flags(problem: WorkspaceProblem, rows: np.ndarray) -> np.ndarray:
         upper = np.min([_per_cable(f.upper + problem.margin_atol * f.scale, m) for f in families], axis=0)
         structure = np.ascontiguousarray(state.structure, dtype=float)
         wrenches = state.balanced_wrenches(families)
-        wrenches = np.ascontiguousarray(np.broadcast_to(wrenches, (len(positions), *np.shape(wrenches)[-2:])), dtype=float)
+        shape = (len(positions), *np.shape(wrenches)[-2:])
+        wrenches = np.array(np.broadcast_to(wrenches, shape), dtype=float, order="C")  # a writable copy, also of one pose
         verdicts = np.empty(len(positions), dtype=np.int8)
         compiled_loops("pipeline.model.nullspace").pulling_verdicts(
             structure, wrenches, np.ascontiguousarray(lower, dtype=float), np.ascontiguousarray(upper, dtype=float),
