@@ -32,6 +32,7 @@ from pipeline.model.tensions import Family, capacity_margins, reachability
 from pipeline.workspace.compute import described_job, name_of
 from pipeline.workspace.kernel import WorkspaceProblem
 from pipeline.workspace.parallel import iter_chunks
+from pipeline.workspace.tolerances import NOMINAL, Tolerances, culprits
 
 log = logging.getLogger(__name__)
 
@@ -53,22 +54,7 @@ class Paving:
         return np.prod((self.hi - self.lo)[:, axes], axis=1)
 
 
-@dataclass(frozen=True)
-class Tolerances:
-    """Build tolerances (``robust.*``), each a half-width on every coordinate: ``anchors`` and
-    ``attachments`` (m), the load's ``mass`` (kg) and centre of mass ``com`` (m)."""
-
-    anchors: float = 0.0
-    attachments: float = 0.0
-    mass: float = 0.0
-    com: float = 0.0
-
-    @property
-    def nominal(self) -> bool:
-        return not (self.anchors or self.attachments or self.mass or self.com)
-
-
-def box_statics(problem: WorkspaceProblem, angles: np.ndarray, tolerances: Tolerances = Tolerances()) -> BoxStatics:
+def box_statics(problem: WorkspaceProblem, angles: np.ndarray, tolerances: Tolerances = NOMINAL) -> BoxStatics:
     """The certificates' data at one orientation (eq. 9's angles), for every robot within
     ``tolerances``: enclosures of R b_i - a_i and R b_i, the required wrenches (each the hull of its
     values at the corners of the mass and centre-of-mass box, where a wrench affine in each is
@@ -149,7 +135,7 @@ def _certified(problem: WorkspaceProblem, box: BoxStatics, robust: BoxStatics, a
 
 
 def pave(problem: WorkspaceProblem, depth: int, seconds: float, compute: DictConfig,
-         tolerances: Tolerances = Tolerances()) -> tuple[Paving, dict]:
+         tolerances: Tolerances = NOMINAL) -> tuple[Paving, dict]:
     """Branch and prune from the robot's search box: the paving and how it ended."""
     robot = problem.robot
     axes = np.flatnonzero(robot.box_hi > robot.box_lo)
@@ -161,7 +147,7 @@ def pave(problem: WorkspaceProblem, depth: int, seconds: float, compute: DictCon
 
 
 def certify_path(problem: WorkspaceProblem, points: np.ndarray, depth: int, seconds: float, compute: DictConfig,
-                 tolerances: Tolerances = Tolerances()) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict]:
+                 tolerances: Tolerances = NOMINAL) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict]:
     """The straight segments between the way-points ``points`` (P, 3) in pieces, each proven
     feasible at every point or at none through the box that holds it (its ends' bounding box,
     widened by a few ulps so that it holds the exact segment, not only the rounded ends), an
@@ -257,12 +243,13 @@ def paving_files(cfg: DictConfig, problem: WorkspaceProblem, files) -> dict:
     volumes = paving.volumes(axes)
     total = float(np.prod((robot.box_hi - robot.box_lo)[axes]))
     shares = {VERDICTS[v]: float(volumes[paving.verdict == v].sum()) for v in VERDICTS}
+    lost = {} if tolerances.nominal else _lost(problem, tolerances, paving, volumes)
     if cfg.output.points:
         table = pd.DataFrame({**{f"lo_{a}": paving.lo[:, k] for k, a in enumerate("xyz")},
                               **{f"hi_{a}": paving.hi[:, k] for k, a in enumerate("xyz")},
                               "verdict": pd.Categorical([VERDICTS[v] for v in paving.verdict],
                                                         categories=list(VERDICTS.values())),
-                              "depth": paving.depth, "volume": volumes})
+                              "depth": paving.depth, "volume": volumes, **lost.pop("columns", {})})
         files.write("boxes", table)
     row = described_job(cfg, problem)
     counts = {name: int((paving.verdict == v).sum()) for v, name in VERDICTS.items()}
@@ -271,11 +258,35 @@ def paving_files(cfg: DictConfig, problem: WorkspaceProblem, files) -> dict:
         volume_m3=shares["inside"], n_inside=counts["inside"], n_outside=counts["outside"], n_undecided=counts["undecided"],
         box_m3=total, inside_m3=shares["inside"], outside_m3=shares["outside"], undecided_m3=shares["undecided"],
         inside_pct=100.0 * shares["inside"] / total, undecided_pct=100.0 * shares["undecided"] / total, **ended,
+        **{key: value for key, value in lost.items() if key != "columns"},
     )
     log.info("%s certified: %.4g to %.4g m^3 feasible (inside %.2f%%, undecided %.2f%% of the search box), %d boxes "
              "in %.1f s (%s)", robot.name, shares["inside"], shares["inside"] + shares["undecided"], row["inside_pct"],
              row["undecided_pct"], len(paving.verdict), ended["seconds"], ended["stopped"])
     return row
+
+
+def _lost(problem: WorkspaceProblem, tolerances: Tolerances, paving: Paving, volumes: np.ndarray) -> dict:
+    """A robust paving's undecided boxes whose centre one build error breaks (``tolerances.culprits``):
+    boxes.parquet's ``lost_to`` (the error's name) and ``lost_at`` (the share of its tolerance that
+    breaks the centre), and the summary's ``lost_named_m3`` (their volume: certainly not in the
+    robust workspace), ``lost_to_top`` and ``lost_to_top_m3`` (the error that names most of it)."""
+    undecided = np.flatnonzero(paving.verdict == UNDECIDED)
+    centres = np.clip(paving.lo[undecided] + (paving.hi[undecided] - paving.lo[undecided]) / 2,
+                      paving.lo[undecided], paving.hi[undecided])
+    started = time.perf_counter()
+    names, at = culprits(problem, tolerances, centres)
+    lost_to, lost_at = np.full(len(volumes), None, dtype=object), np.full(len(volumes), np.nan)
+    lost_to[undecided], lost_at[undecided] = names, at
+    named = np.array([name is not None for name in lost_to])
+    by_error = pd.Series(volumes[named]).groupby(lost_to[named]).sum().sort_values(ascending=False, kind="stable")
+    top = by_error.index[0] if len(by_error) else None
+    row = {"lost_named_m3": float(volumes[named].sum()), "lost_to_top": top,
+           "lost_to_top_m3": float(by_error.iloc[0]) if len(by_error) else 0.0}
+    log.info("of the undecided boxes, %.4g m^3 have a centre one build error within the tolerances breaks (certainly "
+             "lost), most to %s (%.4g m^3); %.1f s", row["lost_named_m3"], top or "none", row["lost_to_top_m3"],
+             time.perf_counter() - started)
+    return {**row, "columns": {"lost_to": pd.Categorical(lost_to, categories=list(by_error.index)), "lost_at": lost_at}}
 
 
 def path_files(cfg: DictConfig, problem: WorkspaceProblem, files, tolerances: Tolerances) -> dict:
