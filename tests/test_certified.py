@@ -589,3 +589,101 @@ def test_a_robust_path_proves_no_more_than_the_nominal_one(make_cfg):
     segment = pieces[:, 0].astype(int)
     samples = points[segment] + t[:, None] * (points[segment + 1] - points[segment])
     assert (_min_margins(problem, samples) >= -problem.margin_atol).all()
+
+
+# -- certified paths of a moving platform: every instant of a rest-to-rest motion proven --------
+
+def _quintic(s):
+    """The rest-to-rest law written here from its definition: the share covered and its second
+    derivative in s (h(0) = 0, h(1) = 1, h' = h'' = 0 at both ends)."""
+    return 10 * s**3 - 15 * s**4 + 6 * s**5, 60 * s - 180 * s**2 + 120 * s**3
+
+
+MOVING = {  # name -> (overrides, way-points, seconds per segment, depth)
+    "crane, dropped faster than g": (CRANE, [[0, 0, 2], [0, 0, 1], [0.5, 0.3, 1.5]], 0.5, 13),
+    "tilted payload": (ROBOTS["tilted payload"][0], [[-0.6, -0.4, 0.6], [0.6, 0.4, 1.3]], 0.4, 12),
+}
+
+
+@pytest.mark.parametrize("name", sorted(MOVING))
+def test_a_moving_path_agrees_with_the_exact_test_at_each_instant(make_cfg, name):
+    """At instants drawn in each piece proven inside (outside), the pose and the acceleration of the
+    law written in this test hold (fail) by the exact per-pose test of the statics with that
+    acceleration (``platform_motion``), a problem built apart from the paving."""
+    overrides, points, seconds, depth = MOVING[name]
+    problem = _problem(make_cfg, overrides, "compute.n_jobs=1")
+    points = np.asarray(points, dtype=float)
+    durations = np.full(len(points) - 1, seconds)
+    pieces, verdict, _, _ = paving.certify_path(problem, points, depth, 600.0,
+                                                make_cfg(*overrides, "compute.n_jobs=1").compute, durations=durations)
+    assert (verdict == INSIDE).any() and (verdict == OUTSIDE).any()
+    rng = np.random.default_rng(9)
+    for kind in (INSIDE, OUTSIDE):
+        for row in rng.choice(np.flatnonzero(verdict == kind), 25):
+            k = int(pieces[row, 0])
+            s = rng.uniform(pieces[row, 1], pieces[row, 2])
+            share, curvature = _quintic(s)
+            delta = points[k + 1] - points[k]
+            acceleration = curvature * delta / seconds**2
+            moving = build(make_cfg(*overrides, "tension=feasible", "analysis=statics", "compute.n_jobs=1",
+                                    f"platform_motion.acceleration=[{[*acceleration.tolist(), 0, 0, 0]}]"), None)
+            least = _min_margins(moving, (points[k] + share * delta)[None])[0]
+            assert (least >= -problem.margin_atol) if kind == INSIDE else (least < problem.margin_atol), (kind, k, s, least)
+
+
+def test_a_crane_dropped_faster_than_gravity_fails_where_the_law_says(tmp_path):
+    """A 5 kg point under four anchors, pushed by 3 N along x, moved 1 m straight down in 0.5 s:
+    its cables (1 to 40 N) hold it while some tensions give sum t_i u_i = m a - m g - f (an LP per
+    instant, written here from the law), which the law's growing downward acceleration ends within
+    0.03 s. The first piece proven infeasible starts there (within a piece), every piece before it
+    holds; slowly (5 s a segment) the whole path is proven."""
+    from scipy.optimize import linprog
+
+    run = tmp_path / "fast"
+    base = [*CRANE, "tension=feasible", "analysis=certified", "certified.depth=16",
+            "certified.path=[[0,0,2],[0,0,1],[0.5,0.3,1.5]]"]
+    done = command(tmp_path, "pipeline", *base, "certified.times=0.5", f"hydra.run.dir={run}")
+    assert done.returncode == 0, done.stderr[-2000:]
+    summary = pd.read_parquet(run / "summary.parquet").iloc[0]
+    pieces = pd.read_parquet(run / "segments.parquet")
+    anchors = np.array([[-1, -1, 3], [1, -1, 3], [1, 1, 3], [-1, 1, 3]], dtype=float)
+
+    def holds(t: float) -> bool:
+        share, curvature = _quintic(t / 0.5)
+        point = np.array([0.0, 0.0, 2.0 - share])
+        acceleration = np.array([0.0, 0.0, -curvature / 0.25])
+        units = (anchors - point) / np.linalg.norm(anchors - point, axis=1)[:, None]
+        needed = 5.0 * acceleration - 5.0 * np.array([0, 0, -9.81]) - np.array([3.0, 0, 0])
+        return linprog(np.zeros(4), A_eq=units.T, b_eq=needed, bounds=[(1, 40)] * 4, method="highs").status == 0
+
+    low, high = 0.0, 0.05
+    assert holds(low) and not holds(high)
+    for _ in range(40):
+        middle = (low + high) / 2
+        low, high = (middle, high) if holds(middle) else (low, middle)
+    assert 0.01 < high < 0.03
+    assert summary["first_outside_s"] >= low - 1e-9  # nothing proven infeasible where the law holds
+    assert summary["first_outside_s"] == pytest.approx(high, abs=1e-4)
+    assert (pieces.loc[pieces.to_s <= low, "verdict"] == "inside").all()
+    assert summary["duration_s"] == 1.0 and not summary["path_certified"]
+    assert np.isclose(pieces.to_s.max(), 1.0) and np.allclose(pieces.from_s.to_numpy()[1:], pieces.to_s.to_numpy()[:-1])
+    assert np.isclose(pieces.length_m.sum(), summary["path_m"])
+    slow = tmp_path / "slow"
+    assert command(tmp_path, "pipeline", *base, "certified.times=[5, 5]", f"hydra.run.dir={slow}").returncode == 0
+    assert pd.read_parquet(slow / "summary.parquet").iloc[0]["path_certified"]
+
+
+@pytest.mark.parametrize("overrides, key", [
+    (["certified.times=1"], "certified.times"),  # no path
+    (["certified.path=[[0,0,1],[0,0,2]]", "certified.times=[1,2]"], "certified.times=[1, 2]: 2 durations for 1 segments"),
+    (["certified.path=[[0,0,1],[0,0,2]]", "certified.times=-1"], "certified.times=-1"),
+    (["certified.path=[[0,0,1],[0,0,2]]", "certified.times=1", "platform_motion.acceleration=[[1,0,0,0,0,0]]"],
+     "platform_motion"),
+    (["certified.path=[[0,0,1],[0,0,2]]", "certified.times=1", "robust.mass=0.1"], "robust.mass"),
+])
+def test_a_moving_path_it_cannot_mean_is_refused_in_one_line(tmp_path, overrides, key):
+    run = tmp_path / "run"
+    done = command(tmp_path, "pipeline", *CRANE, "tension=feasible", "analysis=certified", *overrides, f"hydra.run.dir={run}")
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 2 and len(lines) == 1 and key in lines[0], lines
+    assert not run.exists()

@@ -549,11 +549,14 @@ class CertifiedConfig:
     """``analysis=certified`` (``pipeline.workspace.paving``): branch and prune from the robot's
     search box, at most ``depth`` levels of bisection and ``time`` seconds; with ``path`` (way-points
     [[x, y, z], ...], m) the straight segments between them instead, each piece proven feasible at
-    every point or at none."""
+    every point or at none: at rest, or with ``times`` (s per segment: one value, or one per
+    segment; ``pipeline.app.paths.durations``) moving rest to rest along each segment by the quintic
+    law of ``analysis=trajectory``, each piece with the accelerations it has."""
 
     depth: int = rule(lambda value: None if 0 <= value <= MAX_DEPTH else f"must be in [0, {MAX_DEPTH}]")
     time: float = rule(positive)
     path: Any = rule(lambda value: _path_error(value))
+    times: Any = MISSING
 
 
 def _path_error(value) -> str | None:

@@ -79,7 +79,7 @@ def _from_points(node: DictConfig, law: str, robot: CableRobot, orientation: Dic
         except ValueError as exc:
             raise ConfigError(f"trajectory.points: {exc}") from None
     _no_speeds(node, law)
-    return _timed(law, points, _durations(node.times, len(points) - 1))
+    return _timed(law, points, durations(node.times, len(points) - 1))
 
 
 def _from_file(node: DictConfig, law: str, robot: CableRobot, orientation: DictConfig) -> tuple[Path, float | None]:
@@ -254,22 +254,23 @@ def _on_freedoms(values: np.ndarray, robot: CableRobot, orientation: DictConfig 
     return q
 
 
-def _durations(times, segments: int) -> np.ndarray:
-    """(segments,) each segment's duration from ``trajectory.times``: one value, or one per segment."""
+def durations(times, segments: int, key: str = "trajectory.times") -> np.ndarray:
+    """(segments,) each segment's duration (s) from ``times`` (the key ``key``): one value for every
+    segment, or one per segment; ConfigError for anything else."""
     if times is None:
-        raise ConfigError("trajectory.times: each segment's duration (s), one value for every segment or one per "
+        raise ConfigError(f"{key}: each segment's duration (s), one value for every segment or one per "
                           "segment; or law trapezoid (trajectory.v_max, t_acc, t_dec)")
     values = _shown(times)
     values = values if isinstance(values, list) else [values]
     if not all(_number(value) for value in values):
-        raise ConfigError(f"trajectory.times={values}: every duration must be a number of seconds")
+        raise ConfigError(f"{key}={values}: every duration must be a number of seconds")
     if len(values) not in (1, segments):
-        raise ConfigError(f"trajectory.times={values}: {len(values)} durations for {segments} segments; "
+        raise ConfigError(f"{key}={values}: {len(values)} durations for {segments} segments; "
                           f"give one for every segment or one per segment")
-    durations = np.array(values, dtype=float)
-    if not (np.isfinite(durations).all() and (durations > 0).all()):
-        raise ConfigError(f"trajectory.times={_shown(times)}: every duration must be > 0 and finite (s)")
-    return np.broadcast_to(durations, (segments,)).copy()
+    found = np.array(values, dtype=float)
+    if not (np.isfinite(found).all() and (found > 0).all()):
+        raise ConfigError(f"{key}={_shown(times)}: every duration must be > 0 and finite (s)")
+    return np.broadcast_to(found, (segments,)).copy()
 
 
 def _read_csv(path: FilePath, robot: CableRobot, key: str) -> tuple[np.ndarray, np.ndarray]:

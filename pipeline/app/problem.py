@@ -34,7 +34,7 @@ from typing import Callable
 import numpy as np
 from omegaconf import DictConfig, ListConfig, OmegaConf
 
-from pipeline.app.paths import path_samples
+from pipeline.app.paths import durations, path_samples
 from pipeline.app.config import (
     MAX_ACCELERATION, MAX_FORCE, Config, Cpr8Config, Irpm6Config, PointsConfig, check_values, masked, merged, shown,
     unknown_keys, vector,
@@ -319,16 +319,23 @@ def _certified(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
         (cfg.output.metrics, "output.metrics=true", "the metrics are per pose, of analysis=statics"),
         (cfg.output.cables, "output.cables=true", "the cables' forces are per pose, of analysis=statics"),
         (name_of(cfg.compute.kernel) == "fused", "compute.kernel=fused", "the certificates have one kernel; use auto"),
-        (spec.moves and (cfg.robust.mass > 0 or cfg.robust.com > 0), "robust.mass, robust.com",
-         "the moving platform's inertia changes with its mass and centre of mass; give them without platform_motion"),
+        (spec.moves and cfg.certified.times is not None, "platform_motion",
+         "a moving path's accelerations are its own (certified.times); leave platform_motion at rest"),
+        ((spec.moves or cfg.certified.times is not None) and (cfg.robust.mass > 0 or cfg.robust.com > 0),
+         "robust.mass, robust.com", "the moving platform's inertia changes with its mass and centre of mass; give them "
+         "without platform_motion or certified.times"),
         (cfg.robust.mass > cfg.robot.platform.mass + cfg.load.mass, f"robust.mass={cfg.robust.mass}",
          "a tolerance on the mass larger than the mass itself"),
     )
     for asked, key, why in refused:
         if asked:
             raise ConfigError(f"{key}: analysis=certified: {why}")
+    if cfg.certified.times is not None and cfg.certified.path is None:
+        raise ConfigError("certified.times: the durations of certified.path's segments; give the path's way-points")
     if cfg.certified.path is not None:
         points = np.asarray(OmegaConf.to_container(cfg.certified.path), dtype=float)
+        if cfg.certified.times is not None:
+            durations(cfg.certified.times, len(points) - 1, "certified.times")
         flat = np.flatnonzero(robot.box_lo == robot.box_hi)  # a planar robot's plane
         off = np.flatnonzero((points[:, flat] != robot.box_lo[flat]).any(axis=1))
         if len(off):

@@ -175,10 +175,11 @@ def _upper_row_sums(values: np.ndarray) -> np.ndarray:
     return Interval(values, values).sum(axis=-1).hi
 
 
-def inside(statics: BoxStatics, enclosure: BoxEnclosure, tensions: np.ndarray, rates: np.ndarray,
+def inside(statics: BoxStatics, enclosure: BoxEnclosure, wrenches: Interval, tensions: np.ndarray, rates: np.ndarray,
            right_inverse: np.ndarray) -> np.ndarray:
-    """(N,) whether every pose of each box is proven feasible: for every required wrench k, the
-    tensions t0 + K e of the module's argument stay within the limits. ``tensions`` (N, K, m):
+    """(N,) whether every pose of each box is proven feasible: for every required wrench k (every
+    wrench of its enclosure ``wrenches`` (N, K, k): ``statics.wrenches`` per box, or a moving
+    platform's own), the tensions t0 + K e of the module's argument stay within the limits. ``tensions`` (N, K, m):
     t0 per box and wrench (any doubles; good ones have room to both limits), ``right_inverse``
     (N, m, k): K with A(c) K close to I (the pseudo-inverse at the centre)."""
     n_rows = enclosure.centre.shape[1]
@@ -188,7 +189,7 @@ def inside(statics: BoxStatics, enclosure: BoxEnclosure, tensions: np.ndarray, r
     # the tensions follow the boxes' poses to first order, t(p) = t0 + D (p - c) with A(c) D_l = -(dA/dp_l) t0,
     # so that r(p) = A(p) t(p) - w is of second order in the box's width:
     # r(B) in [A(c) t0 - w] + sum_l [(dA/dp_l)(B) t0 + A(B) D_l] (p_l - c_l)
-    residual = _tension_wrench(enclosure.centre, tensions) - statics.wrenches  # (N, K, k)
+    residual = _tension_wrench(enclosure.centre, tensions) - wrenches  # (N, K, k)
     moved = Interval.point(tensions)
     for axis in range(3):
         rate = (_tension_wrench(enclosure.slopes[:, axis], tensions)
@@ -229,10 +230,11 @@ def _tension_wrench(structure: Interval, tensions: np.ndarray) -> Interval:
     return total
 
 
-def outside(statics: BoxStatics, enclosure: BoxEnclosure, separators: np.ndarray) -> np.ndarray:
+def outside(statics: BoxStatics, enclosure: BoxEnclosure, wrenches: Interval, separators: np.ndarray) -> np.ndarray:
     """(N,) whether every pose of each box is proven infeasible: a cable longer than ``l_max``
-    over the whole box, or a required wrench k whose ``separators`` y (N, K, k) separates it
-    from the cable wrenches at every A in the enclosure (Farkas), a_i = y.A_i bounded as below."""
+    over the whole box, or a required wrench k whose ``separators`` y (N, K, k) separate every
+    wrench of its enclosure ``wrenches`` (N, K, k) from the cable wrenches at every A in the
+    enclosure (Farkas), a_i = y.A_i bounded as below."""
     too_long = (enclosure.lengths.lo > statics.l_max).any(axis=1)
     lower, upper = statics.lower, statics.upper
     a = enclosure.times(separators, _separated)  # y.A_i over the box, (N, K, m)
@@ -251,7 +253,7 @@ def outside(statics: BoxStatics, enclosure: BoxEnclosure, separators: np.ndarray
     offset = np.maximum(ends[0].hi, ends[1].hi)  # nu >= (t_max - t_min) max(e, 0) - c e at both ends e
     pulled = (enclosure.times((separators, np.broadcast_to(lower, slope.shape)), _pulled)
               + enclosure.times((separators, slope), _pulled) + Interval(offset, offset).sum(axis=-1))
-    reach = (statics.wrenches[None] * Interval.point(separators)).sum(axis=-1).lo  # lower bound of y.w
+    reach = (wrenches * Interval.point(separators)).sum(axis=-1).lo  # lower bound of y.w
     separated = ~blocked & (down(reach - pulled.hi) > 0)
     return too_long | (enclosure.regular & separated.any(axis=1))
 
@@ -280,7 +282,7 @@ LP_BLOCKS = 256
 
 def robust_separators(structure: np.ndarray, slopes: np.ndarray, half: np.ndarray, wrenches: np.ndarray,
                       lower: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(N, K, k) a y per box and wrench, and (N, K) its first-order separation over the box: the
+    """(N, K, k) a y per box and wrench (``wrenches`` (N, K, k)), and (N, K) its first-order separation over the box: the
     largest y.w - sum_i max(b_i t_min_i, b_i t_max_i) with b_i = y.A_i(c) + sum_l h_l |y.G_il|,
     what a_i = y.A_i(p) may reach in the box, over |y|_inf <= 1. The LP, per box and wrench:
 
@@ -290,7 +292,7 @@ def robust_separators(structure: np.ndarray, slopes: np.ndarray, half: np.ndarra
     (an unrated cable, t_max = inf, must keep b_i <= 0: S_i = 0). A positive separation is what
     the interval test (:func:`outside`) then proves, up to second order."""
     n, k, m = structure.shape
-    count = wrenches.shape[0]
+    count = wrenches.shape[1]
     width = k + m + 3 * m  # y, S, Z (m x 3, cable-major)
     blocks = n * count
     a = np.swapaxes(np.repeat(structure, count, axis=0), 1, 2)  # (B, m, k): rows y.A_i
@@ -299,7 +301,7 @@ def robust_separators(structure: np.ndarray, slopes: np.ndarray, half: np.ndarra
     rated = np.isfinite(upper)
     spare = np.where(rated, upper - lower, 0.0)
     cost = np.zeros((blocks, width))
-    w = np.tile(wrenches, (n, 1))
+    w = wrenches.reshape(n * count, k)
     cost[:, :k] = -w + np.einsum("bmk,m->bk", a, lower)
     cost[:, k:k + m] = spare
     for axis in range(3):

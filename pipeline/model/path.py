@@ -148,16 +148,37 @@ class Path:
         return Samples(self.breaks[piece] + tau[:, 0], self.segments[piece], value, rate, accel)
 
 
+QUINTIC = (6.0, -15.0, 10.0)  # h(s) = 10 s^3 - 15 s^4 + 6 s^5: the share of a rest-to-rest segment covered at s = tau / T
+
+
 def rest_to_rest(points: np.ndarray, durations: np.ndarray) -> Path:
     """``quintic``: each segment q_i -> q_(i+1) in its duration T_i (s) by the quintic
-    10 s^3 - 15 s^4 + 6 s^5 of s = tau / T_i, at rest at every way-point."""
+    h(s) = 10 s^3 - 15 s^4 + 6 s^5 of s = tau / T_i, at rest at every way-point."""
     points, durations = np.asarray(points, float), np.asarray(durations, float)
     delta = np.diff(points, axis=0)  # (P, 6)
     scale = durations[:, None]
     zero = np.zeros_like(delta)
-    coefficients = np.stack([6 * delta / scale**5, -15 * delta / scale**4, 10 * delta / scale**3, zero, zero,
+    fifth, fourth, third = QUINTIC
+    coefficients = np.stack([fifth * delta / scale**5, fourth * delta / scale**4, third * delta / scale**3, zero, zero,
                              points[:-1]])
     return Path(_breaks(durations), coefficients, np.arange(len(delta)))
+
+
+def quintic_share(s: np.ndarray) -> np.ndarray:
+    """h(s), the share of a rest-to-rest segment covered at s in [0, 1] (increasing: h' = 30 s^2 (1 - s)^2)."""
+    fifth, fourth, third = QUINTIC
+    return s**3 * (third + s * (fourth + s * fifth))
+
+
+def quintic_curvature_range(s0: np.ndarray, s1: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The least and largest h''(s) = 60 s - 180 s^2 + 120 s^3 over each [s0, s1] (within [0, 1]):
+    its values at both ends and at its turning points (3 -+ sqrt 3) / 6 where they fall inside,
+    widened by 1e-12 for their rounding. A segment's acceleration is h''(s) (q_(i+1) - q_i) / T_i^2."""
+    fifth, fourth, third = QUINTIC
+    turns = (3 - math.sqrt(3)) / 6, (3 + math.sqrt(3)) / 6
+    points = np.stack([s0, s1, *(np.clip(turn, s0, s1) for turn in turns)])
+    values = points * (6 * third + points * (12 * fourth + points * 20 * fifth))
+    return values.min(axis=0) - 1e-12, values.max(axis=0) + 1e-12
 
 
 def spline(points: np.ndarray, durations: np.ndarray) -> Path:

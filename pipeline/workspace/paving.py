@@ -8,6 +8,8 @@ seconds. The inside boxes are an inner approximation of the workspace, inside an
 outer one: its volume lies in [V_inside, V_inside + V_undecided] (summary ``inside_m3``,
 ``undecided_m3``, ``undecided_pct`` of the search box). A box's verdict is a proof for the
 criteria that have a certified bound (``Criterion.certified``); a problem with another is refused.
+With ``certified.path`` the straight segments between way-points are certified piece by piece
+instead, at rest or moving rest to rest in ``certified.times`` (:func:`certify_path`).
 
 At each box's centre the floats the certificates try are the statics' own: the structure matrix
 and its pseudo-inverse, the LP's tensions with the most room to both limits
@@ -23,11 +25,12 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 import pandas as pd
-from omegaconf import DictConfig, OmegaConf
+from omegaconf import DictConfig, ListConfig, OmegaConf
 
 from pipeline.model import certificates
 from pipeline.model.certificates import INSIDE, OUTSIDE, UNDECIDED, WRENCH_RTOL, BoxStatics
 from pipeline.model.intervals import Interval, rotation_enclosure
+from pipeline.model.path import quintic_curvature_range, quintic_share
 from pipeline.model.tensions import Family, capacity_margins, reachability
 from pipeline.workspace.compute import described_job, name_of
 from pipeline.workspace.kernel import WorkspaceProblem
@@ -75,12 +78,7 @@ def box_statics(problem: WorkspaceProblem, angles: np.ndarray, tolerances: Toler
                for dc in itertools.product(*[sorted({-tolerances.com, tolerances.com})] * 3)]
     wrenches = np.stack([np.asarray(corner.state(robot, centre, tuple(angles)).required_wrenches, dtype=float)
                          .reshape(-1, len(robot.dofs)) for corner in corners])  # (corners, K, k)
-    size = (1.0 + np.abs(wrenches).max() + np.abs(load.external).max() + np.abs(spec.wrench_set).max(initial=0.0)
-            + (load.mass + tolerances.mass) * (load.gravity + np.abs(spec.accelerations).max(initial=0.0))
-            * (1.0 + np.linalg.norm(load.com) + 2 * tolerances.com)
-            + (0.0 if load.inertia is None else np.abs(load.inertia).max())
-            * (np.abs(spec.accelerations).max(initial=0.0) + np.abs(spec.angular_velocities).max() ** 2))
-    radius = WRENCH_RTOL * size
+    radius = _radius(spec, tolerances, wrenches)
     m = robot.n_cables
     lower = np.broadcast_to(np.asarray(spec.tension.t_min, dtype=float), (m,)).copy()
     upper = np.broadcast_to(np.asarray(problem.limits.t_max, dtype=float), (m,)).copy()
@@ -88,31 +86,64 @@ def box_statics(problem: WorkspaceProblem, angles: np.ndarray, tolerances: Toler
                       lower, upper, np.inf if robot.l_max is None else float(robot.l_max), robot.shortest_cable)
 
 
+def _radius(spec, tolerances: Tolerances, wrenches: np.ndarray) -> float:
+    """How far the statics' rounding may have moved ``wrenches`` formed from ``spec``: ``WRENCH_RTOL``
+    of the size of the terms that form them (the load's, the wrench set's, the motion's)."""
+    load = spec.load
+    size = (1.0 + np.abs(wrenches).max() + np.abs(load.external).max() + np.abs(spec.wrench_set).max(initial=0.0)
+            + (load.mass + tolerances.mass) * (load.gravity + np.abs(spec.accelerations).max(initial=0.0))
+            * (1.0 + np.linalg.norm(load.com) + 2 * tolerances.com)
+            + (0.0 if load.inertia is None else np.abs(load.inertia).max())
+            * (np.abs(spec.accelerations).max(initial=0.0) + np.abs(spec.angular_velocities).max() ** 2))
+    return WRENCH_RTOL * size
+
+
+def moving_wrenches(problem: WorkspaceProblem, angles, accelerations: np.ndarray) -> Interval:
+    """(N, K, k) the required wrenches of a platform that does not turn, each box's linear
+    acceleration anywhere on the segment between its two ends ``accelerations`` (N, 2, 3), m/s^2:
+    the wrench is affine in the acceleration (``dynamics.inertial_wrenches``), so its range over the
+    segment is the hull of its values at the ends, widened as :func:`box_statics` widens."""
+    robot, n, k = problem.robot, len(accelerations), len(problem.robot.dofs)
+    given = np.concatenate([accelerations.reshape(-1, 3), np.zeros((2 * n, 3))], axis=1)
+    spec = replace(problem.spec, accelerations=given)
+    centre = ((robot.box_lo + robot.box_hi) / 2)[None]  # moments about the platform: the same at every position
+    values = np.asarray(spec.state(robot, centre, tuple(angles)).required_wrenches, dtype=float).reshape(-1, n, 2, k)
+    radius = _radius(spec, NOMINAL, values)
+    return Interval(np.moveaxis(values.min(axis=2), 0, 1) - radius, np.moveaxis(values.max(axis=2), 0, 1) + radius)
+
+
 def certify(problem: WorkspaceProblem, statics: list[tuple[BoxStatics, BoxStatics]], lo: np.ndarray,
-            hi: np.ndarray) -> np.ndarray:
+            hi: np.ndarray, accelerations: np.ndarray | None = None) -> np.ndarray:
     """(N,) the verdict of each box [lo, hi] (N, 3): inside at every orientation for every robot
     within the tolerances, outside at one for the nominal robot (then for none within them).
-    ``statics``: (nominal, within the tolerances) per orientation of ``problem.orientations``."""
+    ``statics``: (nominal, within the tolerances) per orientation of ``problem.orientations``;
+    ``accelerations`` (N, 2, 3): a platform moving through each box with its linear acceleration
+    on the segment between the two (:func:`moving_wrenches`; None: the statics' own wrenches)."""
     centre = np.clip(lo + (hi - lo) / 2, lo, hi)
     verdict = np.full(len(lo), INSIDE)
     for angles, boxes in zip(problem.orientations, statics):
         open_ = np.flatnonzero(verdict != OUTSIDE)
         if not len(open_):
             break
-        found = _certified(problem, *boxes, tuple(angles), lo[open_], hi[open_], centre[open_])
+        moving = None if accelerations is None else moving_wrenches(problem, angles, accelerations[open_])
+        found = _certified(problem, *boxes, tuple(angles), lo[open_], hi[open_], centre[open_], moving)
         verdict[open_] = np.where(found == OUTSIDE, OUTSIDE, np.minimum(verdict[open_], found))
     return verdict
 
 
-def _certified(problem: WorkspaceProblem, box: BoxStatics, robust: BoxStatics, angles, lo, hi, centre) -> np.ndarray:
+def _certified(problem: WorkspaceProblem, box: BoxStatics, robust: BoxStatics, angles, lo, hi, centre,
+               moving: Interval | None) -> np.ndarray:
     state = problem.spec.state(problem.robot, centre, angles)
     structure = state.structure
     pinv, rank = state.wrench_pinv
     enclosure = certificates.structure_enclosure(box, lo, hi, centre)
     within = enclosure if robust is box else certificates.structure_enclosure(robust, lo, hi, centre)
-    wrenches = (box.wrenches.lo + box.wrenches.hi) / 2
+    def per_box(wrenches: Interval) -> Interval:
+        shape = (len(lo), *wrenches.shape[-2:])
+        return Interval(np.broadcast_to(wrenches.lo, shape), np.broadcast_to(wrenches.hi, shape))
+    nominal, held_by = (per_box(box.wrenches), per_box(robust.wrenches)) if moving is None else (moving, moving)
+    every = (nominal.lo + nominal.hi) / 2  # (N, K, k)
     family = Family("tension", box.lower, box.upper, np.full(len(box.lower), problem.limits.scale))
-    every = np.broadcast_to(wrenches, (len(lo), *wrenches.shape))
     residual, projected = reachability(structure, pinv, every)
     margin = capacity_margins(structure, pinv, rank, projected, [family])[0]["tension"]
     held = (margin >= 0) & (residual.max(axis=1) <= problem.spec.tension.residual_rtol) & (rank == structure.shape[1])
@@ -122,13 +153,13 @@ def _certified(problem: WorkspaceProblem, box: BoxStatics, robust: BoxStatics, a
     if len(rows):  # the centre holds: the LP's tensions with the most room, moved to first order by A(c)^+
         tensions = capacity_margins(structure[rows], pinv[rows], rank[rows], projected[rows], [family], distribution=True)[1]
         rates = -np.einsum("nmk,nlkj,nKj->nKml", pinv[rows], slopes[rows], tensions)  # A(c) D_l = -(dA/dp_l) t0
-        proven = certificates.inside(robust, within.rows(rows), tensions, rates, pinv[rows])
+        proven = certificates.inside(robust, within.rows(rows), held_by[rows], tensions, rates, pinv[rows])
         verdict[rows[proven]] = INSIDE
     rows = np.flatnonzero(~held)
     if len(rows):  # the centre fails: the separating direction that holds best over the box, to first order
-        separators, gap = certificates.robust_separators(structure[rows], slopes[rows], half[rows], wrenches,
+        separators, gap = certificates.robust_separators(structure[rows], slopes[rows], half[rows], every[rows],
                                                          box.lower, box.upper)
-        proven = certificates.outside(box, enclosure.rows(rows), np.where((gap > 0)[..., None], separators, 0.0))
+        proven = certificates.outside(box, enclosure.rows(rows), nominal[rows], np.where((gap > 0)[..., None], separators, 0.0))
         verdict[rows[proven]] = OUTSIDE
     too_long = (enclosure.lengths.lo > box.l_max).any(axis=1)
     return np.where(too_long, OUTSIDE, verdict)
@@ -147,36 +178,50 @@ def pave(problem: WorkspaceProblem, depth: int, seconds: float, compute: DictCon
 
 
 def certify_path(problem: WorkspaceProblem, points: np.ndarray, depth: int, seconds: float, compute: DictConfig,
-                 tolerances: Tolerances = NOMINAL) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict]:
+                 tolerances: Tolerances = NOMINAL,
+                 durations: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict]:
     """The straight segments between the way-points ``points`` (P, 3) in pieces, each proven
     feasible at every point or at none through the box that holds it (its ends' bounding box,
     widened by a few ulps so that it holds the exact segment, not only the rounded ends), an
-    undecided piece halved again: the pieces (N, 3) [segment, t0, t1] (t along the segment), their
-    verdicts, levels and how it ended."""
+    undecided piece halved again: the pieces (N, 3) [segment, t0, t1], their verdicts, levels and
+    how it ended. At rest (``durations`` None) t is the share of the segment's length; with
+    ``durations`` (P - 1,) s the platform moves rest to rest along each segment in its duration
+    (``pipeline.model.path.rest_to_rest``), t = tau / T is the share of its duration, and each piece
+    is proven with every acceleration it has there (:func:`moving_wrenches` over the range of
+    h''(t) / T^2 along the segment)."""
     starts, ends = points[:-1], points[1:]
+    shape = (lambda t: t) if durations is None else quintic_share
 
     def bounds(items):
         segment = items[:, 0].astype(int)
-        first = starts[segment] + items[:, 1:2] * (ends[segment] - starts[segment])
-        last = starts[segment] + items[:, 2:3] * (ends[segment] - starts[segment])
-        slack = 8 * np.finfo(float).eps * np.maximum(1.0, np.maximum(np.abs(first), np.abs(last)))
-        return np.concatenate([np.minimum(first, last) - slack, np.maximum(first, last) + slack], axis=1)
+        delta = ends[segment] - starts[segment]
+        first = starts[segment] + shape(items[:, 1:2]) * delta
+        last = starts[segment] + shape(items[:, 2:3]) * delta
+        reach = np.maximum(np.abs(first), np.abs(last))  # h(t) and t * delta: a few ulps of delta (h has five roundings)
+        slack = np.finfo(float).eps * (8 * np.maximum(1.0, reach) if durations is None else 16 * (1.0 + reach + np.abs(delta)))
+        box = np.concatenate([np.minimum(first, last) - slack, np.maximum(first, last) + slack], axis=1)
+        if durations is None:
+            return box
+        low, high = quintic_curvature_range(items[:, 1], items[:, 2])
+        scale = delta / durations[segment, None] ** 2
+        return np.concatenate([box, low[:, None] * scale, high[:, None] * scale], axis=1)
 
     def halves(items):
         middle = items[:, 1] + (items[:, 2] - items[:, 1]) / 2
         return np.concatenate([np.column_stack([items[:, 0], items[:, 1], middle]),
                                np.column_stack([items[:, 0], middle, items[:, 2]])])
 
-    lengths = np.linalg.norm(ends - starts, axis=1)
+    spans = np.linalg.norm(ends - starts, axis=1) if durations is None else durations
     pieces = np.column_stack([np.arange(len(starts)), np.zeros(len(starts)), np.ones(len(starts))]).astype(float)
     return _branch_and_prune(problem, tolerances, pieces, bounds, halves,
-                             lambda items: (items[:, 2] - items[:, 1]) * lengths[items[:, 0].astype(int)],
-                             depth, seconds, compute, "of the path's length")
+                             lambda items: (items[:, 2] - items[:, 1]) * spans[items[:, 0].astype(int)],
+                             depth, seconds, compute, "of the path's length" if durations is None else "of the path's time")
 
 
 def _branch_and_prune(problem: WorkspaceProblem, tolerances: Tolerances, items: np.ndarray, bounds, split, size,
                       depth: int, seconds: float, compute: DictConfig, what: str):
-    """Certify ``items`` (boxes or pieces of a path: ``bounds(items)`` their boxes (N, 6) [lo, hi])
+    """Certify ``items`` (boxes or pieces of a path: ``bounds(items)`` their boxes (N, 6) [lo, hi], or
+    (N, 12) with the ends of a moving platform's acceleration in each, :func:`_verdicts`)
     level by level, splitting the undecided ones (``split``), until ``depth`` levels or ``seconds``:
     every item kept, its verdict and level, and how it ended. A level's boxes are certified in
     chunks (``pipeline.workspace.parallel``: ``compute.n_jobs`` workers); past ``seconds`` the
@@ -215,9 +260,11 @@ def _branch_and_prune(problem: WorkspaceProblem, tolerances: Tolerances, items: 
 
 
 def _verdicts(given: tuple, boxes: np.ndarray) -> dict[str, np.ndarray]:
-    """The chunk task: the verdicts of boxes (B, 6) [lo, hi]."""
+    """The chunk task: the verdicts of boxes (B, 6) [lo, hi], or (B, 12) [lo, hi, the two ends of
+    each box's linear acceleration] for a moving platform."""
     problem, statics = given
-    return {"verdict": certify(problem, statics, boxes[:, :3], boxes[:, 3:])}
+    moving = boxes[:, 6:].reshape(-1, 2, 3) if boxes.shape[1] > 6 else None
+    return {"verdict": certify(problem, statics, boxes[:, :3], boxes[:, 3:6], moving)}
 
 
 def _bisected(boxes: np.ndarray, axes: np.ndarray) -> np.ndarray:
@@ -296,23 +343,29 @@ def path_files(cfg: DictConfig, problem: WorkspaceProblem, files, tolerances: To
     point proven) and ``first_outside_m`` (where along the path the first piece proven infeasible
     starts; NaN when none)."""
     points = np.asarray(OmegaConf.to_container(cfg.certified.path), dtype=float)
+    durations = segment_durations(cfg.certified.times, len(points) - 1)
     pieces, verdict, level, ended = certify_path(problem, points, int(cfg.certified.depth), float(cfg.certified.time),
-                                                 cfg.compute, tolerances)
+                                                 cfg.compute, tolerances, durations)
     order = np.lexsort((pieces[:, 1], pieces[:, 0]))  # along the path
     pieces, verdict, level = pieces[order], verdict[order], level[order]
     segment = pieces[:, 0].astype(int)
     starts, ends = points[:-1], points[1:]
     lengths = np.linalg.norm(ends - starts, axis=1)
     before = np.concatenate([[0.0], np.cumsum(lengths)])[segment]
-    first = starts[segment] + pieces[:, 1:2] * (ends[segment] - starts[segment])
-    last = starts[segment] + pieces[:, 2:3] * (ends[segment] - starts[segment])
-    length = (pieces[:, 2] - pieces[:, 1]) * lengths[segment]
-    from_m = before + pieces[:, 1] * lengths[segment]
+    share = (lambda t: t) if durations is None else quintic_share  # of the segment's length at t
+    first = starts[segment] + share(pieces[:, 1:2]) * (ends[segment] - starts[segment])
+    last = starts[segment] + share(pieces[:, 2:3]) * (ends[segment] - starts[segment])
+    length = (share(pieces[:, 2]) - share(pieces[:, 1])) * lengths[segment]
+    from_m = before + share(pieces[:, 1]) * lengths[segment]
+    timing = {}
+    if durations is not None:  # when the platform passes each piece
+        earlier = np.concatenate([[0.0], np.cumsum(durations)])[segment]
+        timing = {"from_s": earlier + pieces[:, 1] * durations[segment], "to_s": earlier + pieces[:, 2] * durations[segment]}
     if cfg.output.points:
         files.write("segments", pd.DataFrame({
             "segment": segment + 1, "t0": pieces[:, 1], "t1": pieces[:, 2],
             **{f"start_{a}": first[:, k] for k, a in enumerate("xyz")}, **{f"end_{a}": last[:, k] for k, a in enumerate("xyz")},
-            "from_m": from_m, "length_m": length,
+            "from_m": from_m, "length_m": length, **timing,
             "verdict": pd.Categorical([VERDICTS[v] for v in verdict], categories=list(VERDICTS.values())), "depth": level}))
     total = float(lengths.sum())
     shares = {VERDICTS[v]: float(length[verdict == v].sum()) for v in VERDICTS}
@@ -326,8 +379,21 @@ def path_files(cfg: DictConfig, problem: WorkspaceProblem, files, tolerances: To
         path_certified=bool((verdict == INSIDE).all()),
         first_outside_m=float(from_m[outside[0]]) if len(outside) else float("nan"), **ended,
     )
-    log.info("%s certified path: %.4g of %.4g m proven feasible at rest (%.2f%%), %.4g m infeasible%s, %.4g m undecided; "
-             "%d pieces in %.1f s (%s)", problem.robot.name, shares["inside"], total, row["inside_pct"], shares["outside"],
+    if durations is not None:
+        row.update(duration_s=float(durations.sum()),
+                   first_outside_s=float(timing["from_s"][outside[0]]) if len(outside) else float("nan"))
+    how = "at rest" if durations is None else f"moving ({row['duration_s']:.4g} s)"
+    log.info("%s certified path: %.4g of %.4g m proven feasible %s (%.2f%%), %.4g m infeasible%s, %.4g m undecided; "
+             "%d pieces in %.1f s (%s)", problem.robot.name, shares["inside"], total, how, row["inside_pct"], shares["outside"],
              f" from {row['first_outside_m']:.4g} m" if len(outside) else "", shares["undecided"], len(verdict),
              ended["seconds"], ended["stopped"])
     return row
+
+
+def segment_durations(times, segments: int) -> np.ndarray | None:
+    """``certified.times``, checked as the job was built (``pipeline.app.paths.durations``), as one
+    duration per segment (s); None: the path at rest."""
+    if times is None:
+        return None
+    values = OmegaConf.to_container(times) if isinstance(times, ListConfig) else times
+    return np.broadcast_to(np.atleast_1d(np.asarray(values, dtype=float)), (segments,)).copy()
