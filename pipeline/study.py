@@ -616,7 +616,7 @@ def _layout_plan(study: StudySpec, extra: list[str], out: Path, launcher: str) -
                           "(analysis=statics or cpr_wwa)")
     from pipeline.app.problem import build_grid
 
-    check_robot(study.layout, job.problem.robot, build_grid(job.cfg, job.problem.robot).cell_volume)
+    check_robot(study.layout, job.problem, build_grid(job.cfg, job.problem.robot).cell_volume)
     return planned
 
 
@@ -629,7 +629,8 @@ def _layouts(study: StudySpec, extra: list[str], out: Path, job: Job) -> pd.Data
     from pipeline.app.yamltext import to_yaml
 
     grid = build_grid(job.cfg, job.problem.robot)
-    table = search_layouts(study.layout, job.problem, grid[0:len(grid)], grid.cell_volume, int(job.cfg.compute.n_jobs))
+    table = search_layouts(study.layout, job.problem, grid[0:len(grid)], grid.cell_volume, int(job.cfg.compute.n_jobs),
+                           (float(job.cfg.load.mass), np.asarray(OmegaConf.to_container(job.cfg.load.com), dtype=float)))
     table["job"] = None
     best = best_trial(table, study.layout)
     if best is None:

@@ -138,6 +138,54 @@ def test_the_longest_cable_and_the_required_box(make_cfg, catalogue):
     assert shrunk["required_failing"] > 0
 
 
+def test_the_largest_payload_is_the_payload_analysis_least_over_the_required_box(make_cfg, catalogue):
+    """Two methods: the bisection of largest_payload (the exact verdict at each mass) against
+    analysis=payload's LP per pose (the largest payload it holds), least over the required box's
+    poses; on IPAnema 1 with an off-centre load, tilted, and on the planar robot."""
+    from pipeline.analyses.layout import PAYLOAD_RTOL, largest_payload
+
+    off_centre = [0.02, -0.01, 0.03]
+    cases = [([*IPANEMA_CASE, "robot.search.step=0.2", "tension.t_max=40", f"load.com={off_centre}",
+               "orientation.psi=0.1", "orientation.theta=-0.05"], off_centre,
+              lambda p: np.all(np.abs(p - [0.3, 0.2, 1.0]) <= 0.5, axis=1)),
+             ([*PLANAR, "robot.up=[0,1,0]"], [0, 0, 0], lambda p: np.all(np.abs(p[:, :2] - [0.1, 0.2]) <= 0.35, axis=1))]
+    for overrides, com, inside in cases:
+        problem, grid = build_problem(make_cfg(*overrides), catalogue)
+        positions = grid[0:len(grid)]
+        required = positions[inside(positions)]
+        found = largest_payload(problem, required, 0.0, np.array(com, dtype=float))
+        payload, _ = build_problem(make_cfg(*overrides, "analysis=payload"), catalogue)
+        least = evaluate_chunk(payload, required)["max_payload_kg"].min()
+        assert 0.5 < found < 100 and len(required) >= 8
+        assert found == pytest.approx(least, rel=10 * PAYLOAD_RTOL), (found, least)
+        assert found <= least * (1 + 1e-9)  # what the bisection returns holds
+
+
+def test_a_payload_search_maximises_what_the_required_box_carries(make_cfg, catalogue):
+    """payload_kg as the objective: every trial's payload holds its required box and 1 % more
+    does not (the verdicts of the registry, a second method), the best trial carries the most."""
+    from pipeline.analyses.layout import largest_payload
+
+    problem, grid = build_problem(make_cfg(*PLANAR, "robot.up=[0,1,0]"), catalogue)
+    positions = grid[0:len(grid)]
+    spec = LayoutSpec(anchors=Box([-1, -1, 0], [1, 1, 0]), objectives=["payload_kg", "feasible_pct"], budget=20,
+                      required=Box([-0.2, -0.2, 0], [0.2, 0.2, 0]))
+    table = search_layouts(spec, problem, positions, grid.cell_volume, n_jobs=1, payload=(0.0, np.zeros(3)))
+    required = spec.required.contains(positions)
+    met = table[table["meets"]]
+    assert len(met) >= 3 and table.loc[~table["meets"], "payload_kg"].isna().all()
+    for _, row in met.head(4).iterrows():
+        anchors, _ = placed(spec, problem.robot, row.to_dict())
+        trial = moved(problem, anchors)
+        for share, holds in ((1.0, True), (1.01, False)):
+            load = replace(trial.spec.load, mass=trial.spec.load.mass + share * row["payload_kg"])
+            assert (registry_count(replace(trial, spec=replace(trial.spec, load=load)), positions[required])
+                    == required.sum()) == holds
+    assert best_trial(table, spec)["payload_kg"] == met["payload_kg"].max()
+    own = largest_payload(problem, positions[required], 0.0, np.zeros(3))
+    assert own == table.iloc[0]["payload_kg"]  # trial 0: the robot as given
+
+
 @pytest.mark.parametrize("fields, message", [
     ({"anchors": {"lo": [0, 0, 0], "hi": [-1, 1, 1]}}, "exceeds hi"),
     ({"anchors": {"lo": [0, 0], "hi": [1, 1, 1]}}, "three finite coordinates"),
@@ -203,6 +251,28 @@ def test_a_layout_study_from_a_users_folder_writes_a_robot_file_that_runs(tmp_pa
     assert pd.read_parquet(tmp_path / "again" / "summary.parquet")["n_feasible"].iloc[0] == best["n_feasible"]
 
 
+def test_a_payload_study_counts_the_payload_at_load_com_on_top_of_load_mass(tmp_path, make_cfg, catalogue):
+    """From the command line: objective payload_kg with the job's own 0.3 kg at an off-centre
+    load.com; the best trial's payload is analysis=payload's least over the required box for the
+    best robot file (its max_payload_kg counts load.mass in)."""
+    study = {**STUDY, "overrides": [*STUDY["overrides"][:-1], "robot.dofs=[x,y,rz]",
+                                    "robot.attachments=[[-0.1,0.1,0],[0.1,0.1,0],[0.1,-0.1,0],[-0.1,-0.1,0]]",
+                                    "robot.up=[0,1,0]", "load.mass=0.3", "load.com=[0.03,0,0]"],
+             "layout": {**STUDY["layout"], "objectives": ["payload_kg"], "budget": 6, "sampler": "tpe"}}
+    write_study(tmp_path / "myconf", study)
+    done = command(tmp_path, "pipeline.study", "--config-dir", "myconf", "mylayout", "--out", "out")
+    assert done.returncode == 0, done.stderr[-3000:]
+    out = tmp_path / "out" / "mylayout"
+    summary = pd.read_parquet(out / "summary.parquet")
+    best = summary[summary["job"] == "best"].iloc[0]
+    assert best["payload_kg"] == summary.loc[summary["meets"], "payload_kg"].max() > 0.3
+    anchors = yaml.safe_load((out / "layout_best.yaml").read_text())["anchors"]
+    payload, grid = build_problem(make_cfg(*study["overrides"], f"robot.anchors={anchors}", "analysis=payload"), catalogue)
+    positions = grid[0:len(grid)]
+    required = positions[np.all(np.abs(positions[:, :2]) <= 0.1 + 1e-9, axis=1)]
+    assert best["payload_kg"] == pytest.approx(evaluate_chunk(payload, required)["max_payload_kg"].min(), rel=1e-5)
+
+
 @pytest.mark.parametrize("change, message", [
     ({"overrides": ["robot=cpr8"]}, "robot=cpr8: study mylayout moves the anchors"),
     ({"overrides": [*PLANAR, "analysis=certified"]}, "analysis=certified: study mylayout counts a grid"),
@@ -218,6 +288,10 @@ def test_a_layout_study_from_a_users_folder_writes_a_robot_file_that_runs(tmp_pa
     ({"layout": {"anchors": {"lo": [-1, -1, 0], "hi": [1, 1, 0]}, "budget": -1}}, "budget=-1"),
     ({"layout": {"anchors": {"lo": [-1, -1, 0], "hi": [1, 1, 0]}, "objectives": ["volume_m3"]}},
      "volume_m3: the grid has no volume"),
+    ({"layout": {"anchors": {"lo": [-1, -1, 0], "hi": [1, 1, 0]}, "objectives": ["payload_kg"]}},
+     "payload_kg is the largest payload the required box holds; give layout.required"),
+    ({"overrides": [*STUDY["overrides"], "platform_motion.acceleration=[[0.5,0,0,0,0,0]]"],
+      "layout": {**STUDY["layout"], "objectives": ["payload_kg"]}}, "payload_kg adds mass to a platform at rest"),
     ({"overrides": [*PLANAR[:4], "robot.dofs=[x,y,z]", "robot.anchors=[[-1,-1,1],[1,-1,1],[1,1,1],[-1,1,1]]",
                     "poses=[[0,0,0.5],[0.2,0,0.5]]", *PLANAR[7:]],
       "layout": {"anchors": {"lo": [-1, -1, 1], "hi": [1, 1, 1]}, "objectives": ["volume_m3"]}},

@@ -18,13 +18,15 @@ the best trial so far (:class:`Steps`, a (1+1) evolution strategy): a sampler ov
 finds the region, the steps climb its ridge (on IPAnema 1's frame TPE alone found 10.58 m^3 in 400
 trials, with three quarters of them refining 10.94).
 
-Objectives (:data:`OBJECTIVES`): ``volume_m3`` (the feasible poses' cells), ``feasible_pct`` and
-``longest_cable_m`` (the longest cable over the feasible poses: the drum a design needs). A
-``required`` box of positions must be feasible at every grid pose inside it (a constraint; the
-grid's verdicts, not a certificate). With ``step`` the variables lie on a lattice, and a lattice
-no larger than the budget is searched exhaustively (every layout once, in order), so its best
-is the best. The best trial is then run again as an ordinary job (``jobs/best``), whose count
-must equal the search's, and written as a robot file the user runs (``layout_best.yaml``).
+Objectives (:data:`OBJECTIVES`): ``volume_m3`` (the feasible poses' cells), ``feasible_pct``,
+``longest_cable_m`` (the longest cable over the feasible poses: the drum a design needs) and
+``payload_kg`` (:func:`largest_payload`: the largest mass added to the load with which every
+grid pose of the required box still holds). A ``required`` box of positions must be feasible at
+every grid pose inside it (a constraint; the grid's verdicts, not a certificate). With ``step``
+the variables lie on a lattice, and a lattice no larger than the budget is searched exhaustively
+(every layout once, in order), so its best is the best. The best trial is then run again as an
+ordinary job (``jobs/best``), whose count must equal the search's, and written as a robot file
+the user runs (``layout_best.yaml``).
 """
 
 from __future__ import annotations
@@ -47,7 +49,10 @@ PLACES = ("box", "faces", "edges")
 QUADRANTS = np.array([[-1.0, 1.0, 1.0], [1.0, 1.0, 1.0], [1.0, -1.0, 1.0], [-1.0, -1.0, 1.0]])  # IPAnema 1's order
 OBJECTIVES = {"volume_m3": ("maximize", "feasible volume (m^3)"),
               "feasible_pct": ("maximize", "feasible share of the grid (%)"),
-              "longest_cable_m": ("minimize", "longest cable over the feasible poses (m)")}
+              "longest_cable_m": ("minimize", "longest cable over the feasible poses (m)"),
+              "payload_kg": ("maximize", "largest payload the required box holds (kg)")}
+PAYLOAD_RTOL = 1e-6  # the largest payload, bisected to this share of itself
+PAYLOAD_MAX = 1e9  # kg: past it the payload is taken as unbounded (cables without an upper limit)
 AXES = "xyz"
 
 
@@ -201,9 +206,17 @@ class LayoutSpec:
         return math.prod(int(round((hi - lo) / self.step)) + 1 for lo, hi in self.ranges(n_cables).values())
 
 
-def check_robot(spec: LayoutSpec, robot, cell_volume: float) -> None:
-    """ConfigError unless ``robot`` (a built ``CableRobot``) can take the layout's variables and its
-    grid (each point's ``cell_volume``) the objectives."""
+def check_robot(spec: LayoutSpec, problem, cell_volume: float) -> None:
+    """ConfigError unless ``problem``'s robot can take the layout's variables and its grid (each
+    point's ``cell_volume``) and statics the objectives."""
+    robot = problem.robot
+    if "payload_kg" in spec.objectives:
+        if spec.required is None:
+            raise ConfigError("layout.objectives: payload_kg is the largest payload the required box holds; give "
+                              "layout.required")
+        if problem.spec.kind != "statics" or problem.spec.moves:
+            raise ConfigError("layout.objectives: payload_kg adds mass to a platform at rest (analysis=statics without "
+                              "platform_motion)")
     if "volume_m3" in spec.objectives and not math.isfinite(cell_volume):
         raise ConfigError("layout.objectives: volume_m3: the grid has no volume (a planar robot's plane, or listed "
                           "poses); use feasible_pct")
@@ -243,16 +256,53 @@ def placed(spec: LayoutSpec, robot, values: dict) -> tuple[np.ndarray, np.ndarra
     return anchors, attachments
 
 
-def evaluate(problem, positions: np.ndarray, cell_volume: float, required: np.ndarray | None) -> dict:
-    """A layout's numbers over the grid ``positions``: feasible poses, volume, share, the longest
-    cable over them and the required poses that fail."""
-    from pipeline.model.geometry import cable_vectors, rotation_matrices
+def _flags(problem, positions: np.ndarray) -> np.ndarray:
+    """The exact verdict of every one of ``positions``, a bounded chunk at a time."""
     from pipeline.workspace.dispatch import bounded_chunk_size
     from pipeline.workspace.feasibility import feasible_flags
 
     chunk = bounded_chunk_size(problem, None)
-    flags = np.concatenate([feasible_flags(problem, positions[start:start + chunk])
-                            for start in range(0, len(positions), chunk)])
+    return np.concatenate([feasible_flags(problem, positions[start:start + chunk])
+                           for start in range(0, len(positions), chunk)] or [np.zeros(0, dtype=bool)])
+
+
+def largest_payload(problem, positions: np.ndarray, payload: float, com: np.ndarray) -> float:
+    """The largest payload (kg) at ``com`` (m, platform frame: ``load.com``) with which every one of
+    ``positions`` holds, the job's own ``payload`` (``load.mass``, already in the problem's load)
+    included, as ``analysis=payload``'s ``max_payload_kg`` counts it; NaN when a pose fails with
+    the job's own, inf past ``PAYLOAD_MAX``. At a pose the wrench is affine in the added mass and
+    the wrenches the cables balance form a convex set, so the masses a pose holds form an interval;
+    every pose holding 0 added, the masses they all hold form an interval from 0, whose end is
+    bisected to ``PAYLOAD_RTOL`` of itself: what is returned holds."""
+    base = problem.spec.load
+
+    def holds(extra: float) -> bool:  # one body: the masses added, the centre of mass their weighted mean
+        total = base.mass + extra
+        load = replace(base, mass=total, com=(base.mass * np.asarray(base.com, dtype=float) + extra * com) / total
+                       if total > 0 else np.asarray(base.com, dtype=float))
+        return bool(_flags(replace(problem, spec=replace(problem.spec, load=load)), positions).all())
+
+    if not holds(0.0):
+        return math.nan
+    low, high = 0.0, 1.0
+    while holds(high):
+        low, high = high, 2 * high
+        if high > PAYLOAD_MAX:
+            return math.inf
+    while high - low > PAYLOAD_RTOL * high:
+        middle = (low + high) / 2
+        low, high = (middle, high) if holds(middle) else (low, middle)
+    return payload + low
+
+
+def evaluate(problem, positions: np.ndarray, cell_volume: float, required: np.ndarray | None,
+             payload: tuple[float, np.ndarray] | None = None) -> dict:
+    """A layout's numbers over the grid ``positions``: feasible poses, volume, share, the longest
+    cable over them, the required poses that fail and, with ``payload`` (the job's ``load.mass`` and
+    ``load.com``), the largest payload the required ones hold (:func:`largest_payload`; NaN without it)."""
+    from pipeline.model.geometry import cable_vectors, rotation_matrices
+
+    flags = _flags(problem, positions)
     longest = 0.0
     if flags.any() and problem.angles is None:
         for orientation in problem.orientations:
@@ -260,14 +310,18 @@ def evaluate(problem, positions: np.ndarray, cell_volume: float, required: np.nd
             lengths = np.linalg.norm(cable_vectors(problem.robot, positions[flags], rotation), axis=-1)
             longest = max(longest, float(lengths.max()))
     n = int(flags.sum())
+    failing = int((~flags[required]).sum()) if required is not None else 0
     return {"n_feasible": n, "n_points": len(positions), "volume_m3": n * cell_volume,
             "feasible_pct": 100.0 * n / len(positions), "longest_cable_m": longest if n else math.nan,
-            "required_failing": int((~flags[required]).sum()) if required is not None else 0}
+            "required_failing": failing,
+            "payload_kg": largest_payload(problem, positions[required], *payload) if payload and not failing else math.nan}
 
 
-def search_layouts(spec: LayoutSpec, problem, positions: np.ndarray, cell_volume: float, n_jobs: int) -> pd.DataFrame:
+def search_layouts(spec: LayoutSpec, problem, positions: np.ndarray, cell_volume: float, n_jobs: int,
+                   payload: tuple[float, np.ndarray] = (0.0, np.zeros(3))) -> pd.DataFrame:
     """Run the trials; one row per trial: its variables, :func:`evaluate`'s numbers, ``meets``
-    (the required box holds) and ``pareto`` (not dominated among those that meet it)."""
+    (the required box holds) and ``pareto`` (not dominated among those that meet it). ``payload``:
+    the job's ``load.mass`` and ``load.com``, where objective ``payload_kg`` adds mass."""
     from joblib import Parallel, delayed, effective_n_jobs
 
     n_jobs = max(1, effective_n_jobs(n_jobs))  # compute.n_jobs=-1: every core, in batches of that many trials
@@ -309,7 +363,9 @@ def search_layouts(spec: LayoutSpec, problem, positions: np.ndarray, cell_volume
                       for trial in trials]
             layouts = [placed(spec, problem.robot, v) for v in values]
             found = parallel(delayed(evaluate)(replace(problem, robot=replace(problem.robot, anchors=a, attachments=b)),
-                                               positions, cell_volume, required) for a, b in layouts)
+                                               positions, cell_volume, required,
+                                               payload if "payload_kg" in spec.objectives else None)
+                             for a, b in layouts)
             improved = False
             for trial, value, numbers in zip(trials, values, found):
                 if numbers["required_failing"] == 0 and (best is None or _better(spec, numbers, best_numbers)):
