@@ -263,7 +263,7 @@ REFUSALS = {  # overrides -> what the one line names
     ("output.cables=true",): "output.cables",
     ("compute.kernel=fused",): "compute.kernel=fused",
     ("workspace.home=[0,0,1]",): "workspace.home",
-    ("robot.cable_diameter=0.01",): "cable_cable",
+    ("robot.platform.shape={lo: [-0.06, -0.06, -0.02], hi: [0.06, 0.06, 0]}",): "cable_platform",
     ("certified.depth=-1",): "certified.depth",
     ("certified.depth=41",): "certified.depth",
     ("certified.time=0",): "certified.time",
@@ -686,4 +686,78 @@ def test_a_moving_path_it_cannot_mean_is_refused_in_one_line(tmp_path, overrides
     done = command(tmp_path, "pipeline", *CRANE, "tension=feasible", "analysis=certified", *overrides, f"hydra.run.dir={run}")
     lines = done.stderr.strip().splitlines()
     assert done.returncode == 2 and len(lines) == 1 and key in lines[0], lines
+    assert not run.exists()
+
+
+# -- the interference criteria proven on boxes ----------------------------------------------------
+
+ROTATED = ["robot=points", "robot.anchors=[[-1,-1,0],[1,-1,0],[1,1,0],[-1,1,0]]",
+           "robot.attachments=[[0.1,0.05,0],[0.1,-0.05,0],[-0.1,-0.05,0],[-0.1,0.05,0]]", "robot.dofs=[x,y]",
+           "robot.search.lo=[-0.9,-0.9,0]", "robot.search.hi=[0.9,0.9,0]", "tension.t_min=1", "tension.t_max=60",
+           "wrench.fy=-5", "robot.cable_diameter=0.02"]  # each cable to the next corner's point: they cross in half the square
+FLOORED = [*CRANE, "obstacles=[{name: floor, point: [0, 0, 0.6], normal: [0, 0, 1]}, "
+           "{name: slope, point: [1.2, 0, 0], normal: [-0.6, 0, 0.8]}]"]
+INTERFERENCE = {  # name -> (overrides, depth, tolerances, the criterion that decides part of the box)
+    "crossing cables": (ROTATED, 12, paving.Tolerances(), "cable_cable"),
+    "crossing cables, anchors within 10 mm": (ROTATED, 12, paving.Tolerances(anchors=0.01), "cable_cable"),
+    "a floor and a slope": (FLOORED, 11, paving.Tolerances(), "cable_obstacle"),
+}
+
+
+@pytest.mark.parametrize("name", sorted(INTERFERENCE))
+def test_interference_proven_on_boxes_agrees_with_the_exact_test(make_cfg, name):
+    """3 000 random points of the boxes proven inside hold every criterion by the exact per-pose
+    test (within tolerances: of robots drawn at the corners of their box), none of the outside
+    boxes' does; the criterion decides boxes both ways; the grid's volume at a fine step lies in
+    the bracket."""
+    overrides, depth, tolerances, criterion = INTERFERENCE[name]
+    problem = _problem(make_cfg, overrides, "compute.n_jobs=1")
+    assert criterion in problem.criteria
+    found, _ = paving.pave(problem, depth, 600.0, make_cfg(*overrides, "compute.n_jobs=1").compute, tolerances)
+    axes = np.flatnonzero(problem.robot.box_hi > problem.robot.box_lo)
+    volumes = found.volumes(axes)
+    rng = np.random.default_rng(4)
+    for kind in (INSIDE, OUTSIDE):
+        rows = np.flatnonzero(found.verdict == kind)
+        assert volumes[rows].sum() > 0.02 * volumes.sum(), kind
+        pick = rng.choice(rows, 3000, p=volumes[rows] / volumes[rows].sum())
+        points = found.lo[pick] + rng.uniform(0, 1, (3000, 3)) * (found.hi[pick] - found.lo[pick])
+        if kind == INSIDE and not tolerances.nominal:
+            for number in range(6):
+                drawn = _problem(make_cfg, _perturbed(overrides, problem.robot, tolerances, rng, corner=True),
+                                 "compute.n_jobs=1")
+                assert (_min_margins(drawn, points[number::6]) >= -problem.margin_atol).all()
+            continue
+        margins = evaluate_chunk(problem, points)
+        least = np.min([value for key, value in margins.items() if key.startswith("margin_")], axis=0)
+        if kind == INSIDE:
+            assert (least >= -problem.margin_atol).all(), np.sort(least)[:5]
+        else:
+            assert (least < problem.margin_atol).all(), np.sort(least)[-5:]
+    alone = paving.pave(replace_criteria(problem, criterion), depth, 600.0,
+                        make_cfg(*overrides, "compute.n_jobs=1").compute, tolerances)[0]
+    assert (alone.verdict == OUTSIDE).any()  # the criterion itself proves boxes outside, not only the statics
+    if tolerances.nominal:
+        step = (volumes.sum() / 2e5) ** (1 / len(axes))  # about 200 000 points
+        axes_points = [np.arange(lo + step / 2, hi, step) if hi > lo else np.array([lo])
+                       for lo, hi in zip(problem.robot.box_lo, problem.robot.box_hi)]
+        grid = np.stack(np.meshgrid(*axes_points, indexing="ij"), axis=-1).reshape(-1, 3)
+        held = (_min_margins(problem, grid) >= -problem.margin_atol).mean() * volumes.sum()
+        inside = volumes[found.verdict == INSIDE].sum()
+        assert inside <= held <= inside + volumes[found.verdict == UNDECIDED].sum()
+
+
+def replace_criteria(problem, criterion):
+    """The problem checking ``criterion`` and the zero-length gate only: the criterion's own boxes."""
+    from dataclasses import replace
+
+    return replace(problem, criteria=tuple(name for name in problem.criteria if name in (criterion, "zero_length")))
+
+
+def test_a_box_obstacle_is_refused_by_a_paving_in_one_line(tmp_path):
+    run = tmp_path / "run"
+    done = command(tmp_path, "pipeline", *CRANE, "tension=feasible", "analysis=certified",
+                   "obstacles=[{name: table, lo: [-0.2, -0.2, 0], hi: [0.2, 0.2, 0.4]}]", f"hydra.run.dir={run}")
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 2 and len(lines) == 1 and "obstacles: analysis=certified: a box obstacle" in lines[0], lines
     assert not run.exists()

@@ -52,7 +52,9 @@ class BoxStatics:
     so that a cable's vector is p + offset; ``arms`` (m, 3) the enclosure of R b_i; ``rows`` the
     freedoms the cables balance (``CableRobot.dofs``); ``wrenches`` (K, k) the required wrenches'
     enclosure; ``lower`` and ``upper`` (m,) the tension limits (N, upper may be inf); ``l_max``
-    (m, or inf) and ``shortest`` (m): a cable must be between them."""
+    (m, or inf) and ``shortest`` (m): a cable must be between them; ``anchors`` (m, 3) and ``body``
+    (k, 3), the enclosures of a_i and of the platform's vertices R v_k (its shape's, else its
+    attachments' hull): what the interference criteria's bounds read (``pipeline.model.clearance_bounds``)."""
 
     offsets: Interval
     arms: Interval
@@ -62,6 +64,8 @@ class BoxStatics:
     upper: np.ndarray
     l_max: float
     shortest: float
+    anchors: Interval
+    body: Interval
 
 
 @dataclass(frozen=True)

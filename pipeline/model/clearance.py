@@ -15,7 +15,15 @@ import numpy as np
 
 
 def segment_distance(p1: np.ndarray, d1: np.ndarray, p2: np.ndarray, d2: np.ndarray) -> np.ndarray:
-    """The distance between segments p1 + s d1 and p2 + t d2, s, t in [0, 1] (arrays (..., 3)).
+    """The distance between segments p1 + s d1 and p2 + t d2, s, t in [0, 1] (arrays (..., 3)):
+    :func:`closest_parameters`' first part."""
+    return closest_parameters(p1, d1, p2, d2)[0]
+
+
+def closest_parameters(p1: np.ndarray, d1: np.ndarray, p2: np.ndarray,
+                       d2: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The distance between segments p1 + s d1 and p2 + t d2, s, t in [0, 1] (arrays (..., 3)),
+    and the parameters s, t of its closest points.
 
     The closest parameters minimise q(s, t) = |r + s d1 - t d2|^2, r = p1 - p2, a convex quadratic
     with a = d1.d1, b = d1.d2, e = d2.d2, c = d1.r, f = d2.r, over the unit square. Its minimum is
@@ -42,12 +50,17 @@ def segment_distance(p1: np.ndarray, d1: np.ndarray, p2: np.ndarray, d2: np.ndar
         s = _dot(normal, np.cross(d2, r)) / determinant
         t = _dot(normal, np.cross(d1, r)) / determinant
         inside = (determinant > 0) & (s >= 0) & (s <= 1) & (t >= 0) & (t <= 1)
-        least = np.where(inside, distance(np.where(inside, s, 0.0), np.where(inside, t, 0.0)), np.inf)
+        best_s, best_t = np.where(inside, s, 0.0), np.where(inside, t, 0.0)
+        least = np.where(inside, distance(best_s, best_t), np.inf)
         for side in (np.zeros_like(a), np.ones_like(a)):
             t = np.where(e > 0, np.clip((b * side + f) / e, 0.0, 1.0), 0.0)
             s = np.where(a > 0, np.clip((b * side - c) / a, 0.0, 1.0), 0.0)
-            least = np.minimum(least, np.minimum(distance(side, t), distance(s, side)))
-    return least
+            for here_s, here_t in ((side, t), (s, side)):
+                found = distance(here_s, here_t)
+                closer = found < least
+                least, best_s, best_t = (np.where(closer, found, least), np.where(closer, here_s, best_s),
+                                         np.where(closer, here_t, best_t))
+    return least, best_s, best_t
 
 
 

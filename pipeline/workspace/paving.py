@@ -33,6 +33,7 @@ from pipeline.model.intervals import Interval, rotation_enclosure
 from pipeline.model.path import quintic_curvature_range, quintic_share
 from pipeline.model.tensions import Family, capacity_margins, reachability
 from pipeline.workspace.compute import described_job, name_of
+from pipeline.workspace.criteria import REGISTRY
 from pipeline.workspace.kernel import WorkspaceProblem
 from pipeline.workspace.parallel import iter_chunks
 from pipeline.workspace.tolerances import NOMINAL, Tolerances, culprits
@@ -82,8 +83,11 @@ def box_statics(problem: WorkspaceProblem, angles: np.ndarray, tolerances: Toler
     m = robot.n_cables
     lower = np.broadcast_to(np.asarray(spec.tension.t_min, dtype=float), (m,)).copy()
     upper = np.broadcast_to(np.asarray(problem.limits.t_max, dtype=float), (m,)).copy()
+    hull = robot.platform_shape is None  # the attachments' hull: its vertices move with them
+    vertices = within(robot.platform_body.vertices, tolerances.attachments if hull else 0.0)
+    body = (rotation[None] * vertices[:, None, :]).sum(axis=-1)  # R v_k, (k, 3)
     return BoxStatics(offsets, arms, tuple(robot.dofs), Interval(wrenches.min(axis=0) - radius, wrenches.max(axis=0) + radius),
-                      lower, upper, np.inf if robot.l_max is None else float(robot.l_max), robot.shortest_cable)
+                      lower, upper, np.inf if robot.l_max is None else float(robot.l_max), robot.shortest_cable, anchors, body)
 
 
 def _radius(spec, tolerances: Tolerances, wrenches: np.ndarray) -> float:
@@ -162,7 +166,13 @@ def _certified(problem: WorkspaceProblem, box: BoxStatics, robust: BoxStatics, a
         proven = certificates.outside(box, enclosure.rows(rows), nominal[rows], np.where((gap > 0)[..., None], separators, 0.0))
         verdict[rows[proven]] = OUTSIDE
     too_long = (enclosure.lengths.lo > box.l_max).any(axis=1)
-    return np.where(too_long, OUTSIDE, verdict)
+    verdict = np.where(too_long, OUTSIDE, verdict)
+    for name in problem.criteria:  # the criteria that bound boxes themselves (the interference criteria)
+        bound = REGISTRY[name].boxes
+        if bound is not None:
+            found = bound(problem.robot, robust, box, lo, hi, centre, problem.margin_atol)
+            verdict = np.where((verdict == OUTSIDE) | (found == OUTSIDE), OUTSIDE, np.minimum(verdict, found))
+    return verdict
 
 
 def pave(problem: WorkspaceProblem, depth: int, seconds: float, compute: DictConfig,

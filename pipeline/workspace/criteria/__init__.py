@@ -102,14 +102,16 @@ for criterion in (
     Criterion("cable_cable", interference.cable_cable, GEOMETRY, None, "#DDCC77",
               "thinner cables (robot.cable_diameter), anchors and attachments that keep the cables apart, "
               "or a smaller box",
-              lambda analysis, spec, robot: robot.cable_radii is not None),
+              lambda analysis, spec, robot: robot.cable_radii is not None, certified=True,
+              boxes=interference.cable_cable_boxes),
     Criterion("cable_platform", interference.cable_platform, GEOMETRY, None, "#332288",
               "attachments on the platform's outer corners or edges, a platform shape that holds them on its "
               "surface (robot.platform.shape), or a smaller box",
               lambda analysis, spec, robot: robot.platform_shape is not None),
     Criterion("cable_obstacle", interference.cable_obstacle, GEOMETRY, None, "#994F00",
               "anchors that route the cables around the obstacles, a smaller box, or obstacles moved",
-              lambda analysis, spec, robot: bool(robot.obstacles)),
+              lambda analysis, spec, robot: bool(robot.obstacles), certified=True,
+              boxes=interference.cable_obstacle_boxes),
     Criterion("stiffness", stiffness.stiffness, STATICS, None, "#44AA99",
               "stiffer cables (robot.cable_ea), shorter cable to the winches (robot.winch_length), more "
               "pretension (a higher tension.t_min) or anchors around the pose",

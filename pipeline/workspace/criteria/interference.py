@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from pipeline.model.clearance import segment_distance
+from pipeline.model.clearance_bounds import pair_verdicts, plane_verdicts
 
 
 def pair_clearances(state) -> np.ndarray:
@@ -78,3 +79,20 @@ def cable_obstacle(state, limits) -> np.ndarray:
 def obstacle_pairs(robot) -> list[str]:
     """The names of :func:`cable_obstacle`'s (obstacle, body) pairs, in its order."""
     return [f"{obstacle.name}: {body}" for obstacle in robot.obstacles for body in (*robot.cable_names, "platform")]
+
+
+def cable_cable_boxes(robot, within, nominal, lo, hi, centre, atol) -> np.ndarray:
+    """:func:`cable_cable` proven on boxes of positions (``clearance_bounds.pair_verdicts``)."""
+    i, j = robot.cable_pairs
+    return pair_verdicts(within.anchors, within.arms, lo, hi, centre, (i, j), robot.cable_radii[i] + robot.cable_radii[j],
+                         atol, collide=(nominal.anchors, nominal.arms))
+
+
+def cable_obstacle_boxes(robot, within, nominal, lo, hi, centre, atol) -> np.ndarray:
+    """:func:`cable_obstacle` proven on boxes of positions for half-space obstacles
+    (``clearance_bounds.plane_verdicts``; a box obstacle's separating axes turn with the cables:
+    ``analysis=certified`` refuses it)."""
+    radii = np.zeros(robot.n_cables) if robot.cable_radii is None else robot.cable_radii
+    planes = [(obstacle.point, obstacle.normal) for obstacle in robot.obstacles]
+    return plane_verdicts(within.anchors, within.arms, within.body, lo, hi, planes, radii, atol * robot.extent,
+                          nominal=(nominal.anchors, nominal.arms, nominal.body))

@@ -34,7 +34,10 @@ class Criterion:
     gives the minimum-norm model's. ``refuses(spec, robot, keys)``: why a problem cannot evaluate it
     with the keys given (one line: the job is refused before it runs), None when it can.
     ``certified``: whether ``analysis=certified`` proves it on boxes of poses
-    (``pipeline.model.certificates``); a certified problem that checks a criterion without one is refused."""
+    (``pipeline.model.certificates``, or ``boxes``); a certified problem that checks a criterion without one
+    is refused. ``boxes(robot, within, nominal, lo, hi, centre, atol) -> (N,)``: its own verdicts on boxes
+    of positions (1 inside, -1 outside, 0 undecided), from the enclosures ``within`` the tolerances
+    (inside) and ``nominal`` (outside) (``pipeline.model.certificates.BoxStatics``)."""
 
     name: str
     function: Callable[[Any, Any], np.ndarray]
@@ -47,6 +50,7 @@ class Criterion:
     bounds: Callable[[Any, Any], tuple | None] | None = None
     refuses: Callable[[Any, Any, dict], str | None] | None = None
     certified: bool = False
+    boxes: Callable[..., np.ndarray] | None = None
 
 
 REGISTRY: dict[str, Criterion] = {}

@@ -1,0 +1,101 @@
+"""Certified clearances over boxes of positions (issue 57): the interference criteria's proofs.
+
+Over a box B of platform positions at one orientation (its enclosures: the anchors a_i, the
+attachment points' offsets R b_i and the platform's vertices R v_k, each an interval, wider for a
+robot within build tolerances), every cable is the segment from a_i to p + R b_i, p in B. All
+bounds are computed in :mod:`pipeline.model.intervals` (outward rounding); the floats chosen at
+the box's centre (the closest points of two cables) need no rigour, the interval tests check them.
+
+- **Two cables apart** (:func:`pair_verdicts`): for any vector n, the distance between two
+  segments is at least (min over the second's points of n . y - max over the first's of n . x) / |n|,
+  and both extremes are at segment ends (the points are convex combinations of them); with n the
+  direction between the centre's closest points the bound is the distance there. Over B the four
+  pairs of ends are bounded with p's shared part cancelled (two attachment points differ by
+  R b_j - R b_i whatever p). Inside when it reaches r_i + r_j for every pair. Every pose of B
+  collides when, for one pair, the two points at the centre's closest parameters, each an
+  enclosure over B (their p parts combined, (s - t) p), are nearer than (1 - atol)(r_i + r_j):
+  the distance is at most theirs.
+- **A cable or the platform from a half-space** (:func:`plane_verdicts`): the clearance of a
+  segment or a convex body from the half-space behind the plane through q with normal n is
+  min over its vertices of n . (x - q) (``clearance.plane_clearance``), linear in each vertex:
+  its enclosure over B is exact up to rounding. Inside when every cable keeps r_i and the platform
+  0; outside when one body's upper bound is below -atol times the robot's extent (the exact
+  test's tolerance).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pipeline.model.clearance import closest_parameters
+from pipeline.model.intervals import Interval, down, up
+
+INSIDE, OUTSIDE, UNDECIDED = 1, -1, 0  # as pipeline.model.certificates
+
+
+def _dot(intervals: Interval, vectors: np.ndarray) -> Interval:
+    """intervals (..., 3) . vectors (..., 3), rounded outward."""
+    return (intervals * Interval.point(vectors)).sum(axis=-1)
+
+
+def _norm_upper(values: Interval) -> np.ndarray:
+    return values.square().sum(axis=-1).sqrt().hi
+
+
+def pair_verdicts(anchors: Interval, arms: Interval, lo: np.ndarray, hi: np.ndarray, centre: np.ndarray,
+                  pairs: tuple[np.ndarray, np.ndarray], reach: np.ndarray, atol: float,
+                  collide: tuple[Interval, Interval] | None = None) -> np.ndarray:
+    """(N,) whether every two cables of ``pairs`` (i, j) stay ``reach`` (P,) apart (r_i + r_j, m)
+    at every position of each box [lo, hi] (N, 3): INSIDE, OUTSIDE (one pair nearer at every
+    position, by ``collide``'s enclosures (anchors, arms) when given: a nominal robot's) or
+    UNDECIDED (module doc). ``anchors``, ``arms`` (m, 3): enclosures of a_i and R b_i;
+    ``centre`` (N, 3): a position of each box."""
+    i, j = pairs
+    box = Interval(lo, hi)[:, None, :]  # (N, 1, 3)
+    verdict = np.full(len(lo), UNDECIDED)
+    if not len(i):
+        return np.full(len(lo), INSIDE)
+    starts = (anchors.lo + anchors.hi) / 2  # floats at the centre, (m, 3)
+    attached = centre[:, None, :] + ((arms.lo + arms.hi) / 2)[None]  # (N, m, 3)
+    gap, s, t = closest_parameters(starts[i][None], attached[:, i] - starts[i][None], starts[j][None],
+                                   attached[:, j] - starts[j][None])
+    first = starts[i][None] + s[..., None] * (attached[:, i] - starts[i][None])
+    second = starts[j][None] + t[..., None] * (attached[:, j] - starts[j][None])
+    normal = second - first  # (N, P, 3)
+    ends = (arms[j] - arms[i],  # p + R b_j - (p + R b_i): p cancels
+            box + arms[j] - anchors[i], anchors[j] - box - arms[i], anchors[j] - anchors[i])
+    separation = np.min([_dot(end, normal).lo for end in ends], axis=0)  # (N, P): n . (y - x) >= this
+    needed = (Interval.point(reach) * Interval.point(_norm_upper(Interval.point(normal)))).hi  # (r_i + r_j) |n|
+    inside = (separation >= needed).all(axis=1)
+    near_anchors, near_arms = collide or (anchors, arms)
+    s_, t_ = Interval.point(s)[..., None], Interval.point(t)[..., None]
+    one = Interval.point(1.0)
+    between = ((one - s_) * near_anchors[i] + s_ * near_arms[i] - (one - t_) * near_anchors[j] - t_ * near_arms[j]
+               + (s_ - t_) * box)  # x_i(s) - y_j(t) over the box, (N, P, 3)
+    outside = (_norm_upper(between) < down(down(1.0 - atol) * reach)).any(axis=1)
+    verdict[inside] = INSIDE
+    verdict[outside & ~inside] = OUTSIDE
+    return verdict
+
+
+def plane_verdicts(anchors: Interval, arms: Interval, body: Interval, lo: np.ndarray, hi: np.ndarray,
+                   planes: list[tuple[np.ndarray, np.ndarray]], radii: np.ndarray, allowance: float,
+                   nominal: tuple[Interval, Interval, Interval] | None = None) -> np.ndarray:
+    """(N,) whether every cable keeps its radius ``radii`` (m,) and the platform (its vertices'
+    offsets ``body`` (k, 3): R v_k) 0 from every half-space behind ``planes`` (point, normal) at
+    every position of each box: INSIDE, OUTSIDE (some body deeper than ``allowance`` at every
+    position, by ``nominal``'s enclosures when given) or UNDECIDED."""
+    box = Interval(lo, hi)[:, None, :]
+    inside = np.ones(len(lo), dtype=bool)
+    outside = np.zeros(len(lo), dtype=bool)
+    for point, normal in planes:
+        def clearances(a: Interval, w: Interval, v: Interval) -> tuple[Interval, Interval, Interval]:
+            return _dot(a - point, normal), _dot(box + w - point, normal), _dot(box + v - point, normal)
+
+        fixed, ends, platform = clearances(anchors, arms, body)  # (m,), (N, m), (N, k)
+        cables = down(np.minimum(ends.lo, fixed.lo) - radii)  # each cable's clearance, lower bound
+        inside &= (cables >= 0).all(axis=1) & (platform.lo.min(axis=1) >= 0)
+        fixed, ends, platform = clearances(*(nominal or (anchors, arms, body)))
+        cables = up(np.minimum(ends.hi, fixed.hi) - radii)  # upper bound
+        outside |= np.minimum(cables.min(axis=1), platform.hi.min(axis=1)) < -allowance
+    return np.where(inside, INSIDE, np.where(outside, OUTSIDE, UNDECIDED))
