@@ -677,6 +677,8 @@ def test_a_crane_dropped_faster_than_gravity_fails_where_the_law_says(tmp_path):
     (["certified.times=1"], "certified.times"),  # no path
     (["certified.path=[[0,0,1],[0,0,2]]", "certified.times=[1,2]"], "certified.times=[1, 2]: 2 durations for 1 segments"),
     (["certified.path=[[0,0,1],[0,0,2]]", "certified.times=-1"], "certified.times=-1"),
+    (["certified.path=[[0,0,1],[0,0,2]]", "certified.times=1e-200"], "certified.times: segment 1 accelerates at inf"),
+    (["certified.path=[[0,0,1],[0,0,2],[0,1,2]]", "certified.times=[1,0.01]"], "segment 2 accelerates at 5.77e+04"),
     (["certified.path=[[0,0,1],[0,0,2]]", "certified.times=1", "platform_motion.acceleration=[[1,0,0,0,0,0]]"],
      "platform_motion"),
     (["certified.path=[[0,0,1],[0,0,2]]", "certified.times=1", "robust.mass=0.1"], "robust.mass"),

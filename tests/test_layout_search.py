@@ -377,7 +377,8 @@ def test_a_search_on_the_frame_keeps_every_anchor_on_it(make_cfg, catalogue, on,
 def test_the_best_layouts_required_box_is_proven_where_the_certificates_speak(make_cfg, catalogue):
     """The required box of the best layout paved as analysis=certified paves a search box: a box
     well inside the workspace of the square frame mostly proven; a robot with a criterion the
-    certificates cannot bound (cables that must not touch) says so instead of a number."""
+    certificates cannot bound (a platform's body the cables must not enter) says so instead of a
+    number."""
     problem, _ = build_problem(make_cfg(*PLANAR), catalogue)
     compute = make_cfg(*PLANAR).compute
     spec = LayoutSpec(anchors=Box([-1, -1, 0], [1, 1, 0]), required=Box([-0.3, -0.3, 0], [0.3, 0.3, 0]))
@@ -385,11 +386,12 @@ def test_the_best_layouts_required_box_is_proven_where_the_certificates_speak(ma
     assert share > 90.0 and "of the required box proven feasible" in said
     positions = np.random.default_rng(3).uniform([-0.3, -0.3, 0], [0.3, 0.3, 0], (500, 3))
     assert registry_count(problem, positions) == 500  # the grid agrees: it holds everywhere sampled
-    touching, _ = build_problem(make_cfg(*PLANAR, "robot.dofs=[x,y,rz]", "robot.cable_diameter=0.01",
-                                         "robot.attachments=[[-0.1,-0.1,0],[0.1,-0.1,0],[0.1,0.1,0],[-0.1,0.1,0]]"),
-                                catalogue)
-    assert prove_required(spec, touching, compute) == (None, "the required box is not proven: criterion cable_cable "
-                                                              "has no certified bound")
+    bodied, _ = build_problem(make_cfg(*PLANAR, "robot.dofs=[x,y,rz]", "robot.platform.shape={lo: [-0.1, -0.1, -0.05], "
+                                       "hi: [0.1, 0.1, 0.05]}",
+                                       "robot.attachments=[[-0.1,-0.1,0],[0.1,-0.1,0],[0.1,0.1,0],[-0.1,0.1,0]]"),
+                              catalogue)
+    assert prove_required(spec, bodied, compute) == (None, "the required box is not proven: criterion cable_platform "
+                                                           "has no certified bound")
     assert prove_required(LayoutSpec(anchors=Box([-1, -1, 0], [1, 1, 0])), problem, compute) == (None, "no required box")
 
 

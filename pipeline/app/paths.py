@@ -22,11 +22,13 @@ Samples every ``trajectory.dt`` or less (null: 0.01 s, or a CASPR file's ``time_
 from __future__ import annotations
 
 import csv
+import math
 from pathlib import Path as FilePath
 
 import numpy as np
 from omegaconf import DictConfig, OmegaConf
 
+from pipeline.app.config import MAX_ACCELERATION
 from pipeline.app.xmlfiles import parse_xml
 from pipeline.errors import ConfigError
 from pipeline.model.geometry import CableRobot
@@ -49,12 +51,11 @@ def path_samples(cfg: DictConfig, robot: CableRobot) -> Samples:
     if node.points is not None and node.file is not None:
         raise ConfigError("trajectory.points: the way-points come from trajectory.points or trajectory.file, "
                           "not both")
-    if node.file is not None:
-        path, step = _from_file(node, law, robot, cfg.orientation)
-    else:
-        if node.name is not None:
-            raise ConfigError(f"trajectory.name={node.name}: names a trajectory of a CASPR file (trajectory.file)")
-        path, step = _from_points(node, law, robot, cfg.orientation), None
+    if node.file is None and node.name is not None:
+        raise ConfigError(f"trajectory.name={node.name}: names a trajectory of a CASPR file (trajectory.file)")
+    with np.errstate(divide="ignore", over="ignore", invalid="ignore"):  # times too short: refused below, by the peak
+        path, step = (_from_file(node, law, robot, cfg.orientation) if node.file is not None
+                      else (_from_points(node, law, robot, cfg.orientation), None))
     dt = float(node.dt) if node.dt is not None else (step or DEFAULT_DT)
     count = int(path.counts(dt).sum())
     if count > min(cfg.compute.max_poses, MAX_SAMPLES):
@@ -62,7 +63,14 @@ def path_samples(cfg: DictConfig, robot: CableRobot) -> Samples:
                  f"{MAX_SAMPLES:,} (a path's samples are held whole: about 0.5 kB each)")
         raise ConfigError(f"trajectory.dt={dt:g}: {count:.3g} samples over the path's {path.duration:g} s, more than "
                           f"{bound}; a longer step, or the path in parts")
-    return path.sample(dt)
+    with np.errstate(divide="ignore", over="ignore", invalid="ignore"):
+        samples = path.sample(dt)
+    peak = float(np.abs(samples.q_ddot).max(initial=0.0)) if np.isfinite(samples.q_ddot).all() else math.inf
+    if peak > MAX_ACCELERATION:
+        key = "trajectory.file" if node.file is not None else "trajectory.times" if law in TIMED else "trajectory.t_acc"
+        raise ConfigError(f"{key}: the path accelerates at {peak:.3g} m/s^2 (or rad/s^2), more than {MAX_ACCELERATION:g}: "
+                          "a unit typed wrong, or times too short")
+    return samples
 
 
 def _from_points(node: DictConfig, law: str, robot: CableRobot, orientation: DictConfig) -> Path:

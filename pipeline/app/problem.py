@@ -48,6 +48,7 @@ from pipeline.model.geometry import FREEDOMS, CableRobot, eq9_angles
 from pipeline.model.pulleys import Pulleys
 from pipeline.model.sagging import MAX_CABLES, SaggingSpec
 from pipeline.model.motion import acceleration_set, cartesian_cube, extreme_points, velocity_set
+from pipeline.model.path import QUINTIC_PEAK
 from pipeline.model.robots import PointsRobot, cpr8, irpm6, point_list
 from pipeline.model.statics import PathLimits, PathSpec, PayloadSpec, StaticLimits, StaticsSpec
 from pipeline.model.tensions import TensionSpec
@@ -337,8 +338,13 @@ def _certified(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
         raise ConfigError("certified.times: the durations of certified.path's segments; give the path's way-points")
     if cfg.certified.path is not None:
         points = np.asarray(OmegaConf.to_container(cfg.certified.path), dtype=float)
-        if cfg.certified.times is not None:
-            durations(cfg.certified.times, len(points) - 1, "certified.times")
+        if cfg.certified.times is not None:  # the quintic's peak acceleration: 10 / sqrt(3) of distance / time^2
+            times = durations(cfg.certified.times, len(points) - 1, "certified.times")
+            with np.errstate(divide="ignore", over="ignore"):
+                peaks = QUINTIC_PEAK * np.linalg.norm(np.diff(points, axis=0), axis=1) / times ** 2
+            if not peaks.max() <= MAX_ACCELERATION:
+                raise ConfigError(f"certified.times: segment {int(np.argmax(peaks)) + 1} accelerates at {peaks.max():.3g} m/s^2, "
+                                  f"more than {MAX_ACCELERATION:g}: a unit typed wrong, or times too short")
         flat = np.flatnonzero(robot.box_lo == robot.box_hi)  # a planar robot's plane
         off = np.flatnonzero((points[:, flat] != robot.box_lo[flat]).any(axis=1))
         if len(off):

@@ -149,6 +149,7 @@ class Path:
 
 
 QUINTIC = (6.0, -15.0, 10.0)  # h(s) = 10 s^3 - 15 s^4 + 6 s^5: the share of a rest-to-rest segment covered at s = tau / T
+QUINTIC_PEAK = 10 / math.sqrt(3)  # the largest |h''(s)| on [0, 1], at s = (3 -+ sqrt 3) / 6
 
 
 def rest_to_rest(points: np.ndarray, durations: np.ndarray) -> Path:
