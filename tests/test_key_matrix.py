@@ -133,3 +133,26 @@ def test_a_key_of_another_analysis_file_is_refused_not_ignored(tmp_path, analysi
     assert len(lines) == 1 and lines[0].startswith("error: ") and key.split(".")[0] in lines[0], lines
     assert f"analysis={analysis}" in lines[0], lines
     assert not run.exists()
+
+
+def test_a_foreign_key_is_refused_from_the_api_and_from_a_study_file(tmp_path):
+    """The same rule from the two other entry points: the API raises ConfigError naming the key and
+    writes no folder; a user's study whose overrides carry another analysis's key exits 2 in one
+    line before any job runs."""
+    import yaml
+
+    from pipeline import api
+    from pipeline.errors import ConfigError
+
+    with pytest.raises(ConfigError, match=r"^motion: analysis=statics does not read it"):
+        api.workspace(["robot=irpm6", "+motion.v_max=2"], folder=tmp_path / "api")
+    assert not (tmp_path / "api").exists()
+    studies = tmp_path / "myconf" / "studies"
+    studies.mkdir(parents=True)
+    (studies / "mine.yaml").write_text(yaml.safe_dump({
+        "title": "mine", "source": "mine", "overrides": ["robot=irpm6", "+actuator=3"],
+        "sweep": {"wrench.fz": "50000,100000"}}))
+    done = command(tmp_path, "pipeline.study", "--config-dir", "myconf", "mine", "--out", "out")
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 2 and len(lines) == 1 and "actuator: analysis=statics does not read it" in lines[0], lines
+    assert not (tmp_path / "out").exists()
