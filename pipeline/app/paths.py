@@ -32,7 +32,7 @@ from pipeline.app.config import MAX_ACCELERATION
 from pipeline.app.xmlfiles import parse_xml
 from pipeline.errors import ConfigError
 from pipeline.model.geometry import CableRobot
-from pipeline.model.path import Path, Samples, hermite, rest_to_rest, spline, trapezoidal
+from pipeline.model.path import Path, Samples, durations, hermite, rest_to_rest, spline, trapezoidal
 
 DEFAULT_DT = 0.01  # s between samples, when neither trajectory.dt nor a CASPR file gives one
 MAX_WAY_POINTS = 1_000_000
@@ -87,7 +87,10 @@ def _from_points(node: DictConfig, law: str, robot: CableRobot, orientation: Dic
         except ValueError as exc:
             raise ConfigError(f"trajectory.points: {exc}") from None
     _no_speeds(node, law)
-    return _timed(law, points, durations(node.times, len(points) - 1))
+    if node.times is None:
+        raise ConfigError("trajectory.times: each segment's duration (s), one value for every segment or one per "
+                          "segment; or law trapezoid (trajectory.v_max, t_acc, t_dec)")
+    return _timed(law, points, durations(_shown(node.times), len(points) - 1, "trajectory.times"))
 
 
 def _from_file(node: DictConfig, law: str, robot: CableRobot, orientation: DictConfig) -> tuple[Path, float | None]:
@@ -260,25 +263,6 @@ def _on_freedoms(values: np.ndarray, robot: CableRobot, orientation: DictConfig 
         q[:, 3:] = [float(orientation[angle]) for angle in ("psi", "theta", "phi")]
     q[:, list(robot.dofs)] = values
     return q
-
-
-def durations(times, segments: int, key: str = "trajectory.times") -> np.ndarray:
-    """(segments,) each segment's duration (s) from ``times`` (the key ``key``): one value for every
-    segment, or one per segment; ConfigError for anything else."""
-    if times is None:
-        raise ConfigError(f"{key}: each segment's duration (s), one value for every segment or one per "
-                          "segment; or law trapezoid (trajectory.v_max, t_acc, t_dec)")
-    values = _shown(times)
-    values = values if isinstance(values, list) else [values]
-    if not all(_number(value) for value in values):
-        raise ConfigError(f"{key}={values}: every duration must be a number of seconds")
-    if len(values) not in (1, segments):
-        raise ConfigError(f"{key}={values}: {len(values)} durations for {segments} segments; "
-                          f"give one for every segment or one per segment")
-    found = np.array(values, dtype=float)
-    if not (np.isfinite(found).all() and (found > 0).all()):
-        raise ConfigError(f"{key}={_shown(times)}: every duration must be > 0 and finite (s)")
-    return np.broadcast_to(found, (segments,)).copy()
 
 
 def _read_csv(path: FilePath, robot: CableRobot, key: str) -> tuple[np.ndarray, np.ndarray]:

@@ -34,7 +34,7 @@ from typing import Callable
 import numpy as np
 from omegaconf import DictConfig, ListConfig, OmegaConf
 
-from pipeline.app.paths import durations, path_samples
+from pipeline.app.paths import path_samples
 from pipeline.app.config import (
     MAX_ACCELERATION, MAX_FORCE, Config, Cpr8Config, Irpm6Config, PointsConfig, check_values, masked, merged, shown,
     unknown_keys, vector,
@@ -48,7 +48,7 @@ from pipeline.model.geometry import FREEDOMS, CableRobot, eq9_angles
 from pipeline.model.pulleys import Pulleys
 from pipeline.model.sagging import MAX_CABLES, SaggingSpec
 from pipeline.model.motion import acceleration_set, cartesian_cube, extreme_points, velocity_set
-from pipeline.model.path import QUINTIC_PEAK
+from pipeline.model.path import QUINTIC_PEAK, durations
 from pipeline.model.robots import PointsRobot, cpr8, irpm6, point_list
 from pipeline.model.statics import PathLimits, PathSpec, PayloadSpec, StaticLimits, StaticsSpec
 from pipeline.model.tensions import TensionSpec
@@ -339,7 +339,7 @@ def _certified(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
     if cfg.certified.path is not None:
         points = np.asarray(OmegaConf.to_container(cfg.certified.path), dtype=float)
         if cfg.certified.times is not None:  # the quintic's peak acceleration: 10 / sqrt(3) of distance / time^2
-            times = durations(cfg.certified.times, len(points) - 1, "certified.times")
+            times = durations(shown(cfg.certified.times), len(points) - 1, "certified.times")
             with np.errstate(divide="ignore", over="ignore"):
                 peaks = QUINTIC_PEAK * np.linalg.norm(np.diff(points, axis=0), axis=1) / times ** 2
             if not peaks.max() <= MAX_ACCELERATION:

@@ -27,10 +27,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from pipeline.model.certificates import INSIDE, OUTSIDE, UNDECIDED
 from pipeline.model.clearance import closest_parameters
 from pipeline.model.intervals import Interval, down, up
-
-INSIDE, OUTSIDE, UNDECIDED = 1, -1, 0  # as pipeline.model.certificates
 
 
 def _dot(intervals: Interval, vectors: np.ndarray) -> Interval:

@@ -34,6 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pipeline.errors import ConfigError
 from pipeline.model.geometry import elementary_rotations, rotation_matrices
 
 COORDINATES = ("x", "y", "z", "psi", "theta", "phi")  # q's columns (the angles in orientation.convention)
@@ -163,6 +164,22 @@ def rest_to_rest(points: np.ndarray, durations: np.ndarray) -> Path:
     coefficients = np.stack([fifth * delta / scale**5, fourth * delta / scale**4, third * delta / scale**3, zero, zero,
                              points[:-1]])
     return Path(_breaks(durations), coefficients, np.arange(len(delta)))
+
+
+def durations(times, segments: int, key: str) -> np.ndarray:
+    """(segments,) each segment's duration (s) from ``times`` (plain values: a number, or a list),
+    the value of the key ``key``: one value for every segment, or one per segment, each > 0 and
+    finite; ConfigError naming the key for anything else."""
+    values = times if isinstance(times, list) else [times]
+    if not all(isinstance(value, (int, float)) and not isinstance(value, bool) for value in values):
+        raise ConfigError(f"{key}={values}: every duration must be a number of seconds")
+    if len(values) not in (1, segments):
+        raise ConfigError(f"{key}={values}: {len(values)} durations for {segments} segments; "
+                          f"give one for every segment or one per segment")
+    found = np.array(values, dtype=float)
+    if not (np.isfinite(found).all() and (found > 0).all()):
+        raise ConfigError(f"{key}={times}: every duration must be > 0 and finite (s)")
+    return np.broadcast_to(found, (segments,)).copy()
 
 
 def quintic_share(s: np.ndarray) -> np.ndarray:

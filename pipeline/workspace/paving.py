@@ -25,12 +25,12 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 import pandas as pd
-from omegaconf import DictConfig, ListConfig, OmegaConf
+from omegaconf import DictConfig, OmegaConf
 
 from pipeline.model import certificates
 from pipeline.model.certificates import INSIDE, OUTSIDE, UNDECIDED, WRENCH_RTOL, BoxStatics
 from pipeline.model.intervals import Interval, rotation_enclosure
-from pipeline.model.path import quintic_curvature_range, quintic_share
+from pipeline.model.path import durations as path_durations, quintic_curvature_range, quintic_share
 from pipeline.model.tensions import Family, capacity_margins, reachability
 from pipeline.workspace.compute import described_job, name_of
 from pipeline.workspace.criteria import REGISTRY
@@ -116,6 +116,11 @@ def moving_wrenches(problem: WorkspaceProblem, angles, accelerations: np.ndarray
     return Interval(np.moveaxis(values.min(axis=2), 0, 1) - radius, np.moveaxis(values.max(axis=2), 0, 1) + radius)
 
 
+def centres(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """(N, 3) a point of each box [lo, hi] at its middle (clipped into it against rounding)."""
+    return np.clip(lo + (hi - lo) / 2, lo, hi)
+
+
 def certify(problem: WorkspaceProblem, statics: list[tuple[BoxStatics, BoxStatics]], lo: np.ndarray,
             hi: np.ndarray, accelerations: np.ndarray | None = None) -> np.ndarray:
     """(N,) the verdict of each box [lo, hi] (N, 3): inside at every orientation for every robot
@@ -123,7 +128,7 @@ def certify(problem: WorkspaceProblem, statics: list[tuple[BoxStatics, BoxStatic
     ``statics``: (nominal, within the tolerances) per orientation of ``problem.orientations``;
     ``accelerations`` (N, 2, 3): a platform moving through each box with its linear acceleration
     on the segment between the two (:func:`moving_wrenches`; None: the statics' own wrenches)."""
-    centre = np.clip(lo + (hi - lo) / 2, lo, hi)
+    centre = centres(lo, hi)
     verdict = np.full(len(lo), INSIDE)
     for angles, boxes in zip(problem.orientations, statics):
         open_ = np.flatnonzero(verdict != OUTSIDE)
@@ -329,10 +334,8 @@ def _lost(problem: WorkspaceProblem, tolerances: Tolerances, paving: Paving, vol
     breaks the centre), and the summary's ``lost_named_m3`` (their volume: certainly not in the
     robust workspace), ``lost_to_top`` and ``lost_to_top_m3`` (the error that names most of it)."""
     undecided = np.flatnonzero(paving.verdict == UNDECIDED)
-    centres = np.clip(paving.lo[undecided] + (paving.hi[undecided] - paving.lo[undecided]) / 2,
-                      paving.lo[undecided], paving.hi[undecided])
     started = time.perf_counter()
-    names, at = culprits(problem, tolerances, centres)
+    names, at = culprits(problem, tolerances, centres(paving.lo[undecided], paving.hi[undecided]))
     lost_to, lost_at = np.full(len(volumes), None, dtype=object), np.full(len(volumes), np.nan)
     lost_to[undecided], lost_at[undecided] = names, at
     named = np.array([name is not None for name in lost_to])
@@ -353,7 +356,9 @@ def path_files(cfg: DictConfig, problem: WorkspaceProblem, files, tolerances: To
     point proven) and ``first_outside_m`` (where along the path the first piece proven infeasible
     starts; NaN when none)."""
     points = np.asarray(OmegaConf.to_container(cfg.certified.path), dtype=float)
-    durations = segment_durations(cfg.certified.times, len(points) - 1)
+    times = cfg.certified.times
+    durations = None if times is None else path_durations(
+        OmegaConf.to_container(times) if OmegaConf.is_config(times) else times, len(points) - 1, "certified.times")
     pieces, verdict, level, ended = certify_path(problem, points, int(cfg.certified.depth), float(cfg.certified.time),
                                                  cfg.compute, tolerances, durations)
     order = np.lexsort((pieces[:, 1], pieces[:, 0]))  # along the path
@@ -398,12 +403,3 @@ def path_files(cfg: DictConfig, problem: WorkspaceProblem, files, tolerances: To
              f" from {row['first_outside_m']:.4g} m" if len(outside) else "", shares["undecided"], len(verdict),
              ended["seconds"], ended["stopped"])
     return row
-
-
-def segment_durations(times, segments: int) -> np.ndarray | None:
-    """``certified.times``, checked as the job was built (``pipeline.app.paths.durations``), as one
-    duration per segment (s); None: the path at rest."""
-    if times is None:
-        return None
-    values = OmegaConf.to_container(times) if isinstance(times, ListConfig) else times
-    return np.broadcast_to(np.atleast_1d(np.asarray(values, dtype=float)), (segments,)).copy()
