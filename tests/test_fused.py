@@ -232,7 +232,7 @@ def test_chunks_joblib_hands_workers_as_read_only_maps_give_the_in_process_margi
     positions = np.random.default_rng(3).uniform(-1.5, 1.5, size=(140_000, 3)) + [1.6, 1.1, -1.1]
     if robot:
         positions = positions + [-1.6, -1.1, 3.1]
-    parts = list(iter_chunks(evaluate_chunk, problem, positions, n_jobs=2, chunk_size=70_000))
+    parts = list(iter_chunks(evaluate_chunk, problem, positions, n_jobs=2, backend="loky", chunk_size=70_000))
     assert [s for s, _ in parts] == [slice(0, 70_000), slice(70_000, 140_000)]
     here = [evaluate_chunk(problem, positions[s]) for s, _ in parts]  # a chunk's first pose starts cold
     for key in here[0]:

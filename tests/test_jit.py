@@ -157,6 +157,8 @@ def test_the_compiled_loops_use_nothing_but_their_own_text(module, exports):
     assert all(node.level == 0 and node.module in ("__future__", "numpy", "numba")
                for node in ast.walk(tree) if isinstance(node, ast.ImportFrom))
     assert set(module.SIGNATURES) == exports
+    # the entry points let go of the GIL: a job's worker threads run them at once (compute.backend=threading)
+    assert {name for name in exports if getattr(module, name).targetoptions.get("nogil")} == exports
 
 
 SLOW = "import time\ntime.sleep(1.5)  # a long compile: the window two starting processes share\n" + MODULE

@@ -7,7 +7,8 @@ installation box (``anchors``) and, when ``attachments`` is given, the attachmen
 platform's box, and counts the grid's feasible poses in this process
 (:func:`pipeline.workspace.feasibility.feasible_flags`: the exact verdict of every pose, by the
 null-space test where it applies; no Hydra composition, no process per trial), on
-``n_jobs`` of joblib's workers, a batch of trials at a time (Optuna's ask and tell, seeded). With
+``n_jobs`` worker threads (the compiled test and numpy release the GIL: one process's
+memory), a batch of trials at a time (Optuna's ask and tell, seeded). With
 ``symmetry: quadrants`` the frame's mirror planes x = 0 and y = 0 hold: the robot's cables come
 in fours, (-x, +y), (+x, +y), (+x, -y), (-x, -y) (IPAnema 1's order), and each four is one
 designed anchor in the quarter x, y >= 0 and one designed attachment, mirrored with it. With
@@ -351,7 +352,7 @@ def search_layouts(spec: LayoutSpec, problem, positions: np.ndarray, cell_volume
     log.info("layout: %d trials of %d poses (%s%s), %d variables, %d worker(s)", budget, len(positions),
              "every layout of the lattice" if exhaustive else spec.sampler, f", step {spec.step} m" if spec.step else "",
              len(ranges) + len(choices), n_jobs)
-    with Parallel(n_jobs=n_jobs) as parallel:
+    with Parallel(n_jobs=n_jobs, backend="threading") as parallel:
         while len(rows) < budget:
             count = min(n_jobs, budget - len(rows))
             if len(rows) >= refine_from and best is not None:  # the last share of the budget: around the best

@@ -502,7 +502,9 @@ class ModelConfig:
 
 @dataclass
 class ComputeConfig:
-    """Parallel execution: joblib backend, workers (capped at the machine's cores, except on a
+    """Parallel execution: joblib backend (``threading``: the chunks on worker threads of the
+    job's process, whose compiled loops and numpy release the GIL; ``loky``: on worker processes,
+    about 190 MiB each), workers (capped at the machine's cores, except on a
     Dask scheduler elsewhere), poses per chunk (null: by the cost model, 20 000 and on Dask at
     least 0.2 s of kernel; a number is taken as given; either is lowered so that a chunk's
     largest array stays under 32 MB). ``backend=dask`` runs the chunks on the Dask scheduler at

@@ -298,7 +298,7 @@ def _descend(row, sign, goal, earlier_lo, earlier_up, lo, up, c, s):
     return s, False
 
 
-@njit(SIGNATURES["least_margins"], cache=True)
+@njit(SIGNATURES["least_margins"], cache=True, nogil=True)
 def least_margins(structure, spread, null, wrenches, subsets, others, fixed, posed, where, varies,
                   relax_rtol, big, margins):
     """Fill ``margins`` (F, n) with each family's nested capacity margin, least over the K
@@ -383,7 +383,7 @@ def least_margins(structure, spread, null, wrenches, subsets, others, fixed, pos
     return unsettled
 
 
-@njit(SIGNATURES["largest_wrenches"], cache=True)
+@njit(SIGNATURES["largest_wrenches"], cache=True, nogil=True)
 def largest_wrenches(structure, spread, null, wrenches, subsets, others, lower, upper, tolerance, reach):
     """Fill ``reach`` (n, 2, d) with the largest mu >= 0 for which w + mu e_j (``reach[p, 0, j]``)
     and w - mu e_j (``reach[p, 1, j]``) stay in S [lower, upper]: ray shooting against every

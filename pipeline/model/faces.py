@@ -51,7 +51,7 @@ def _solve(gram, rhs, j):
     return True
 
 
-@njit(SIGNATURES["least_norm"], cache=True)
+@njit(SIGNATURES["least_norm"], cache=True, nogil=True)
 def least_norm(y0, basis, lower, upper, tolerance, cables, sizes, sides, out, found):
     """For poses p and wrenches k: out[p, k] the point y0 + N lambda of least |lambda| within
     [lower - tolerance, upper + tolerance] (y0, lower, upper (n, K, m), tolerance (n, K), basis

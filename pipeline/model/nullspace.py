@@ -202,7 +202,7 @@ def _vertex(c, g, free, lower, upper):
             chosen[i] = chosen[i - 1] + 1
 
 
-@njit(SIGNATURES["pulling_verdicts"], cache=True)
+@njit(SIGNATURES["pulling_verdicts"], cache=True, nogil=True)
 def pulling_verdicts(structure, wrenches, lower, upper, pivot_rtol, verdicts):
     """``verdicts`` (n,) of the poses of ``structure`` (n, r, m) holding every wrench of
     ``wrenches`` (n, K, r) with forces in [``lower``, ``upper``] (m,): 1 feasible, 0 not, -1

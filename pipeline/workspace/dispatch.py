@@ -34,22 +34,29 @@ CHUNK_POSES = 20_000  # compute.chunk_size=null: a chunk's poses, between 2 000 
 DASK_CHUNK_S = 0.2
 
 
-# Cost model of the choice between worker processes and this one (docs/performance.md): a
-# local worker costs about WORKER_START_S of CPU before its first chunk (process start and the
-# kernel's imports, numpy only) and two workers at best halve the kernel time, so they pay off
-# when the kernel alone would take more than 2 x WORKER_START_S here. Kernel speeds per core,
+# Cost model of the choice between chunk workers and this process alone (docs/performance.md).
+# A worker thread (compute.backend=threading, the default) shares this process: the compiled
+# loops run without the GIL (nogil) and numpy's array work releases it, so two threads run two
+# chunks at once for about THREAD_START_S (the pool, the hand-offs of the GIL) and no memory but
+# the chunks in flight (benchmarks/LOG.md, 2026-11-29: 3 x 10^5 fused poses 1.73-2.25 s wall on
+# two threads against 1.99-2.55 s alone; 40 000 numpy poses about even). A worker process (loky,
+# multiprocessing) costs about WORKER_START_S of CPU before its first chunk (process start and
+# the kernel's imports, numpy only) and its own interpreter's memory (about 190 MiB). Two workers
+# at best halve the kernel time, so they pay off when the kernel alone would take more than
+# twice their start here. Kernel speeds per core,
 # measured by benchmarks/bench_kernel.py and bench_feasible.py (lower ends of their ranges).
 # The speeds hold for the paper's set of 93 velocities per pose (grid.n_vel = 6) and the statics
 # of one wrench; a pose's cost grows with its set (each spec's ``work()``: its velocities, a wrench
 # set's vertices, the payload's LP). A job estimated above LONG_JOB_S is announced with a warning.
 WORKER_START_S = 0.4
+THREAD_START_S = 0.1
 # The compiled kernels cost a process FUSED_START_S to load from numba's cache (numba's import,
 # with scipy.linalg, and the machine code: pipeline.model.jit), and the first process on a machine
 # compiles them: a job whose numpy kernel would take less keeps it, so a small job never pays
 # more than it could save.
 FUSED_START_S = 0.4
 # Fused chunks are computed several times faster than the parent classifies and writes them, so
-# workers pay only for long fused jobs (benchmarks/LOG.md, 2026-11-24: about 1.5 x 10^6 poses).
+# worker processes pay only for long fused jobs (benchmarks/LOG.md, 2026-11-24: about 1.5 x 10^6 poses).
 FUSED_WORKERS_FROM_S = 1.5  # the fused kernel's time (cost model) from which workers are used
 # Jobs at a time (hydra.launcher.n_jobs, a study's pool): a job worker imports the whole job's
 # code (Hydra, pandas, pyarrow) and loads numba's cache, about JOB_WORKER_START_S of wall each
@@ -120,17 +127,22 @@ def use_fused(cfg: DictConfig, problem: WorkspaceProblem, n_points: int, sweep_p
 
 
 def worth_workers(problem: WorkspaceProblem, n_points: int, n_jobs: int, backend: str) -> int:
-    """``n_jobs``, or 1 when the cost model says local workers would not pay for their start
-    (measured on 2 cores: 125 000 CPR-WWA poses took 1.13x the wall time and 1.44x the CPU on
-    two workers; 10^6 poses 0.7x the wall time); for the fused kernel, FUSED_WORKERS_FROM_S.
-    A Dask cluster is the user's explicit choice."""
+    """``n_jobs``, or 1 when the cost model says local workers would not pay for their start:
+    threads (``threading``) from 2 x THREAD_START_S of kernel; worker processes from 2 x
+    WORKER_START_S (measured on 2 cores: 125 000 CPR-WWA poses took 1.13x the wall time and
+    1.44x the CPU on two processes; 10^6 poses 0.7x the wall time), for the fused kernel from
+    FUSED_WORKERS_FROM_S. A Dask cluster is the user's explicit choice."""
     if backend == "dask" or n_jobs == 1:
         return n_jobs
     serial_s = estimated_seconds(problem, n_points)
-    if serial_s > (FUSED_WORKERS_FROM_S if problem.fused else 2 * WORKER_START_S):
+    if backend == "threading":
+        threshold = 2 * THREAD_START_S
+    else:
+        threshold = FUSED_WORKERS_FROM_S if problem.fused else 2 * WORKER_START_S
+    if serial_s > threshold:
         return n_jobs
-    log.debug("compute.n_jobs=%d: about %.2f s of kernel, too little for worker processes to pay "
-              "for their start; running here", n_jobs, serial_s)
+    log.debug("compute.n_jobs=%d: about %.2f s of kernel, too little for %s workers to pay for their "
+              "start; running here", n_jobs, serial_s, backend)
     return 1
 
 
@@ -209,7 +221,7 @@ def decide(cfg: DictConfig, problem: WorkspaceProblem, n_points: int, sweep_pays
                     estimated_seconds(problem, n_points) / cores(workers))
 
 
-def bounded_chunk_size(problem: WorkspaceProblem, requested: int | None, backend: str = "loky") -> int:
+def bounded_chunk_size(problem: WorkspaceProblem, requested: int | None, backend: str = "threading") -> int:
     """Poses per chunk: the requested size, or for None (``compute.chunk_size=null``) the cost
     model's, CHUNK_POSES and on Dask at least DASK_CHUNK_S of kernel; lowered so that a chunk's
     largest intermediate array (poses x cables x velocity or acceleration set) stays within

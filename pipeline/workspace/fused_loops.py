@@ -315,7 +315,7 @@ def _drop_one(jac, gram, rows, m, rtol, factor, scale, w, warm, along, deflated,
     return True
 
 
-@njit(SIGNATURES["cpr_wwa"], cache=True)
+@njit(SIGNATURES["cpr_wwa"], cache=True, nogil=True)
 def cpr_wwa(positions, anchors, arms, rate_axes, radius, rows, extremes, centre, half, loads, rtol,
             limits, gains, t_max, l_max, out, rank, unsettled):
     """Fill ``out`` (n, 8) with the margins of ``fused.CRITERIA`` (the last two columns: the
@@ -331,7 +331,7 @@ def cpr_wwa(positions, anchors, arms, rate_axes, radius, rows, extremes, centre,
         raise ValueError("the pseudo-inverse has 3 or 6 rows")
 
 
-@njit(SIGNATURES["statics"], cache=True)
+@njit(SIGNATURES["statics"], cache=True, nogil=True)
 def statics(positions, anchors, arms, centre, base, wrench, rtol, singular_rtol, t_min, s_max, scale,
              l_max, out, unsettled):
     """Fill ``out`` (n, 5) with the margins of ``fused.STATICS_CRITERIA`` (the last column: the

@@ -3,7 +3,9 @@
 Follows scikit-learn's ``_parallel_pairwise``: the poses are split into contiguous slices, each
 worker evaluates the vectorised kernel on its slice, and the results come back in order. A
 problem that fits in a single chunk runs in-process (no pool start-up). The joblib backend is a
-parameter: ``dask`` sends the same chunks to a Dask distributed cluster (the scheduler at
+parameter: ``threading`` (the default) runs the chunks on threads of this process, which the
+compiled loops (``nogil``) and numpy's array work leave free to run at once, with no second
+interpreter's memory; ``loky`` on worker processes; ``dask`` sends the same chunks to a Dask distributed cluster (the scheduler at
 ``scheduler``, or a local cluster of ``n_jobs`` single-threaded worker processes) through
 joblib's dask backend, with no other change.
 """
@@ -40,7 +42,7 @@ def iter_chunks(
     problem,
     positions,
     n_jobs: int = 2,
-    backend: str = "loky",
+    backend: str = "threading",
     chunk_size: int = 20_000,
     scheduler: str | None = None,
     estimate: float | None = None,

@@ -1,12 +1,12 @@
-"""Dask against loky (issue 41), whole processes in the same run: a job of 10^7 poses (the fused
-kernel, ``output.points=false``) on a local cluster of two workers against loky's two workers,
-and a five-job sweep whose jobs are split into chunks (one cluster for the sweep) against the
-same sweep on loky.
+"""The chunk workers' backends, whole processes in the same run: a job of 10^7 poses (the fused
+kernel, ``output.points=false``) and a five-job sweep whose jobs are split into chunks, each on two
+worker threads (``compute.backend=threading``, the default: the reference), on two loky worker
+processes, and on a local Dask cluster of two workers (one cluster for the sweep; issue 41).
 
-    python benchmarks/bench_dask.py [--repeat 3] [--n 216]
+    python benchmarks/bench_backends.py [--repeat 3] [--n 216]
 
 Printed: wall and CPU seconds and the peak memory of the process tree (medians and ranges of
-``--repeat`` runs, interleaved), and each Dask line's ratio to its loky reference.
+``--repeat`` runs, one backend after another), and each other line's ratio to its threads' reference.
 """
 
 from __future__ import annotations
@@ -34,12 +34,12 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as scratch:
         cwd = Path(scratch)
         for label, argv, folder in cases:
-            loky = measured(f"{label}, loky (reference)", [*argv, f"{folder}=loky{{run}}_{len(argv)}"],
-                            args.repeat, cwd)
-            dask = measured(f"{label}, Dask local cluster", [*argv, "compute.backend=dask",
-                                                             f"{folder}=dask{{run}}_{len(argv)}"], args.repeat, cwd)
-            print(f"  Dask / loky: wall x{dask[0] / loky[0]:.2f}, CPU x{dask[1] / loky[1]:.2f}")
-
+            threads = measured(f"{label}, threads (reference)", [*argv, f"{folder}=threads{{run}}_{len(argv)}"],
+                               args.repeat, cwd)
+            for backend in ("loky", "dask"):
+                other = measured(f"{label}, {backend}", [*argv, f"compute.backend={backend}",
+                                                         f"{folder}={backend}{{run}}_{len(argv)}"], args.repeat, cwd)
+                print(f"  {backend} / threads: wall x{other[0] / threads[0]:.2f}, CPU x{other[1] / threads[1]:.2f}")
 
 if __name__ == "__main__":
     main()
