@@ -12,7 +12,8 @@ import pytest
 import yaml
 
 from conftest import command
-from pipeline.analyses.layout import Box, LayoutSpec, best_trial, evaluate, placed, prove_required, search_layouts
+from pipeline.analyses.layout import (Box, LayoutSpec, best_trial, check_robot, evaluate, placed, prove_required,
+                                      search_layouts)
 from pipeline.app.problem import build_problem
 from pipeline.errors import ConfigError
 from pipeline.workspace.kernel import evaluate_chunk
@@ -186,6 +187,75 @@ def test_a_payload_search_maximises_what_the_required_box_carries(make_cfg, cata
     assert own == table.iloc[0]["payload_kg"]  # trial 0: the robot as given
 
 
+def swept_tension_factor(structure: np.ndarray, directions: int = 20_000) -> float:
+    """Pham et al.'s tension factor of one 6 x 8 structure matrix by a second method: its null space
+    (two-dimensional) swept, h = N [cos a, sin a] at ``directions`` angles, the best min h / max h
+    among the strictly positive h (a lower bound, within the sweep's step of the exact value)."""
+    import scipy.linalg
+
+    null = scipy.linalg.null_space(structure)
+    assert null.shape[1] == 2
+    angles = np.linspace(0.0, 2 * np.pi, directions, endpoint=False)
+    h = null @ np.stack([np.cos(angles), np.sin(angles)])
+    positive = (h > 0).all(axis=0)
+    return float((h.min(axis=0)[positive] / h.max(axis=0)[positive]).max()) if positive.any() else 0.0
+
+
+def test_the_least_tension_factor_against_the_null_space_swept(make_cfg, catalogue):
+    """objective tension_factor: the least over a required box off the centre of IPAnema 1, tilted,
+    against the null space swept (no LP); 1 at the centre of the untilted robot, whose mirrored
+    cables hold nothing with equal tensions (A 1 = 0, worked out by hand)."""
+    from pipeline.analyses.layout import least_tension_factor
+
+    problem, grid = build_problem(make_cfg(*IPANEMA_CASE, "robot.search.step=0.2", "orientation.psi=0.1",
+                                           "orientation.theta=-0.05"), catalogue)
+    positions = grid[0:len(grid)]
+    required = positions[np.all(np.abs(positions - [0.3, 0.2, 1.0]) <= 0.3, axis=1)]
+    found = least_tension_factor(problem, required)
+    ((at, orientation),) = problem.poses(required)
+    structures = problem.spec.state(problem.robot, at, orientation).structure
+    swept = min(swept_tension_factor(a) for a in structures)
+    assert len(required) >= 8 and 0.05 < found < 0.95
+    assert swept - 1e-9 <= found <= swept + 1e-3
+    level, _ = build_problem(make_cfg(*IPANEMA_CASE, "robot.search.step=0.2"), catalogue)
+    assert least_tension_factor(level, np.array([[0.0, 0.0, 1.0]])) == pytest.approx(1.0, abs=1e-9)
+    assert least_tension_factor(level, np.array([[0.5, 0.0, 1.0]])) < 1 - 1e-3
+
+
+def test_a_search_trading_workspace_for_frame(make_cfg, catalogue):
+    """objectives [volume_m3, frame_m3] on IPAnema 1 with quadrants on a lattice: every trial's
+    frame_m3 is the bounding box of its placed anchors (measured here), the front's trials are not
+    dominated by any (checked pair by pair), and the largest frame gives the largest volume; with
+    tension_factor second, the required box's least tension factor is reported for the trials that
+    hold it."""
+    problem, grid = build_problem(make_cfg(*IPANEMA_CASE, "robot.search.step=0.25"), catalogue)
+    positions = grid[0:len(grid)]
+    spec = LayoutSpec(anchors=Box([-2, -1.5, 0], [2, 1.5, 2]), symmetry="quadrants", step=0.5,
+                      objectives=["volume_m3", "frame_m3"], budget=30, sampler="nsga2")
+    spec.check_across("test")
+    table = search_layouts(spec, problem, positions, grid.cell_volume, n_jobs=2)
+    for _, row in table.iterrows():
+        anchors, _ = placed(spec, problem.robot, row.to_dict())
+        extent = anchors.max(axis=0) - anchors.min(axis=0)
+        assert row["frame_m3"] == pytest.approx(extent[0] * extent[1] * extent[2], rel=1e-12)
+    front = table[table["pareto"]]
+    assert len(front) >= 2
+    for _, row in front.iterrows():
+        better = (table["volume_m3"] >= row["volume_m3"]) & (table["frame_m3"] <= row["frame_m3"])
+        strictly = (table["volume_m3"] > row["volume_m3"]) | (table["frame_m3"] < row["frame_m3"])
+        assert not (better & strictly).any()
+    assert table.iloc[0]["frame_m3"] == 24.0  # trial 0: IPAnema 1's own 4 x 3 x 2 m frame
+    required = Box([-0.5, -0.5, 0.75], [0.5, 0.5, 1.25])
+    spec = replace(spec, objectives=["volume_m3", "tension_factor"], required=required, budget=6)
+    table = search_layouts(spec, problem, positions, grid.cell_volume, n_jobs=1)
+    met = table[table["meets"]]
+    assert len(met) >= 1 and table.loc[~table["meets"], "tension_factor"].isna().all()
+    assert ((met["tension_factor"] > 0) & (met["tension_factor"] <= 1)).all()
+    cpr8, cpr8_grid = build_problem(make_cfg(), catalogue)  # CPR-WWA: a platform in motion, J's pseudo-inverse
+    with pytest.raises(ConfigError, match="tension_factor is of a static pose's structure matrix"):
+        check_robot(spec, cpr8, cpr8_grid.cell_volume)
+
+
 @pytest.mark.parametrize("fields, message", [
     ({"anchors": {"lo": [0, 0, 0], "hi": [-1, 1, 1]}}, "exceeds hi"),
     ({"anchors": {"lo": [0, 0], "hi": [1, 1, 1]}}, "three finite coordinates"),
@@ -290,6 +360,10 @@ def test_a_payload_study_counts_the_payload_at_load_com_on_top_of_load_mass(tmp_
      "volume_m3: the grid has no volume"),
     ({"layout": {"anchors": {"lo": [-1, -1, 0], "hi": [1, 1, 0]}, "objectives": ["payload_kg"]}},
      "payload_kg is the largest payload the required box holds; give layout.required"),
+    ({"layout": {"anchors": {"lo": [-1, -1, 0], "hi": [1, 1, 0]}, "objectives": ["tension_factor"]}},
+     "tension_factor is the least over the required box; give layout.required"),
+    ({"layout": {"anchors": {"lo": [-1, -1, 0], "hi": [1, 1, 0]}, "objectives": ["feasible_pct", "frame_m3"]}},
+     "frame_m3 is the anchors' bounding volume"),
     ({"overrides": [*STUDY["overrides"], "platform_motion.acceleration=[[0.5,0,0,0,0,0]]"],
       "layout": {**STUDY["layout"], "objectives": ["payload_kg"]}}, "payload_kg adds mass to a platform at rest"),
     ({"overrides": [*PLANAR[:4], "robot.dofs=[x,y,z]", "robot.anchors=[[-1,-1,1],[1,-1,1],[1,1,1],[-1,1,1]]",

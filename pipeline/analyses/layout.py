@@ -22,7 +22,11 @@ trials, with three quarters of them refining 10.94).
 Objectives (:data:`OBJECTIVES`): ``volume_m3`` (the feasible poses' cells), ``feasible_pct``,
 ``longest_cable_m`` (the longest cable over the feasible poses: the drum a design needs) and
 ``payload_kg`` (:func:`largest_payload`: the largest mass added to the load with which every
-grid pose of the required box still holds). A ``required`` box of positions must be feasible at
+grid pose of the required box still holds), ``tension_factor`` (:func:`least_tension_factor`: Pham et
+al.'s tension factor, ``output.metrics``' column, least over the required box's grid poses: how
+evenly the cables can be tensed where the robot must work) and ``frame_m3`` (the volume of the
+anchors' bounding box: the frame a layout needs, so that a two-objective search trades workspace
+for frame). A ``required`` box of positions must be feasible at
 every grid pose inside it (a constraint; the grid's verdicts, not a certificate). With ``step``
 the variables lie on a lattice, and a lattice no larger than the budget is searched exhaustively
 (every layout once, in order), so its best is the best. The best trial is then run again as an
@@ -51,7 +55,9 @@ QUADRANTS = np.array([[-1.0, 1.0, 1.0], [1.0, 1.0, 1.0], [1.0, -1.0, 1.0], [-1.0
 OBJECTIVES = {"volume_m3": ("maximize", "feasible volume (m^3)"),
               "feasible_pct": ("maximize", "feasible share of the grid (%)"),
               "longest_cable_m": ("minimize", "longest cable over the feasible poses (m)"),
-              "payload_kg": ("maximize", "largest payload the required box holds (kg)")}
+              "payload_kg": ("maximize", "largest payload the required box holds (kg)"),
+              "tension_factor": ("maximize", "least tension factor over the required box"),
+              "frame_m3": ("minimize", "the anchors' bounding box (m^3)")}
 PAYLOAD_RTOL = 1e-6  # the largest payload, bisected to this share of itself
 PAYLOAD_MAX = 1e9  # kg: past it the payload is taken as unbounded (cables without an upper limit)
 AXES = "xyz"
@@ -218,6 +224,14 @@ def check_robot(spec: LayoutSpec, problem, cell_volume: float) -> None:
         if problem.spec.kind != "statics" or problem.spec.moves:
             raise ConfigError("layout.objectives: payload_kg adds mass to a platform at rest (analysis=statics without "
                               "platform_motion)")
+    if "tension_factor" in spec.objectives:
+        if spec.required is None:
+            raise ConfigError("layout.objectives: tension_factor is the least over the required box; give layout.required")
+        if problem.spec.kind != "statics":
+            raise ConfigError("layout.objectives: tension_factor is of a static pose's structure matrix (analysis=statics)")
+    if "frame_m3" in spec.objectives and (np.asarray(spec.anchors.hi) <= np.asarray(spec.anchors.lo)).any():
+        raise ConfigError(f"layout.objectives: frame_m3 is the anchors' bounding volume; the installation box "
+                          f"{spec.anchors.lo}..{spec.anchors.hi} is flat (a planar robot's frame has no volume)")
     if "volume_m3" in spec.objectives and not math.isfinite(cell_volume):
         raise ConfigError("layout.objectives: volume_m3: the grid has no volume (a planar robot's plane, or listed "
                           "poses); use feasible_pct")
@@ -296,11 +310,28 @@ def largest_payload(problem, positions: np.ndarray, payload: float, com: np.ndar
     return payload + low
 
 
+def least_tension_factor(problem, positions: np.ndarray) -> float:
+    """The least tension factor (:func:`pipeline.model.metrics.tension_factor`, 0 where the
+    structure matrix lacks a rank, as ``output.metrics`` writes it) over ``positions`` at every
+    orientation of the job's set; 1 for none."""
+    from pipeline.model.metrics import tension_factor
+
+    least = 1.0
+    for at, orientation in problem.poses(positions):
+        if len(at):
+            state = problem.spec.state(problem.robot, at, orientation)
+            structure, rank = state.structure, state.wrench_pinv[1]
+            least = min(least, float(np.where(rank == structure.shape[1], tension_factor(structure), 0.0).min()))
+    return least
+
+
 def evaluate(problem, positions: np.ndarray, cell_volume: float, required: np.ndarray | None,
-             payload: tuple[float, np.ndarray] | None = None) -> dict:
+             payload: tuple[float, np.ndarray] | None = None, objectives: tuple[str, ...] = ()) -> dict:
     """A layout's numbers over the grid ``positions``: feasible poses, volume, share, the longest
-    cable over them, the required poses that fail and, with ``payload`` (the job's ``load.mass`` and
-    ``load.com``), the largest payload the required ones hold (:func:`largest_payload`; NaN without it)."""
+    cable over them, the required poses that fail, the anchors' bounding volume and, with ``payload``
+    (the job's ``load.mass`` and ``load.com``), the largest payload the required ones hold
+    (:func:`largest_payload`; NaN without it); with ``tension_factor`` among ``objectives``, the least
+    over the required ones (:func:`least_tension_factor`; NaN without it)."""
     from pipeline.model.geometry import cable_vectors, rotation_matrices
 
     flags = _flags(problem, positions)
@@ -315,7 +346,10 @@ def evaluate(problem, positions: np.ndarray, cell_volume: float, required: np.nd
     return {"n_feasible": n, "n_points": len(positions), "volume_m3": n * cell_volume,
             "feasible_pct": 100.0 * n / len(positions), "longest_cable_m": longest if n else math.nan,
             "required_failing": failing,
-            "payload_kg": largest_payload(problem, positions[required], *payload) if payload and not failing else math.nan}
+            "payload_kg": largest_payload(problem, positions[required], *payload) if payload and not failing else math.nan,
+            "tension_factor": (least_tension_factor(problem, positions[required])
+                               if "tension_factor" in objectives and not failing else math.nan),
+            "frame_m3": float(np.prod(np.ptp(problem.robot.anchors, axis=0)))}
 
 
 def search_layouts(spec: LayoutSpec, problem, positions: np.ndarray, cell_volume: float, n_jobs: int,
@@ -365,7 +399,8 @@ def search_layouts(spec: LayoutSpec, problem, positions: np.ndarray, cell_volume
             layouts = [placed(spec, problem.robot, v) for v in values]
             found = parallel(delayed(evaluate)(replace(problem, robot=replace(problem.robot, anchors=a, attachments=b)),
                                                positions, cell_volume, required,
-                                               payload if "payload_kg" in spec.objectives else None)
+                                               payload if "payload_kg" in spec.objectives else None,
+                                               tuple(spec.objectives))
                              for a, b in layouts)
             improved = False
             for trial, value, numbers in zip(trials, values, found):
