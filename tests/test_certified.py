@@ -8,6 +8,7 @@ on five robots (spatial, tilted with an off-centre payload and a length limit, a
 orientations, a planar body with a wrench set, a planar point and a point in space); the volume
 of a fine grid inside the certified bracket."""
 
+import math
 from fractions import Fraction
 
 import mpmath
@@ -21,6 +22,7 @@ from pipeline.model import certificates
 from pipeline.model.certificates import INSIDE, OUTSIDE, UNDECIDED
 from pipeline.model.geometry import rotation_matrix
 from pipeline.model.intervals import Interval, rotation_enclosure
+from pipeline.model.path import StraightMotion
 from pipeline.workspace import paving
 from pipeline.workspace.kernel import evaluate_chunk
 from pipeline.workspace.tolerances import culprits, errors as tolerances_errors
@@ -289,7 +291,23 @@ REFUSALS = {  # overrides -> what the one line names
     ("robot.platform.mass=1", "certified.path=[[0,0,1],[0,0,2]]", "certified.times=1",
      "platform_motion.acceleration=[[1,0,0,0,0,0]]"): "platform_motion: analysis=certified: a moving path's",
     ("robot.platform.mass=1", "certified.path=[[0,0,1],[0,0,2]]", "certified.times=1", "robust.mass=0.1"):
-        "without platform_motion or certified.times",
+        "without platform_motion or a moving path",
+    # a trapezoid's speed profile (certified.law=trapezoid)
+    ("certified.law=trapezoid",): "certified.law=trapezoid: the motion along certified.path's segments",  # no path
+    ("certified.v_max=1",): "certified.v_max: the motion along certified.path's segments",
+    ("certified.law=linear",): "certified.law",
+    ("certified.path=[[0,0,1],[0,0,2]]", "certified.v_max=1"): "certified.v_max: a trapezoid's speed profile",
+    ("certified.path=[[0,0,1],[0,0,2]]", "certified.law=trapezoid", "certified.v_max=1"):
+        "certified.t_acc: certified.law=trapezoid needs v_max (m/s), t_acc and t_dec (s)",
+    ("certified.path=[[0,0,1],[0,0,2]]", "certified.law=trapezoid", "certified.v_max=1", "certified.t_acc=1",
+     "certified.t_dec=1", "certified.times=1"): "certified.times: law trapezoid times each segment",
+    ("certified.path=[[0,0,1],[0,0,2]]", "certified.law=trapezoid", "certified.v_max=1", "certified.t_acc=1e-6",
+     "certified.t_dec=1"): "certified.t_acc: segment 1 accelerates at 1e+06 m/s^2",
+    ("certified.path=[[0,0,1],[0,0,2]]", "certified.law=trapezoid", "certified.v_max=1", "certified.t_acc=0",
+     "certified.t_dec=1"): "certified.t_acc",
+    ("robot.platform.mass=1", "certified.path=[[0,0,1],[0,0,2]]", "certified.law=trapezoid", "certified.v_max=1",
+     "certified.t_acc=1", "certified.t_dec=1", "platform_motion.acceleration=[[1,0,0,0,0,0]]"):
+        "platform_motion: analysis=certified: a moving path's",
 }
 
 
@@ -626,7 +644,8 @@ def test_a_moving_path_agrees_with_the_exact_test_at_each_instant(make_cfg, name
     points = np.asarray(points, dtype=float)
     durations = np.full(len(points) - 1, seconds)
     pieces, verdict, _, _ = paving.certify_path(problem, points, depth, 600.0,
-                                                make_cfg(*overrides, "compute.n_jobs=1").compute, durations=durations)
+                                                make_cfg(*overrides, "compute.n_jobs=1").compute,
+                                                motion=StraightMotion.quintic(points, durations))
     assert (verdict == INSIDE).any() and (verdict == OUTSIDE).any()
     rng = np.random.default_rng(9)
     for kind in (INSIDE, OUTSIDE):
@@ -683,6 +702,69 @@ def test_a_crane_dropped_faster_than_gravity_fails_where_the_law_says(tmp_path):
     assert command(tmp_path, "pipeline", *base, "certified.times=[5, 5]", f"hydra.run.dir={slow}").returncode == 0
     assert pd.read_parquet(slow / "summary.parquet").iloc[0]["path_certified"]
 
+
+
+def _trapezoid(distance: float, v_max: float, t_acc: float, t_dec: float, tau: float) -> tuple[float, float, float]:
+    """The CPR-8 paper's speed profile written here from its definition (accelerate at v_max / t_acc,
+    cruise at v_max, decelerate at v_max / t_dec; the peak speed lowered where the distance is too
+    short): the distance covered and the acceleration at time tau, and the whole time."""
+    acc, dec = v_max / t_acc, v_max / t_dec
+    peak = min(v_max, math.sqrt(2 * distance * acc * dec / (acc + dec)))
+    ramp_up, ramp_down = peak / acc, peak / dec
+    cruise = (distance - peak * ramp_up / 2 - peak * ramp_down / 2) / peak
+    if tau < ramp_up:
+        return acc * tau**2 / 2, acc, ramp_up + cruise + ramp_down
+    if tau < ramp_up + cruise:
+        return peak * ramp_up / 2 + peak * (tau - ramp_up), 0.0, ramp_up + cruise + ramp_down
+    late = tau - ramp_up - cruise
+    return peak * ramp_up / 2 + peak * cruise + peak * late - dec * late**2 / 2, -dec, ramp_up + cruise + ramp_down
+
+
+def test_a_crane_on_the_papers_speed_profile_fails_only_while_it_drops_faster_than_gravity(tmp_path):
+    """certified.law=trapezoid: the crane's 5 kg point moved 1 m down at 2 m/s, reaching it in 0.1 s
+    (20 m/s^2 down: the cables, which only pull up, cannot hold it) and stopping in 0.5 s, then
+    0.768 m up and sideways in the triangular profile. At instants drawn in every piece, the pose
+    and acceleration of the law written here hold (fail) by an LP written from the law wherever the
+    piece is proven inside (outside); the first 0.1 s are proven infeasible from the start, the
+    cruise and the stop proven feasible."""
+    from scipy.optimize import linprog
+
+    run = tmp_path / "run"
+    points = np.array([[0, 0, 2], [0, 0, 1], [0.5, 0.3, 1.5]], dtype=float)
+    done = command(tmp_path, "pipeline", *CRANE, "tension=feasible", "analysis=certified", "certified.depth=12",
+                   "certified.path=[[0,0,2],[0,0,1],[0.5,0.3,1.5]]", "certified.law=trapezoid", "certified.v_max=2",
+                   "certified.t_acc=0.1", "certified.t_dec=0.5", f"hydra.run.dir={run}")
+    assert done.returncode == 0, done.stderr[-2000:]
+    summary = pd.read_parquet(run / "summary.parquet").iloc[0]
+    pieces = pd.read_parquet(run / "segments.parquet")
+    anchors = np.array([[-1, -1, 3], [1, -1, 3], [1, 1, 3], [-1, 1, 3]], dtype=float)
+    lengths = np.linalg.norm(np.diff(points, axis=0), axis=1)
+    totals = [_trapezoid(length, 2, 0.1, 0.5, 0.0)[2] for length in lengths]
+    assert summary["duration_s"] == pytest.approx(sum(totals), rel=1e-12)
+    assert np.isclose(pieces.to_s.max(), sum(totals)) and np.allclose(pieces.from_s.to_numpy()[1:], pieces.to_s.to_numpy()[:-1])
+    assert np.isclose(pieces.length_m.sum(), summary["path_m"])
+
+    def holds(segment: int, tau: float) -> bool:
+        covered, acceleration, _ = _trapezoid(lengths[segment], 2, 0.1, 0.5, tau)
+        along = (points[segment + 1] - points[segment]) / lengths[segment]
+        point = points[segment] + covered * along
+        units = (anchors - point) / np.linalg.norm(anchors - point, axis=1)[:, None]
+        needed = 5.0 * acceleration * along - 5.0 * np.array([0, 0, -9.81]) - np.array([3.0, 0, 0])
+        return linprog(np.zeros(4), A_eq=units.T, b_eq=needed, bounds=[(1, 40)] * 4, method="highs").status == 0
+
+    rng = np.random.default_rng(5)
+    checked = {"inside": 0, "outside": 0}
+    for row in pieces.itertuples():
+        if row.verdict == "undecided":
+            continue
+        for t in rng.uniform(row.t0, row.t1, 3):
+            assert holds(row.segment - 1, t * totals[row.segment - 1]) == (row.verdict == "inside"), (row, t)
+            checked[row.verdict] += 1
+    assert checked["inside"] > 20 and checked["outside"] > 5
+    assert summary["first_outside_s"] == 0.0 and not summary["path_certified"]
+    first = pieces[pieces.segment == 1]
+    assert (first.loc[first.to_s <= 0.099, "verdict"] == "outside").all()
+    assert (first.loc[first.from_s >= 0.101, "verdict"] == "inside").all()
 
 
 # -- the interference criteria proven on boxes ----------------------------------------------------

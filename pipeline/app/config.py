@@ -551,14 +551,19 @@ class CertifiedConfig:
     """``analysis=certified`` (``pipeline.workspace.paving``): branch and prune from the robot's
     search box, at most ``depth`` levels of bisection and ``time`` seconds; with ``path`` (way-points
     [[x, y, z], ...], m) the straight segments between them instead, each piece proven feasible at
-    every point or at none: at rest, or with ``times`` (s per segment: one value, or one per
-    segment; ``pipeline.app.paths.durations``) moving rest to rest along each segment by the quintic
-    law of ``analysis=trajectory``, each piece with the accelerations it has."""
+    every point or at none: at rest, or moving rest to rest along each segment, each piece with the
+    accelerations it has, by ``law``: ``quintic`` with ``times`` (s per segment: one value, or one
+    per segment), or ``trapezoid`` with ``v_max`` (m/s), ``t_acc`` and ``t_dec`` (s), the laws of
+    ``analysis=trajectory`` (``pipeline.app.paths.certified_motion``)."""
 
     depth: int = rule(lambda value: None if 0 <= value <= MAX_DEPTH else f"must be in [0, {MAX_DEPTH}]")
     time: float = rule(positive)
     path: Any = rule(lambda value: _path_error(value))
     times: Any = MISSING
+    law: str = rule(lambda value: None if value in ("quintic", "trapezoid") else "must be quintic or trapezoid")
+    v_max: Optional[float] = rule(positive)
+    t_acc: Optional[float] = rule(positive)
+    t_dec: Optional[float] = rule(positive)
 
 
 def _path_error(value) -> str | None:

@@ -32,7 +32,7 @@ from pipeline.app.config import MAX_ACCELERATION
 from pipeline.app.xmlfiles import parse_xml
 from pipeline.errors import ConfigError
 from pipeline.model.geometry import CableRobot
-from pipeline.model.path import Path, Samples, durations, hermite, rest_to_rest, spline, trapezoidal
+from pipeline.model.path import Path, Samples, StraightMotion, durations, hermite, rest_to_rest, spline, trapezoidal
 
 DEFAULT_DT = 0.01  # s between samples, when neither trajectory.dt nor a CASPR file gives one
 MAX_WAY_POINTS = 1_000_000
@@ -306,3 +306,33 @@ def _shown(value):
 
 def _number(value) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def certified_motion(cfg: DictConfig, points: np.ndarray) -> StraightMotion | None:
+    """``certified.path``'s motion (``analysis=certified``): None at rest (law quintic without
+    ``times``), else the law of ``certified.law``; ConfigError naming the key for a key of the
+    other law, one missing, or an acceleration past MAX_ACCELERATION."""
+    node = cfg.certified
+    given = [key for key in SPEEDS if node[key] is not None]
+    if node.law == "quintic":
+        if given:
+            raise ConfigError(f"certified.{given[0]}: a trapezoid's speed profile; set certified.law=trapezoid "
+                              "(the quintic law takes certified.times)")
+        if node.times is None:
+            return None
+        motion = StraightMotion.quintic(points, durations(_shown(node.times), len(points) - 1, "certified.times"))
+        key = "certified.times"
+    else:
+        if node.times is not None:
+            raise ConfigError("certified.times: law trapezoid times each segment by certified.v_max, t_acc and t_dec; "
+                              "leave certified.times null")
+        missing = [key for key in SPEEDS if node[key] is None]
+        if missing:
+            raise ConfigError(f"certified.{missing[0]}: certified.law=trapezoid needs v_max (m/s), t_acc and t_dec (s)")
+        motion = StraightMotion.trapezoid(points, float(node.v_max), float(node.t_acc), float(node.t_dec))
+        key = "certified.t_acc"
+    peaks = motion.peaks()
+    if not peaks.max() <= MAX_ACCELERATION:
+        raise ConfigError(f"{key}: segment {int(np.argmax(peaks)) + 1} accelerates at {peaks.max():.3g} m/s^2, "
+                          f"more than {MAX_ACCELERATION:g}: a unit typed wrong, or times too short")
+    return motion

@@ -34,7 +34,7 @@ from typing import Callable
 import numpy as np
 from omegaconf import DictConfig, ListConfig, OmegaConf
 
-from pipeline.app.paths import path_samples
+from pipeline.app.paths import certified_motion, path_samples
 from pipeline.app.config import (
     MAX_ACCELERATION, MAX_FORCE, Config, Cpr8Config, Irpm6Config, PointsConfig, check_values, masked, merged, shown,
     unknown_keys, vector,
@@ -48,7 +48,6 @@ from pipeline.model.geometry import FREEDOMS, CableRobot, eq9_angles
 from pipeline.model.pulleys import Pulleys
 from pipeline.model.sagging import MAX_CABLES, SaggingSpec
 from pipeline.model.motion import acceleration_set, cartesian_cube, extreme_points, velocity_set
-from pipeline.model.path import QUINTIC_PEAK, durations
 from pipeline.model.robots import PointsRobot, cpr8, irpm6, point_list
 from pipeline.model.statics import PathLimits, PathSpec, PayloadSpec, StaticLimits, StaticsSpec
 from pipeline.model.tensions import TensionSpec
@@ -305,6 +304,7 @@ def _certified(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
     """The statics' spec and limits over boxes of positions (``pipeline.workspace.paving``):
     refuses in one line what the certificates cannot bound yet or a paving does not write."""
     spec, limits = _statics(cfg, catalogue, robot)
+    moving = cfg.certified.times is not None or cfg.certified.law != "quintic"
     refused = (
         (spec.tension.model != "feasible", "tension.model=pinv", "the certificates are of cables that pull; "
          "use tension=feasible"),
@@ -323,28 +323,24 @@ def _certified(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
         (cfg.output.metrics, "output.metrics=true", "the metrics are per pose, of analysis=statics"),
         (cfg.output.cables, "output.cables=true", "the cables' forces are per pose, of analysis=statics"),
         (name_of(cfg.compute.kernel) == "fused", "compute.kernel=fused", "the certificates have one kernel; use auto"),
-        (spec.moves and cfg.certified.times is not None, "platform_motion",
-         "a moving path's accelerations are its own (certified.times); leave platform_motion at rest"),
-        ((spec.moves or cfg.certified.times is not None) and (cfg.robust.mass > 0 or cfg.robust.com > 0),
+        (spec.moves and moving, "platform_motion",
+         "a moving path's accelerations are its own (certified.times or law); leave platform_motion at rest"),
+        ((spec.moves or moving) and (cfg.robust.mass > 0 or cfg.robust.com > 0),
          "robust.mass, robust.com", "the moving platform's inertia changes with its mass and centre of mass; give them "
-         "without platform_motion or certified.times"),
+         "without platform_motion or a moving path"),
         (cfg.robust.mass > cfg.robot.platform.mass + cfg.load.mass, f"robust.mass={cfg.robust.mass}",
          "a tolerance on the mass larger than the mass itself"),
     )
     for asked, key, why in refused:
         if asked:
             raise ConfigError(f"{key}: analysis=certified: {why}")
-    if cfg.certified.times is not None and cfg.certified.path is None:
-        raise ConfigError("certified.times: the durations of certified.path's segments; give the path's way-points")
+    speeds = [key for key in ("times", "v_max", "t_acc", "t_dec") if cfg.certified[key] is not None]
+    if (speeds or moving) and cfg.certified.path is None:
+        key = f"certified.{speeds[0]}" if speeds else f"certified.law={cfg.certified.law}"
+        raise ConfigError(f"{key}: the motion along certified.path's segments; give the path's way-points")
     if cfg.certified.path is not None:
         points = np.asarray(OmegaConf.to_container(cfg.certified.path), dtype=float)
-        if cfg.certified.times is not None:  # the quintic's peak acceleration: 10 / sqrt(3) of distance / time^2
-            times = durations(shown(cfg.certified.times), len(points) - 1, "certified.times")
-            with np.errstate(divide="ignore", over="ignore"):
-                peaks = QUINTIC_PEAK * np.linalg.norm(np.diff(points, axis=0), axis=1) / times ** 2
-            if not peaks.max() <= MAX_ACCELERATION:
-                raise ConfigError(f"certified.times: segment {int(np.argmax(peaks)) + 1} accelerates at {peaks.max():.3g} m/s^2, "
-                                  f"more than {MAX_ACCELERATION:g}: a unit typed wrong, or times too short")
+        certified_motion(cfg, points)
         flat = np.flatnonzero(robot.box_lo == robot.box_hi)  # a planar robot's plane
         off = np.flatnonzero((points[:, flat] != robot.box_lo[flat]).any(axis=1))
         if len(off):
@@ -357,7 +353,9 @@ def _certified(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
 def _paving_files(cfg: DictConfig, problem: WorkspaceProblem, grid: Grid | None, files, sweep_pays: bool) -> dict:
     from pipeline.workspace.paving import paving_files  # pandas: only this analysis needs it
 
-    return paving_files(cfg, problem, files)
+    path = cfg.certified.path
+    motion = None if path is None else certified_motion(cfg, np.asarray(OmegaConf.to_container(path), dtype=float))
+    return paving_files(cfg, problem, files, motion)
 
 
 @dataclass(frozen=True)

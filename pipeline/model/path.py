@@ -30,7 +30,7 @@ at least, so a segment shorter than the step is still checked where it accelerat
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import astuple, dataclass
 
 import numpy as np
 
@@ -197,6 +197,71 @@ def quintic_curvature_range(s0: np.ndarray, s1: np.ndarray) -> tuple[np.ndarray,
     points = np.stack([s0, s1, *(np.clip(turn, s0, s1) for turn in turns)])
     values = points * (6 * third + points * (12 * fourth + points * 20 * fifth))
     return values.min(axis=0) - 1e-12, values.max(axis=0) + 1e-12
+
+
+@dataclass(frozen=True)
+class StraightMotion:
+    """A rest-to-rest time law along the straight segments between way-points, for a certified
+    path in motion (``pipeline.workspace.paving.certify_path``): segment i lasts ``durations[i]`` s
+    and at t = tau / T_i in [0, 1] has covered :meth:`share` of its vector q_(i+1) - q_i, with an
+    acceleration that vector times a factor (1/s^2) within :meth:`acceleration_range` over an
+    interval of t. ``law``: ``quintic`` (:func:`rest_to_rest`) or ``trapezoid``
+    (:func:`trapezoid_phases` over each segment's length: ``phases`` (P, 7) its acc, dec, peak,
+    cruise, t1, t2 and total, ``lengths`` (P,) m)."""
+
+    law: str
+    durations: np.ndarray
+    lengths: np.ndarray
+    phases: np.ndarray | None = None
+
+    @classmethod
+    def quintic(cls, points: np.ndarray, durations: np.ndarray) -> "StraightMotion":
+        lengths = np.linalg.norm(np.diff(np.asarray(points, float), axis=0), axis=1)
+        return cls("quintic", np.asarray(durations, float), lengths)
+
+    @classmethod
+    def trapezoid(cls, points: np.ndarray, v_max: float, t_acc: float, t_dec: float) -> "StraightMotion":
+        lengths = np.linalg.norm(np.diff(np.asarray(points, float), axis=0), axis=1)
+        phases = np.array([astuple(trapezoid_phases(float(length), v_max, t_acc, t_dec)) for length in lengths])
+        return cls("trapezoid", phases[:, 6].copy(), lengths, phases)
+
+    def peaks(self) -> np.ndarray:
+        """(P,) each segment's largest acceleration (m/s^2)."""
+        if self.phases is None:
+            with np.errstate(divide="ignore", over="ignore"):
+                return QUINTIC_PEAK * self.lengths / self.durations ** 2
+        return np.maximum(self.phases[:, 0], self.phases[:, 1])
+
+    def share(self, segment: np.ndarray, t: np.ndarray) -> np.ndarray:
+        """The share of segment ``segment`` covered at ``t`` (each in [0, 1]; increasing in t)."""
+        if self.phases is None:
+            return quintic_share(t)
+        acc, dec, peak, cruise, t1, t2, _ = self.phases[segment].T
+        tau = t * self.durations[segment]
+        covered = np.where(tau < t1, acc * tau ** 2 / 2, np.where(
+            tau < t2, peak * t1 / 2 + peak * (tau - t1),
+            peak * t1 / 2 + peak * cruise + peak * (tau - t2) - dec * (tau - t2) ** 2 / 2))
+        return np.clip(covered / self.lengths[segment], 0.0, 1.0)
+
+    def acceleration_range(self, segment: np.ndarray, t0: np.ndarray, t1: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The least and largest factor of the segment's vector that its acceleration takes over
+        [t0, t1] (1/s^2): the quintic's h''(t) / T^2 (:func:`quintic_curvature_range`); the
+        trapezoid's acc / L, 0 (cruising) and -dec / L, those of every phase the interval meets
+        (within 1e-12 of its time at a phase's end, for the rounding of the phases' times), each
+        widened by 1e-12 of itself."""
+        if self.phases is None:
+            low, high = quintic_curvature_range(t0, t1)
+            return low / self.durations[segment] ** 2, high / self.durations[segment] ** 2
+        acc, dec, _, cruise, end_acc, end_cruise, total = self.phases[segment].T
+        tolerance = 1e-12 * total
+        start, end = t0 * total, t1 * total
+        values = np.stack([acc, np.zeros_like(acc), -dec]) / self.lengths[segment]
+        meets = np.stack([start <= end_acc + tolerance,
+                          (cruise > 0) & (end >= end_acc - tolerance) & (start <= end_cruise + tolerance),
+                          end >= end_cruise - tolerance])
+        low = np.where(meets, values, np.inf).min(axis=0)
+        high = np.where(meets, values, -np.inf).max(axis=0)
+        return low - 1e-12 * np.abs(low), high + 1e-12 * np.abs(high)
 
 
 def spline(points: np.ndarray, durations: np.ndarray) -> Path:

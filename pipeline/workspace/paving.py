@@ -30,7 +30,7 @@ from omegaconf import DictConfig, OmegaConf
 from pipeline.model import certificates
 from pipeline.model.certificates import INSIDE, OUTSIDE, UNDECIDED, WRENCH_RTOL, BoxStatics
 from pipeline.model.intervals import Interval, rotation_enclosure
-from pipeline.model.path import durations as path_durations, quintic_curvature_range, quintic_share
+from pipeline.model.path import StraightMotion
 from pipeline.model.tensions import Family, capacity_margins, reachability
 from pipeline.workspace.compute import described_job, name_of
 from pipeline.workspace.criteria import REGISTRY
@@ -194,43 +194,45 @@ def pave(problem: WorkspaceProblem, depth: int, seconds: float, compute: DictCon
 
 def certify_path(problem: WorkspaceProblem, points: np.ndarray, depth: int, seconds: float, compute: DictConfig,
                  tolerances: Tolerances = NOMINAL,
-                 durations: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict]:
+                 motion: StraightMotion | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict]:
     """The straight segments between the way-points ``points`` (P, 3) in pieces, each proven
     feasible at every point or at none through the box that holds it (its ends' bounding box,
     widened by a few ulps so that it holds the exact segment, not only the rounded ends), an
     undecided piece halved again: the pieces (N, 3) [segment, t0, t1], their verdicts, levels and
-    how it ended. At rest (``durations`` None) t is the share of the segment's length; with
-    ``durations`` (P - 1,) s the platform moves rest to rest along each segment in its duration
-    (``pipeline.model.path.rest_to_rest``), t = tau / T is the share of its duration, and each piece
-    is proven with every acceleration it has there (:func:`moving_wrenches` over the range of
-    h''(t) / T^2 along the segment)."""
+    how it ended. At rest (``motion`` None) t is the share of the segment's length; with a
+    ``motion`` (``pipeline.model.path.StraightMotion``: quintic or trapezoid) the platform moves rest
+    to rest along each segment, t = tau / T is the share of its duration, and each piece is proven
+    with every acceleration it has there (:func:`moving_wrenches` over the motion's range of
+    accelerations along the segment)."""
     starts, ends = points[:-1], points[1:]
-    shape = (lambda t: t) if durations is None else quintic_share
+
+    def shape(segment, t):
+        return t if motion is None else motion.share(segment, t)
 
     def bounds(items):
         segment = items[:, 0].astype(int)
         delta = ends[segment] - starts[segment]
-        first = starts[segment] + shape(items[:, 1:2]) * delta
-        last = starts[segment] + shape(items[:, 2:3]) * delta
-        reach = np.maximum(np.abs(first), np.abs(last))  # h(t) and t * delta: a few ulps of delta (h has five roundings)
-        slack = np.finfo(float).eps * (8 * np.maximum(1.0, reach) if durations is None else 16 * (1.0 + reach + np.abs(delta)))
+        first = starts[segment] + shape(segment, items[:, 1])[:, None] * delta
+        last = starts[segment] + shape(segment, items[:, 2])[:, None] * delta
+        reach = np.maximum(np.abs(first), np.abs(last))  # the share and t * delta: a few ulps of delta (a dozen roundings)
+        slack = np.finfo(float).eps * (8 * np.maximum(1.0, reach) if motion is None else 16 * (1.0 + reach + np.abs(delta)))
         box = np.concatenate([np.minimum(first, last) - slack, np.maximum(first, last) + slack], axis=1)
-        if durations is None:
+        if motion is None:
             return box
-        low, high = quintic_curvature_range(items[:, 1], items[:, 2])
-        scale = delta / durations[segment, None] ** 2
-        return np.concatenate([box, low[:, None] * scale, high[:, None] * scale], axis=1)
+        low, high = motion.acceleration_range(segment, items[:, 1], items[:, 2])
+        ends_of = np.stack([low[:, None] * delta, high[:, None] * delta], axis=1)  # a factor of delta: the segment's ends
+        return np.concatenate([box, ends_of.reshape(len(items), 6)], axis=1)
 
     def halves(items):
         middle = items[:, 1] + (items[:, 2] - items[:, 1]) / 2
         return np.concatenate([np.column_stack([items[:, 0], items[:, 1], middle]),
                                np.column_stack([items[:, 0], middle, items[:, 2]])])
 
-    spans = np.linalg.norm(ends - starts, axis=1) if durations is None else durations
+    spans = np.linalg.norm(ends - starts, axis=1) if motion is None else motion.durations
     pieces = np.column_stack([np.arange(len(starts)), np.zeros(len(starts)), np.ones(len(starts))]).astype(float)
     return _branch_and_prune(problem, tolerances, pieces, bounds, halves,
                              lambda items: (items[:, 2] - items[:, 1]) * spans[items[:, 0].astype(int)],
-                             depth, seconds, compute, "of the path's length" if durations is None else "of the path's time")
+                             depth, seconds, compute, "of the path's length" if motion is None else "of the path's time")
 
 
 def _branch_and_prune(problem: WorkspaceProblem, tolerances: Tolerances, items: np.ndarray, bounds, split, size,
@@ -293,12 +295,12 @@ def _bisected(boxes: np.ndarray, axes: np.ndarray) -> np.ndarray:
     return np.concatenate([lower, upper])
 
 
-def paving_files(cfg: DictConfig, problem: WorkspaceProblem, files) -> dict:
+def paving_files(cfg: DictConfig, problem: WorkspaceProblem, files, motion: StraightMotion | None = None) -> dict:
     """A certified job's boxes.parquet and summary (module doc), or with ``certified.path`` its
-    segments.parquet and summary (:func:`path_files`)."""
+    segments.parquet and summary (:func:`path_files`; ``motion``: the path's, None at rest)."""
     tolerances = Tolerances(**{key: float(value) for key, value in cfg.robust.items()})
     if cfg.certified.path is not None:
-        return path_files(cfg, problem, files, tolerances)
+        return path_files(cfg, problem, files, tolerances, motion)
     paving, ended = pave(problem, int(cfg.certified.depth), float(cfg.certified.time), cfg.compute, tolerances)
     robot = problem.robot
     axes = np.flatnonzero(robot.box_hi > robot.box_lo)
@@ -349,31 +351,31 @@ def _lost(problem: WorkspaceProblem, tolerances: Tolerances, paving: Paving, vol
     return {**row, "columns": {"lost_to": pd.Categorical(lost_to, categories=list(by_error.index)), "lost_at": lost_at}}
 
 
-def path_files(cfg: DictConfig, problem: WorkspaceProblem, files, tolerances: Tolerances) -> dict:
+def path_files(cfg: DictConfig, problem: WorkspaceProblem, files, tolerances: Tolerances,
+               motion: StraightMotion | None) -> dict:
     """A certified path's segments.parquet (one row per piece: its segment, its parameters t0, t1
     and ends, where along the path it starts, its length, verdict and level) and summary: the path's
     length, the shares of it proven feasible, infeasible and undecided, ``path_certified`` (every
     point proven) and ``first_outside_m`` (where along the path the first piece proven infeasible
     starts; NaN when none)."""
     points = np.asarray(OmegaConf.to_container(cfg.certified.path), dtype=float)
-    times = cfg.certified.times
-    durations = None if times is None else path_durations(
-        OmegaConf.to_container(times) if OmegaConf.is_config(times) else times, len(points) - 1, "certified.times")
     pieces, verdict, level, ended = certify_path(problem, points, int(cfg.certified.depth), float(cfg.certified.time),
-                                                 cfg.compute, tolerances, durations)
+                                                 cfg.compute, tolerances, motion)
     order = np.lexsort((pieces[:, 1], pieces[:, 0]))  # along the path
     pieces, verdict, level = pieces[order], verdict[order], level[order]
     segment = pieces[:, 0].astype(int)
     starts, ends = points[:-1], points[1:]
     lengths = np.linalg.norm(ends - starts, axis=1)
     before = np.concatenate([[0.0], np.cumsum(lengths)])[segment]
-    share = (lambda t: t) if durations is None else quintic_share  # of the segment's length at t
-    first = starts[segment] + share(pieces[:, 1:2]) * (ends[segment] - starts[segment])
-    last = starts[segment] + share(pieces[:, 2:3]) * (ends[segment] - starts[segment])
-    length = (share(pieces[:, 2]) - share(pieces[:, 1])) * lengths[segment]
-    from_m = before + share(pieces[:, 1]) * lengths[segment]
+    begin, end = (pieces[:, 1], pieces[:, 2]) if motion is None else (motion.share(segment, pieces[:, 1]),
+                                                                      motion.share(segment, pieces[:, 2]))
+    first = starts[segment] + begin[:, None] * (ends[segment] - starts[segment])  # shares of the segment's length
+    last = starts[segment] + end[:, None] * (ends[segment] - starts[segment])
+    length = (end - begin) * lengths[segment]
+    from_m = before + begin * lengths[segment]
     timing = {}
-    if durations is not None:  # when the platform passes each piece
+    if motion is not None:  # when the platform passes each piece
+        durations = motion.durations
         earlier = np.concatenate([[0.0], np.cumsum(durations)])[segment]
         timing = {"from_s": earlier + pieces[:, 1] * durations[segment], "to_s": earlier + pieces[:, 2] * durations[segment]}
     if cfg.output.points:
@@ -394,10 +396,10 @@ def path_files(cfg: DictConfig, problem: WorkspaceProblem, files, tolerances: To
         path_certified=bool((verdict == INSIDE).all()),
         first_outside_m=float(from_m[outside[0]]) if len(outside) else float("nan"), **ended,
     )
-    if durations is not None:
+    if motion is not None:
         row.update(duration_s=float(durations.sum()),
                    first_outside_s=float(timing["from_s"][outside[0]]) if len(outside) else float("nan"))
-    how = "at rest" if durations is None else f"moving ({row['duration_s']:.4g} s)"
+    how = "at rest" if motion is None else f"moving ({motion.law}, {row['duration_s']:.4g} s)"
     log.info("%s certified path: %.4g of %.4g m proven feasible %s (%.2f%%), %.4g m infeasible%s, %.4g m undecided; "
              "%d pieces in %.1f s (%s)", problem.robot.name, shares["inside"], total, how, row["inside_pct"], shares["outside"],
              f" from {row['first_outside_m']:.4g} m" if len(outside) else "", shares["undecided"], len(verdict),
