@@ -51,7 +51,7 @@ REFUSED = {**{(analysis, key): key for analysis in ("lines", "trajectory") for k
            **{(analysis, "catenary"): "robot.catenary" for analysis in ANALYSES if analysis != "statics"},
            # what a paving cannot prove yet (analysis=certified: pipeline/app/problem.py, Criterion.certified)
            **{("certified", key): named for key, named in (
-               ("platform.shape", "cable_platform"), ("obstacles", "obstacles: analysis=certified: a box obstacle"),
+               ("obstacles", "obstacles: analysis=certified: a box obstacle"),
                ("workspace.home", "workspace.home"), ("output.cables", "output.cables"), ("output.mesh", "output.mesh"),
                ("output.metrics", "output.metrics"), ("pulleys", "robot.pulleys"), ("stiffness", "stiffness"),
                ("sag", "sag"), ("cable rules", "cable_contraction"))}}

@@ -328,6 +328,9 @@ def _certified(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
         ((spec.moves or moving) and (cfg.robust.mass > 0 or cfg.robust.com > 0),
          "robust.mass, robust.com", "the moving platform's inertia changes with its mass and centre of mass; give them "
          "without platform_motion or a moving path"),
+        (cfg.robust.attachments > 0 and robot.platform_shape is not None, "robust.attachments",
+         "an attachment built off its place leaves the platform shape's surface, which cable_platform reads: "
+         "not certified yet; use robust.anchors, or no robot.platform.shape"),
         (cfg.robust.mass > cfg.robot.platform.mass + cfg.load.mass, f"robust.mass={cfg.robust.mass}",
          "a tolerance on the mass larger than the mass itself"),
     )

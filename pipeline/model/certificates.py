@@ -54,7 +54,8 @@ class BoxStatics:
     enclosure; ``lower`` and ``upper`` (m,) the tension limits (N, upper may be inf); ``l_max``
     (m, or inf) and ``shortest`` (m): a cable must be between them; ``anchors`` (m, 3) and ``body``
     (k, 3), the enclosures of a_i and of the platform's vertices R v_k (its shape's, else its
-    attachments' hull): what the interference criteria's bounds read (``pipeline.model.clearance_bounds``)."""
+    attachments' hull), ``normals`` (f, 3) of its shape's faces' normals R n_f (none without a
+    shape): what the interference criteria's bounds read (``pipeline.model.clearance_bounds``)."""
 
     offsets: Interval
     arms: Interval
@@ -66,6 +67,7 @@ class BoxStatics:
     shortest: float
     anchors: Interval
     body: Interval
+    normals: Interval
 
 
 @dataclass(frozen=True)

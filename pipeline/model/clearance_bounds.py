@@ -21,6 +21,13 @@ the box's centre (the closest points of two cables) need no rigour, the interval
   its enclosure over B is exact up to rounding. Inside when every cable keeps r_i and the platform
   0; outside when one body's upper bound is below -atol times the robot's extent (the exact
   test's tolerance).
+- **A cable out of the platform's body** (:func:`face_verdicts`): cable i is clear of the convex
+  body exactly when n . t >= 0 for some face holding its attachment, n = R n_f the face's normal
+  and t = a_i - p - R b_i the cable's vector from the attachment (``criteria.interference
+  .cable_platform``). n . t is affine in p: its enclosure over B is exact up to rounding. Inside
+  when every cable has such a face over all of B (one face for the whole box: a sufficient
+  condition); outside when some cable has n . t < -atol |t| at every position for every face
+  holding it (the exact test's margin is that sine).
 """
 
 from __future__ import annotations
@@ -97,4 +104,24 @@ def plane_verdicts(anchors: Interval, arms: Interval, body: Interval, lo: np.nda
         fixed, ends, platform = clearances(*(nominal or (anchors, arms, body)))
         cables = up(np.minimum(ends.hi, fixed.hi) - radii)  # upper bound
         outside |= np.minimum(cables.min(axis=1), platform.hi.min(axis=1)) < -allowance
+    return np.where(inside, INSIDE, np.where(outside, OUTSIDE, UNDECIDED))
+
+
+def face_verdicts(anchors: Interval, arms: Interval, normals: Interval, faces: np.ndarray, lo: np.ndarray,
+                  hi: np.ndarray, atol: float, nominal: tuple[Interval, Interval, Interval] | None = None) -> np.ndarray:
+    """(N,) whether every cable leaves the platform's body at every position of each box (module
+    doc): ``anchors``, ``arms`` (m, 3) the enclosures of a_i and R b_i, ``normals`` (f, 3) of the
+    faces' R n_f, ``faces`` (m, f) which faces hold each attachment; INSIDE, OUTSIDE (some cable
+    into the body at every position, by ``nominal``'s enclosures when given) or UNDECIDED."""
+    box = Interval(lo, hi)[:, None, :]  # (N, 1, 3)
+
+    def sides(a: Interval, w: Interval, n: Interval) -> tuple[Interval, Interval]:
+        toward = a[None] - box - w[None]  # (N, m, 3): t = a_i - p - R b_i
+        return (toward[:, :, None, :] * n[None, None]).sum(axis=-1), toward  # n_f . t, (N, m, f)
+
+    side, _ = sides(anchors, arms, normals)
+    inside = (np.where(faces[None], side.lo, -np.inf).max(axis=2) >= 0).all(axis=1)
+    side, toward = sides(*(nominal or (anchors, arms, normals)))
+    reach = up(atol * _norm_upper(toward))  # atol |t| (N, m), rounded up
+    outside = (np.where(faces[None], side.hi, -np.inf).max(axis=2) < -reach).any(axis=1)
     return np.where(inside, INSIDE, np.where(outside, OUTSIDE, UNDECIDED))

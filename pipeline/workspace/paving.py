@@ -86,8 +86,11 @@ def box_statics(problem: WorkspaceProblem, angles: np.ndarray, tolerances: Toler
     hull = robot.platform_shape is None  # the attachments' hull: its vertices move with them
     vertices = within(robot.platform_body.vertices, tolerances.attachments if hull else 0.0)
     body = (rotation[None] * vertices[:, None, :]).sum(axis=-1)  # R v_k, (k, 3)
+    faces = np.zeros((0, 3)) if robot.platform_shape is None else robot.platform_shape.normals
+    normals = (rotation[None] * Interval.point(faces)[:, None, :]).sum(axis=-1)  # R n_f, (f, 3)
     return BoxStatics(offsets, arms, tuple(robot.dofs), Interval(wrenches.min(axis=0) - radius, wrenches.max(axis=0) + radius),
-                      lower, upper, np.inf if robot.l_max is None else float(robot.l_max), robot.shortest_cable, anchors, body)
+                      lower, upper, np.inf if robot.l_max is None else float(robot.l_max), robot.shortest_cable, anchors, body,
+                      normals)
 
 
 def _radius(spec, tolerances: Tolerances, wrenches: np.ndarray) -> float:

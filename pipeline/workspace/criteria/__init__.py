@@ -107,7 +107,8 @@ for criterion in (
     Criterion("cable_platform", interference.cable_platform, GEOMETRY, None, "#332288",
               "attachments on the platform's outer corners or edges, a platform shape that holds them on its "
               "surface (robot.platform.shape), or a smaller box",
-              lambda analysis, spec, robot: robot.platform_shape is not None),
+              lambda analysis, spec, robot: robot.platform_shape is not None, certified=True,
+              boxes=interference.cable_platform_boxes),
     Criterion("cable_obstacle", interference.cable_obstacle, GEOMETRY, None, "#994F00",
               "anchors that route the cables around the obstacles, a smaller box, or obstacles moved",
               lambda analysis, spec, robot: bool(robot.obstacles), certified=True,

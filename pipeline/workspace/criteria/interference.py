@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from pipeline.model.clearance import segment_distance
-from pipeline.model.clearance_bounds import pair_verdicts, plane_verdicts
+from pipeline.model.clearance_bounds import face_verdicts, pair_verdicts, plane_verdicts
 
 
 def pair_clearances(state) -> np.ndarray:
@@ -86,6 +86,12 @@ def cable_cable_boxes(robot, within, nominal, lo, hi, centre, atol) -> np.ndarra
     i, j = robot.cable_pairs
     return pair_verdicts(within.anchors, within.arms, lo, hi, centre, (i, j), robot.cable_radii[i] + robot.cable_radii[j],
                          atol, collide=(nominal.anchors, nominal.arms))
+
+
+def cable_platform_boxes(robot, within, nominal, lo, hi, centre, atol) -> np.ndarray:
+    """:func:`cable_platform` proven on boxes of positions (``clearance_bounds.face_verdicts``)."""
+    return face_verdicts(within.anchors, within.arms, within.normals, robot.attachment_faces, lo, hi, atol,
+                         nominal=(nominal.anchors, nominal.arms, nominal.normals))
 
 
 def cable_obstacle_boxes(robot, within, nominal, lo, hi, centre, atol) -> np.ndarray:
