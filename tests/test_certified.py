@@ -721,6 +721,33 @@ def _trapezoid(distance: float, v_max: float, t_acc: float, t_dec: float, tau: f
     return peak * ramp_up / 2 + peak * cruise + peak * late - dec * late**2 / 2, -dec, ramp_up + cruise + ramp_down
 
 
+@pytest.mark.parametrize("distance", [1.0, 0.05])  # cruising at v_max; too short for it: the triangle
+def test_the_trapezoid_of_a_certified_path_against_its_definition(distance):
+    """StraightMotion's trapezoid against the profile written here: the share covered at 2 001
+    instants, and each of 1 000 pieces' accelerations (and 50 pieces across a phase's end, where
+    both values must be in the range) holding the law's at instants inside it."""
+    points = np.array([[0.0, 0.0, 1.0], [distance, 0.0, 1.0]])
+    motion = StraightMotion.trapezoid(points, 0.8, 0.2, 0.5)
+    total = _trapezoid(distance, 0.8, 0.2, 0.5, 0.0)[2]
+    assert motion.durations[0] == pytest.approx(total, rel=1e-14)
+    t = np.linspace(0.0, 1.0, 2001)
+    segment = np.zeros(len(t), dtype=int)
+    written = np.array([_trapezoid(distance, 0.8, 0.2, 0.5, u * total)[0] for u in t]) / distance
+    assert np.abs(motion.share(segment, t) - written).max() < 1e-14
+    edges = np.linspace(0.0, 1.0, 1001)
+    low, high = motion.acceleration_range(segment[:1000], edges[:-1], edges[1:])
+    rng = np.random.default_rng(2)
+    for k in range(1000):
+        for u in rng.uniform(edges[k], edges[k + 1], 4):
+            value = _trapezoid(distance, 0.8, 0.2, 0.5, u * total)[1] / distance
+            assert low[k] <= value <= high[k], (k, u, value, low[k], high[k])
+    ramp = min(0.8, math.sqrt(2 * distance * 4 * 1.6 / 5.6)) / 4  # the end of the first phase (s)
+    across = np.full(50, ramp / total) + np.linspace(-1e-3, -1e-9, 50), np.full(50, ramp / total) + np.linspace(1e-9, 1e-3, 50)
+    low, high = motion.acceleration_range(np.zeros(50, dtype=int), *across)
+    after = 0.0 if distance == 1.0 else -1.6 / distance  # cruising, or already braking in the triangle
+    assert (low <= min(4 / distance, after)).all() and (high >= 4 / distance).all()
+
+
 def test_a_crane_on_the_papers_speed_profile_fails_only_while_it_drops_faster_than_gravity(tmp_path):
     """certified.law=trapezoid: the crane's 5 kg point moved 1 m down at 2 m/s, reaching it in 0.1 s
     (20 m/s^2 down: the cables, which only pull up, cannot hold it) and stopping in 0.5 s, then
