@@ -415,6 +415,8 @@ def test_the_named_build_error_breaks_the_centre_of_its_box_and_no_smaller_one_d
     open_ = np.flatnonzero(robust.verdict == UNDECIDED)
     centres = robust.lo[open_] + (robust.hi[open_] - robust.lo[open_]) / 2
     names, shares = culprits(problem, tolerances, centres)
+    threads = culprits(problem, tolerances, centres, n_jobs=2)  # the errors on two threads: the same names
+    assert list(threads[0]) == list(names) and np.array_equal(threads[1], shares, equal_nan=True)
     is_named = np.array([found is not None for found in names], dtype=bool)
     named = np.flatnonzero(is_named)
     assert len(named), "no undecided box is lost to a single build error"

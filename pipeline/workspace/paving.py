@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import itertools
 import logging
+import os
 import time
 from dataclasses import dataclass, replace
 
@@ -310,7 +311,7 @@ def paving_files(cfg: DictConfig, problem: WorkspaceProblem, files, motion: Stra
     volumes = paving.volumes(axes)
     total = float(np.prod((robot.box_hi - robot.box_lo)[axes]))
     shares = {VERDICTS[v]: float(volumes[paving.verdict == v].sum()) for v in VERDICTS}
-    lost = {} if tolerances.nominal else _lost(problem, tolerances, paving, volumes)
+    lost = {} if tolerances.nominal else _lost(problem, tolerances, paving, volumes, cfg.compute.n_jobs)
     if cfg.output.points:
         table = pd.DataFrame({**{f"lo_{a}": paving.lo[:, k] for k, a in enumerate("xyz")},
                               **{f"hi_{a}": paving.hi[:, k] for k, a in enumerate("xyz")},
@@ -333,14 +334,18 @@ def paving_files(cfg: DictConfig, problem: WorkspaceProblem, files, motion: Stra
     return row
 
 
-def _lost(problem: WorkspaceProblem, tolerances: Tolerances, paving: Paving, volumes: np.ndarray) -> dict:
+def _lost(problem: WorkspaceProblem, tolerances: Tolerances, paving: Paving, volumes: np.ndarray, n_jobs: int) -> dict:
     """A robust paving's undecided boxes whose centre one build error breaks (``tolerances.culprits``):
     boxes.parquet's ``lost_to`` (the error's name) and ``lost_at`` (the share of its tolerance that
     breaks the centre), and the summary's ``lost_named_m3`` (their volume: certainly not in the
-    robust workspace), ``lost_to_top`` and ``lost_to_top_m3`` (the error that names most of it)."""
+    robust workspace), ``lost_to_top`` and ``lost_to_top_m3`` (the error that names most of it); the
+    errors tried on ``compute.n_jobs`` threads."""
+    from joblib import effective_n_jobs
+
     undecided = np.flatnonzero(paving.verdict == UNDECIDED)
     started = time.perf_counter()
-    names, at = culprits(problem, tolerances, centres(paving.lo[undecided], paving.hi[undecided]))
+    threads = min(effective_n_jobs(n_jobs), os.cpu_count() or 1)  # compute.n_jobs, at most this machine's cores
+    names, at = culprits(problem, tolerances, centres(paving.lo[undecided], paving.hi[undecided]), threads)
     lost_to, lost_at = np.full(len(volumes), None, dtype=object), np.full(len(volumes), np.nan)
     lost_to[undecided], lost_at[undecided] = names, at
     named = np.array([name is not None for name in lost_to])

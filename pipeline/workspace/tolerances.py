@@ -81,23 +81,36 @@ def errors(problem: WorkspaceProblem, tolerances: Tolerances) -> list[tuple[str,
     return found
 
 
-def culprits(problem: WorkspaceProblem, tolerances: Tolerances, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def culprits(problem: WorkspaceProblem, tolerances: Tolerances, points: np.ndarray,
+             n_jobs: int = 1) -> tuple[np.ndarray, np.ndarray]:
     """For each of ``points`` (n, 3): the name of the single build error within ``tolerances`` that
     breaks it at the smallest share of its tolerance, and that share (a robot with that error is a
     counterexample: the point fails there); None and NaN where the robot as designed fails at the
-    point or no single error breaks it (module doc)."""
+    point or no single error breaks it (module doc). The errors are tried on ``n_jobs`` threads
+    (the exact test's compiled loop and numpy release the GIL) and taken in their order, so that
+    of two errors breaking a point at the same share the first is named, whatever the threads."""
+    from joblib import Parallel, delayed
+
     names = np.full(len(points), None, dtype=object)
     shares = np.full(len(points), np.nan)
     held = np.flatnonzero(feasible_flags(problem, points)) if len(points) else np.zeros(0, dtype=int)
-    for name, at in errors(problem, tolerances):
-        rows = held[~feasible_flags(at(1.0), points[held])]
-        low, high = np.zeros(len(rows)), np.ones(len(rows))  # holds at low, breaks at high
-        for _ in range(BISECTIONS):
-            middle = (low + high) / 2
-            for share in np.unique(middle):  # one problem per share; every row of a step starts with the same
-                subset = np.flatnonzero(middle == share)
-                broken = ~feasible_flags(at(float(share)), points[rows[subset]])
-                high[subset[broken]], low[subset[~broken]] = share, share
+    tried = errors(problem, tolerances)
+    found = Parallel(n_jobs=n_jobs, backend="threading")(delayed(_breaking)(at, points, held) for _, at in tried)
+    for (name, _), (rows, high) in zip(tried, found):
         better = ~(shares[rows] <= high)  # NaN (not named yet) or a larger share
         names[rows[better]], shares[rows[better]] = name, high[better]
     return names, shares
+
+
+def _breaking(at: Callable[[float], WorkspaceProblem], points: np.ndarray, held: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The rows of ``held`` whose point one error (``at``: the problem at a share of it) breaks at
+    its whole tolerance, and the share that breaks each, bisected to 1/2^BISECTIONS."""
+    rows = held[~feasible_flags(at(1.0), points[held])]
+    low, high = np.zeros(len(rows)), np.ones(len(rows))  # holds at low, breaks at high
+    for _ in range(BISECTIONS):
+        middle = (low + high) / 2
+        for share in np.unique(middle):  # one problem per share; every row of a step starts with the same
+            subset = np.flatnonzero(middle == share)
+            broken = ~feasible_flags(at(float(share)), points[rows[subset]])
+            high[subset[broken]], low[subset[~broken]] = share, share
+    return rows, high
