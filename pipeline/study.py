@@ -616,7 +616,7 @@ def _layout_plan(study: StudySpec, extra: list[str], out: Path, launcher: str) -
                           "(analysis=statics or cpr_wwa)")
     from pipeline.app.problem import build_grid
 
-    check_robot(study.layout, job.problem, build_grid(job.cfg, job.problem.robot).cell_volume)
+    check_robot(study.layout, job.problem, build_grid(job.cfg, job.problem.robot))
     return planned
 
 

@@ -253,7 +253,7 @@ def test_a_search_trading_workspace_for_frame(make_cfg, catalogue):
     assert ((met["tension_factor"] > 0) & (met["tension_factor"] <= 1)).all()
     cpr8, cpr8_grid = build_problem(make_cfg(), catalogue)  # CPR-WWA: a platform in motion, J's pseudo-inverse
     with pytest.raises(ConfigError, match="tension_factor is of a static pose's structure matrix"):
-        check_robot(spec, cpr8, cpr8_grid.cell_volume)
+        check_robot(spec, cpr8, cpr8_grid)
 
 
 @pytest.mark.parametrize("fields, message", [
@@ -362,6 +362,8 @@ def test_a_payload_study_counts_the_payload_at_load_com_on_top_of_load_mass(tmp_
      "payload_kg is the largest payload the required box holds; give layout.required"),
     ({"layout": {"anchors": {"lo": [-1, -1, 0], "hi": [1, 1, 0]}, "objectives": ["tension_factor"]}},
      "tension_factor is the least over the required box; give layout.required"),
+    ({"layout": {**STUDY["layout"], "objectives": ["payload_kg"], "required": {"lo": [0.01, 0.01, 0], "hi": [0.02, 0.02, 0]}}},
+     "layout.required: the box [0.01, 0.01, 0.0]..[0.02, 0.02, 0.0] holds no pose of the grid"),
     ({"layout": {"anchors": {"lo": [-1, -1, 0], "hi": [1, 1, 0]}, "objectives": ["feasible_pct", "frame_m3"]}},
      "frame_m3 is the anchors' bounding volume"),
     ({"overrides": [*STUDY["overrides"], "platform_motion.acceleration=[[0.5,0,0,0,0,0]]"],
@@ -451,8 +453,7 @@ def test_a_search_on_the_frame_keeps_every_anchor_on_it(make_cfg, catalogue, on,
 def test_the_best_layouts_required_box_is_proven_where_the_certificates_speak(make_cfg, catalogue):
     """The required box of the best layout paved as analysis=certified paves a search box: a box
     well inside the workspace of the square frame mostly proven; a robot with a criterion the
-    certificates cannot bound (a platform's body the cables must not enter) says so instead of a
-    number."""
+    certificates cannot bound (the sag of heavy cables) says so instead of a number."""
     problem, _ = build_problem(make_cfg(*PLANAR), catalogue)
     compute = make_cfg(*PLANAR).compute
     spec = LayoutSpec(anchors=Box([-1, -1, 0], [1, 1, 0]), required=Box([-0.3, -0.3, 0], [0.3, 0.3, 0]))
@@ -460,12 +461,9 @@ def test_the_best_layouts_required_box_is_proven_where_the_certificates_speak(ma
     assert share > 90.0 and "of the required box proven feasible" in said
     positions = np.random.default_rng(3).uniform([-0.3, -0.3, 0], [0.3, 0.3, 0], (500, 3))
     assert registry_count(problem, positions) == 500  # the grid agrees: it holds everywhere sampled
-    bodied, _ = build_problem(make_cfg(*PLANAR, "robot.dofs=[x,y,rz]", "robot.platform.shape={lo: [-0.1, -0.1, -0.05], "
-                                       "hi: [0.1, 0.1, 0.05]}",
-                                       "robot.attachments=[[-0.1,-0.1,0],[0.1,-0.1,0],[0.1,0.1,0],[-0.1,0.1,0]]"),
-                              catalogue)
-    assert prove_required(spec, bodied, compute) == (None, "the required box is not proven: criterion cable_platform "
-                                                           "has no certified bound")
+    sagging, _ = build_problem(make_cfg(*PLANAR, "robot.cable_mass=0.05", "+criteria.sag={ratio: 0.02}"), catalogue)
+    assert prove_required(spec, sagging, compute) == (None, "the required box is not proven: criterion sag "
+                                                            "has no certified bound")
     assert prove_required(LayoutSpec(anchors=Box([-1, -1, 0], [1, 1, 0])), problem, compute) == (None, "no required box")
 
 

@@ -213,10 +213,11 @@ class LayoutSpec:
         return math.prod(int(round((hi - lo) / self.step)) + 1 for lo, hi in self.ranges(n_cables).values())
 
 
-def check_robot(spec: LayoutSpec, problem, cell_volume: float) -> None:
-    """ConfigError unless ``problem``'s robot can take the layout's variables and its grid (each
-    point's ``cell_volume``) and statics the objectives."""
-    robot = problem.robot
+def check_robot(spec: LayoutSpec, problem, grid) -> None:
+    """ConfigError unless ``problem``'s robot can take the layout's variables, its ``grid``
+    (``pipeline.workspace.grid.Grid``) the objectives and the required box (at least one of its
+    poses: an empty box would hold every layout, and its payload and tension factor say nothing)."""
+    robot, cell_volume = problem.robot, grid.cell_volume
     if "payload_kg" in spec.objectives:
         if spec.required is None:
             raise ConfigError("layout.objectives: payload_kg is the largest payload the required box holds; give "
@@ -246,6 +247,9 @@ def check_robot(spec: LayoutSpec, problem, cell_volume: float) -> None:
                               "so, or give layout.attachments to design them too")
     if robot.pulleys is not None:
         raise ConfigError("layout: the robot has pulleys at its anchors; a layout search moves bare anchors")
+    if spec.required is not None and not spec.required.contains(grid[0:len(grid)]).any():
+        raise ConfigError(f"layout.required: the box {spec.required.lo}..{spec.required.hi} holds no pose of the "
+                          "grid; a box around some of its points (robot.search, its step)")
     if spec.attachments is not None and robot.platform_shape is not None:
         raise ConfigError("layout.attachments: the robot's platform has a shape (robot.platform.shape) whose surface "
                           "holds the attachments; moving them inside a box would leave it: not searched yet")
