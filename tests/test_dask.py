@@ -77,23 +77,24 @@ def test_a_sweep_starts_one_cluster_and_only_for_jobs_of_several_chunks(tmp_path
     each); five that fit in one chunk each (a chunk on Dask is at least 0.2 s of kernel by the
     cost model: 27 000 fused poses) start none. The tables are those of the same jobs computed
     here, in one process."""
-    def sweep(name, *overrides):
-        done = subprocess.run([sys.executable, "-m", "pipeline", "-m", "actuator=1,2,3,4,5", "grid.n=30",
-                               f"hydra.sweep.dir={tmp_path / name}", *overrides],
+    def sweep(name, n, kernel, *overrides):
+        done = subprocess.run([sys.executable, "-m", "pipeline", "-m", "actuator=1,2,3,4,5", f"grid.n={n}",
+                               f"compute.kernel={kernel}", f"hydra.sweep.dir={tmp_path / name}", *overrides],
                               capture_output=True, text=True, timeout=600)
         assert done.returncode == 0, done.stderr
-        return done.stdout + done.stderr, pd.read_parquet(tmp_path / name / "summary.parquet")
+        here = pd.DataFrame([compute_workspace(make_cfg(f"actuator={a}", f"grid.n={n}", f"compute.kernel={kernel}"),
+                                               catalogue)[1]
+                             for a in range(1, 6)])
+        return done.stdout + done.stderr, pd.read_parquet(tmp_path / name / "summary.parquet"), here
 
-    numpy = ["compute.kernel=numpy", "compute.chunk_size=5000"]
-    log, shared = sweep("shared", "compute.backend=dask", *numpy)
+    columns = ["actuator", "n_points", "n_feasible", "feasible_pct"]
+    # 8 000 poses of the numpy kernel: four chunks a job; 27 000 of the fused one: one chunk
+    log, shared, here = sweep("shared", 20, "numpy", "compute.backend=dask", "compute.chunk_size=2000")
     clusters = [line.rsplit(" ", 1)[1] for line in log.splitlines() if "chunks on the Dask cluster" in line]
     assert len(clusters) == 5 and len(set(clusters)) == 1, log
-    log, small = sweep("small", "compute.backend=dask")
-    assert "Dask cluster" not in log
-    here = pd.DataFrame([compute_workspace(make_cfg(f"actuator={a}", "grid.n=30"), catalogue)[1]
-                         for a in range(1, 6)])
-    columns = ["actuator", "n_points", "n_feasible", "feasible_pct"]
     pd.testing.assert_frame_equal(shared[columns], here[columns])
+    log, small, here = sweep("small", 30, "fused", "compute.backend=dask")
+    assert "Dask cluster" not in log
     pd.testing.assert_frame_equal(small[columns], here[columns])
 
 
