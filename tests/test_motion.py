@@ -39,18 +39,18 @@ def test_velocity_grid_decoupled_from_position_grid(make_cfg, catalogue):
 def test_chunk_size_bounded_by_memory_budget(make_cfg, catalogue):
     """grid.n=100 with the velocity grid tied to it keeps 101^3 candidates (2 376 of them extremes,
     which the kernel evaluates) per pose; chunks shrink so one chunk's largest array stays within
-    4e6 floats, counted on the extremes (on every velocity with J-dot, which is not linear in v)."""
+    5e5 floats, counted on the extremes (on every velocity with J-dot, which is not linear in v)."""
     from pipeline.workspace.dispatch import CHUNK_BUDGET_FLOATS, bounded_chunk_size
     from pipeline.app.problem import build_problem
 
     dense, _ = build_problem(make_cfg("grid.n=100"), catalogue)
     size = bounded_chunk_size(dense, 20_000)
     assert len(dense.spec.velocity_extremes) == 2376 and size * 8 * 2376 <= CHUNK_BUDGET_FLOATS
-    assert size == 4_000_000 // (8 * 2376)
+    assert size == 500_000 // (8 * 2376)
     paper, _ = build_problem(make_cfg(), catalogue)
-    assert bounded_chunk_size(paper, 20_000) == 20_000  # 8 x 12 extremes: far within
+    assert bounded_chunk_size(paper, 20_000) == 500_000 // (8 * 12)  # 8 x 12 extremes
     centripetal, _ = build_problem(make_cfg("grid.n_vel=20", "model.jdot=true"), catalogue)
-    assert bounded_chunk_size(centripetal, 20_000) == 4_000_000 // (8 * len(centripetal.spec.velocities))
+    assert bounded_chunk_size(centripetal, 20_000) == 500_000 // (8 * len(centripetal.spec.velocities))
 
 
 @pytest.mark.parametrize("n", [2, 5, 6, 9, 12])

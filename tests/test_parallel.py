@@ -61,7 +61,7 @@ def test_one_decision_gives_a_job_its_kernel_chunks_and_workers(make_cfg, catalo
     cfg = make_cfg("compute.n_jobs=2", "compute.backend=loky")
     problem = build_problem(cfg, catalogue)[0]
     small = decide(cfg, problem, 216)
-    assert (small.problem.fused, small.chunk_size, small.workers) == (False, 20_000, 1)
+    assert (small.problem.fused, small.chunk_size, small.workers) == (False, 500_000 // (8 * 12), 1)
     large = decide(cfg, problem, 60 ** 3)
     assert (large.problem.fused, large.chunk_size, large.workers) == (True, 20_000, 1)
     assert decide(cfg, problem, 2_000_000).workers == 2

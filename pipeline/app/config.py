@@ -507,7 +507,7 @@ class ComputeConfig:
     about 190 MiB each), workers (capped at the machine's cores, except on a
     Dask scheduler elsewhere), poses per chunk (null: by the cost model, 20 000 and on Dask at
     least 0.2 s of kernel; a number is taken as given; either is lowered so that a chunk's
-    largest array stays under 32 MB). ``backend=dask`` runs the chunks on the Dask scheduler at
+    largest array stays under 4 MB). ``backend=dask`` runs the chunks on the Dask scheduler at
     ``scheduler`` (null: a local cluster of n_jobs workers, one for a sweep's jobs run one after
     another). ``max_poses``: the most pose x orientation evaluations a
     job may take (checked before any work; raise it knowingly). ``kernel``: auto (the compiled

@@ -24,7 +24,8 @@ from pipeline.workspace.progress import clock_text
 
 log = logging.getLogger("pipeline")
 
-CHUNK_BUDGET_FLOATS = 4_000_000  # largest (poses x cables x set size) array of one chunk: 32 MB
+CHUNK_BUDGET_FLOATS = 500_000  # largest (poses x cables x set size) array of one chunk: 4 MB
+FUSED_CHUNK_POSES = 500_000  # the fused kernel holds no such array, only its (poses x cables) outputs
 FEASIBLE_CHUNK_POSES = 4096  # tension.model=feasible: about 1 s per chunk, so progress is visible
 CHUNK_POSES = 20_000  # compute.chunk_size=null: a chunk's poses, between 2 000 and 20 000 barely matter
 # On Dask a chunk carries at least DASK_CHUNK_S of kernel by the cost model: a task's round
@@ -225,16 +226,18 @@ def bounded_chunk_size(problem: WorkspaceProblem, requested: int | None, backend
     """Poses per chunk: the requested size, or for None (``compute.chunk_size=null``) the cost
     model's, CHUNK_POSES and on Dask at least DASK_CHUNK_S of kernel; lowered so that a chunk's
     largest intermediate array (poses x cables x velocity or acceleration set) stays within
-    CHUNK_BUDGET_FLOATS (the fused kernel holds no such array), and to FEASIBLE_CHUNK_POSES
-    under the feasible tension model."""
+    CHUNK_BUDGET_FLOATS (about forty such arrays are alive at once: 4 MB keeps a chunk's pages in
+    use instead of faulting fresh ones; the fused kernel holds no such array and takes at most
+    FUSED_CHUNK_POSES), and to FEASIBLE_CHUNK_POSES under the feasible tension model."""
     if requested is None:
         requested = CHUNK_POSES
         if backend == "dask":
             requested = max(requested, int(DASK_CHUNK_S / estimated_seconds(problem, 1)))
-    per_pose = problem.robot.n_cables * (1 if problem.fused else problem.spec.set_size())
     if problem.spec.tension.model == "feasible":
         requested = min(requested, FEASIBLE_CHUNK_POSES)
-    return max(1, min(requested, CHUNK_BUDGET_FLOATS // per_pose))
+    if problem.fused:
+        return max(1, min(requested, FUSED_CHUNK_POSES))
+    return max(1, min(requested, CHUNK_BUDGET_FLOATS // (problem.robot.n_cables * problem.spec.set_size())))
 
 
 def fused_pays(jobs) -> bool:
