@@ -111,6 +111,7 @@ def test_a_dask_chunk_holds_at_least_a_fifth_of_a_second_of_kernel(make_cfg, cat
     size = bounded_chunk_size(fused, None, "dask")
     assert size == 200_000 and estimated_seconds(fused, size) == pytest.approx(DASK_CHUNK_S)
     assert bounded_chunk_size(fused, 500, "dask") == 500  # a number is taken as given
+    assert bounded_chunk_size(fused, 10**9) == 4_000_000 // 8  # its (poses x 8 cables) outputs within 32 MB
     # 0.2 s of the numpy kernel would be 30 000 poses; the memory budget (8 cables x 12 extremes) bounds it
     assert bounded_chunk_size(problem, None, "dask") == 500_000 // (8 * 12)
     dense, _ = build_problem(make_cfg("orientation.psi=0.5", "grid.n_vel=60"), catalogue)

@@ -730,11 +730,13 @@ def _structured(schema) -> DictConfig:
     return OmegaConf.structured(schema)
 
 
-def masked(full: DictConfig, present: DictConfig) -> DictConfig:
+def masked(full: DictConfig, present: DictConfig, missing_ok: bool = False) -> DictConfig:
     """``full``'s typed values at the keys of ``present`` only (struct: no key can be added); a
-    value that resolves to the wrong type (an interpolation) is a ConfigError as in :func:`merged`."""
+    value that resolves to the wrong type (an interpolation) is a ConfigError as in :func:`merged`.
+    A required value left unset (``???``) raises MissingMandatoryValue, or with ``missing_ok``
+    stays unset (a base the overrides complete)."""
     try:
-        typed = _masked(full, present)
+        typed = _masked(full, present, missing_ok)
     except MissingMandatoryValue:  # its callers say which value is missing
         raise
     except OmegaConfBaseException as exc:
@@ -743,12 +745,15 @@ def masked(full: DictConfig, present: DictConfig) -> DictConfig:
     return typed
 
 
-def _masked(full: DictConfig, present: DictConfig) -> dict:
+def _masked(full: DictConfig, present: DictConfig, missing_ok: bool) -> dict:
     kept = {}
     for key in present:
+        if missing_ok and OmegaConf.is_missing(full, key):
+            kept[key] = "???"
+            continue
         value = full[key]
         if isinstance(present[key], DictConfig) and isinstance(value, DictConfig):
-            value = _masked(value, present[key])
+            value = _masked(value, present[key], missing_ok)
         kept[key] = value
     return OmegaConf.create(kept)
 

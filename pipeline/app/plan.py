@@ -29,7 +29,7 @@ import threading
 from collections import OrderedDict
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
 from hydra import compose, initialize_config_dir
 from hydra.core.override_parser.overrides_parser import OverridesParser
@@ -400,6 +400,8 @@ class Composition:
         full = typed_schema(plain)  # typed once per composition
         self._full = Copies(full)
         self._typed = _derivable(full, plain)
+        missing = OmegaConf.missing_keys(plain)
+        self._missing = [key for key in _leaf_keys(plain) if key in missing]  # in the files' order
         self._scratch = full  # where each override text is typed, once (:meth:`_typed_value`)
         self._converted: dict[str, Any] = {}
 
@@ -421,10 +423,12 @@ class Composition:
             for override in overrides:
                 _apply(plain, override)
                 OmegaConf.update(typed, override.key_or_group, self._typed_value(override), merge=False)
+            unset = next((key for key in self._missing if _unset(typed, key)), None)
+            if unset is not None:
+                _no_value(unset)
             return typed, plain
         except MissingMandatoryValue as exc:  # ??? in a file, and not given
-            raise ConfigError(f"{exc.full_key}: no value given (a required key: set it in the file or on "
-                              f"the command line, e.g. {exc.full_key}=...)") from None
+            _no_value(exc.full_key)
 
     def _typed_value(self, override: Override) -> Any:
         """The override's value as its key's declared type makes it, typed once per override
@@ -496,17 +500,25 @@ def without_hydra(config: DictConfig) -> DictConfig:
     return task
 
 
+def _no_value(key: str) -> NoReturn:
+    raise ConfigError(f"{key}: no value given (a required key: set it in the file or on "
+                      f"the command line, e.g. {key}=...)") from None
+
+
+def _unset(cfg: DictConfig, key: str) -> bool:
+    """The dotted ``key``'s value is ``???``."""
+    parent, _, name = key.rpartition(".")
+    return OmegaConf.is_missing(OmegaConf.select(cfg, parent) if parent else cfg, name)
+
+
 def _derivable(full: DictConfig, plain: DictConfig) -> Copies | None:
-    """The typed job config of no override (``full`` masked to ``plain``'s keys), from which each
-    job's is derived, when every value of the files is set and none is an interpolation (a
-    typed config holds resolved values, which an override of another key could change); else
-    None."""
+    """The typed job config of no override (``full`` masked to ``plain``'s keys, a required value
+    of the files left unset for the overrides to give), from which each job's is derived, when
+    no value of the files is an interpolation (a typed config holds resolved values, which an
+    override of another key could change); else None."""
     if "${" in to_yaml(plain):
         return None
-    try:
-        return Copies(masked(full, plain))
-    except MissingMandatoryValue:  # ??? in the files: the overrides give it
-        return None
+    return Copies(masked(full, plain, missing_ok=True))
 
 
 def _not_derivable(override: Override) -> bool:

@@ -25,7 +25,7 @@ from pipeline.workspace.progress import clock_text
 log = logging.getLogger("pipeline")
 
 CHUNK_BUDGET_FLOATS = 500_000  # largest (poses x cables x set size) array of one chunk: 4 MB
-FUSED_CHUNK_POSES = 500_000  # the fused kernel holds no such array, only its (poses x cables) outputs
+FUSED_CHUNK_FLOATS = 4_000_000  # the fused kernel holds no such array, only its (poses x cables) outputs: 32 MB
 FEASIBLE_CHUNK_POSES = 4096  # tension.model=feasible: about 1 s per chunk, so progress is visible
 CHUNK_POSES = 20_000  # compute.chunk_size=null: a chunk's poses, between 2 000 and 20 000 barely matter
 # On Dask a chunk carries at least DASK_CHUNK_S of kernel by the cost model: a task's round
@@ -228,7 +228,7 @@ def bounded_chunk_size(problem: WorkspaceProblem, requested: int | None, backend
     largest intermediate array (poses x cables x velocity or acceleration set) stays within
     CHUNK_BUDGET_FLOATS (about forty such arrays are alive at once: 4 MB keeps a chunk's pages in
     use instead of faulting fresh ones; the fused kernel holds no such array and takes at most
-    FUSED_CHUNK_POSES), and to FEASIBLE_CHUNK_POSES under the feasible tension model."""
+    FUSED_CHUNK_FLOATS in its (poses x cables) outputs), and to FEASIBLE_CHUNK_POSES under the feasible tension model."""
     if requested is None:
         requested = CHUNK_POSES
         if backend == "dask":
@@ -236,7 +236,7 @@ def bounded_chunk_size(problem: WorkspaceProblem, requested: int | None, backend
     if problem.spec.tension.model == "feasible":
         requested = min(requested, FEASIBLE_CHUNK_POSES)
     if problem.fused:
-        return max(1, min(requested, FUSED_CHUNK_POSES))
+        return max(1, min(requested, FUSED_CHUNK_FLOATS // problem.robot.n_cables))
     return max(1, min(requested, CHUNK_BUDGET_FLOATS // (problem.robot.n_cables * problem.spec.set_size())))
 
 
