@@ -656,7 +656,7 @@ def _layouts(study: StudySpec, extra: list[str], out: Path, job: Job) -> pd.Data
         text = to_yaml(OmegaConf.create({"defaults": ["points", "_self_"], **robot, "anchors": anchors.tolist(),
                                          "attachments": attachments.tolist()}))
         write_text(path, f"# {what} of study {study.name}, trial {int(row['trial'])}: {row['n_feasible']} of "
-                         f"{row['n_points']} poses feasible\n" + text)
+                         f"{row['n_points']} poses feasible{_drive_said(row, study.layout.cost)}\n" + text)
 
     robot_file(out / "layout_best.yaml", best, "the best layout")
     front = table[table["pareto"]]
@@ -664,9 +664,17 @@ def _layouts(study: StudySpec, extra: list[str], out: Path, job: Job) -> pd.Data
     (out / "layouts").mkdir()
     for _, row in front.iterrows():  # the Pareto front's layouts, for a designer to choose along it
         robot_file(out / "layouts" / f"trial_{int(row['trial']):04d}.yaml", row, "a layout on the Pareto front")
-    log.info("layout: the best, trial %d: %d/%d poses feasible (%.3f m^3); robot files %s and %d in %s", best["trial"],
-             best["n_feasible"], best["n_points"], best["volume_m3"], out / "layout_best.yaml", len(front), out / "layouts")
+    log.info("layout: the best, trial %d: %d/%d poses feasible (%.3f m^3)%s; robot files %s and %d in %s", best["trial"],
+             best["n_feasible"], best["n_points"], best["volume_m3"], _drive_said(best, study.layout.cost),
+             out / "layout_best.yaml", len(front), out / "layouts")
     return table
+
+
+def _drive_said(row: pd.Series, cost: str | None) -> str:
+    """A layout trial's actuator (objective actuator_cost: the cheapest that holds the required box), as said after its count."""
+    chosen = row.get("actuator")
+    return ("" if chosen is None or pd.isna(chosen) else
+            f"; actuator {int(chosen)} of the catalogue on every cable ({cost} {row['actuator_cost']:g} in all)")
 
 
 def _gather(jobs_dir: Path, cases: dict[str, list[str]], labels: dict[str, str]) -> pd.DataFrame:

@@ -12,8 +12,8 @@ import pytest
 import yaml
 
 from conftest import command
-from pipeline.analyses.layout import (Box, LayoutSpec, best_trial, check_robot, evaluate, placed, prove_required,
-                                      search_layouts)
+from pipeline.analyses.layout import (Box, LayoutSpec, best_trial, check_robot, cheapest_drive, drives, evaluate, placed,
+                                      prove_required, search_layouts)
 from pipeline.app.problem import build_problem
 from pipeline.errors import ConfigError
 from pipeline.workspace.kernel import evaluate_chunk
@@ -256,6 +256,104 @@ def test_a_search_trading_workspace_for_frame(make_cfg, catalogue):
         check_robot(spec, cpr8, cpr8_grid)
 
 
+PRICES = {1: 900, 2: 400, 3: 100, 4: 150, 5: 60}  # price_EUR of Table 1's actuators in the user's catalogue
+
+
+def priced_catalogue(path, prices=PRICES):
+    """Table 1 with the user's own column price_EUR (text to the catalogue reader, as users write it)."""
+    from pipeline.model.catalogue import TABLE1
+
+    lines = TABLE1.read_text().strip().splitlines()
+    path.write_text("\n".join([lines[0] + ",price_EUR", *(f"{line},{prices[int(line.split(',')[0])]}" for line in lines[1:])])
+                    + "\n")
+    return path
+
+
+def rest_cap_by_hand(row: dict) -> float:
+    """The largest tension (N) a catalogue row holds at rest, from its columns and the laws: the
+    torque behind the gearbox M = tau N_V eta <= torque_Nm N_V eta (eq. 32); at rest the armature
+    draws i = M / (k_t N_V eta) at u = R i <= U (eq. 34 without speed terms); M = R_w t."""
+    behind = float(row["gear_ratio"]) * float(row["efficiency"])
+    torque = float(row["torque_Nm"]) * behind
+    voltage = float(row["voltage_V"]) * float(row["torque_constant_Nm_per_A"]) * behind / float(row["resistance_ohm"])
+    return min(torque, voltage) / float(row["winch_radius_m"])
+
+
+def planar_lp_holds(anchors, position, force, lower, upper) -> bool:
+    """Whether tensions in [lower, upper] balance ``force`` on a planar point at ``position``:
+    unit vectors toward the anchors written from the law, HiGHS's LP, no code of the package."""
+    from scipy.optimize import linprog
+
+    toward = anchors[:, :2] - position[:2]
+    unit = toward / np.linalg.norm(toward, axis=1, keepdims=True)
+    return linprog(np.zeros(len(anchors)), A_eq=unit.T, b_eq=-np.asarray(force), bounds=[(lower, u) for u in upper],
+                   method="highs").status == 0
+
+
+def test_the_rest_cap_of_table_1_from_its_columns():
+    """rest_tension_cap against the laws written from the catalogue's columns; actuator 4 is held
+    by its voltage at rest (55.58 N) before its torque (55.65 N), the others by their torque."""
+    from pipeline.model.actuators import actuator_model, rest_tension_cap
+    from pipeline.model.catalogue import load_catalogue
+
+    rows = load_catalogue().rows
+    caps = {row["id"]: rest_tension_cap(actuator_model(row)) for row in rows}
+    for row in rows:
+        assert caps[row["id"]] == pytest.approx(rest_cap_by_hand(row), rel=1e-12)
+    assert caps[4] == pytest.approx(24 * 0.0352 * 30 * 0.7 / 3.99 / 0.08, rel=1e-12)  # 55.58 N: its voltage at rest
+    assert caps[4] < 0.212 * 30 * 0.7 / 0.08  # 55.65 N: its torque
+    assert caps[1] == pytest.approx(0.6 * 30 * 0.6 / 0.08, rel=1e-12)  # 135 N: its torque
+
+
+def test_the_cheapest_actuator_holds_the_required_box_and_no_cheaper_one_does(make_cfg, catalogue, tmp_path):
+    """Objective actuator_cost with the user's prices, on every layout of a lattice of a planar
+    robot pulled off-centre (8 N sideways, 40 N down): for every layout, the brute force over the
+    catalogue (each row's cap written from its columns, an LP per required pose with tensions in
+    [t_min, cap]: the cables have no rating of their own) finds the same cheapest actuator, or none; the costs are the price
+    times the four cables, and the best trial is the cheapest. Two cables holding a load under
+    tension=pinv (the registry's margins, not the null-space test): their tensions, solved here,
+    decide."""
+    from pipeline.model.catalogue import load_catalogue
+
+    user = load_catalogue(priced_catalogue(tmp_path / "motors.csv"))
+    problem, grid = build_problem(make_cfg(*PLANAR[:-1], "wrench.fx=8", "wrench.fy=-40"), catalogue)
+    positions = grid[0:len(grid)]
+    spec = LayoutSpec(anchors=Box([-1, -1, 0], [1, 1, 0]), symmetry="quadrants", step=0.25, budget=25,
+                      objectives=["actuator_cost", "feasible_pct"], required=Box([-0.3, -0.3, 0], [0.3, 0.3, 0]),
+                      catalogue=str(tmp_path / "motors.csv"), cost="price_EUR")  # every layout of the lattice
+    spec.check_across("test")
+    check_robot(spec, problem, grid)
+    table = search_layouts(spec, problem, positions, grid.cell_volume, n_jobs=1)
+    required = positions[spec.required.contains(positions)]
+    caps = {row["id"]: rest_cap_by_hand(row) for row in user.rows}
+    chosen = []
+    for _, row in table.iterrows():
+        anchors, _ = placed(spec, problem.robot, row.to_dict())
+        holds = {k: all(planar_lp_holds(anchors, p, [8, -40], 1.0, [cap] * 4) for p in required)  # no rating of its own
+                 for k, cap in caps.items()} if row["meets"] else {}
+        cheapest = min((PRICES[k], k) for k, held in holds.items() if held) if any(holds.values()) else None
+        if cheapest is None:
+            assert np.isnan(row["actuator"]) and np.isnan(row["actuator_cost"])
+        else:
+            assert (row["actuator"], row["actuator_cost"]) == (cheapest[1], 4 * cheapest[0])
+        chosen.append(None if cheapest is None else cheapest[1])
+    assert len({c for c in chosen if c is not None}) >= 3, chosen  # the layout decides the actuator
+    crane, _ = build_problem(make_cfg(*PLANAR[:2], "robot.anchors=[[-1,1,0],[1,1,0]]", "robot.attachments=[[0,0,0],[0,0,0]]",
+                                      *PLANAR[4:7], "tension=pinv", "tension.t_min=1", "wrench.fy=-40"), catalogue)
+    found = set()
+    for corner in ([-0.2, -0.4], [0.3, 0.5], [0.0, 0.6], [0.0, 0.75], [0.2, 0.8]):  # up to 28, 52, 70, 135, 193 N
+        poses = np.array([[x, y, 0.0] for x in (corner[0], corner[0] + 0.1) for y in (corner[1], corner[1] + 0.1)])
+        toward = crane.robot.anchors[None, :, :2] - poses[:, None, :2]
+        unit = toward / np.linalg.norm(toward, axis=2, keepdims=True)
+        tensions = np.linalg.solve(np.transpose(unit, (0, 2, 1)), np.tile([0.0, 40.0], (len(poses), 1))[..., None])[..., 0]
+        held = [k for k in caps if ((tensions >= 1) & (tensions <= caps[k])).all()]
+        drive = cheapest_drive(crane, poses, drives(spec, 2))
+        assert (None if drive is None else drive.id) == (min(held, key=PRICES.get) if held else None), (corner, tensions)
+        found.add(None if drive is None else drive.id)
+    assert found == {3, 4, 2, 1, None}, found
+    assert best_trial(table, spec)["actuator_cost"] == table.loc[table["meets"], "actuator_cost"].min()
+
+
 @pytest.mark.parametrize("fields, message", [
     ({"anchors": {"lo": [0, 0, 0], "hi": [-1, 1, 1]}}, "exceeds hi"),
     ({"anchors": {"lo": [0, 0], "hi": [1, 1, 1]}}, "three finite coordinates"),
@@ -269,6 +367,9 @@ def test_a_search_trading_workspace_for_frame(make_cfg, catalogue):
     ({"anchors": {"lo": [0, 0, 0], "hi": [0, 0, 1]}, "anchors_on": "edges"}, "has no edges"),
     ({"anchors": {"lo": [0, 0, 0], "hi": [1, 1, 1]}, "refine": 1.0}, "refine=1.0"),
     ({"anchors": {"lo": [0, 0, 0], "hi": [1, 1, 1]}, "refine": 0.5, "step": 0.5}, "refine takes continuous"),
+    ({"anchors": {"lo": [0, 0, 0], "hi": [1, 1, 1]}, "objectives": ["actuator_cost"]}, "cost=None: objective actuator_cost"),
+    ({"anchors": {"lo": [0, 0, 0], "hi": [1, 1, 1]}, "cost": "price_EUR"}, "cost=price_EUR: objective actuator_cost"),
+    ({"anchors": {"lo": [0, 0, 0], "hi": [1, 1, 1]}, "catalogue": "m.csv"}, "catalogue=m.csv: read for objective"),
 ])
 def test_a_layout_block_that_cannot_be_searched_is_refused(fields, message):
     spec = LayoutSpec(anchors=Box(**fields.pop("anchors")), **fields)
@@ -343,6 +444,40 @@ def test_a_payload_study_counts_the_payload_at_load_com_on_top_of_load_mass(tmp_
     assert best["payload_kg"] == pytest.approx(evaluate_chunk(payload, required)["max_payload_kg"].min(), rel=1e-5)
 
 
+def test_a_cost_study_names_the_actuator_to_buy_in_its_robot_file(tmp_path, make_cfg, catalogue):
+    """From the command line with the user's catalogue and prices: the best trial is the cheapest
+    one that holds the required box, its robot file names its actuator, and run as a job with the
+    cables rated at that actuator's cap (written here from the catalogue's columns) every required
+    pose holds, while the catalogue's next smaller cap loses one."""
+    from pipeline.model.catalogue import load_catalogue
+
+    priced_catalogue(tmp_path / "motors.csv")
+    overrides = [*PLANAR[:-3], "tension=feasible", "tension.t_min=1", "wrench.fx=8", "wrench.fy=-40"]
+    study = {**STUDY, "overrides": overrides,
+             "layout": {**STUDY["layout"], "objectives": ["actuator_cost", "feasible_pct"], "step": 0.25, "budget": 25,
+                        "sampler": "tpe", "required": {"lo": [-0.3, -0.3, 0], "hi": [0.3, 0.3, 0]},
+                        "catalogue": "motors.csv", "cost": "price_EUR"}}
+    write_study(tmp_path / "myconf", study)
+    done = command(tmp_path, "pipeline.study", "--config-dir", "myconf", "mylayout", "--out", "out")
+    assert done.returncode == 0, done.stderr[-3000:]
+    out = tmp_path / "out" / "mylayout"
+    summary = pd.read_parquet(out / "summary.parquet")
+    best = summary[summary["job"] == "best"].iloc[0]
+    assert best["actuator_cost"] == summary.loc[summary["meets"], "actuator_cost"].min() == 4 * PRICES[int(best["actuator"])]
+    header = (out / "layout_best.yaml").read_text().splitlines()[0]
+    said = f"actuator {int(best['actuator'])} of the catalogue on every cable (price_EUR {best['actuator_cost']:g} in all)"
+    assert said in header, header
+    anchors = yaml.safe_load((out / "layout_best.yaml").read_text())["anchors"]
+    caps = sorted(rest_cap_by_hand(row) for row in load_catalogue(tmp_path / "motors.csv").rows)
+    own = rest_cap_by_hand(load_catalogue(tmp_path / "motors.csv").row(int(best["actuator"])))
+    lower = max(cap for cap in caps if cap < own)
+    for rating, holds in ((own, True), (lower, False)):
+        problem, grid = build_problem(make_cfg(*overrides, f"robot.anchors={anchors}", f"tension.t_max={rating}"), catalogue)
+        positions = grid[0:len(grid)]
+        required = positions[np.all(np.abs(positions[:, :2]) <= 0.3 + 1e-9, axis=1)]
+        assert (registry_count(problem, required) == len(required)) == holds
+
+
 @pytest.mark.parametrize("change, message", [
     ({"overrides": ["robot=cpr8"]}, "robot=cpr8: study mylayout moves the anchors"),
     ({"overrides": [*PLANAR, "analysis=certified"]}, "analysis=certified: study mylayout counts a grid"),
@@ -372,8 +507,25 @@ def test_a_payload_study_counts_the_payload_at_load_com_on_top_of_load_mass(tmp_
                     "poses=[[0,0,0.5],[0.2,0,0.5]]", *PLANAR[7:]],
       "layout": {"anchors": {"lo": [-1, -1, 1], "hi": [1, 1, 1]}, "objectives": ["volume_m3"]}},
      "volume_m3: the grid has no volume"),
+    ({"layout": {**STUDY["layout"], "objectives": ["actuator_cost"], "cost": "price_EUR", "required": None,
+                 "catalogue": "motors.csv"}}, "actuator_cost is the cheapest catalogue actuator that holds the required box"),
+    ({"layout": {**STUDY["layout"], "objectives": ["actuator_cost"], "cost": "price_USD", "catalogue": "motors.csv"}},
+     "layout.cost=price_USD: not a numeric column of catalogue=motors.csv (its columns: power_W, "),
+    ({"layout": {**STUDY["layout"], "objectives": ["actuator_cost"], "cost": "price_EUR", "catalogue": "quoted.csv"}},
+     "layout.cost=price_EUR: catalogue=quoted.csv, actuator 3: 'on request' is not a price"),
+    ({"layout": {**STUDY["layout"], "objectives": ["actuator_cost"], "cost": "price_EUR", "catalogue": "inf.csv"}},
+     "layout.cost=price_EUR: catalogue=inf.csv, actuator 3: '1e308' is not a price"),
+    ({"layout": {**STUDY["layout"], "objectives": ["actuator_cost"], "cost": "price_EUR", "catalogue": "none.csv"}},
+     "catalogue=none.csv"),
+    ({"overrides": [*IPANEMA_CASE[:6], "analysis=cpr_wwa", "robot.search.step=0.5"],
+      "layout": {"anchors": {"lo": [-2, -1.5, 0], "hi": [2, 1.5, 2]}, "objectives": ["actuator_cost"], "cost": "power_W",
+                 "required": {"lo": [-0.5, -0.5, 0.5], "hi": [0.5, 0.5, 1.5]}}},
+     "actuator_cost holds a platform at rest (analysis=statics without platform_motion)"),
 ])
 def test_a_layout_study_it_cannot_run_exits_2_in_one_line_and_writes_nothing(tmp_path, change, message):
+    priced_catalogue(tmp_path / "motors.csv")
+    priced_catalogue(tmp_path / "quoted.csv", {**PRICES, 3: "on request"})
+    priced_catalogue(tmp_path / "inf.csv", {**PRICES, 3: "1e308"})  # finite, not times four cables
     write_study(tmp_path / "myconf", {**STUDY, **change})
     done = command(tmp_path, "pipeline.study", "--config-dir", "myconf", "mylayout", "--out", "out")
     assert done.returncode == 2 and message in done.stderr, done.stderr[-2000:]

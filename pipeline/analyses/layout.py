@@ -26,7 +26,9 @@ grid pose of the required box still holds), ``tension_factor`` (:func:`least_ten
 al.'s tension factor, ``output.metrics``' column, least over the required box's grid poses: how
 evenly the cables can be tensed where the robot must work) and ``frame_m3`` (the volume of the
 anchors' bounding box: the frame a layout needs, so that a two-objective search trades workspace
-for frame). A ``required`` box of positions must be feasible at
+for frame) and ``actuator_cost`` (:func:`cheapest_drive`: the cheapest actuator of the layout's
+``catalogue``, by its ``cost`` column, that holds the required box at rest, times the cables).
+A ``required`` box of positions must be feasible at
 every grid pose inside it (a constraint; the grid's verdicts, not a certificate). With ``step``
 the variables lie on a lattice, and a lattice no larger than the budget is searched exhaustively
 (every layout once, in order), so its best is the best. The best trial is then run again as an
@@ -57,7 +59,8 @@ OBJECTIVES = {"volume_m3": ("maximize", "feasible volume (m^3)"),
               "longest_cable_m": ("minimize", "longest cable over the feasible poses (m)"),
               "payload_kg": ("maximize", "largest payload the required box holds (kg)"),
               "tension_factor": ("maximize", "least tension factor over the required box"),
-              "frame_m3": ("minimize", "the anchors' bounding box (m^3)")}
+              "frame_m3": ("minimize", "the anchors' bounding box (m^3)"),
+              "actuator_cost": ("minimize", "the cheapest catalogue actuators that hold the required box")}
 PAYLOAD_RTOL = 1e-6  # the largest payload, bisected to this share of itself
 PAYLOAD_MAX = 1e9  # kg: past it the payload is taken as unbounded (cables without an upper limit)
 AXES = "xyz"
@@ -92,7 +95,9 @@ class LayoutSpec:
     objective) or ``nsga2``; ``anchors_on``: ``box`` (anywhere in the installation box),
     ``faces`` (on its faces: a frame's walls, ceiling and floor; a planar robot's: the rectangle's
     sides) or ``edges`` (on its edges: a frame's posts and beams; a planar robot's: its corners);
-    ``refine``: the share of the budget spent last around the best trial so far (:func:`nearby`)."""
+    ``refine``: the share of the budget spent last around the best trial so far (:func:`nearby`);
+    ``catalogue`` (a CSV; None: the shipped Table 1) and ``cost`` (its column that prices one
+    actuator) for the objective ``actuator_cost``."""
 
     anchors: Box = field(default_factory=Box)
     attachments: Optional[Box] = None
@@ -105,6 +110,8 @@ class LayoutSpec:
     sampler: str = "tpe"
     anchors_on: str = "box"
     refine: float = 0.0
+    catalogue: Optional[str] = None
+    cost: Optional[str] = None
 
     def check_across(self, where: str) -> None:
         """ConfigError naming the first field that cannot be used."""
@@ -146,6 +153,11 @@ class LayoutSpec:
             raise ConfigError(f"{where}.budget={self.budget}: must be in [1, 100000]")
         if self.sampler not in SAMPLERS:
             raise ConfigError(f"{where}.sampler={self.sampler!r}: one of {', '.join(SAMPLERS)}")
+        if ("actuator_cost" in self.objectives) != (self.cost is not None):
+            raise ConfigError(f"{where}.cost={self.cost}: objective actuator_cost prices the cheapest catalogue actuator "
+                              "that holds the required box by a column of the catalogue: give both, or neither")
+        if self.catalogue is not None and self.cost is None:
+            raise ConfigError(f"{where}.catalogue={self.catalogue}: read for objective actuator_cost only")
 
     def designed_cables(self, n_cables: int) -> range:
         """The cables whose points are variables (all; with quadrants the second of each four)."""
@@ -230,6 +242,14 @@ def check_robot(spec: LayoutSpec, problem, grid) -> None:
             raise ConfigError("layout.objectives: tension_factor is the least over the required box; give layout.required")
         if problem.spec.kind != "statics":
             raise ConfigError("layout.objectives: tension_factor is of a static pose's structure matrix (analysis=statics)")
+    if "actuator_cost" in spec.objectives:
+        if spec.required is None:
+            raise ConfigError("layout.objectives: actuator_cost is the cheapest catalogue actuator that holds the required "
+                              "box; give layout.required")
+        if problem.spec.kind != "statics" or problem.spec.moves:
+            raise ConfigError("layout.objectives: actuator_cost holds a platform at rest (analysis=statics without "
+                              "platform_motion)")
+        drives(spec, robot.n_cables)  # the catalogue and its cost column, refused in one line
     if "frame_m3" in spec.objectives and (np.asarray(spec.anchors.hi) <= np.asarray(spec.anchors.lo)).any():
         raise ConfigError(f"layout.objectives: frame_m3 is the anchors' bounding volume; the installation box "
                           f"{spec.anchors.lo}..{spec.anchors.hi} is flat (a planar robot's frame has no volume)")
@@ -329,13 +349,75 @@ def least_tension_factor(problem, positions: np.ndarray) -> float:
     return least
 
 
+@dataclass(frozen=True)
+class Drive:
+    """A catalogue actuator on every cable at rest: its ``id``, ``cost`` (the catalogue's ``cost``
+    column times the cables) and ``cap`` (N), the largest tension it holds at rest
+    (:func:`pipeline.model.actuators.rest_tension_cap`: eqs. 32 and 34, the catalogue's winch and
+    gearbox)."""
+
+    id: int
+    cost: float
+    cap: float
+
+
+def drives(spec: LayoutSpec, n_cables: int) -> tuple[Drive, ...]:
+    """The catalogue's actuators, cheapest first (then by id); ConfigError in one line for a
+    catalogue that cannot be read or a ``cost`` that is not a column of finite numbers >= 0."""
+    from pipeline.model.actuators import actuator_model, rest_tension_cap
+    from pipeline.model.catalogue import load_catalogue
+
+    catalogue = load_catalogue(spec.catalogue)
+    if spec.cost not in catalogue.columns or spec.cost == "name":
+        raise ConfigError(f"layout.cost={spec.cost}: not a numeric column of catalogue={catalogue.source} (its columns: "
+                          f"{', '.join(c for c in catalogue.columns if c != 'name')})")
+    found = []
+    for row in catalogue.rows:
+        try:
+            price = float(row[spec.cost])
+        except ValueError:
+            price = math.nan
+        if not (math.isfinite(n_cables * price) and price >= 0):
+            raise ConfigError(f"layout.cost={spec.cost}: catalogue={catalogue.source}, actuator {row['id']}: "
+                              f"{row[spec.cost]!r} is not a price (a number >= 0, finite times {n_cables} cables)")
+        found.append(Drive(row["id"], n_cables * price, rest_tension_cap(actuator_model(row))))
+    return tuple(sorted(found, key=lambda drive: (drive.cost, drive.id)))
+
+
+def cheapest_drive(problem, positions: np.ndarray, catalogue: tuple[Drive, ...]) -> Drive | None:
+    """The first drive of ``catalogue`` (cheapest first) with which every one of ``positions`` holds at
+    rest: the statics job with ``tension.t_max`` lowered to the drive's cap (the criteria selected
+    again, as the job's builder selects them: a robot without a rating gains the rating's); None
+    when none does. A cap no larger than one that failed is not tried (a lower cap holds fewer
+    poses)."""
+    from pipeline.workspace.criteria import selected
+
+    failed = -math.inf
+    rating = problem.spec.tension.t_max
+    for drive in catalogue:
+        if drive.cap <= failed:
+            continue
+        t_max = drive.cap if rating is None else np.minimum(rating, drive.cap)
+        spec = replace(problem.spec, tension=replace(problem.spec.tension, t_max=t_max))
+        capped = replace(problem, spec=spec, criteria=selected(spec.kind, spec, problem.robot, problem.settings),
+                         limits=replace(problem.limits, t_max=t_max, scale=float(np.max(t_max))))
+        if _flags(capped, positions).all():
+            return drive
+        failed = drive.cap
+    return None
+
+
 def evaluate(problem, positions: np.ndarray, cell_volume: float, required: np.ndarray | None,
-             payload: tuple[float, np.ndarray] | None = None, objectives: tuple[str, ...] = ()) -> dict:
+             payload: tuple[float, np.ndarray] | None = None, objectives: tuple[str, ...] = (),
+             catalogue: tuple[Drive, ...] = ()) -> dict:
     """A layout's numbers over the grid ``positions``: feasible poses, volume, share, the longest
     cable over them, the required poses that fail, the anchors' bounding volume and, with ``payload``
     (the job's ``load.mass`` and ``load.com``), the largest payload the required ones hold
     (:func:`largest_payload`; NaN without it); with ``tension_factor`` among ``objectives``, the least
-    over the required ones (:func:`least_tension_factor`; NaN without it)."""
+    over the required ones (:func:`least_tension_factor`; NaN without it); with ``catalogue`` (its
+    drives, cheapest first, :func:`drives`) the cheapest that holds the required ones at rest
+    (:func:`cheapest_drive`: ``actuator``, its id, and ``actuator_cost``, NaN for none; without
+    ``catalogue`` neither key)."""
     from pipeline.model.geometry import cable_vectors, rotation_matrices
 
     flags = _flags(problem, positions)
@@ -353,7 +435,13 @@ def evaluate(problem, positions: np.ndarray, cell_volume: float, required: np.nd
             "payload_kg": largest_payload(problem, positions[required], *payload) if payload and not failing else math.nan,
             "tension_factor": (least_tension_factor(problem, positions[required])
                                if "tension_factor" in objectives and not failing else math.nan),
-            "frame_m3": float(np.prod(np.ptp(problem.robot.anchors, axis=0)))}
+            "frame_m3": float(np.prod(np.ptp(problem.robot.anchors, axis=0))),
+            **(_drive_numbers(None if failing else cheapest_drive(problem, positions[required], catalogue))
+               if catalogue else {})}
+
+
+def _drive_numbers(drive: Drive | None) -> dict:
+    return {"actuator": math.nan if drive is None else drive.id, "actuator_cost": math.nan if drive is None else drive.cost}
 
 
 def search_layouts(spec: LayoutSpec, problem, positions: np.ndarray, cell_volume: float, n_jobs: int,
@@ -373,6 +461,7 @@ def search_layouts(spec: LayoutSpec, problem, positions: np.ndarray, cell_volume
                optuna.samplers.TPESampler(seed=spec.seed, multivariate=True))
     study = optuna.create_study(directions=[OBJECTIVES[o][0] for o in spec.objectives], sampler=sampler)
     choices = spec.choices(problem.robot.n_cables)
+    catalogue = drives(spec, problem.robot.n_cables) if "actuator_cost" in spec.objectives else ()
     current = designed(spec, problem.robot)
     if current is not None:
         study.enqueue_trial(current)  # the robot as the overrides give it: the search starts from it
@@ -404,7 +493,7 @@ def search_layouts(spec: LayoutSpec, problem, positions: np.ndarray, cell_volume
             found = parallel(delayed(evaluate)(replace(problem, robot=replace(problem.robot, anchors=a, attachments=b)),
                                                positions, cell_volume, required,
                                                payload if "payload_kg" in spec.objectives else None,
-                                               tuple(spec.objectives))
+                                               tuple(spec.objectives), catalogue)
                              for a, b in layouts)
             improved = False
             for trial, value, numbers in zip(trials, values, found):

@@ -108,3 +108,10 @@ def voltage_interval(act: ActuatorModel, high, low) -> tuple:
     in units of U / S_v."""
     volts, s_v = act.voltage_limit, act.S_v
     return (high - volts) / s_v, (low + volts) / s_v, volts / s_v
+
+
+def rest_tension_cap(act: ActuatorModel) -> float:
+    """The largest cable tension (N) the actuator holds at rest: eq. (32)'s |M| <= M_mot N_M and
+    eq. (34)'s |u| <= U at theta_dot = theta_ddot = 0, where u = -S_v M (eq. 21), so |M| <= U / S_v;
+    M = R t (eq. 20)."""
+    return min(act.torque_limit, voltage_interval(act, 0.0, 0.0)[1]) / act.winch_radius
