@@ -130,9 +130,6 @@ def actuator_choice(overrides: Iterable[str] = (), folder: str | Path | None = N
                           "use workspace() for one")
     folder = Path(folder) if folder is not None else _new_folder()
     first = first_actuator_job(overrides, folder)
-    if first.catalogue is None:
-        raise ConfigError(f"analysis={first.cfg.analysis}: no actuators to choose from "
-                          "(the choice needs analysis=cpr_wwa)")
     ids = ",".join(str(i) for i in first.catalogue.ids)
     planned = plan(["-m", f"actuator={ids}", *overrides, f"hydra.sweep.dir={quoted(folder)}",
                     "hydra.sweep.subdir='actuator=${actuator}'"])  # every job checked before the first runs

@@ -462,9 +462,9 @@ def checked_commands(name: str, extra: list[str], out_root: Path | None = None,
     if study.designs:  # the lowest and highest designs
         job = first_actuator_job([*study.arguments, *extra], out)
         cfg, catalogue = job.cfg, job.catalogue
-        if catalogue is None:  # the objectives and the search read the job's catalogue actuator
-            raise ConfigError(f"analysis={cfg.analysis}: study {name} designs a catalogue "
-                              "actuator's drive train; this analysis has no actuator (use analysis=cpr_wwa)")
+        if cfg.analysis not in ("cpr_wwa", "lines", "trajectory"):  # a drive's train in motion
+            raise ConfigError(f"analysis={cfg.analysis}: study {name} designs a catalogue actuator's drive train "
+                              "in motion (analysis=cpr_wwa, lines, or trajectory with actuator=ID)")
         if study.search is not None:
             _check_searchable(cfg, name)
         if study.optimise is not None:
@@ -701,16 +701,8 @@ def _sweep_values(key: str, values: str, fixed: list[str]) -> str:
 
 def first_actuator_job(overrides: list[str], folder: Path) -> Job:
     """The one job of ``overrides`` (into ``folder``) checked with the first id of the catalogue
-    they name, which a user's may not number 1 (an ``actuator=`` among the overrides wins); for
-    an analysis without actuators, the job as it is (its catalogue None)."""
-    where = f"hydra.run.dir={quoted(folder)}"
-    try:
-        return plan([f"actuator={catalogue_of(overrides).ids[0]}", *overrides, where]).jobs[0]
-    except ConfigError:  # an analysis without actuators has no key actuator: say that instead
-        job = plan([*overrides, where]).jobs[0]
-        if job.catalogue is not None:
-            raise
-        return job
+    they name, which a user's may not number 1 (an ``actuator=`` among the overrides wins)."""
+    return plan([f"actuator={catalogue_of(overrides).ids[0]}", *overrides, f"hydra.run.dir={quoted(folder)}"]).jobs[0]
 
 
 def catalogue_of(overrides: list[str]):

@@ -89,7 +89,7 @@ def test_actuator_choice_on_a_catalogue_without_id_1(tmp_path, monkeypatch):
     ("workspace", ["grid.nn=3"], "grid.nn"),
     ("workspace", ["robot=nosuch"], "robot=nosuch: no such option of the robot group"),
     ("actuator_choice", ["actuator=2"], "actuator=...: the choice runs every actuator"),
-    ("actuator_choice", ["robot=irpm6"], "no actuators to choose from"),
+    ("actuator_choice", ["analysis=payload"], "actuator=1: analysis=payload finds the largest payload"),
     ("actuator_choice", ["catalogue=missing.csv"], "catalogue=missing.csv"),
 ])
 def test_bad_input_raises_config_error_and_writes_nothing(tmp_path, monkeypatch, call, overrides, message):

@@ -137,7 +137,7 @@ CASES = [
      "compute.kernel=fused: it evaluates tension.model=pinv only"),
     ("pipeline", ["orientation.total.n=1000", "orientation.total.bound=0.1"], "compute.max_poses"),
     ("pipeline", ["-m", "load.mass=1,2,inf"], "load.mass=inf"),
-    ("pipeline", ["robot=irpm6", "actuator=3"], "no such key for robot=irpm6 with analysis=statics"),
+    ("pipeline", ["robot=irpm6", "motion.v_max=1"], "no such key for robot=irpm6 with analysis=statics"),
     # a traceback of OmegaConf's, a misleading "robot.name=None", a limit blamed on the grid, a crash in the job
     ("pipeline", ["--config-dir", "robots", "robot=noanchors"], "robot.anchors: no value given"),
     ("pipeline", ["--config-dir", "robots", "robot=frame9"], "robot=frame9: no such option of the robot group "
@@ -197,7 +197,7 @@ CASES = [
     ("pipeline.study", ["design_mass", "load.mass=-1"], "load.mass=-1.0: must be >= 0"),
     ("pipeline.study", ["actuator_choice", "drive.gear_ratio=0"], "drive.gear_ratio=0"),
     ("pipeline.study", [], "no study given"),
-    ("pipeline.study", ["design_mass", "irpm_fig13_end_ratio", "actuator=2"], "no such key for robot=irpm6"),
+    ("pipeline.study", ["design_mass", "irpm_fig13_end_ratio", "motion.v_max=0.5"], "no such key for robot=irpm6"),
     ("pipeline.report", [], "no results for studies"),
 ]
 
@@ -211,7 +211,7 @@ def listing(root: Path) -> set[str]:
 # a study command fails (no study, redrawing damaged results, several studies at once).
 END_TO_END = {"actuator=9", "-m actuator=1,2,9", "catalogue=truncated.parquet", "actuator=[1,2",
               "-m actuator=1,2 hydra.launcher.n_jobs=0", "grid.n=1000000", "no_such_study",
-              "design_mass --figures-only", "design_mass irpm_fig13_end_ratio actuator=2"}
+              "design_mass --figures-only", "design_mass irpm_fig13_end_ratio motion.v_max=0.5"}
 IN_PROCESS = [c for c in CASES if c[0] == "pipeline" and " ".join(c[1]) not in END_TO_END]
 STUDIES_IN_PROCESS = [c for c in CASES if c[0] == "pipeline.study" and " ".join(c[1]) not in END_TO_END]
 PROCESSES = [c for c in CASES if c not in IN_PROCESS and c not in STUDIES_IN_PROCESS]

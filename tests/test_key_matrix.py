@@ -35,6 +35,8 @@ KEYS = {  # key -> (overrides, the criterion or column it adds when the job runs
     "platform_motion": (["platform_motion.acceleration=[[0.5,0,0,0,0,0],[0,0,-0.5,0,0,0]]"], None),
     "cable rules": (["robot.cable_mass=0.05", "+criteria.cable_contraction={share: 0.002}",
                      "+criteria.cable_frequency={hz: 2}"], "margin_cable_frequency"),
+    "actuator": (["actuator=2"], "margin_voltage"),
+    "drive": (["drive.gear_ratio=20"], None),
 }
 # the cells that are refused, with the key the one line names
 REFUSED = {**{(analysis, key): key for analysis in ("lines", "trajectory") for key in ("workspace.home", "output.mesh")},
@@ -49,6 +51,9 @@ REFUSED = {**{(analysis, key): key for analysis in ("lines", "trajectory") for k
            **{(analysis, "platform_motion"): "platform_motion" for analysis in ANALYSES
               if analysis not in ("statics", "certified")},
            **{(analysis, "catenary"): "robot.catenary" for analysis in ANALYSES if analysis != "statics"},
+           ("payload", "actuator"): "actuator=2: analysis=payload", ("certified", "actuator"): "actuator=2: analysis=certified",
+           **{(analysis, "drive"): "drive.gear_ratio=20.0: the drive is a catalogue actuator's; give its id"
+              for analysis in ("statics", "trajectory", "payload", "certified")},  # actuator=null
            # what a paving cannot prove yet (analysis=certified: pipeline/app/problem.py, Criterion.certified)
            **{("certified", key): named for key, named in (
                ("obstacles", "obstacles: analysis=certified: a box obstacle"),
@@ -113,13 +118,13 @@ FOREIGN = sorted({(analysis, key, repr(value)) for owner, leaves in OWN.items() 
 def test_the_foreign_cells_cover_every_analysis_files_keys():
     """The cells below are the keys each analysis file sets and another one's does not."""
     assert {analysis for analysis, _, _ in FOREIGN} == set(ANALYSES)
-    assert {"actuator", "motion.v_max", "lines.samples", "model.moment_arm", "trajectory.law",
+    assert {"motion.v_max", "lines.samples", "model.moment_arm", "trajectory.law",
             "certified.depth", "platform_motion.angular_velocity"} <= {key for _, key, _ in FOREIGN}
 
 
 @pytest.mark.parametrize("analysis, key, value", FOREIGN)
 def test_a_key_of_another_analysis_file_is_refused_not_ignored(tmp_path, analysis, key, value):
-    """``+motion.v_max=2`` on a statics job, ``+actuator=3`` on a statics job, ``+model.moment_arm=base``
+    """``+motion.v_max=2`` on a statics job, ``+trajectory.law=spline`` on a statics job, ``+model.moment_arm=base``
     on CPR-WWA: the analysis would not read the key, so the job would silently answer another
     question; one line naming the key, exit 2, nothing written."""
     import ast
@@ -150,9 +155,9 @@ def test_a_foreign_key_is_refused_from_the_api_and_from_a_study_file(tmp_path):
     studies = tmp_path / "myconf" / "studies"
     studies.mkdir(parents=True)
     (studies / "mine.yaml").write_text(yaml.safe_dump({
-        "title": "mine", "source": "mine", "overrides": ["robot=irpm6", "+actuator=3"],
+        "title": "mine", "source": "mine", "overrides": ["robot=irpm6", "+motion.v_max=3"],
         "sweep": {"wrench.fz": "50000,100000"}}))
     done = command(tmp_path, "pipeline.study", "--config-dir", "myconf", "mine", "--out", "out")
     lines = done.stderr.strip().splitlines()
-    assert done.returncode == 2 and len(lines) == 1 and "actuator: analysis=statics does not read it" in lines[0], lines
+    assert done.returncode == 2 and len(lines) == 1 and "motion: analysis=statics does not read it" in lines[0], lines
     assert not (tmp_path / "out").exists()

@@ -100,6 +100,21 @@ def test_the_points_robot_studies_give_the_numbers_their_docs_state(make_cfg, ca
     assert (summary["n_feasible"], summary["n_points"]) == (feasible, 24000)
 
 
+def test_the_readme_s_drive_numbers(ipanema):
+    """The README's row for a catalogue actuator on the own robot: a 2 kg platform in [1, 100] N,
+    61.55 % without a drive; actuator 4 48.02 % (its voltage), 3 29.93 % (its torque), 5 none."""
+    root, _, _ = ipanema
+    found = {}
+    for actuator in (None, 4, 3, 5):
+        extra = [] if actuator is None else [f"actuator={actuator}"]
+        done = run(root, "robot=ipanema1", "tension.model=feasible", "tension.t_min=1", "tension.t_max=100",
+                   "robot.platform.mass=2", *extra, f"hydra.run.dir=drive{actuator}")
+        assert done.returncode == 0, done.stderr
+        found[actuator] = pd.read_parquet(root / f"drive{actuator}" / "summary.parquet").iloc[0]
+    assert [round(found[a]["feasible_pct"], 2) for a in (None, 4, 3, 5)] == [61.55, 48.02, 29.93, 0.0]
+    assert found[4]["lost_voltage"] > 0 == found[4]["lost_torque"] and found[3]["lost_torque"] > 0 == found[3]["lost_voltage"]
+
+
 def test_the_readme_s_payload_and_wrench_set_numbers(ipanema):
     """The README's own-robot commands with cables in [1, 100] N: the payload map (median 4.6 kg,
     at most 25.3 kg, 83.60 % of the box holds the platform alone, as the statics analysis says;

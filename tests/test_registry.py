@@ -52,11 +52,13 @@ def test_the_cable_length_limit_is_checked_in_cpr_wwa_too(make_cfg, catalogue):
 
 
 def test_a_job_has_only_the_keys_of_its_robot_and_analysis(make_cfg, catalogue):
-    """The IRPM's statics summary carries no actuator, motion or CPR-8 grid; the CPR-8's no
-    moment-arm reading; each gets its own analysis' keys (conf/analysis/)."""
+    """The IRPM's statics summary carries no motion or CPR-8 grid, and no actuator unless one is
+    given (the statics' drive, actuator=null); the CPR-8's no moment-arm reading; each gets its
+    own analysis' keys (conf/analysis/)."""
     _, irpm = compute_workspace(make_cfg("robot=irpm6", "robot.search.step=1"), catalogue)
     _, cpr8 = compute_workspace(make_cfg(), catalogue)
-    assert not any(k.startswith(("actuator", "motion.", "grid.", "drive.", "choice.")) for k in irpm)
+    assert not any(k.startswith(("motion.", "grid.", "model.pinv_columns")) for k in irpm)
+    assert irpm["actuator"] is None and "actuator_name" not in irpm
     assert irpm["model.moment_arm"] == "platform" and "model.moment_arm" not in cpr8
     assert cpr8["actuator"] == 1 and cpr8["grid.n"] == 6 and "wrench.fz" in cpr8 and "wrench.fz" in irpm
     assert not any(k.startswith("robot.r_") for k in cpr8)

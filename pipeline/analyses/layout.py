@@ -249,6 +249,9 @@ def check_robot(spec: LayoutSpec, problem, grid) -> None:
         if problem.spec.kind != "statics" or problem.spec.moves:
             raise ConfigError("layout.objectives: actuator_cost holds a platform at rest (analysis=statics without "
                               "platform_motion)")
+        if problem.spec.winch_radius is not None:
+            raise ConfigError("layout.objectives: actuator_cost chooses the actuator from layout.catalogue; leave the "
+                              "job's own actuator=null")
         drives(spec, robot.n_cables)  # the catalogue and its cost column, refused in one line
     if "frame_m3" in spec.objectives and (np.asarray(spec.anchors.hi) <= np.asarray(spec.anchors.lo)).any():
         raise ConfigError(f"layout.objectives: frame_m3 is the anchors' bounding volume; the installation box "

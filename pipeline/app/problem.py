@@ -40,7 +40,7 @@ from pipeline.app.config import (
     unknown_keys, vector,
 )
 from pipeline.errors import ConfigError
-from pipeline.model.actuators import actuator_model
+from pipeline.model.actuators import ActuatorModel, actuator_model
 from pipeline.model.catalogue import Catalogue
 from pipeline.model.clearance import Obstacle, Polytope
 from pipeline.model.dynamics import Load, MotionSpec, inertia_tensor
@@ -49,7 +49,7 @@ from pipeline.model.pulleys import Pulleys
 from pipeline.model.sagging import MAX_CABLES, SaggingSpec
 from pipeline.model.motion import acceleration_set, cartesian_cube, extreme_points, velocity_set
 from pipeline.model.robots import PointsRobot, cpr8, irpm6, point_list
-from pipeline.model.statics import PathLimits, PathSpec, PayloadSpec, StaticLimits, StaticsSpec
+from pipeline.model.statics import DrivenLimits, PathSpec, PayloadSpec, StaticsSpec
 from pipeline.model.tensions import TensionSpec
 from pipeline.workspace.compute import grid_workspace, name_of
 from pipeline.workspace.dispatch import fused_unfit
@@ -175,11 +175,26 @@ def _known_actuator(cfg: DictConfig, catalogue: Catalogue) -> None:
         raise ConfigError(f"actuator={cfg.actuator}: no such id in the catalogue (ids: {ids})")
 
 
+def _drive(cfg: DictConfig, catalogue: Catalogue | None) -> ActuatorModel | None:
+    """The catalogue actuator that drives every cable (``actuator``, ``drive.*`` overriding its
+    winch radius and gear ratio; eq. (32) with xi, the default reading); None without one, and a
+    ``drive.*`` given without one refused."""
+    if cfg.actuator is not None:
+        _known_actuator(cfg, catalogue)
+        return actuator_model(catalogue.row(cfg.actuator), cfg.drive.winch_radius, cfg.drive.gear_ratio)
+    given = next((key for key, value in cfg.drive.items() if value is not None), None)
+    if given is not None:
+        raise ConfigError(f"drive.{given}={cfg.drive[given]}: the drive is a catalogue actuator's; give its id, "
+                          "actuator=ID")
+    return None
+
+
 def _statics(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
     """The statics' spec (eqs. 7-10), limits and criteria, balancing the rows of the robot's
-    freedoms; refuses moments about the base for a platform with mass, and, under the
-    minimum-norm model, fewer cables than freedoms (its gram ratio would make every pose
-    singular; ``tension=feasible`` finds the poses where fewer cables hold the load, as a crane's)."""
+    freedoms, with ``actuator`` the drive of every cable (:func:`_drive`; its criteria, eqs. 30-34,
+    in each required motion of the platform); refuses moments about the base for a platform with
+    mass, and, under the minimum-norm model, fewer cables than freedoms (its gram ratio would make
+    every pose singular; ``tension=feasible`` finds the poses where fewer cables hold the load, as a crane's)."""
     load = load_spec(cfg)
     if name_of(cfg.model.moment_arm) == "base" and load.mass > 0:
         raise ConfigError(f"model.moment_arm=base: moments about the base are only read for a "
@@ -187,6 +202,7 @@ def _statics(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
                           f"load.mass={cfg.load.mass}); set both to 0 and put the weight in wrench.*")
     if name_of(cfg.tension.model) == "pinv":
         _enough_cables(cfg, robot, len(robot.dofs), "; tension=feasible finds where fewer cables hold the load")
+    drive = _drive(cfg, catalogue)
     spec = StaticsSpec(
         moment_arm=name_of(cfg.model.moment_arm),
         cable_direction=name_of(cfg.model.cable_direction),
@@ -195,6 +211,7 @@ def _statics(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
         load=load,
         **dict(zip(("wrench_set", "vertex_numbers"), wrench_set(cfg.wrench.set))),
         **platform_motion(cfg, load),
+        winch_radius=None if drive is None else np.full(robot.n_cables, drive.winch_radius),
     )
     if spec.set_size() > MAX_SET_VERTICES:
         raise ConfigError(f"platform_motion.acceleration: {len(spec.accelerations)} accelerations with each of "
@@ -203,7 +220,7 @@ def _statics(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
     force = spec.load.external[:3] - spec.load.mass * spec.load.gravity * robot.up
     scale = float(np.max(rating)) if rating is not None else max(float(np.linalg.norm(force)), 1.0)
     required = spec.set_size() if len(spec.wrench_set) or spec.moves else 0  # a set's wrenches (summary)
-    limits = StaticLimits(np.inf if rating is None else rating, cfg.model.rank_rtol, scale, required)
+    limits = DrivenLimits(np.inf if rating is None else rating, cfg.model.rank_rtol, scale, required, drive=drive)
     return spec, limits
 
 
@@ -217,6 +234,9 @@ def _payload(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
         raise ConfigError("wrench.set: analysis=payload finds the largest payload under one wrench; a required "
                           "wrench set is for analysis=statics")
     spec, limits = _statics(cfg, catalogue, robot)
+    if spec.winch_radius is not None:
+        raise ConfigError(f"actuator={cfg.actuator}: analysis=payload finds the largest payload the cables hold; a "
+                          "drive's limits are checked by analysis=statics or trajectory")
     if spec.moves:
         raise ConfigError("platform_motion: analysis=payload finds the largest payload of a platform at rest; "
                           "a platform's motion is for analysis=statics")
@@ -266,10 +286,9 @@ def _line_files(cfg: DictConfig, problem: WorkspaceProblem, grid: Grid, files, s
 
 def _trajectory(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
     """The statics of a path's samples (``pipeline.model.statics.PathSpec``): the statics' spec
-    and limits at every sample, the path ``trajectory.*`` gives (``pipeline.app.paths``) and,
-    with ``actuator``, the catalogue actuator that drives every cable (``drive.*`` overriding its
-    winch radius and gear ratio; eq. (32) with xi, the default reading). Refuses a platform's
-    motion apart from its path's, an orientation set, listed poses and a drive without an actuator."""
+    and limits at every sample (with ``actuator`` the statics' drive, :func:`_drive`, at each
+    sample's own motion), the path ``trajectory.*`` gives (``pipeline.app.paths``). Refuses a
+    platform's motion apart from its path's, an orientation set and listed poses."""
     spec, limits = _statics(cfg, catalogue, robot)
     if spec.moves:
         raise ConfigError("platform_motion: analysis=trajectory takes the platform's motion from its path "
@@ -280,18 +299,9 @@ def _trajectory(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot)
     if cfg.poses is not None:
         raise ConfigError("poses: analysis=trajectory checks its path's samples (trajectory.points or "
                           "trajectory.file), not listed poses")
-    drive = None
-    if cfg.actuator is not None:  # the catalogue actuator drives every cable along the path
-        _known_actuator(cfg, catalogue)
-        drive = actuator_model(catalogue.row(cfg.actuator), cfg.drive.winch_radius, cfg.drive.gear_ratio)
-    elif any(value is not None for value in cfg.drive.values()):
-        given = next(key for key, value in cfg.drive.items() if value is not None)
-        raise ConfigError(f"drive.{given}={cfg.drive[given]}: a path's drive is a catalogue actuator's; give its id, "
-                          "actuator=ID")
     spec = PathSpec(**{f.name: getattr(spec, f.name) for f in fields(spec)}, samples=path_samples(cfg, robot),
-                    convention=name_of(cfg.orientation.convention),
-                    winch_radius=None if drive is None else np.full(robot.n_cables, drive.winch_radius))
-    return spec, PathLimits(**{f.name: getattr(limits, f.name) for f in fields(limits)}, drive=drive)
+                    convention=name_of(cfg.orientation.convention))
+    return spec, limits
 
 
 def _path_files(cfg: DictConfig, problem: WorkspaceProblem, grid: Grid | None, files, sweep_pays: bool) -> dict:
@@ -309,6 +319,8 @@ def _certified(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
         (spec.tension.model != "feasible", "tension.model=pinv", "the certificates are of cables that pull; "
          "use tension=feasible"),
         (robot.fixed_point, "robot.dofs", "a robot on a joint has orientations to pave, not positions; not certified yet"),
+        (spec.winch_radius is not None, f"actuator={cfg.actuator}", "a drive's limits have no certified bound yet; "
+         "analysis=statics checks them"),
         (not (np.isfinite(robot.box_lo).all() and np.isfinite(robot.box_hi).all()), "robot.search",
          "the paving starts from the search box; give robot.search.lo and hi"),
         (robot.pulleys is not None, "robot.pulleys", "a pulley's exit point moves with the pose; no certified bound yet"),
@@ -377,8 +389,8 @@ class AnalysisKind:
     certified: bool = False  # whether its verdicts are proofs: every criterion it checks has a certified bound
 
 
-STATICS_KEYS = ("model.moment_arm", "model.cable_direction", "platform_motion")
 DRIVE_KEYS = ("actuator", "catalogue", "drive", "choice")
+STATICS_KEYS = ("model.moment_arm", "model.cable_direction", "platform_motion", *DRIVE_KEYS)
 CPR_WWA_KEYS = (*DRIVE_KEYS, "motion", "grid.n_vel", "model.pinv_columns", "model.velocity_boundary",
                 "model.acceleration_set", "model.jdot", "model.xi_in_torque_limit")
 ANALYSES = {
@@ -386,7 +398,7 @@ ANALYSES = {
     "statics": AnalysisKind(_statics, _grid_files, STATICS_KEYS),
     "lines": AnalysisKind(_cpr_wwa, _line_files, (*CPR_WWA_KEYS, "lines")),
     "payload": AnalysisKind(_payload, _grid_files, STATICS_KEYS),
-    "trajectory": AnalysisKind(_trajectory, _path_files, (*STATICS_KEYS, *DRIVE_KEYS, "trajectory"), gridded=False),
+    "trajectory": AnalysisKind(_trajectory, _path_files, (*STATICS_KEYS, "trajectory"), gridded=False),
     "certified": AnalysisKind(_certified, _paving_files, (*STATICS_KEYS, "certified", "robust"), gridded=False,
                               certified=True),
 }

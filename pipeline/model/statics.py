@@ -42,7 +42,8 @@ class StaticsSpec:
     minimum-norm tensions (``pinv``, eq. 10) or pulling cables only (``feasible``,
     ``pipeline.model.tensions``; for six cables the same verdict). ``accelerations`` (A, 6) and
     ``angular_velocities`` (V, 3): the platform's motion (``platform_motion``), every
-    acceleration at every angular velocity required with every wrench.
+    acceleration at every angular velocity required with every wrench. ``winch_radius`` (m,): R of
+    each cable's winch where a catalogue actuator drives the cables (``actuator``; None: no drive).
     """
 
     moment_arm: str = "platform"
@@ -54,6 +55,7 @@ class StaticsSpec:
     vertex_numbers: tuple[int, ...] = ()
     accelerations: np.ndarray = field(default_factory=lambda: np.zeros((0, 6)))
     angular_velocities: np.ndarray = field(default_factory=lambda: np.zeros((1, 3)))
+    winch_radius: np.ndarray | None = None
     kind: ClassVar[str] = "statics"  # which compiled kernel evaluates it (pipeline.workspace.fused)
     summarised: ClassVar[tuple[str, ...]] = ()  # per-pose columns the summary gives min, median, max of
 
@@ -80,6 +82,8 @@ class StaticsSpec:
         """Why the compiled statics kernel cannot evaluate this spec, None when it can."""
         if len(self.wrench_set) or self.moves:
             return "it balances one wrench (no wrench.set, no platform_motion)"
+        if self.winch_radius is not None:
+            return "it checks the cables' own limits, not a drive's (actuator=null)"
         return None if self.tension.model == "pinv" else "it evaluates tension.model=pinv only"
 
 
@@ -104,11 +108,11 @@ class StaticLimits:
 
 
 @dataclass(frozen=True)
-class PathLimits(StaticLimits):
-    """The statics' limits at every sample of a path and, with ``drive`` (the catalogue
-    actuator of every cable, ``pipeline.model.actuators.ActuatorModel``), the actuator's: its
-    constants and limits (``G_v``, ``speed_limit``, ...) read through these limits, so that one
-    limits object serves the statics' criteria and the actuator's."""
+class DrivenLimits(StaticLimits):
+    """The statics' limits (at the poses of a grid or the samples of a path) and, with ``drive``
+    (the catalogue actuator of every cable, ``pipeline.model.actuators.ActuatorModel``), the
+    actuator's: its constants and limits (``G_v``, ``speed_limit``, ...) read through these
+    limits, so that one limits object serves the statics' criteria and the actuator's."""
 
     drive: ActuatorModel | None = None
 
@@ -260,6 +264,78 @@ class PoseStatics(PoseGeometry):
     def _gram(self) -> np.ndarray:
         return gram(self.structure_matrix)
 
+    # A drive (``StaticsSpec.winch_radius``; the actuator criteria of eqs. 30-34): each winch turns
+    # by theta = l / R (eq. 18: theta > 0 pays the cable out), so its speed and acceleration are
+    # the cable's over R, and it holds the load torque M = R t; at each required wrench's own motion.
+
+    @property
+    def kinds(self) -> tuple[str, ...]:
+        return ("statics", "dynamics") if self.spec.winch_radius is not None else ("statics",)
+
+    @cached_property
+    def motion_rates(self) -> tuple[np.ndarray, np.ndarray]:
+        """(n, K, m) each cable's speed and acceleration (``PoseGeometry.cable_rates``) in the motion
+        of each required wrench (:attr:`required_wrenches`, the same order): the platform's
+        reference point at rest, turning at each angular velocity and accelerating at each
+        acceleration of ``platform_motion`` ((n, 1, m) zeros at rest)."""
+        n, m = len(self.positions), self.robot.n_cables
+        if not self.spec.moves:
+            return np.zeros((n, 1, m)), np.zeros((n, 1, m))
+        accelerations = self.spec.accelerations if len(self.spec.accelerations) else np.zeros((1, 6))
+        still = np.zeros((n, 3))
+        rates = [self.cable_rates(still, np.broadcast_to(omega, (n, 3)), np.broadcast_to(a[:3], (n, 3)),
+                                  np.broadcast_to(a[3:], (n, 3)))
+                 for omega in self.spec.angular_velocities for a in accelerations]
+        repeats = (1, max(1, len(self.spec.wrench_set)), 1)  # every wrench with every motion, wrenches outer
+        return (np.tile(np.stack([r[0] for r in rates], axis=1), repeats),
+                np.tile(np.stack([r[1] for r in rates], axis=1), repeats))
+
+    @cached_property
+    def shaft_speed_range(self) -> tuple[np.ndarray, np.ndarray]:
+        """(n, m) theta_dot = l_dot / R, the largest and the smallest over the required motions."""
+        speed = self.motion_rates[0] / self.spec.winch_radius
+        return speed.max(axis=1), speed.min(axis=1)
+
+    @cached_property
+    def shaft_acceleration(self) -> np.ndarray:
+        """(n, K, m) theta_ddot = l_ddot / R in each required motion (with the cables' turn: exact)."""
+        return self.motion_rates[1] / self.spec.winch_radius
+
+    @property
+    def shaft_acceleration_worst(self) -> np.ndarray:
+        return np.abs(self.shaft_acceleration).max(axis=1)
+
+    @cached_property
+    def torque_range(self) -> tuple[np.ndarray, np.ndarray]:
+        """(n, m) M = R t of the tensions (the largest and smallest over the required wrenches)."""
+        high, low = self.force_range
+        return self.spec.winch_radius * high, self.spec.winch_radius * low
+
+    def voltage_of(self, act, torques: np.ndarray) -> np.ndarray:
+        """(n, K, m) u = G_v theta_ddot + L_v theta_dot - S_v M of eq. (21) in each required motion,
+        at load torques M (n, K, m)."""
+        speed = self.motion_rates[0] / self.spec.winch_radius
+        return act.G_v * self.shaft_acceleration + act.L_v * speed + act.load_gain * torques
+
+    def voltage_worst(self, act) -> np.ndarray:
+        """(n, m) the largest |u| over the required wrenches, each with its own motion's speed and
+        acceleration and its own tensions."""
+        tensions = self.tensions_over_set if self.ranges_over_a_set else self.tensions[:, None, :]
+        return np.abs(self.voltage_of(act, self.spec.winch_radius * tensions)).max(axis=1)
+
+    def torque_bounds(self, act) -> tuple:
+        """|R t| <= M_mot N_M (eq. 32) on the ``feasible`` model's variables, the tensions t."""
+        limit = act.torque_limit / self.spec.winch_radius
+        return -limit, limit, limit
+
+    def voltage_bounds(self, act) -> tuple:
+        """The interval on t that keeps |u| <= U (eq. 34) in each required motion:
+        :func:`pipeline.model.actuators.voltage_interval` on M = R t, over R; (n, K, m)."""
+        other = self.voltage_of(act, 0.0)
+        lower, upper, scale = voltage_interval(act, other, other)
+        radius = self.spec.winch_radius
+        return lower / radius, upper / radius, scale / radius[0]
+
 
 class PathStatics(PoseStatics):
     """The statics of a path's samples (``analysis=trajectory``): each pose with its own rotation
@@ -293,66 +369,20 @@ class PathStatics(PoseStatics):
         return self.cable_rates(self.velocities[:, :3], self.velocities[:, 3:], self.accelerations[:, :3],
                                 self.accelerations[:, 3:])
 
-    # The drive along the path (``PathSpec.winch_radius``; the actuator criteria of eqs. 30-34):
-    # each winch turns by theta = l / R (eq. 18: theta > 0 pays the cable out), so its speed and
-    # acceleration are the cable's exact ones over R, and it holds the load torque M = R t.
-
-    @property
-    def kinds(self) -> tuple[str, ...]:
-        return ("statics", "dynamics") if self.spec.winch_radius is not None else ("statics",)
-
     @cached_property
-    def shaft_speed_range(self) -> tuple[np.ndarray, np.ndarray]:
-        """(n, m) theta_dot = l_dot / R of each sample (its largest and smallest: the same)."""
-        speed = self.rates[0] / self.spec.winch_radius
-        return speed, speed
-
-    @cached_property
-    def shaft_acceleration(self) -> np.ndarray:
-        """(n, m) theta_ddot = l_ddot / R of each sample (with the cables' turn: exact)."""
-        return self.rates[1] / self.spec.winch_radius
-
-    @property
-    def shaft_acceleration_worst(self) -> np.ndarray:
-        return np.abs(self.shaft_acceleration)
-
-    @cached_property
-    def torque_range(self) -> tuple[np.ndarray, np.ndarray]:
-        """(n, m) M = R t of the tensions (the largest and smallest over a wrench set)."""
-        high, low = self.force_range
-        return self.spec.winch_radius * high, self.spec.winch_radius * low
-
-    def voltage_of(self, act, torques: np.ndarray) -> np.ndarray:
-        """(n, m) u = G_v theta_ddot + L_v theta_dot - S_v M of eq. (21) at load torques M (n, m)."""
-        return act.G_v * self.shaft_acceleration + act.L_v * self.shaft_speed_range[0] + act.load_gain * torques
-
-    def voltage_worst(self, act) -> np.ndarray:
-        high, low = self.torque_range
-        return np.maximum(np.abs(self.voltage_of(act, high)), np.abs(self.voltage_of(act, low)))
-
-    def torque_bounds(self, act) -> tuple:
-        """|R t| <= M_mot N_M (eq. 32) on the ``feasible`` model's variables, the tensions t."""
-        limit = act.torque_limit / self.spec.winch_radius
-        return -limit, limit, limit
-
-    def voltage_bounds(self, act) -> tuple:
-        """The interval on t that keeps |u| <= U (eq. 34) at each sample's speed and acceleration:
-        :func:`pipeline.model.actuators.voltage_interval` on M = R t, over R; (n, 1, m)."""
-        other = (act.G_v * self.shaft_acceleration + act.L_v * self.shaft_speed_range[0])[:, None, :]
-        lower, upper, scale = voltage_interval(act, other, other)
-        radius = self.spec.winch_radius
-        return lower / radius, upper / radius, scale / radius[0]
+    def motion_rates(self) -> tuple[np.ndarray, np.ndarray]:
+        """(n, 1, m) each cable's speed and acceleration at its sample (:attr:`rates`)."""
+        speed, acceleration = self.rates
+        return speed[:, None, :], acceleration[:, None, :]
 
 
 @dataclass(frozen=True)
 class PathSpec(StaticsSpec):
     """``analysis=trajectory``: the statics of a path's ``samples`` (``pipeline.model.path.Samples``),
-    their angles in ``convention`` (``orientation.convention``); ``winch_radius`` (m,) R of each
-    cable's winch where a catalogue actuator drives the cables (``actuator``; None: no drive)."""
+    their angles in ``convention`` (``orientation.convention``)."""
 
     samples: Samples | None = None
     convention: str = "zyx"
-    winch_radius: np.ndarray | None = None
     kind: ClassVar[str] = "trajectory"
 
     def fused_unfit(self) -> str | None:

@@ -108,9 +108,9 @@ def drive_columns(state, act, columns: dict) -> dict:
     eq. 21), the armature current ``current_<c>`` = (u - C_E theta_dot) / R_r (A) and the
     electrical power ``power_<c>`` = u i (W; < 0: the motor brakes and feeds back)."""
     names = state.robot.cable_names
-    speed, accel = state.shaft_speed_range[0], state.shaft_acceleration
+    speed, accel = state.shaft_speed_range[0], state.shaft_acceleration[:, 0]
     torque = state.spec.winch_radius * np.column_stack([columns[f"tension_{name}"] for name in names])
-    voltage = state.voltage_of(act, torque)
+    voltage = state.voltage_of(act, torque[:, None, :])[:, 0]
     current = (voltage - act.C_E * speed) / act.R_r
     values = dict(zip(DRIVE, (speed, accel, torque, voltage, current, voltage * current)))
     return {f"{quantity}_{name}": values[quantity][:, i] for quantity in DRIVE for i, name in enumerate(names)}

@@ -40,9 +40,9 @@ def _dynamics(analysis: str, spec=None, robot=None) -> bool:
 
 
 def _driven(analysis: str, spec, robot=None) -> bool:
-    """Whether a catalogue actuator drives the cables: CPR-WWA's, or a path's with ``actuator``
-    (``PathSpec.winch_radius``); the actuator's criteria apply to exactly these."""
-    return _dynamics(analysis) or (analysis == "trajectory" and spec.winch_radius is not None)
+    """Whether a catalogue actuator drives the cables: CPR-WWA's, or a static pose's or a path's
+    with ``actuator`` (``StaticsSpec.winch_radius``); the actuator's criteria apply to exactly these."""
+    return _dynamics(analysis) or (analysis in ("statics", "trajectory") and spec.winch_radius is not None)
 
 
 # the analyses whose cables hold the platform's load: at a pose, along a path, over a box of poses
