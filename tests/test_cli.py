@@ -126,7 +126,7 @@ def test_help_lists_the_choices_and_every_key_with_its_meaning(tmp_path):
     assert "``" not in page and ":func:" not in page
     irpm = run(tmp_path, "--help", "robot=irpm6", "robot.gamma_deg=30").stdout
     assert "  robot.gamma_deg = 30.0" in irpm and "pair angle gamma (deg)" in " ".join(irpm.split())
-    assert "  actuator =" not in irpm and "  tension.t_max = 55000.0" in irpm
+    assert "  motion.v_max =" not in irpm and "  actuator = null" in irpm and "  tension.t_max = 55000.0" in irpm
     bad = run(tmp_path, "--help", "robot=nosuch")
     assert bad.returncode == 2 and bad.stderr.startswith("error: robot=nosuch: no such option")
     points = run(tmp_path, "--help", "robot=points", "robot.l_max=3")  # it refused: its points are required

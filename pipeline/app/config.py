@@ -642,10 +642,11 @@ class Config:
     """The job: ``analysis``, a config group (cpr_wwa: dynamics and actuator limits; statics:
     wrench and tensions; lines: the paper's straight lines; payload: the largest payload per
     pose; trajectory: the platform along a path; certified: boxes of poses proven feasible or not;
-    ``robot=irpm6`` and ``points`` pick statics), ``actuator`` (the id of a catalogue
-    row; a path's may be null: no drive), ``catalogue`` (a CSV or Parquet path; null = Table 1 of the CPR-8 paper, shipped in
-    pipeline/data), ``poses`` (a list of [x, y, z] positions in m checked instead of the robot's
-    grid, e.g. ``poses=[[0,0,5]]``; null = the grid; the summary's volume_m3 is then NaN),
+    ``robot=irpm6`` and ``points`` pick statics), ``actuator`` (the id of a catalogue row; a
+    static pose's or a path's may be null: no drive), ``catalogue`` (a CSV or Parquet path; null =
+    Table 1 of the CPR-8 paper, shipped in pipeline/data), ``poses`` (a list of [x, y, z]
+    positions in m checked instead of the robot's grid, e.g. ``poses=[[0,0,5]]``; null = the
+    grid; the summary's volume_m3 is then NaN),
     ``obstacles`` (the cell's obstacles no cable and not the platform may touch, criterion
     ``cable_obstacle``: a list of boxes ``{name: table, lo: [x, y, z], hi: [x, y, z]}`` and
     half-spaces ``{name: floor, point: [x, y, z], normal: [x, y, z]}``, the obstacle behind the
