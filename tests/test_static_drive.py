@@ -87,15 +87,15 @@ def newton_euler(position, rotation, mass, com, inertia, acceleration, omega, gr
     return np.concatenate([force, np.cross(c, force) - world @ alpha - np.cross(omega, world @ omega)])
 
 
-def length_rates(position, rotation, acceleration, omega, step=1e-4):
+def length_rates(position, rotation, velocity, acceleration, omega, step=1e-4):
     """(m,) each cable's speed and acceleration by central differences of its length along the
-    motion p(t) = p + a t^2 / 2, R(t) = expm([omega t + alpha t^2 / 2]x) R (at rest at t = 0)."""
+    motion p(t) = p + v t + a t^2 / 2, R(t) = expm([omega t + alpha t^2 / 2]x) R."""
     anchors, arms = np.array(ANCHORS, float), np.array(ATTACHMENTS, float)
 
     def lengths(t):
         turn = omega * t + 0.5 * acceleration[3:] * t * t
         skew = np.array([[0, -turn[2], turn[1]], [turn[2], 0, -turn[0]], [-turn[1], turn[0], 0]])
-        ends = position + 0.5 * acceleration[:3] * t * t + arms @ (expm(skew) @ rotation).T
+        ends = position + velocity * t + 0.5 * acceleration[:3] * t * t + arms @ (expm(skew) @ rotation).T
         return np.linalg.norm(anchors - ends, axis=1)
 
     before, now, after = lengths(-step), lengths(0.0), lengths(step)
@@ -125,15 +125,17 @@ def lp_holds(position, rotation, wrench, speed, accel, act, radius, slack=0.0) -
 
 def test_in_motion_every_motion_meets_the_drive_with_its_own_wrench_and_cable_rates(make_cfg, catalogue):
     """platform_motion: three accelerations (linear and angular, none symmetric) at two angular
-    velocities, actuator 4 (its voltage binds first): a pose holds iff every one of the six
-    motions has tensions within the drive's limits for its own wrench (Newton-Euler here) and its
-    own cable speeds and accelerations (finite differences of the lengths here), by an LP each;
-    poses within 1e-6 of a limit are not counted."""
+    velocities and two velocities of the reference point, actuator 4 (its voltage binds first): a
+    pose holds iff every one of the twelve motions has tensions within the drive's limits for its
+    own wrench (Newton-Euler here) and its own cable speeds and accelerations (finite differences
+    of the lengths here), by an LP each; poses within 1e-6 of a limit are not counted."""
     accelerations = [[1.5, -0.5, 2.0, 0.0, 0.0, 0.0], [-1.0, 0.8, -1.2, 0.5, -0.3, 0.8], [0.2, 1.1, 0.4, -0.6, 0.4, 0.0]]
     omegas = [[0.0, 0.0, 6.0], [1.0, -0.8, 0.3]]
+    velocities = [[0.0, 0.0, 0.0], [0.6, -0.4, 0.3]]
     problem, grid, driven, limiting = verdicts(
         make_cfg, catalogue, *ROBOT, "robot.platform.mass=3", "actuator=4",
-        f"platform_motion.acceleration={accelerations}", f"platform_motion.angular_velocity={omegas}")
+        f"platform_motion.acceleration={accelerations}", f"platform_motion.angular_velocity={omegas}",
+        f"platform_motion.velocity={velocities}")
     act = actuator_model(catalogue.row(4))
     rotation = rotation_matrices(np.array([[0.1, -0.05, 0.0]]))[0]
     com, inertia = np.array([0.03, -0.02, 0.01]), np.diag([0.1, 0.12, 0.2])
@@ -143,11 +145,12 @@ def test_in_motion_every_motion_meets_the_drive_with_its_own_wrench_and_cable_ra
         verdict = []
         for slack in (-1e-6, 1e-6):
             ok = True
-            for omega in np.array(omegas, float):
-                for acceleration in np.array(accelerations, float):
-                    wrench = newton_euler(position, rotation, 3.0, com, inertia, acceleration, omega)
-                    speed, accel = length_rates(position, rotation, acceleration, omega)
-                    ok &= lp_holds(position, rotation, wrench, speed, accel, act, 0.08, slack)
+            for velocity in np.array(velocities, float):
+                for omega in np.array(omegas, float):
+                    for acceleration in np.array(accelerations, float):
+                        wrench = newton_euler(position, rotation, 3.0, com, inertia, acceleration, omega)
+                        speed, accel = length_rates(position, rotation, velocity, acceleration, omega)
+                        ok &= lp_holds(position, rotation, wrench, speed, accel, act, 0.08, slack)
             verdict.append(ok)
         if verdict[0] == verdict[1]:
             assert held == verdict[0], position
@@ -158,7 +161,8 @@ def test_in_motion_every_motion_meets_the_drive_with_its_own_wrench_and_cable_ra
 
 def test_a_drive_on_a_static_grid_from_the_command_line(tmp_path):
     """The job's summary names its actuator and what the drive loses; payload and certified
-    refuse a drive in one line, and drive.* without an actuator too, nothing written."""
+    refuse a drive in one line, and drive.* or a velocity without an actuator too, and a velocity
+    that is not three finite numbers, nothing written."""
     done = command(tmp_path, "pipeline", *ROBOT, "robot.platform.mass=12", "actuator=4", "hydra.run.dir=run")
     assert done.returncode == 0, done.stderr[-2000:]
     summary = pd.read_parquet(tmp_path / "run" / "summary.parquet").iloc[0]
@@ -167,7 +171,10 @@ def test_a_drive_on_a_static_grid_from_the_command_line(tmp_path):
     for extra, message in ((["analysis=payload", "actuator=1"], "actuator=1: analysis=payload finds the largest payload"),
                            (["analysis=certified", "actuator=1"],
                             "actuator=1: analysis=certified: a drive's limits have no certified bound"),
-                           (["drive.gear_ratio=10"], "drive.gear_ratio=10.0: the drive is a catalogue actuator's")):
+                           (["drive.gear_ratio=10"], "drive.gear_ratio=10.0: the drive is a catalogue actuator's"),
+                           (["platform_motion.velocity=[0.5,0,0]"],
+                            "platform_motion.velocity: the reference point's velocity changes no wrench"),
+                           (["actuator=1", "platform_motion.velocity=[0.5,0,nan]"], "platform_motion.velocity")):
         refused = command(tmp_path, "pipeline", *ROBOT, *extra, "hydra.run.dir=refused")
         assert refused.returncode == 2 and message in refused.stderr, refused.stderr[-1500:]
         assert len(refused.stderr.strip().splitlines()) == 1 and not (tmp_path / "refused").exists()

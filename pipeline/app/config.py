@@ -466,11 +466,13 @@ class PlatformMotionConfig:
     ``{linear: r, angular: r}`` (each by the icosahedron around it); null: at rest.
     ``angular_velocity``: [wx, wy, wz], rad/s, the platform's (its centripetal and gyroscopic
     terms, quadratic in it), or a list of them, each required (exact at each listed velocity, not
-    between them). The platform's mass, centre of mass and
-    inertia are ``robot.platform`` and ``load``'s."""
+    between them). ``velocity``: [vx, vy, vz], m/s, the reference point's, or a list of them, each
+    required: it changes no wrench, only a drive's motors (``actuator``; refused without one).
+    The platform's mass, centre of mass and inertia are ``robot.platform`` and ``load``'s."""
 
     acceleration: Any = MISSING
     angular_velocity: Any = MISSING
+    velocity: Any = MISSING
 
 
 @dataclass

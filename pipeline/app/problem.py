@@ -213,9 +213,13 @@ def _statics(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
         **platform_motion(cfg, load),
         winch_radius=None if drive is None else np.full(robot.n_cables, drive.winch_radius),
     )
+    if np.any(spec.velocities) and drive is None:
+        raise ConfigError("platform_motion.velocity: the reference point's velocity changes no wrench the cables "
+                          "balance; it turns a drive's motors: give actuator=ID")
     if spec.set_size() > MAX_SET_VERTICES:
-        raise ConfigError(f"platform_motion.acceleration: {len(spec.accelerations)} accelerations with each of "
-                          f"{len(spec.wrench_set)} wrenches of wrench.set, {spec.set_size()}; at most {MAX_SET_VERTICES}")
+        raise ConfigError(f"platform_motion: {max(1, len(spec.accelerations))} accelerations x "
+                          f"{len(spec.angular_velocities)} angular velocities x {len(spec.velocities)} velocities with each "
+                          f"of {max(1, len(spec.wrench_set))} wrenches, {spec.set_size()}; at most {MAX_SET_VERTICES}")
     rating = spec.tension.t_max
     force = spec.load.external[:3] - spec.load.mass * spec.load.gravity * robot.up
     scale = float(np.max(rating)) if rating is not None else max(float(np.linalg.norm(force)), 1.0)
@@ -476,9 +480,9 @@ def ball_vertices(node) -> np.ndarray:
 
 
 def platform_motion(cfg: DictConfig, load: Load) -> dict:
-    """The statics' ``accelerations`` and ``angular_velocity`` of ``platform_motion`` (at rest
-    without the node); refuses angular motion of a platform without its inertia and more
-    wrenches than ``MAX_SET_VERTICES`` with the wrench set."""
+    """The statics' ``accelerations``, ``angular_velocities`` and ``velocities`` of
+    ``platform_motion`` (at rest without the node); refuses angular motion of a platform without
+    its inertia."""
     if "platform_motion" not in cfg:
         return {}
     node = cfg.platform_motion
@@ -488,29 +492,31 @@ def platform_motion(cfg: DictConfig, load: Load) -> dict:
     else:
         accelerations = vertex_set(given, "platform_motion.acceleration", _acceleration,
                                    "[ax, ay, az, alpha_x, alpha_y, alpha_z] (m/s^2, rad/s^2)", "at rest")[0]
-    omega = angular_velocities(node.angular_velocity)
+    omega = velocity_list(node.angular_velocity, "platform_motion.angular_velocity", OMEGA_RULE, "[wx, wy, wz] (rad/s)")
+    velocities = velocity_list(node.velocity, "platform_motion.velocity", VELOCITY_RULE, "[vx, vy, vz] (m/s)")
     if load.inertia is None and load.mass > 0 and (np.any(omega) or np.any(accelerations[:, 3:])):
         raise ConfigError("platform_motion: a platform that turns needs its inertia, robot.platform.inertia "
                           "([Ixx, Iyy, Izz(, Ixy, Ixz, Iyz)] kg m^2 about its centre of mass)")
-    return {"accelerations": accelerations, "angular_velocities": omega}
+    return {"accelerations": accelerations, "angular_velocities": omega, "velocities": velocities}
 
 
-MAX_ANGULAR_VELOCITIES = 64  # listed angular velocities: each multiplies the wrenches a pose holds
+MAX_VELOCITIES = 64  # listed (angular) velocities: each multiplies the wrenches a pose holds
 
 
-def angular_velocities(value) -> np.ndarray:
-    """(V, 3) ``platform_motion.angular_velocity``: one [wx, wy, wz] (rad/s) or a list of them."""
-    key = "platform_motion.angular_velocity"
+def velocity_list(value, key: str, rule, what: str) -> np.ndarray:
+    """(V, 3) one velocity ``what`` or a list of them (``platform_motion.angular_velocity``,
+    ``velocity``)."""
     given = OmegaConf.to_container(value) if isinstance(value, ListConfig) else value
     rows = given if isinstance(given, list) and given and all(isinstance(v, list) for v in given) else [given]
-    if len(rows) > MAX_ANGULAR_VELOCITIES:
-        raise ConfigError(f"{key}: {len(rows)} angular velocities, at most {MAX_ANGULAR_VELOCITIES}")
-    return np.array([_checked(row, key, OMEGA_RULE, "[wx, wy, wz] (rad/s), or a list of them") for row in rows])
+    if len(rows) > MAX_VELOCITIES:
+        raise ConfigError(f"{key}: {len(rows)} velocities, at most {MAX_VELOCITIES}")
+    return np.array([_checked(row, key, rule, f"{what}, or a list of them") for row in rows])
 
 
 WRENCH_RULE = vector(6, "fx fy fz mx my mz, N and N m", MAX_FORCE)  # the rule of load.external
 ACCELERATION_RULE = vector(6, "ax ay az alpha_x alpha_y alpha_z, m/s^2 and rad/s^2", MAX_ACCELERATION)
 OMEGA_RULE = vector(3, "wx wy wz, rad/s", MAX_ACCELERATION)
+VELOCITY_RULE = vector(3, "vx vy vz, m/s", MAX_ACCELERATION)
 POINT_RULE = vector(3, "x, y, z, m", MAX_FORCE)  # an obstacle's or a platform box's corner, point, normal
 
 

@@ -40,9 +40,11 @@ class StaticsSpec:
     required (``wrench.set``'s vertices, each once; none: the load's wrench alone), and
     ``vertex_numbers`` each one's number in the set as given (1 = its first). ``tension``:
     minimum-norm tensions (``pinv``, eq. 10) or pulling cables only (``feasible``,
-    ``pipeline.model.tensions``; for six cables the same verdict). ``accelerations`` (A, 6) and
-    ``angular_velocities`` (V, 3): the platform's motion (``platform_motion``), every
-    acceleration at every angular velocity required with every wrench. ``winch_radius`` (m,): R of
+    ``pipeline.model.tensions``; for six cables the same verdict). ``accelerations`` (A, 6),
+    ``angular_velocities`` (O, 3) and ``velocities`` (V, 3): the platform's motion
+    (``platform_motion``), every acceleration at every angular velocity and every velocity of the
+    reference point required with every wrench (a velocity changes no wrench: it moves a drive's
+    motors). ``winch_radius`` (m,): R of
     each cable's winch where a catalogue actuator drives the cables (``actuator``; None: no drive).
     """
 
@@ -55,6 +57,7 @@ class StaticsSpec:
     vertex_numbers: tuple[int, ...] = ()
     accelerations: np.ndarray = field(default_factory=lambda: np.zeros((0, 6)))
     angular_velocities: np.ndarray = field(default_factory=lambda: np.zeros((1, 3)))
+    velocities: np.ndarray = field(default_factory=lambda: np.zeros((1, 3)))
     winch_radius: np.ndarray | None = None
     kind: ClassVar[str] = "statics"  # which compiled kernel evaluates it (pipeline.workspace.fused)
     summarised: ClassVar[tuple[str, ...]] = ()  # per-pose columns the summary gives min, median, max of
@@ -65,12 +68,13 @@ class StaticsSpec:
     @property
     def moves(self) -> bool:
         """Whether the platform moves (``platform_motion``): its momentum's rate joins every wrench."""
-        return bool(len(self.accelerations)) or bool(np.any(self.angular_velocities))
+        return bool(len(self.accelerations)) or bool(np.any(self.angular_velocities)) or bool(np.any(self.velocities))
 
     def set_size(self) -> int:
         """Largest per-pose, per-cable set a criterion holds in memory: the wrench set's vertices
-        times the accelerations' times the angular velocities'."""
-        return max(1, len(self.wrench_set)) * max(1, len(self.accelerations)) * len(self.angular_velocities)
+        times the accelerations' times the angular velocities' times the velocities'."""
+        return (max(1, len(self.wrench_set)) * max(1, len(self.accelerations)) * len(self.angular_velocities)
+                * len(self.velocities))
 
     def work(self) -> float:
         """A pose's work against the statics of one wrench (the cost model's reference,
@@ -208,8 +212,9 @@ class PoseStatics(PoseGeometry):
     def required_wrenches(self) -> np.ndarray:
         """(K, k) the wrenches the cables must balance: :attr:`wrench`, plus each wrench of the
         set (``wrench.set``) when there is one, each with the momentum's rate of each acceleration
-        of the platform's motion at each of its angular velocities (``platform_motion``; K = their
-        product); (n, K, k) for a rotation per pose."""
+        of the platform's motion at each of its angular velocities, for each of its velocities
+        (``platform_motion``; K = their product, the wrenches outermost, then the velocities, the
+        angular velocities and the accelerations); (n, K, k) for a rotation per pose."""
         rows = list(self.robot.dofs)
         wrenches = self.wrench[..., None, :]
         if len(self.spec.wrench_set):
@@ -218,7 +223,8 @@ class PoseStatics(PoseGeometry):
             return wrenches
         accelerations = self.spec.accelerations if len(self.spec.accelerations) else np.zeros((1, 6))
         moving = np.concatenate([inertial_wrenches(self.spec.load, self.rotation, accelerations, omega)
-                                 for omega in self.spec.angular_velocities], axis=-2)[..., rows]
+                                 for _ in self.spec.velocities for omega in self.spec.angular_velocities],
+                                axis=-2)[..., rows]
         combined = wrenches[..., :, None, :] + moving[..., None, :, :]  # every wrench with every acceleration
         return combined.reshape(*combined.shape[:-3], -1, combined.shape[-1])
 
@@ -276,16 +282,15 @@ class PoseStatics(PoseGeometry):
     def motion_rates(self) -> tuple[np.ndarray, np.ndarray]:
         """(n, K, m) each cable's speed and acceleration (``PoseGeometry.cable_rates``) in the motion
         of each required wrench (:attr:`required_wrenches`, the same order): the platform's
-        reference point at rest, turning at each angular velocity and accelerating at each
+        reference point at each velocity, turning at each angular velocity and accelerating at each
         acceleration of ``platform_motion`` ((n, 1, m) zeros at rest)."""
         n, m = len(self.positions), self.robot.n_cables
         if not self.spec.moves:
             return np.zeros((n, 1, m)), np.zeros((n, 1, m))
         accelerations = self.spec.accelerations if len(self.spec.accelerations) else np.zeros((1, 6))
-        still = np.zeros((n, 3))
-        rates = [self.cable_rates(still, np.broadcast_to(omega, (n, 3)), np.broadcast_to(a[:3], (n, 3)),
-                                  np.broadcast_to(a[3:], (n, 3)))
-                 for omega in self.spec.angular_velocities for a in accelerations]
+        rates = [self.cable_rates(np.broadcast_to(v, (n, 3)), np.broadcast_to(omega, (n, 3)),
+                                  np.broadcast_to(a[:3], (n, 3)), np.broadcast_to(a[3:], (n, 3)))
+                 for v in self.spec.velocities for omega in self.spec.angular_velocities for a in accelerations]
         repeats = (1, max(1, len(self.spec.wrench_set)), 1)  # every wrench with every motion, wrenches outer
         return (np.tile(np.stack([r[0] for r in rates], axis=1), repeats),
                 np.tile(np.stack([r[1] for r in rates], axis=1), repeats))
