@@ -393,14 +393,20 @@ def write_study(folder, study=STUDY, name="mylayout"):
     (folder / "studies" / f"{name}.yaml").write_text(yaml.safe_dump(study))
 
 
-def test_a_layout_study_from_a_users_folder_writes_a_robot_file_that_runs(tmp_path):
-    write_study(tmp_path / "myconf")
+def run_study(tmp_path, study=STUDY):
+    """The layout study ``study`` from the user's folder ``myconf``: its folder, summary and best row."""
+    write_study(tmp_path / "myconf", study)
     done = command(tmp_path, "pipeline.study", "--config-dir", "myconf", "mylayout", "--out", "out")
     assert done.returncode == 0, done.stderr[-3000:]
     out = tmp_path / "out" / "mylayout"
     summary = pd.read_parquet(out / "summary.parquet")
-    assert len(summary) == 10 and (summary["job"] == "best").sum() == 1
-    best = summary[summary["job"] == "best"].iloc[0]
+    assert (summary["job"] == "best").sum() == 1
+    return out, summary, summary[summary["job"] == "best"].iloc[0]
+
+
+def test_a_layout_study_from_a_users_folder_writes_a_robot_file_that_runs(tmp_path):
+    out, summary, best = run_study(tmp_path)
+    assert len(summary) == 10
     assert best["feasible_pct"] == summary.loc[summary["meets"], "feasible_pct"].max()
     assert best["required_proven_pct"] > 50 and summary["required_proven_pct"].notna().sum() == 1
     assert (out / "figures" / "best.png").stat().st_size > 0
@@ -430,12 +436,7 @@ def test_a_payload_study_counts_the_payload_at_load_com_on_top_of_load_mass(tmp_
                                     "robot.attachments=[[-0.1,0.1,0],[0.1,0.1,0],[0.1,-0.1,0],[-0.1,-0.1,0]]",
                                     "robot.up=[0,1,0]", "load.mass=0.3", "load.com=[0.03,0,0]"],
              "layout": {**STUDY["layout"], "objectives": ["payload_kg"], "budget": 6, "sampler": "tpe"}}
-    write_study(tmp_path / "myconf", study)
-    done = command(tmp_path, "pipeline.study", "--config-dir", "myconf", "mylayout", "--out", "out")
-    assert done.returncode == 0, done.stderr[-3000:]
-    out = tmp_path / "out" / "mylayout"
-    summary = pd.read_parquet(out / "summary.parquet")
-    best = summary[summary["job"] == "best"].iloc[0]
+    out, summary, best = run_study(tmp_path, study)
     assert best["payload_kg"] == summary.loc[summary["meets"], "payload_kg"].max() > 0.3
     anchors = yaml.safe_load((out / "layout_best.yaml").read_text())["anchors"]
     payload, grid = build_problem(make_cfg(*study["overrides"], f"robot.anchors={anchors}", "analysis=payload"), catalogue)
@@ -457,12 +458,7 @@ def test_a_cost_study_names_the_actuator_to_buy_in_its_robot_file(tmp_path, make
              "layout": {**STUDY["layout"], "objectives": ["actuator_cost", "feasible_pct"], "step": 0.25, "budget": 25,
                         "sampler": "tpe", "required": {"lo": [-0.3, -0.3, 0], "hi": [0.3, 0.3, 0]},
                         "catalogue": "motors.csv", "cost": "price_EUR"}}
-    write_study(tmp_path / "myconf", study)
-    done = command(tmp_path, "pipeline.study", "--config-dir", "myconf", "mylayout", "--out", "out")
-    assert done.returncode == 0, done.stderr[-3000:]
-    out = tmp_path / "out" / "mylayout"
-    summary = pd.read_parquet(out / "summary.parquet")
-    best = summary[summary["job"] == "best"].iloc[0]
+    out, summary, best = run_study(tmp_path, study)
     assert best["actuator_cost"] == summary.loc[summary["meets"], "actuator_cost"].min() == 4 * PRICES[int(best["actuator"])]
     header = (out / "layout_best.yaml").read_text().splitlines()[0]
     said = f"actuator {int(best['actuator'])} of the catalogue on every cable (price_EUR {best['actuator_cost']:g} in all)"

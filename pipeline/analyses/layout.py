@@ -61,6 +61,11 @@ OBJECTIVES = {"volume_m3": ("maximize", "feasible volume (m^3)"),
               "tension_factor": ("maximize", "least tension factor over the required box"),
               "frame_m3": ("minimize", "the anchors' bounding box (m^3)"),
               "actuator_cost": ("minimize", "the cheapest catalogue actuators that hold the required box")}
+# objective -> (what it is of the required box, what it asks of the statics, whether at rest)
+NEEDS = {"payload_kg": ("is the largest payload the required box holds", "adds mass to a platform at rest", True),
+         "tension_factor": ("is the least over the required box", "is of a static pose's structure matrix", False),
+         "actuator_cost": ("is the cheapest catalogue actuator that holds the required box", "holds a platform at rest",
+                           True)}
 PAYLOAD_RTOL = 1e-6  # the largest payload, bisected to this share of itself
 PAYLOAD_MAX = 1e9  # kg: past it the payload is taken as unbounded (cables without an upper limit)
 AXES = "xyz"
@@ -230,25 +235,14 @@ def check_robot(spec: LayoutSpec, problem, grid) -> None:
     (``pipeline.workspace.grid.Grid``) the objectives and the required box (at least one of its
     poses: an empty box would hold every layout, and its payload and tension factor say nothing)."""
     robot, cell_volume = problem.robot, grid.cell_volume
-    if "payload_kg" in spec.objectives:
-        if spec.required is None:
-            raise ConfigError("layout.objectives: payload_kg is the largest payload the required box holds; give "
-                              "layout.required")
-        if problem.spec.kind != "statics" or problem.spec.moves:
-            raise ConfigError("layout.objectives: payload_kg adds mass to a platform at rest (analysis=statics without "
-                              "platform_motion)")
-    if "tension_factor" in spec.objectives:
-        if spec.required is None:
-            raise ConfigError("layout.objectives: tension_factor is the least over the required box; give layout.required")
-        if problem.spec.kind != "statics":
-            raise ConfigError("layout.objectives: tension_factor is of a static pose's structure matrix (analysis=statics)")
+    for name in spec.objectives:
+        needs, kind, at_rest = NEEDS.get(name, (None, None, False))
+        if needs is not None and spec.required is None:
+            raise ConfigError(f"layout.objectives: {name} {needs}; give layout.required")
+        if kind is not None and (problem.spec.kind != "statics" or (at_rest and problem.spec.moves)):
+            raise ConfigError(f"layout.objectives: {name} {kind} (analysis=statics"
+                              f"{' without platform_motion' if at_rest else ''})")
     if "actuator_cost" in spec.objectives:
-        if spec.required is None:
-            raise ConfigError("layout.objectives: actuator_cost is the cheapest catalogue actuator that holds the required "
-                              "box; give layout.required")
-        if problem.spec.kind != "statics" or problem.spec.moves:
-            raise ConfigError("layout.objectives: actuator_cost holds a platform at rest (analysis=statics without "
-                              "platform_motion)")
         if problem.spec.winch_radius is not None:
             raise ConfigError("layout.objectives: actuator_cost chooses the actuator from layout.catalogue; leave the "
                               "job's own actuator=null")
