@@ -462,9 +462,6 @@ def checked_commands(name: str, extra: list[str], out_root: Path | None = None,
     if study.designs:  # the lowest and highest designs
         job = first_actuator_job([*study.arguments, *extra], out)
         cfg, catalogue = job.cfg, job.catalogue
-        if cfg.analysis not in ("cpr_wwa", "lines", "trajectory"):  # a drive's train in motion
-            raise ConfigError(f"analysis={cfg.analysis}: study {name} designs a catalogue actuator's drive train "
-                              "in motion (analysis=cpr_wwa, lines, or trajectory with actuator=ID)")
         if study.search is not None:
             _check_searchable(cfg, name)
         if study.optimise is not None:
@@ -535,12 +532,12 @@ def _check_figure_keys(study: StudySpec, cfg) -> None:
 
 def _check_searchable(cfg, name: str) -> None:
     """The search is exact for a drive with minimum-norm tensions (``pipeline.analyses.search``):
-    CPR-WWA's, or a path's with an actuator (each sample's shaft speed and acceleration scale with
-    the ratio, its load torque with the inverse, its tensions do not move), and it reads every
-    job's margins: ConfigError otherwise."""
-    if cfg.analysis not in ("cpr_wwa", "trajectory") or cfg.get("actuator") is None:
-        raise ConfigError(f"analysis={cfg.analysis}: study {name} searches the drive train; "
-                          "analysis=cpr_wwa has one, and analysis=trajectory with actuator=ID")
+    CPR-WWA's, or a static grid's or a path's with an actuator (in each required motion a pose's
+    or sample's shaft speed and acceleration scale with the ratio, its load torque with the
+    inverse, its tensions do not move), and it reads every job's margins: ConfigError otherwise."""
+    if cfg.analysis == "lines":  # a grid point's verdict there is its lines' samples', not its own margins
+        raise ConfigError(f"analysis=lines: study {name} searches the drive train; analysis=cpr_wwa has one, "
+                          "and analysis=statics or trajectory with actuator=ID")
     if cfg.tension.model.name != "pinv":
         raise ConfigError(f"tension.model={cfg.tension.model.name}: study {name}'s search is exact for "
                           "minimum-norm tensions only (tension=pinv); use an optimise block")

@@ -2,7 +2,10 @@
 the smallest winch radius, gear ratio or motor torque demand that reaches the required share,
 or the proof that no design in the stated ranges does.
 
-Two facts of the CPR-WWA model (eqs. 18-22, 30-34, minimum-norm tensions) make it exact:
+Two facts of the CPR-WWA model (eqs. 18-22, 30-34, minimum-norm tensions) make it exact; they
+hold as well for any robot's drive with minimum-norm tensions, over a static grid in its required
+motions (``analysis=statics actuator=ID``, each pose's cable rates and tensions those of its
+motions) or along a path (``analysis=trajectory``), whose tension limits do not depend on the drive:
 
 1. **Only the transmission ratio rho = N_V / R_i counts.** The shaft speed and acceleration are
    the cable's divided by R_i and the motor's are N_V times the shaft's; the load torque

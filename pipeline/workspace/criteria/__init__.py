@@ -73,7 +73,7 @@ for criterion in (
               "wrench they cannot produce), or more cables",
               lambda analysis, spec, robot: _dynamics(analysis) or (analysis in HELD and _feasible(spec)), certified=True),
     Criterion(SLACK, tension.slack, ANY, 3, "#882255",
-              "tension=feasible if the cables may not push (tension=pinv's minimum-norm forces often do), "
+              "under tension=pinv, tension=feasible if the cables may not push (minimum-norm forces often do); "
               "else a lower tension.t_min, more cables or anchors around the load",
               lambda analysis, spec, robot: analysis in HELD or (_dynamics(analysis) and _feasible(spec)),
               bounds=tension.slack_bounds, certified=True),
