@@ -462,6 +462,9 @@ def checked_commands(name: str, extra: list[str], out_root: Path | None = None,
     if study.designs:  # the lowest and highest designs
         job = first_actuator_job([*study.arguments, *extra], out)
         cfg, catalogue = job.cfg, job.catalogue
+        if cfg.analysis == "certified":
+            raise ConfigError(f"analysis=certified: study {name} reads each job's margins and share of poses; a "
+                              "paving's boxes have verdicts (design the drive with analysis=statics, then certify it)")
         if study.search is not None:
             _check_searchable(cfg, name)
         if study.optimise is not None:

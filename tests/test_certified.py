@@ -185,20 +185,46 @@ def test_no_pose_of_a_certified_box_contradicts_the_exact_test(make_cfg, name):
     overrides, depth = ROBOTS[name]
     problem = _problem(make_cfg, overrides, "compute.n_jobs=1")
     found, _ = paving.pave(problem, depth, 600.0, make_cfg(*overrides, "compute.n_jobs=1").compute)
-    rng = np.random.default_rng(4)
-    checked = {}
-    for verdict in (INSIDE, OUTSIDE):
-        rows = np.flatnonzero(found.verdict == verdict)
-        assert len(rows) > 0, (name, verdict)
-        weights = found.volumes(np.flatnonzero(problem.robot.box_hi > problem.robot.box_lo))[rows]
-        pick = rng.choice(rows, 4000, p=weights / weights.sum())
-        points = found.lo[pick] + rng.uniform(0, 1, (4000, 3)) * (found.hi[pick] - found.lo[pick])
-        corners = np.where(rng.uniform(size=(1000, 3)) < 0.5, found.lo[pick[:1000]], found.hi[pick[:1000]])
-        checked[verdict] = _min_margins(problem, np.concatenate([points, corners]))
+    checked = {verdict: _min_margins(problem, _drawn(found, problem, verdict)) for verdict in (INSIDE, OUTSIDE)}
     atol = problem.margin_atol
     assert (checked[INSIDE] >= -atol).all(), np.sort(checked[INSIDE])[:5]
     assert (checked[OUTSIDE] < atol).all(), np.sort(checked[OUTSIDE])[-5:]
     assert (checked[OUTSIDE] < -atol).mean() > 0.99  # (a corner may sit on the boundary of an outside box)
+
+
+def _drawn(found, problem, verdict, seed: int = 4) -> np.ndarray:
+    """5 000 positions in the boxes of ``verdict``: 4 000 uniform in them (a box drawn by its
+    volume) and 1 000 of their corners."""
+    rng = np.random.default_rng(seed)
+    rows = np.flatnonzero(found.verdict == verdict)
+    assert len(rows) > 0, verdict
+    weights = found.volumes(np.flatnonzero(problem.robot.box_hi > problem.robot.box_lo))[rows]
+    pick = rng.choice(rows, 4000, p=weights / weights.sum())
+    points = found.lo[pick] + rng.uniform(0, 1, (4000, 3)) * (found.hi[pick] - found.lo[pick])
+    corners = np.where(rng.uniform(size=(1000, 3)) < 0.5, found.lo[pick[:1000]], found.hi[pick[:1000]])
+    return np.concatenate([points, corners])
+
+
+def test_a_drive_at_rest_is_proven_as_its_tension_cap(make_cfg, catalogue):
+    """A catalogue actuator at rest holds each cable up to min(M_lim, U/S_v)/R (eqs. 32, 34 at
+    zero speed; Table 1's actuator 3: 29.80 N, under the crane's 40 N rating), so its boxes are
+    proven with that cap. Checked against the exact statics with the drive (its own torque and
+    voltage criteria per pose, another code path): no drawn pose of an inside box fails, none of
+    an outside box holds; the drive binds (poses of its outside boxes hold without it, and its
+    inside volume is smaller)."""
+    found, volumes, statics = {}, {}, {}
+    for case, drive in (("driven", ["actuator=3"]), ("bare", [])):
+        problem = build(make_cfg(*CRANE, "tension=feasible", "analysis=certified", *drive), catalogue)
+        found[case], _ = paving.pave(problem, 11, 600.0, make_cfg(*CRANE, "compute.n_jobs=1").compute)
+        volumes[case] = found[case].volumes(np.arange(3))[found[case].verdict == INSIDE].sum()
+        statics[case] = build(make_cfg(*CRANE, "tension=feasible", "analysis=statics", *drive), catalogue)
+    assert set(statics["driven"].criteria) >= {"torque", "voltage"}
+    atol = statics["driven"].margin_atol
+    inside = _min_margins(statics["driven"], _drawn(found["driven"], statics["driven"], INSIDE))
+    outside = _drawn(found["driven"], statics["driven"], OUTSIDE)
+    assert (inside >= -atol).all() and (_min_margins(statics["driven"], outside) < atol).all()
+    assert (_min_margins(statics["bare"], outside) > atol).mean() > 0.01  # 2.3 %: the outside is mostly far
+    assert volumes["driven"] < 0.9 * volumes["bare"], volumes
 
 
 def test_the_bracket_holds_a_fine_grid_and_narrows_with_depth(make_cfg):

@@ -219,7 +219,7 @@ def test_a_search_and_an_optimiser_must_ask_the_same_question(tmp_path):
     (["output.points=false"], "output.points=false: study smallest_gear_ratio's search reads every job's margins"),
     (["catalogue=missing.csv"], "missing.csv"),
     (["analysis=payload"], "actuator=1: analysis=payload finds the largest payload the cables hold"),
-    (["robot=irpm6", "analysis=certified", "tension=feasible"], "actuator=1: analysis=certified"),
+    (["robot=irpm6", "analysis=certified", "tension=feasible"], "analysis=certified: study smallest_gear_ratio reads"),
     (["analysis=lines"], "analysis=lines: study smallest_gear_ratio searches the drive train; analysis=cpr_wwa has one"),
 ])
 def test_a_search_the_model_cannot_make_exact_is_refused_before_anything_runs(tmp_path, extra, message):

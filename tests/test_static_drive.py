@@ -160,17 +160,22 @@ def test_in_motion_every_motion_meets_the_drive_with_its_own_wrench_and_cable_ra
 
 
 def test_a_drive_on_a_static_grid_from_the_command_line(tmp_path):
-    """The job's summary names its actuator and what the drive loses; payload and certified
-    refuse a drive in one line, and drive.* or a velocity without an actuator too, and a velocity
-    that is not three finite numbers, nothing written."""
+    """The job's summary names its actuator and what the drive loses. Refused in one line,
+    nothing written: a drive under payload, a drive in motion under certified (a velocity, an
+    acceleration or a moving path), drive.* or a velocity without an actuator, and a velocity
+    that is not three finite numbers."""
     done = command(tmp_path, "pipeline", *ROBOT, "robot.platform.mass=12", "actuator=4", "hydra.run.dir=run")
     assert done.returncode == 0, done.stderr[-2000:]
     summary = pd.read_parquet(tmp_path / "run" / "summary.parquet").iloc[0]
     assert summary["actuator"] == 4 and summary["actuator_name"] == "Table 1 actuator 4"
     assert summary["lost_voltage"] > 0 and summary["lost_torque"] == 0
     for extra, message in ((["analysis=payload", "actuator=1"], "actuator=1: analysis=payload finds the largest payload"),
-                           (["analysis=certified", "actuator=1"],
-                            "actuator=1: analysis=certified: a drive's limits have no certified bound"),
+                           (["analysis=certified", "actuator=1", "platform_motion.acceleration=[[0.5,0,0,0,0,0]]"],
+                            "actuator=1: analysis=certified: a drive in motion"),
+                           (["analysis=certified", "actuator=1", "platform_motion.velocity=[0.5,0,0]"],
+                            "actuator=1: analysis=certified: a drive in motion"),
+                           (["analysis=certified", "actuator=1", "certified.path=[[0,0,1],[0.5,0,1]]", "certified.times=2"],
+                            "actuator=1: analysis=certified: a drive in motion"),
                            (["drive.gear_ratio=10"], "drive.gear_ratio=10.0: the drive is a catalogue actuator's"),
                            (["platform_motion.velocity=[0.5,0,0]"],
                             "platform_motion.velocity: the reference point's velocity changes no wrench"),

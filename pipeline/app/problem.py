@@ -40,7 +40,7 @@ from pipeline.app.config import (
     unknown_keys, vector,
 )
 from pipeline.errors import ConfigError
-from pipeline.model.actuators import ActuatorModel, actuator_model
+from pipeline.model.actuators import ActuatorModel, actuator_model, rest_tension_cap
 from pipeline.model.catalogue import Catalogue
 from pipeline.model.clearance import Obstacle, Polytope
 from pipeline.model.dynamics import Load, MotionSpec, inertia_tensor
@@ -316,15 +316,18 @@ def _path_files(cfg: DictConfig, problem: WorkspaceProblem, grid: Grid | None, f
 
 def _certified(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
     """The statics' spec and limits over boxes of positions (``pipeline.workspace.paving``):
-    refuses in one line what the certificates cannot bound yet or a paving does not write."""
+    refuses in one line what the certificates cannot bound yet or a paving does not write. A
+    drive at rest is one tension cap per cable (``actuators.rest_tension_cap``: eqs. 32 and 34
+    at zero speed), folded into ``t_max``: its boxes are those of that rating."""
     spec, limits = _statics(cfg, catalogue, robot)
     moving = cfg.certified.times is not None or cfg.certified.law != "quintic"
     refused = (
         (spec.tension.model != "feasible", "tension.model=pinv", "the certificates are of cables that pull; "
          "use tension=feasible"),
         (robot.fixed_point, "robot.dofs", "a robot on a joint has orientations to pave, not positions; not certified yet"),
-        (spec.winch_radius is not None, f"actuator={cfg.actuator}", "a drive's limits have no certified bound yet; "
-         "analysis=statics checks them"),
+        (spec.winch_radius is not None and (spec.moves or moving or np.any(spec.velocities)), f"actuator={cfg.actuator}",
+         "a drive in motion (its speed, acceleration and back-EMF) has no certified bound yet; at rest it is a "
+         "proven tension cap; analysis=statics checks it in motion"),
         (not (np.isfinite(robot.box_lo).all() and np.isfinite(robot.box_hi).all()), "robot.search",
          "the paving starts from the search box; give robot.search.lo and hi"),
         (robot.pulleys is not None, "robot.pulleys", "a pulley's exit point moves with the pose; no certified bound yet"),
@@ -366,6 +369,9 @@ def _certified(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
             axis = "xyz"[flat[0]]
             raise ConfigError(f"certified.path: way-point {off[0] + 1} leaves the robot's plane {axis} = "
                               f"{robot.box_lo[flat[0]]:g} (robot.dofs={[FREEDOMS[i] for i in robot.dofs]})")
+    if limits.drive is not None:  # at rest (refused in motion above)
+        limits = replace(limits, t_max=np.minimum(limits.t_max, rest_tension_cap(limits.drive)))
+        spec = replace(spec, winch_radius=None)
     return spec, limits
 
 
