@@ -56,7 +56,6 @@ REFUSED = {**{(analysis, key): key for analysis in ("lines", "trajectory") for k
               for analysis in ("statics", "trajectory", "payload", "certified")},  # actuator=null
            # what a paving cannot prove yet (analysis=certified: pipeline/app/problem.py, Criterion.certified)
            **{("certified", key): named for key, named in (
-               ("obstacles", "obstacles: analysis=certified: a box obstacle"),
                ("workspace.home", "workspace.home"), ("output.cables", "output.cables"), ("output.mesh", "output.mesh"),
                ("output.metrics", "output.metrics"), ("pulleys", "robot.pulleys"), ("stiffness", "stiffness"),
                ("sag", "sag"), ("cable rules", "cable_contraction"))}}

@@ -331,9 +331,6 @@ def _certified(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
         (not (np.isfinite(robot.box_lo).all() and np.isfinite(robot.box_hi).all()), "robot.search",
          "the paving starts from the search box; give robot.search.lo and hi"),
         (robot.pulleys is not None, "robot.pulleys", "a pulley's exit point moves with the pose; no certified bound yet"),
-        (any(obstacle.normal is None for obstacle in robot.obstacles), "obstacles",
-         "a box obstacle's separating axes turn with the cables: no certified bound yet; half-spaces "
-         "{name, point, normal} are proven"),
         (spec.moment_arm == "base", "model.moment_arm=base", "moments about the base move the wrench with the pose; "
          "not certified yet"),
         (cfg.poses is not None, "poses", "a paving proves boxes of the search box, not listed poses"),

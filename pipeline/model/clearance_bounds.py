@@ -21,6 +21,14 @@ the box's centre (the closest points of two cables) need no rigour, the interval
   its enclosure over B is exact up to rounding. Inside when every cable keeps r_i and the platform
   0; outside when one body's upper bound is below -atol times the robot's extent (the exact
   test's tolerance).
+- **A cable or the platform from an axis-aligned box** (:func:`box_verdicts`): the exact test's
+  clearance is the separating-axis gap (``clearance.box_separation``), the largest over its axes,
+  so at least the gap along any one of the box's own axes e_k, max(lo_k - max x_k, min x_k - hi_k)
+  over the body's vertices (a segment's two ends), linear in each vertex. Inside when every cable
+  keeps r_i along one axis and the platform 0 along one (a sufficient condition: an axis crossed
+  with the cable is not tried). Outside when a cable's end lies deeper in the box than atol times
+  the robot's extent at every position: a ball of that depth about it is in the box, so every
+  axis's projections overlap by that depth and the gap is below minus it.
 - **A cable out of the platform's body** (:func:`face_verdicts`): cable i is clear of the convex
   body exactly when n . t >= 0 for some face holding its attachment, n = R n_f the face's normal
   and t = a_i - p - R b_i the cable's vector from the attachment (``criteria.interference
@@ -105,6 +113,61 @@ def plane_verdicts(anchors: Interval, arms: Interval, body: Interval, lo: np.nda
         cables = up(np.minimum(ends.hi, fixed.hi) - radii)  # upper bound
         outside |= np.minimum(cables.min(axis=1), platform.hi.min(axis=1)) < -allowance
     return np.where(inside, INSIDE, np.where(outside, OUTSIDE, UNDECIDED))
+
+
+def box_verdicts(anchors: Interval, arms: Interval, body: Interval, lo: np.ndarray, hi: np.ndarray, centre: np.ndarray,
+                 boxes: list[tuple[np.ndarray, np.ndarray]], radii: np.ndarray, allowance: float,
+                 nominal: tuple[Interval, Interval, Interval] | None = None) -> np.ndarray:
+    """(N,) whether every cable keeps its radius ``radii`` (m,) and the platform (its vertices'
+    offsets ``body`` (k, 3): R v_k) 0 from every axis-aligned box [low, high] of ``boxes`` at every
+    position of each box of positions (``centre`` (N, 3): a point of each; module doc): INSIDE,
+    OUTSIDE (a cable's end deeper in an obstacle than ``allowance`` at every position, by
+    ``nominal``'s enclosures when given) or UNDECIDED."""
+    box = Interval(lo, hi)[:, None, :]
+    inside = np.ones(len(lo), dtype=bool)
+    outside = np.zeros(len(lo), dtype=bool)
+
+    def gap(lowest: np.ndarray, highest: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
+        """A lower bound of the largest gap along the box's axes of bodies spanning [lowest, highest] (..., 3)."""
+        return np.maximum(down(low - highest), down(lowest - high)).max(axis=-1)
+
+    for low, high in boxes:
+        ends, platform = box + arms, box + body  # (N, m, 3), (N, k, 3)
+        cables = gap(np.minimum(anchors.lo, ends.lo), np.maximum(anchors.hi, ends.hi), low, high)  # (N, m)
+        apart = (cables >= radii) | ((radii == 0) & (_crossed_gap(anchors, ends, centre, arms, low, high) > 0))
+        inside &= apart.all(axis=1) & (gap(platform.lo.min(axis=1), platform.hi.max(axis=1), low, high) >= 0)
+        fixed, offsets = (nominal or (anchors, arms, body))[:2]
+        for end in (fixed[None], box + offsets):  # each cable's anchor (1, m, 3) and attachment point (N, m, 3)
+            depth = np.minimum(down(end.lo - low), down(high - end.hi)).min(axis=-1)  # how deep in, a lower bound
+            outside |= (depth > allowance).any(axis=1)
+    return np.where(inside, INSIDE, np.where(outside, OUTSIDE, UNDECIDED))
+
+
+def _crossed_gap(anchors: Interval, ends: Interval, centre: np.ndarray, arms: Interval, low: np.ndarray,
+                 high: np.ndarray) -> np.ndarray:
+    """(N, m) a lower bound over each box of positions of the gap between each cable and the box
+    [low, high] along one fixed axis: the separating axis of the centre's cable (the box's axes
+    and the cable's direction crossed with each) that parts them most there. A positive bound
+    proves them apart at every position, so that the separating-axis test of the exact criterion
+    finds a positive gap too (it decides a segment and a box); it says nothing of a cable's
+    radius (that gap is along the centre's axis, not one the exact test tries)."""
+    direction = centre[:, None, :] + (arms.lo + arms.hi) / 2 - (anchors.lo + anchors.hi) / 2  # (N, m, 3)
+    axes = np.concatenate([np.broadcast_to(np.eye(3), (*direction.shape[:2], 3, 3)),
+                           np.cross(direction[:, :, None, :], np.eye(3))], axis=2)  # (N, m, 6, 3)
+    middle, half = (high + low) / 2, (high - low) / 2
+    start, end = (anchors.lo + anchors.hi) / 2, centre[:, None, :] + (arms.lo + arms.hi) / 2
+    seen = np.stack([np.einsum("nmad,md->nma", axes, start), np.einsum("nmad,nmd->nma", axes, end)])  # (2, N, m, 6)
+    reach = np.abs(axes) @ half
+    score = np.maximum(seen.min(axis=0) - (axes @ middle + reach), (axes @ middle - reach) - seen.max(axis=0))
+    score /= np.maximum(np.linalg.norm(axes, axis=-1), 1e-300)
+    axis = np.take_along_axis(axes, score.argmax(axis=2)[..., None, None], axis=2)[:, :, 0]  # (N, m, 3), doubles
+    along = Interval.point(axis)
+    fixed = (anchors[None] * along).sum(axis=-1)  # (N, m)
+    moving = (ends * along).sum(axis=-1)
+    centre_of = (Interval.point(middle) * along).sum(axis=-1)
+    spread = (Interval.point(half) * Interval.point(np.abs(axis))).sum(axis=-1)
+    upper, lower = centre_of + spread, centre_of - spread
+    return np.maximum(down(np.minimum(fixed.lo, moving.lo) - upper.hi), down(lower.lo - np.maximum(fixed.hi, moving.hi)))
 
 
 def face_verdicts(anchors: Interval, arms: Interval, normals: Interval, faces: np.ndarray, lo: np.ndarray,

@@ -8,7 +8,8 @@ from __future__ import annotations
 import numpy as np
 
 from pipeline.model.clearance import segment_distance
-from pipeline.model.clearance_bounds import face_verdicts, pair_verdicts, plane_verdicts
+from pipeline.model.certificates import OUTSIDE
+from pipeline.model.clearance_bounds import box_verdicts, face_verdicts, pair_verdicts, plane_verdicts
 
 
 def pair_clearances(state) -> np.ndarray:
@@ -95,10 +96,13 @@ def cable_platform_boxes(robot, within, nominal, lo, hi, centre, atol) -> np.nda
 
 
 def cable_obstacle_boxes(robot, within, nominal, lo, hi, centre, atol) -> np.ndarray:
-    """:func:`cable_obstacle` proven on boxes of positions for half-space obstacles
-    (``clearance_bounds.plane_verdicts``; a box obstacle's separating axes turn with the cables:
-    ``analysis=certified`` refuses it)."""
+    """:func:`cable_obstacle` proven on boxes of positions, for half-space obstacles
+    (``clearance_bounds.plane_verdicts``) and axis-aligned boxes (``box_verdicts``)."""
     radii = np.zeros(robot.n_cables) if robot.cable_radii is None else robot.cable_radii
-    planes = [(obstacle.point, obstacle.normal) for obstacle in robot.obstacles]
-    return plane_verdicts(within.anchors, within.arms, within.body, lo, hi, planes, radii, atol * robot.extent,
-                          nominal=(nominal.anchors, nominal.arms, nominal.body))
+    planes = [(obstacle.point, obstacle.normal) for obstacle in robot.obstacles if obstacle.normal is not None]
+    boxes = [(obstacle.lo, obstacle.hi) for obstacle in robot.obstacles if obstacle.normal is None]
+    given = (within.anchors, within.arms, within.body, lo, hi)
+    enclosures, allowance = (nominal.anchors, nominal.arms, nominal.body), atol * robot.extent
+    found = [plane_verdicts(*given, planes, radii, allowance, nominal=enclosures),
+             box_verdicts(*given, centre, boxes, radii, allowance, nominal=enclosures)]
+    return np.where((found[0] == OUTSIDE) | (found[1] == OUTSIDE), OUTSIDE, np.minimum(*found))
