@@ -156,3 +156,31 @@ def test_the_samples_margins_are_the_literal_criteria_at_each_samples_own_motion
         literal = literal_margins(problem.robot, positions[n:n + 1], problem.orientation, one, problem.limits)
         for name, value in literal.items():
             assert found[name][n] == pytest.approx(value[0], abs=1e-9), (name, n)
+
+
+def test_line_0_is_the_trajectory_analysis_along_the_same_segment(lines, make_cfg, catalogue):
+    """One physics, two paths through the code: the paper's line O''-F'' (the CPR-WWA model,
+    M = (J^T)^+ F and eqs. 19-21, read with J-dot) and ``analysis=trajectory`` along the same
+    segment with the same trapezoid (the statics' minimum-norm tensions times R, the cables' rates
+    differentiated from their lengths), the CPR-8 at 0.5 rad (its structure matrix of rank 6)
+    with actuator 2. At t = 0 the shaft speeds, torques and voltages agree to 1e-9 of the largest;
+    along the line, the trajectory's read between its samples (its grid takes both sides of each
+    jump of the acceleration, so it parts from the lines' after the first), to 1e-4."""
+    from pipeline.workspace.samples import follow
+
+    samples = line_of(lines(*ROT, "model.jdot=true", "actuator=2")[0]).reset_index(drop=True)
+    ends = samples[["x", "y", "z"]].to_numpy()[[0, -1]].tolist()
+    cfg = make_cfg("robot=cpr8", "analysis=trajectory", "actuator=2", "tension=pinv", *ROT, f"trajectory.points={ends}",
+                   "trajectory.law=trapezoid", "trajectory.v_max=1.3", "trajectory.t_acc=1.82", "trajectory.t_dec=1.82")
+    path = follow(cfg, build_problem(cfg, catalogue)[0])[0]
+    names = list(build_problem(cfg, catalogue)[0].robot.cable_names)
+    times = samples["t"].to_numpy()
+    assert path["t"].iloc[-1] == pytest.approx(times[-1], rel=1e-12)
+    away = (np.abs(times - 1.82) > 0.02) & (np.abs(times - (times[-1] - 1.82)) > 0.02)  # not at a jump
+    for quantity in ("theta_dot", "torque", "voltage"):
+        paper = samples[[f"{quantity}_{i + 1}" for i in range(len(names))]].to_numpy()
+        ours = path[[f"{quantity}_{name}" for name in names]].to_numpy()
+        scale = np.abs(paper).max()
+        assert np.abs(paper[0] - ours[0]).max() < 1e-9 * scale, quantity
+        read = np.column_stack([np.interp(times[away], path["t"], ours[:, i]) for i in range(len(names))])
+        assert np.abs(paper[away] - read).max() < 1e-4 * scale, quantity
