@@ -201,3 +201,24 @@ def test_the_actuator_choice_of_a_users_robot_at_rest(tmp_path, make_cfg, catalo
     assert choice.verdict == ("actuator choice at x >= 50 %: accept 1, 2, 4; reject 3 21.85 % (lost to torque 211); "
                               "5 0.00 % (lost to torque 270)")
     assert table.loc[4, "lost_voltage"] == 132 and table.loc[4, "lost_torque"] == 0  # actuator 4: its voltage binds
+
+
+def test_a_certified_job_with_a_drive_at_rest_is_the_paving_at_its_cap(tmp_path, catalogue):
+    """``analysis=certified actuator=3`` from the command line: its boxes are, one for one, those of
+    the same job with ``tension.t_max`` at actuator 3's rest cap written here from the catalogue's
+    columns (29.80 N, below the 40 N rating), its summary names the actuator, and the cap binds
+    (the 40 N job proves more inside)."""
+    crane = [*CRANE[:-4], "tension=feasible", "tension.t_min=1", "robot.platform.mass=3", "wrench.fx=4",
+             "analysis=certified", "certified.depth=9"]
+    cap = rest_cap(catalogue.row(3))
+    assert cap == pytest.approx(29.8025)
+    found = {}
+    for name, extra in (("driven", ["tension.t_max=40", "actuator=3"]), ("capped", [f"tension.t_max={cap!r}"]),
+                        ("rated", ["tension.t_max=40"])):
+        done = command(tmp_path, "pipeline", *crane, *extra, f"hydra.run.dir={name}")
+        assert done.returncode == 0, done.stderr[-2000:]
+        found[name] = (pd.read_parquet(tmp_path / name / "boxes.parquet"),
+                       pd.read_parquet(tmp_path / name / "summary.parquet").iloc[0])
+    pd.testing.assert_frame_equal(found["driven"][0], found["capped"][0])
+    assert found["driven"][1]["actuator_name"] == "Table 1 actuator 3"
+    assert found["rated"][1]["inside_m3"] > found["driven"][1]["inside_m3"] > 0
