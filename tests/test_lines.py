@@ -172,8 +172,8 @@ def test_line_0_is_the_trajectory_analysis_along_the_same_segment(lines, make_cf
     ends = samples[["x", "y", "z"]].to_numpy()[[0, -1]].tolist()
     cfg = make_cfg("robot=cpr8", "analysis=trajectory", "actuator=2", "tension=pinv", *ROT, f"trajectory.points={ends}",
                    "trajectory.law=trapezoid", "trajectory.v_max=1.3", "trajectory.t_acc=1.82", "trajectory.t_dec=1.82")
-    path = follow(cfg, build_problem(cfg, catalogue)[0])[0]
-    names = list(build_problem(cfg, catalogue)[0].robot.cable_names)
+    problem = build_problem(cfg, catalogue)[0]
+    path, names = follow(cfg, problem)[0], list(problem.robot.cable_names)
     times = samples["t"].to_numpy()
     assert path["t"].iloc[-1] == pytest.approx(times[-1], rel=1e-12)
     away = (np.abs(times - 1.82) > 0.02) & (np.abs(times - (times[-1] - 1.82)) > 0.02)  # not at a jump
