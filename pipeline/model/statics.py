@@ -222,9 +222,9 @@ class PoseStatics(PoseGeometry):
         if not self.spec.moves:
             return wrenches
         accelerations = self.spec.accelerations if len(self.spec.accelerations) else np.zeros((1, 6))
-        moving = np.concatenate([inertial_wrenches(self.spec.load, self.rotation, accelerations, omega)
-                                 for _ in self.spec.velocities for omega in self.spec.angular_velocities],
-                                axis=-2)[..., rows]
+        turning = np.concatenate([inertial_wrenches(self.spec.load, self.rotation, accelerations, omega)
+                                  for omega in self.spec.angular_velocities], axis=-2)[..., rows]
+        moving = np.concatenate([turning] * len(self.spec.velocities), axis=-2)  # no term in the linear velocity
         combined = wrenches[..., :, None, :] + moving[..., None, :, :]  # every wrench with every acceleration
         return combined.reshape(*combined.shape[:-3], -1, combined.shape[-1])
 
