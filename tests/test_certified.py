@@ -50,8 +50,8 @@ ROBOTS = {  # name -> (overrides, depth)
     "ipanema": ([*QUARTER, "robot.search.lo=[0,0,0]", "robot.search.hi=[2,1.5,2]"], 12),
     "tilted payload": ([*CROSSED_ROBOT, "tension.t_min=0", "tension.t_max=150", "load.mass=3", "load.com=[0.04,-0.03,0.02]",
                         "orientation.psi=0.1", "orientation.theta=-0.08", "orientation.phi=0.25", "robot.l_max=3.2"], 14),
-    "orientation set": ([*QUARTER, "robot.search.lo=[0.5,0.3,0.5]", "robot.search.hi=[1.9,1.4,1.5]",
-                         "orientation.total={bound: 0.03, n: 2}"], 11),
+    "orientation set": ([*QUARTER, "robot.search.lo=[0.2,0.1,0.8]", "robot.search.hi=[1.9,1.4,1.2]",
+                         "orientation.total={bound: 0.03, n: 2}"], 9),
     "planar body": (PLANAR_BODY, 12),
     "planar point": (PLANAR_POINT, 12),
     "crane": (CRANE, 11),
@@ -374,8 +374,8 @@ def _perturbed(overrides, robot, tolerances, rng, corner: bool) -> list[str]:
 
 @pytest.mark.parametrize("name", sorted(ROBUST))
 def test_no_robot_within_the_tolerances_contradicts_a_robust_box(make_cfg, name):
-    """Monte-Carlo falsification: 300 robots drawn within the tolerances (a third at corners of
-    their box), each at 40 random poses of the robust inside boxes: all feasible by the exact test
+    """Monte-Carlo falsification: 120 robots drawn within the tolerances (a third at corners of
+    their box), each at 100 random poses of the robust inside boxes: all feasible by the exact test
     of that robot; the robust inside set lies in the nominal one and shrinks as they grow."""
     overrides, depth, tolerances = ROBUST[name]
     problem = _problem(make_cfg, overrides, "compute.n_jobs=1")
@@ -394,11 +394,11 @@ def test_no_robot_within_the_tolerances_contradicts_a_robust_box(make_cfg, name)
     rows = np.flatnonzero(robust.verdict == INSIDE)
     weights = robust.volumes(axes)[rows]
     least = []
-    for number in range(300):
+    for number in range(120):
         drawn = _problem(make_cfg, _perturbed(overrides, problem.robot, tolerances, rng, corner=number % 3 == 0),
                          "compute.n_jobs=1")
-        pick = rng.choice(rows, 40, p=weights / weights.sum())
-        points = robust.lo[pick] + rng.uniform(0, 1, (40, 3)) * (robust.hi[pick] - robust.lo[pick])
+        pick = rng.choice(rows, 100, p=weights / weights.sum())
+        points = robust.lo[pick] + rng.uniform(0, 1, (100, 3)) * (robust.hi[pick] - robust.lo[pick])
         least.append(_min_margins(drawn, points))
     least = np.concatenate(least)
     assert (least >= -problem.margin_atol).all(), np.sort(least)[:5]
@@ -462,7 +462,7 @@ def test_the_named_build_error_breaks_the_centre_of_its_box_and_no_smaller_one_d
     errors = [error for error, _ in tolerances_errors(problem, tolerances)]
     assert len(errors) == 2 * (3 * problem.robot.n_cables * ((tolerances.anchors > 0) + (tolerances.attachments > 0))
                                + (tolerances.mass > 0) + 3 * (tolerances.com > 0))
-    for row in rng.choice(named, min(2, len(named)), replace=False):
+    for row in rng.choice(named, 1, replace=False):
         if shares[row] > 1 / 64:
             below = [least(error, shares[row] - 1 / 64, centres[row:row + 1])[0] for error in errors]
             assert min(below) >= -atol, (names[row], shares[row], errors[int(np.argmin(below))])

@@ -144,14 +144,11 @@ def test_in_motion_every_motion_meets_the_drive_with_its_own_wrench_and_cable_ra
     for position, held in zip(positions, driven):
         verdict = []
         for slack in (-1e-6, 1e-6):
-            ok = True
-            for velocity in np.array(velocities, float):
-                for omega in np.array(omegas, float):
-                    for acceleration in np.array(accelerations, float):
-                        wrench = newton_euler(position, rotation, 3.0, com, inertia, acceleration, omega)
-                        speed, accel = length_rates(position, rotation, velocity, acceleration, omega)
-                        ok &= lp_holds(position, rotation, wrench, speed, accel, act, 0.08, slack)
-            verdict.append(ok)
+            verdict.append(all(  # the first motion that fails decides
+                lp_holds(position, rotation, newton_euler(position, rotation, 3.0, com, inertia, acceleration, omega),
+                         *length_rates(position, rotation, velocity, acceleration, omega), act, 0.08, slack)
+                for velocity in np.array(velocities, float) for omega in np.array(omegas, float)
+                for acceleration in np.array(accelerations, float)))
         if verdict[0] == verdict[1]:
             assert held == verdict[0], position
             checked += 1
