@@ -23,18 +23,20 @@ def lp_margin(structure, wrench, lower, upper):
     return -result.fun if result.status == 0 else -np.inf
 
 
+@pytest.mark.parametrize("t_min", [1.0, 0.0])
 @pytest.mark.parametrize("r, m", [(6, 6), (6, 7), (6, 8), (6, 9), (3, 4), (3, 5), (2, 4)])
-def test_the_null_space_verdict_equals_an_lp_on_random_structure_matrices(r, m):
+def test_the_null_space_verdict_equals_an_lp_on_random_structure_matrices(r, m, t_min):
     """Random S with unit columns and moment rows at the platform's scale, random wrenches: the
     verdict of every decided pose is the LP's (poses within 1e-7 of the boundary excluded, where
-    either may round), and about half the poses are feasible, so both answers are exercised."""
+    either may round), and about half the poses are feasible, so both answers are exercised; with
+    forces in [1, 10] and in [0, 10] (a vertex on a zero bound misses it by its round-off)."""
     rng = np.random.default_rng(r * 10 + m)
     n = 600
     structure = rng.normal(size=(n, r, m))
     structure[:, r // 2:] *= 0.1
     spread = rng.uniform(0.0, 14.0, (n, m)) - rng.uniform(0.0, 4.0, (n, 1))  # forces some of them outside [1, 10]
     wrenches = np.einsum("nrm,nm->nr", structure, spread)[:, None, :]
-    lower, upper = np.full(m, 1.0), np.full(m, 10.0)
+    lower, upper = np.full(m, t_min), np.full(m, 10.0)
     verdicts = np.empty(n, dtype=np.int8)
     compiled_loops("pipeline.model.nullspace").pulling_verdicts(structure, wrenches, lower, upper, PIVOT_RTOL, verdicts)
     margin = np.array([lp_margin(structure[p], wrenches[p, 0], lower, upper) for p in range(n)])
@@ -87,6 +89,10 @@ CASES = {
         "robot=points", "robot.dofs=[x,y]", "robot.anchors=[[0,1,0],[0,0,0],[0,-1,0]]",
         "robot.attachments=[[0,0,0],[0,0,0],[0,0,0]]", "robot.search.lo=[-0.9,-0.9,0]", "robot.search.hi=[0.9,0.9,0]",
         "robot.search.step=0.15", "tension=feasible", "tension.t_min=1", "tension.t_max=10", "wrench.fy=-3"],
+    "cables that may go slack (t_min = 0), tilted, off-centre payload": [  # a vertex on a zero bound: its round-off
+        *CROSSED_ROBOT, "tension=feasible", "tension.t_min=0", "tension.t_max=150", "load.mass=3",
+        "load.com=[0.04,-0.03,0.02]", "orientation.psi=0.1", "orientation.theta=-0.08", "orientation.phi=0.25",
+        "robot.search.step=0.1"],
     "minimum-norm forces (the registry alone)": [*SPREAD_ROBOT, "robot.search.step=0.25", "load.mass=5",
                                                  "tension.t_max=300"],
 }

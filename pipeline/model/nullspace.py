@@ -20,8 +20,11 @@ What it cannot decide it says (-1, the caller's exact model decides those poses)
 bound), a null space wider than ``MAX_FREE``, an infinite lower bound, or a vertex whose cable
 forces miss S x = w by more than ``RESIDUAL_RTOL`` of |S| |x| (checked in the original units, so
 a feasible verdict is backed by the forces themselves). The bounds are the caller's, relaxed by
-its own tolerance; the candidates are checked with ``CHECK_RTOL`` of each bound's size on top,
-the round-off of a vertex that lies on them.
+its own tolerance; the candidates are checked with ``CHECK_RTOL`` of the size of each bound and
+of the terms that form the force (c_j and each g_jf lam_f) on top, the round-off of a vertex that
+lies on them: a force of a few newtons formed from terms of hundreds misses a bound it lies on by
+1e-14 N, more than a share of the bound's size alone when the bound is about zero (cables that may
+go slack, ``t_min = 0``, whose every vertex then failed: tests/test_feasibility.py).
 """
 
 from __future__ import annotations
@@ -30,7 +33,7 @@ import numpy as np
 from numba import njit
 
 MAX_FREE = 3  # null spaces up to this dimension are enumerated (2^3 C(m, 3) candidates)
-CHECK_RTOL = 1e-12  # a candidate's bound holds within this share of the bound's size
+CHECK_RTOL = 1e-12  # a candidate's bound holds within this share of the sizes of the bound and of the force's terms
 RESIDUAL_RTOL = 1e-9  # a feasible vertex's |S x - w| against |S| |x| + |w|
 SIGNATURES = {
     "pulling_verdicts": "void(f8[:, :, ::1], f8[:, :, ::1], f8[::1], f8[::1], f8, i1[::1])",
@@ -151,7 +154,7 @@ def _vertex(c, g, free, lower, upper):
     if d == 0:
         return x, _holds(x, lower, upper)
     for j in range(m):  # a force that cannot reach its bounds over lam's box: Q is empty (Q lies in that box)
-        least, most = c[j], c[j]
+        least, most, size = c[j], c[j], abs(c[j])
         for f in range(d):
             low, high = lower[free[f]], upper[free[f]]
             if not np.isfinite(high):
@@ -159,8 +162,9 @@ def _vertex(c, g, free, lower, upper):
                 break
             least += min(g[j, f] * low, g[j, f] * high)
             most += max(g[j, f] * low, g[j, f] * high)
-        if (most < lower[j] - CHECK_RTOL * (abs(lower[j]) + abs(most))
-                or least > upper[j] + CHECK_RTOL * (abs(upper[j]) + abs(least))):
+            size += max(abs(g[j, f] * low), abs(g[j, f] * high))
+        if (most < lower[j] - CHECK_RTOL * (abs(lower[j]) + size)
+                or least > upper[j] + CHECK_RTOL * (abs(upper[j]) + size)):
             return x, False
     chosen = np.arange(d)
     matrix = np.empty((d, d))
@@ -182,12 +186,13 @@ def _vertex(c, g, free, lower, upper):
                 break  # the d cables' hyperplanes are parallel on every side
             holds = True
             for j in range(m):  # each force, stopping at the first out of its bounds
-                total = c[j]
+                total, size = c[j], abs(c[j])
                 for f in range(d):
                     total += g[j, f] * lam[f]
+                    size += abs(g[j, f] * lam[f])
                 x[j] = total
-                if (total < lower[j] - CHECK_RTOL * (abs(lower[j]) + abs(total))
-                        or total > upper[j] + CHECK_RTOL * (abs(upper[j]) + abs(total))):
+                if (total < lower[j] - CHECK_RTOL * (abs(lower[j]) + size)
+                        or total > upper[j] + CHECK_RTOL * (abs(upper[j]) + size)):
                     holds = False
                     break
             if holds:
