@@ -249,6 +249,34 @@ def test_the_bracket_holds_a_fine_grid_and_narrows_with_depth(make_cfg):
     assert brackets[2][1] - brackets[2][0] < 0.5 * (brackets[0][1] - brackets[0][0])
 
 
+@pytest.mark.parametrize("name", ["ipanema", "tilted payload"])
+def test_a_box_spared_its_lp_has_a_corner_the_exact_test_decides(make_cfg, name):
+    """The paving tries no inside certificate on a box with a corner that fails by more than the
+    margins' tolerance, no outside one on a box with a corner that holds by more (no such
+    certificate can hold there). Against the exact per-pose test of the cable forces at the 8
+    corners of 3 000 random boxes (the tilted robot's cables limited in length too, which the
+    paving proves apart): each box said to have a failing (holding) corner has one; and a box whose corners the
+    exact test finds failing (holding) by 1e-6 is said to, but for the few the compiled test cannot
+    decide (a corner on an anchor)."""
+    problem = _problem(make_cfg, ROBOTS[name][0])
+    robot = problem.robot
+    rng = np.random.default_rng(6)
+    size = (robot.box_hi - robot.box_lo) / 16
+    lo = rng.uniform(robot.box_lo, robot.box_hi - size, (3000, 3))
+    hi = lo + size * rng.uniform(0.2, 1.0, (3000, 3))
+    statics = paving.box_statics(problem, problem.orientations[0])
+    every = np.broadcast_to((statics.wrenches.lo + statics.wrenches.hi) / 2, (3000, *statics.wrenches.shape))
+    fails, holds = paving._corners(problem, statics, tuple(problem.orientations[0]), lo, hi, every)
+    corners = np.where(np.arange(8)[:, None] >> np.arange(3) & 1, hi[:, None], lo[:, None])
+    found = evaluate_chunk(problem, corners.reshape(-1, 3))  # the forces' criteria (a cable's length is proven apart)
+    margins = np.min([found[f"margin_{name}"] for name in ("unreachable", "slack", "tension_max")], axis=0).reshape(-1, 8)
+    atol = problem.margin_atol
+    assert (margins[fails] < -atol).any(axis=1).all() and (margins[holds] > atol).any(axis=1).all()
+    clearly_fails, clearly_holds = (margins < -1e-6).any(axis=1), (margins > 1e-6).any(axis=1)
+    assert clearly_fails.sum() > 300 and clearly_holds.sum() > 300 and (clearly_fails & clearly_holds).sum() > 30
+    assert fails[clearly_fails].mean() > 0.99 and holds[clearly_holds].mean() > 0.99
+
+
 def test_a_load_no_cable_can_hold_is_outside_everywhere(make_cfg):
     """A weight the cables cannot hold anywhere (100 kg on cables rated 40 N): the whole search
     box certified outside within a few levels."""
