@@ -39,6 +39,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pipeline.model.highs import solver as highs
+
 from pipeline.model.intervals import Interval, cross, down, stack, up
 
 WRENCH_RTOL = 1e-12  # the required wrenches' enclosure, relative to the size of the terms forming them
@@ -281,9 +283,12 @@ def _pulled(structure: Interval, given: tuple[np.ndarray, np.ndarray]) -> Interv
 
 # The floats a certificate tries, chosen for the whole box to first order (any doubles are sound:
 # the interval tests above check them). Each is a small LP per box and wrench, solved by HiGHS as
-# one block-diagonal LP per ``LP_BLOCKS`` of them.
+# one block-diagonal LP per ``LP_BLOCKS`` of them, passed to HiGHS directly (through scipy's
+# ``linprog`` the wrapper's own work cost half as much again as the solve, and HiGHS's time grows
+# faster than linearly with the blocks: 16 at once cost a third of 256 through ``linprog``,
+# benchmarks/LOG.md).
 
-LP_BLOCKS = 256
+LP_BLOCKS = 16
 
 
 def robust_separators(structure: np.ndarray, slopes: np.ndarray, half: np.ndarray, wrenches: np.ndarray,
@@ -327,22 +332,21 @@ def robust_separators(structure: np.ndarray, slopes: np.ndarray, half: np.ndarra
     b_ub = np.zeros((blocks, 7 * m))
     bounds = np.tile(np.array([[-1.0, 1.0]] * k + [[0.0, np.inf]] * m + [[0.0, np.inf]] * (3 * m)), (blocks, 1, 1))
     bounds[:, k:k + m][:, ~rated] = (0.0, 0.0)
-    x, ok = _block_lps(cost, a_ub, b_ub, None, None, bounds)
+    x, ok = _block_lps(cost, a_ub, b_ub, bounds)
     value = np.where(ok, -np.einsum("bj,bj->b", cost, x), -np.inf)
     return x[:, :k].reshape(n, count, k), value.reshape(n, count)
 
 
-def _block_lps(cost, a_ub, b_ub, a_eq, b_eq, bounds) -> tuple[np.ndarray, np.ndarray]:
-    """Solve B small LPs (min cost.x, A_ub x <= b_ub, A_eq x = b_eq, bounds; dense per-block
-    arrays) as block-diagonal LPs of ``LP_BLOCKS``; (B, width) solutions and (B,) which solved
-    (a batch HiGHS does not solve is halved until its blocks solve alone or fail alone)."""
+def _block_lps(cost, a_ub, b_ub, bounds) -> tuple[np.ndarray, np.ndarray]:
+    """Solve B small LPs (min cost.x, A_ub x <= b_ub, bounds; dense per-block arrays) as
+    block-diagonal LPs of ``LP_BLOCKS``; (B, width) solutions and (B,) which solved (a batch HiGHS
+    does not solve is halved until its blocks solve alone or fail alone)."""
     blocks, width = cost.shape
     x, ok = np.zeros((blocks, width)), np.zeros(blocks, dtype=bool)
     pending = [np.arange(start, min(start + LP_BLOCKS, blocks)) for start in range(0, blocks, LP_BLOCKS)]
     while pending:
         rows = pending.pop()
-        solved = _solve_blocks(cost[rows], a_ub[rows], b_ub[rows], None if a_eq is None else a_eq[rows],
-                               None if b_eq is None else b_eq[rows], bounds[rows])
+        solved = _solve_blocks(cost[rows], a_ub[rows], b_ub[rows], bounds[rows])
         if solved is not None:
             x[rows], ok[rows] = solved, True
         elif len(rows) > 1:
@@ -350,13 +354,30 @@ def _block_lps(cost, a_ub, b_ub, a_eq, b_eq, bounds) -> tuple[np.ndarray, np.nda
     return x, ok
 
 
-def _solve_blocks(cost, a_ub, b_ub, a_eq, b_eq, bounds):
-    import scipy.sparse as sparse
-    from scipy.optimize import linprog
+def _solve_blocks(cost, a_ub, b_ub, bounds) -> np.ndarray | None:
+    """One block-diagonal LP of the blocks (B, r, width) through this thread's HiGHS: (B, width)
+    its solution, or None if HiGHS does not find one."""
+    import highspy
 
-    blocks, width = cost.shape
-    def diagonal(parts):
-        return sparse.block_diag(list(parts), format="csr") if parts is not None else None
-    result = linprog(cost.ravel(), A_ub=diagonal(a_ub), b_ub=b_ub.ravel(), A_eq=diagonal(a_eq),
-                     b_eq=None if b_eq is None else b_eq.ravel(), bounds=bounds.reshape(-1, 2), method="highs")
-    return result.x.reshape(blocks, width) if result.status == 0 else None
+    blocks, rows, width = a_ub.shape
+    infinity = highspy.kHighsInf
+    columns = np.swapaxes(a_ub, 1, 2)  # (B, width, r): block b's column j
+    nonzero = columns != 0
+    lp = highspy.HighsLp()
+    lp.num_col_, lp.num_row_ = blocks * width, blocks * rows
+    lp.col_cost_ = cost.ravel()
+    lp.col_lower_ = np.where(np.isfinite(bounds[..., 0]), bounds[..., 0], -infinity).ravel()
+    lp.col_upper_ = np.where(np.isfinite(bounds[..., 1]), bounds[..., 1], infinity).ravel()
+    lp.row_lower_ = np.full(blocks * rows, -infinity)
+    lp.row_upper_ = b_ub.ravel()
+    lp.a_matrix_.format_ = highspy.MatrixFormat.kColwise
+    lp.a_matrix_.start_ = np.concatenate([[0], np.cumsum(nonzero.sum(axis=2).ravel())])
+    lp.a_matrix_.index_ = np.broadcast_to(np.arange(rows) + rows * np.arange(blocks)[:, None, None], nonzero.shape)[nonzero]
+    lp.a_matrix_.value_ = columns[nonzero]
+    solver = highs()
+    solver.clearModel()
+    solver.passModel(lp)
+    solver.run()
+    if solver.getModelStatus() != highspy.HighsModelStatus.kOptimal:
+        return None
+    return np.asarray(solver.getSolution().col_value).reshape(blocks, width)

@@ -26,13 +26,11 @@ from __future__ import annotations
 
 import functools
 import itertools
-import os
-import sys
-import threading
 from math import comb
 
 import numpy as np
 
+from pipeline.model.highs import solver as highs
 from pipeline.model.tensions import Family, feasible_tensions
 
 MAX_ACTIVE_SETS = 1024  # active sets per pair beyond which HiGHS's QP solves it
@@ -176,36 +174,10 @@ def _qp_block(structure, wrenches, lower, upper, weights):
     hessian.value_ = np.tile(np.broadcast_to(weights, (m,)) ** 2, count)
     model = highspy.HighsModel()
     model.lp_, model.hessian_ = lp, hessian
-    solver = _qp_solver()
+    solver = highs()
     solver.clearModel()
     solver.passModel(model)
     solver.run()
     if solver.getModelStatus() != highspy.HighsModelStatus.kOptimal:
         return None
     return np.asarray(solver.getSolution().col_value).reshape(count, m) * unit
-
-
-_SOLVERS = threading.local()
-
-
-def _qp_solver():
-    """This thread's HiGHS instance, made once: HiGHS prints its banner on the process's stdout
-    when an instance is made (before any option can silence it), which would mix into a job's
-    output, so the descriptor is pointed at the null device for that moment only."""
-    solver = getattr(_SOLVERS, "solver", None)
-    if solver is None:
-        import highspy
-
-        sys.stdout.flush()
-        saved = os.dup(1)
-        try:
-            with open(os.devnull, "w") as null:
-                os.dup2(null.fileno(), 1)
-                solver = highspy.Highs()
-        finally:
-            os.dup2(saved, 1)
-            os.close(saved)
-        solver.setOptionValue("output_flag", False)
-        _SOLVERS.solver = solver
-    return solver
-
