@@ -7,8 +7,7 @@ from scipy.optimize import linprog
 
 from conftest import CROSSED_ROBOT, SPREAD_ROBOT
 from pipeline.app.problem import build_problem
-from pipeline.model.jit import compiled_loops
-from pipeline.workspace.feasibility import PIVOT_RTOL, feasible_flags
+from pipeline.workspace.feasibility import feasible_flags, null_space_verdicts
 from pipeline.workspace.kernel import evaluate_chunk
 from pipeline.workspace.verdict import classify
 
@@ -37,8 +36,7 @@ def test_the_null_space_verdict_equals_an_lp_on_random_structure_matrices(r, m, 
     spread = rng.uniform(0.0, 14.0, (n, m)) - rng.uniform(0.0, 4.0, (n, 1))  # forces some of them outside [1, 10]
     wrenches = np.einsum("nrm,nm->nr", structure, spread)[:, None, :]
     lower, upper = np.full(m, t_min), np.full(m, 10.0)
-    verdicts = np.empty(n, dtype=np.int8)
-    compiled_loops("pipeline.model.nullspace").pulling_verdicts(structure, wrenches, lower, upper, PIVOT_RTOL, verdicts)
+    verdicts = null_space_verdicts(structure, wrenches, lower, upper)
     margin = np.array([lp_margin(structure[p], wrenches[p, 0], lower, upper) for p in range(n)])
     clear = np.abs(margin) > 1e-7
     decided = verdicts >= 0
@@ -53,10 +51,8 @@ def test_rank_short_and_wide_null_spaces_are_left_to_the_exact_model():
     short[:, 5] = short[:, 4]  # two equal rows: rank 5 of 6
     wide = rng.normal(size=(5, 3, 7))  # null space of dimension 4
     for structure in (short, wide):
-        verdicts = np.empty(5, dtype=np.int8)
-        compiled_loops("pipeline.model.nullspace").pulling_verdicts(
-            structure, np.zeros((5, 1, structure.shape[1])), np.ones(structure.shape[2]),
-            np.full(structure.shape[2], 10.0), PIVOT_RTOL, verdicts)
+        verdicts = null_space_verdicts(structure, np.zeros((5, 1, structure.shape[1])), np.ones(structure.shape[2]),
+                                       np.full(structure.shape[2], 10.0))
         assert (verdicts == -1).all()
 
 

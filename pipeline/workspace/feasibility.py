@@ -45,14 +45,7 @@ def feasible_flags(problem: WorkspaceProblem, rows: np.ndarray) -> np.ndarray:
         m = state.structure.shape[2]
         lower = np.max([_per_cable(f.lower - problem.margin_atol * f.scale, m) for f in families], axis=0)
         upper = np.min([_per_cable(f.upper + problem.margin_atol * f.scale, m) for f in families], axis=0)
-        structure = np.ascontiguousarray(state.structure, dtype=float)
-        wrenches = state.balanced_wrenches(families)
-        shape = (len(positions), *np.shape(wrenches)[-2:])
-        wrenches = np.array(np.broadcast_to(wrenches, shape), dtype=float, order="C")  # a writable copy, also of one pose
-        verdicts = np.empty(len(positions), dtype=np.int8)
-        compiled_loops("pipeline.model.nullspace").pulling_verdicts(
-            structure, wrenches, np.ascontiguousarray(lower, dtype=float), np.ascontiguousarray(upper, dtype=float),
-            PIVOT_RTOL, verdicts)
+        verdicts = null_space_verdicts(state.structure, state.balanced_wrenches(families), lower, upper)
         undecided = np.flatnonzero(held & (verdicts < 0))
         held &= verdicts != 0
         if len(undecided):
@@ -60,6 +53,19 @@ def feasible_flags(problem: WorkspaceProblem, rows: np.ndarray) -> np.ndarray:
             held[undecided] = _registry_flags(problem, problem.spec.state(problem.robot, positions[undecided], turned))
         flags &= held
     return flags
+
+
+def null_space_verdicts(structure: np.ndarray, wrenches: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """(n,) int8 the compiled null-space test of pulling cables (``pipeline.model.nullspace``) at
+    each pose of ``structure`` (n, k, m) for its ``wrenches`` ((n, K, k), or one pose's for all):
+    1 every wrench has tensions in [lower, upper] (per cable), 0 one has none, -1 undecided."""
+    shape = (len(structure), *np.shape(wrenches)[-2:])
+    wrenches = np.array(np.broadcast_to(wrenches, shape), dtype=float, order="C")  # a writable copy, also of one pose
+    verdicts = np.empty(len(structure), dtype=np.int8)
+    compiled_loops("pipeline.model.nullspace").pulling_verdicts(
+        np.ascontiguousarray(structure, dtype=float), wrenches, np.ascontiguousarray(lower, dtype=float),
+        np.ascontiguousarray(upper, dtype=float), PIVOT_RTOL, verdicts)
+    return verdicts
 
 
 def _constant(family) -> bool:

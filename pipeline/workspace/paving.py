@@ -31,12 +31,11 @@ from omegaconf import DictConfig, OmegaConf
 from pipeline.model import certificates
 from pipeline.model.certificates import INSIDE, OUTSIDE, UNDECIDED, WRENCH_RTOL, BoxStatics
 from pipeline.model.intervals import Interval, rotation_enclosure
-from pipeline.model.jit import compiled_loops
 from pipeline.model.path import StraightMotion
 from pipeline.model.tensions import Family, capacity_margins, reachability
 from pipeline.workspace.compute import described_job, name_of
 from pipeline.workspace.criteria import REGISTRY
-from pipeline.workspace.feasibility import PIVOT_RTOL
+from pipeline.workspace.feasibility import null_space_verdicts
 from pipeline.workspace.kernel import WorkspaceProblem
 from pipeline.workspace.parallel import iter_chunks
 from pipeline.workspace.tolerances import NOMINAL, Tolerances, culprits
@@ -211,16 +210,11 @@ def _corners(problem: WorkspaceProblem, box: BoxStatics, angles, lo: np.ndarray,
     boxes at depth 15 cost no LP). ``wrenches``: each box's own, the middle of its enclosure (for
     every robot within the tolerances, the nominal robot's: a corner it fails, the robust box fails)."""
     corners = np.where(np.arange(8)[:, None] >> np.arange(3) & 1, hi[:, None], lo[:, None]).reshape(-1, 3)
-    structure = np.ascontiguousarray(problem.spec.state(problem.robot, corners, angles).structure, dtype=float)
-    every = np.ascontiguousarray(np.repeat(wrenches, 8, axis=0), dtype=float)
+    structure = problem.spec.state(problem.robot, corners, angles).structure
+    every = np.repeat(wrenches, 8, axis=0)
     slack = problem.margin_atol * problem.limits.scale
-    found = []
-    for lower, upper in ((box.lower - slack, box.upper + slack), (box.lower + slack, box.upper - slack)):
-        verdicts = np.empty(len(corners), dtype=np.int8)
-        compiled_loops("pipeline.model.nullspace").pulling_verdicts(
-            structure, every, np.ascontiguousarray(lower, dtype=float), np.ascontiguousarray(upper, dtype=float),
-            PIVOT_RTOL, verdicts)
-        found.append(verdicts.reshape(-1, 8))
+    found = [null_space_verdicts(structure, every, lower, upper).reshape(-1, 8)
+             for lower, upper in ((box.lower - slack, box.upper + slack), (box.lower + slack, box.upper - slack))]
     return (found[0] == 0).any(axis=1), (found[1] == 1).any(axis=1)
 
 
