@@ -162,7 +162,7 @@ def _certified(problem: WorkspaceProblem, box: BoxStatics, robust: BoxStatics, a
     margin = capacity_margins(structure, pinv, rank, projected, [family])[0]["tension"]
     held = (margin >= 0) & (residual.max(axis=1) <= problem.spec.tension.residual_rtol) & (rank == structure.shape[1])
     fails, holds = _corners(problem, box, angles, lo, hi, every)
-    slopes, half = (enclosure.slopes.lo + enclosure.slopes.hi) / 2, (hi - lo) / 2
+    slopes, half = (enclosure.gradient.lo + enclosure.gradient.hi) / 2, (hi - lo) / 2  # dA/dp at the centre
     verdict = np.full(len(lo), UNDECIDED)
     rows = np.flatnonzero(held & enclosure.regular & ~fails)
     if len(rows):  # the centre holds: the LP's tensions with the most room, moved to first order through the cables with room
