@@ -40,7 +40,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pipeline.model.highs import solver as highs
+from pipeline.model.highs import block_columns, solved
 
 from pipeline.model.intervals import Interval, cross, down, stack, up
 
@@ -435,8 +435,6 @@ def _solve_blocks(cost, a_ub, b_ub, bounds) -> np.ndarray | None:
 
     blocks, rows, width = a_ub.shape
     infinity = highspy.kHighsInf
-    columns = np.swapaxes(a_ub, 1, 2)  # (B, width, r): block b's column j
-    nonzero = columns != 0
     lp = highspy.HighsLp()
     lp.num_col_, lp.num_row_ = blocks * width, blocks * rows
     lp.col_cost_ = cost.ravel()
@@ -445,13 +443,6 @@ def _solve_blocks(cost, a_ub, b_ub, bounds) -> np.ndarray | None:
     lp.row_lower_ = np.full(blocks * rows, -infinity)
     lp.row_upper_ = b_ub.ravel()
     lp.a_matrix_.format_ = highspy.MatrixFormat.kColwise
-    lp.a_matrix_.start_ = np.concatenate([[0], np.cumsum(nonzero.sum(axis=2).ravel())])
-    lp.a_matrix_.index_ = np.broadcast_to(np.arange(rows) + rows * np.arange(blocks)[:, None, None], nonzero.shape)[nonzero]
-    lp.a_matrix_.value_ = columns[nonzero]
-    solver = highs()
-    solver.clearModel()
-    solver.passModel(lp)
-    solver.run()
-    if solver.getModelStatus() != highspy.HighsModelStatus.kOptimal:
-        return None
-    return np.asarray(solver.getSolution().col_value).reshape(blocks, width)
+    lp.a_matrix_.start_, lp.a_matrix_.index_, lp.a_matrix_.value_ = block_columns(a_ub)
+    found = solved(lp)
+    return None if found is None else found.reshape(blocks, width)

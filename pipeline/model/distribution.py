@@ -30,7 +30,7 @@ from math import comb
 
 import numpy as np
 
-from pipeline.model.highs import solver as highs
+from pipeline.model.highs import block_columns, solved
 from pipeline.model.tensions import Family, feasible_tensions
 
 MAX_ACTIVE_SETS = 1024  # active sets per pair beyond which HiGHS's QP solves it
@@ -153,9 +153,6 @@ def _qp_block(structure, wrenches, lower, upper, weights):
     count, r, m = structure.shape
     unit = float(np.max(np.abs(wrenches))) or 1.0  # forces of the order of the wrench: conditioning
     columns = count * m
-    matrix = np.zeros((count, r, m)) + structure  # column j of block p: rows p r .. p r + r - 1
-    start = np.arange(columns + 1) * r
-    index = (np.arange(count)[:, None, None] * r + np.arange(r)[None, :, None]).repeat(m, axis=2)
     lp = highspy.HighsLp()
     lp.num_col_, lp.num_row_ = columns, count * r
     lp.col_cost_ = np.zeros(columns)
@@ -163,9 +160,7 @@ def _qp_block(structure, wrenches, lower, upper, weights):
     lp.col_upper_ = np.where(np.isfinite(upper), upper / unit, highspy.kHighsInf).ravel()
     lp.row_lower_ = lp.row_upper_ = (wrenches / unit).ravel()
     lp.a_matrix_.format_ = highspy.MatrixFormat.kColwise
-    lp.a_matrix_.start_ = start
-    lp.a_matrix_.index_ = np.transpose(index, (0, 2, 1)).ravel()
-    lp.a_matrix_.value_ = np.transpose(matrix, (0, 2, 1)).ravel()
+    lp.a_matrix_.start_, lp.a_matrix_.index_, lp.a_matrix_.value_ = block_columns(np.zeros((count, r, m)) + structure)
     hessian = highspy.HighsHessian()
     hessian.dim_ = columns
     hessian.format_ = highspy.HessianFormat.kTriangular
@@ -174,10 +169,5 @@ def _qp_block(structure, wrenches, lower, upper, weights):
     hessian.value_ = np.tile(np.broadcast_to(weights, (m,)) ** 2, count)
     model = highspy.HighsModel()
     model.lp_, model.hessian_ = lp, hessian
-    solver = highs()
-    solver.clearModel()
-    solver.passModel(model)
-    solver.run()
-    if solver.getModelStatus() != highspy.HighsModelStatus.kOptimal:
-        return None
-    return np.asarray(solver.getSolution().col_value).reshape(count, m) * unit
+    found = solved(model)
+    return None if found is None else found.reshape(count, m) * unit
