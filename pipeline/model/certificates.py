@@ -128,6 +128,23 @@ class BoxEnclosure:
         return taylor.intersect(mean_value)
 
 
+@dataclass(frozen=True)
+class AnchorErrors:
+    """The anchors' build errors (each coordinate of each anchor within +-``tolerance``, m) followed
+    to first order by the tensions, as the positions are: ``nominal`` the enclosure of the robot
+    with its anchors as designed (any other tolerance kept), ``rates`` (N, K, m, m, 3) E, each
+    tension's motion per anchor coordinate a_il at the box's centre, A(c) E_il = -(dA/da_il)(c) t0.
+    A cable's vector p + R b_i - a_i moves with a_il as with p_l reversed, so dA/da_il is minus
+    column i of dA/dp_l."""
+
+    nominal: BoxEnclosure
+    rates: np.ndarray
+    tolerance: float
+
+    def rows(self, index) -> AnchorErrors:
+        return AnchorErrors(self.nominal.rows(index), self.rates[index], self.tolerance)
+
+
 def structure_enclosure(statics: BoxStatics, lo: np.ndarray, hi: np.ndarray, centre: np.ndarray) -> BoxEnclosure:
     """Enclosures of A(p), its derivatives and the lengths over the boxes [lo, hi] (N, 3), by
     the mean-value form about ``centre`` (N, 3), a point of each box, for every offset R b_i - a_i
@@ -232,20 +249,22 @@ def _upper_row_sums(values: np.ndarray) -> np.ndarray:
 
 
 def inside(statics: BoxStatics, enclosure: BoxEnclosure, wrenches: Interval, tensions: np.ndarray, rates: np.ndarray,
-           right_inverse: np.ndarray) -> np.ndarray:
+           right_inverse: np.ndarray, anchors: AnchorErrors | None = None) -> np.ndarray:
     """(N,) whether every pose of each box is proven feasible: for every required wrench k (every
     wrench of its enclosure ``wrenches`` (N, K, k): ``statics.wrenches`` per box, or a moving
     platform's own), the tensions t0 + K e of the module's argument stay within the limits. ``tensions`` (N, K, m):
     t0 per box and wrench (any doubles; good ones have room to both limits), ``right_inverse``
-    (N, m, k): K with A(c) K close to I (the pseudo-inverse at the centre)."""
+    (N, m, k): K with A(c) K close to I (the pseudo-inverse at the centre). With ``anchors`` (a
+    robot within build tolerances) the tensions also follow each anchor's error to first order,
+    t = t0 + D (p - c) + E delta + K e, and r(p, delta) is r(p, 0) (over ``anchors.nominal``) plus
+    sum_il (dr/da_il)(B, Delta) delta_il, dr/da_il = (dA/da_il) t + A E_il, zero at the centre:
+    the anchors' part of r is of second order, where the enclosure of A over the tolerances alone
+    leaves it of first order (:func:`anchors_residual`)."""
     n_rows = enclosure.centre.shape[1]
     size = (enclosure.times(right_inverse, _matmul) - np.eye(n_rows)).magnitude()  # |M|, M = A(B) K - I, (N, k, k)
     weights = _perron(size)  # (N, k) > 0: |M| contracts in the norm max_i |x_i| / v_i when (|M| v)_i < v_i
     contraction = up(_upper_row_sums(up(size * weights[:, None, :])) / weights).max(axis=-1)  # (N,)
-    residual = residual_enclosure(enclosure, wrenches, tensions, rates)
-    moved = Interval.point(tensions)  # t0 + D (B - c)
-    for axis in range(3):
-        moved = moved + Interval.point(rates[..., axis]) * enclosure.step[:, None, None, axis]
+    moved, residual = followed(enclosure, wrenches, tensions, rates, anchors)
     room = down(1.0 - contraction)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         scaled = up(residual.magnitude() / weights[:, None, :]).max(axis=-1)  # |r|_v, (N, K)
@@ -290,6 +309,37 @@ def residual_enclosure(enclosure: BoxEnclosure, wrenches: Interval, tensions: np
                     + _tension_wrench(enclosure.slopes[:, a], rates[..., b]))
         residual = residual + term * product[:, None, None]
     return residual.intersect(mean_value)
+
+
+def followed(enclosure: BoxEnclosure, wrenches: Interval, tensions: np.ndarray, rates: np.ndarray,
+             anchors: AnchorErrors | None = None) -> tuple[Interval, Interval]:
+    """The tensions t0 + D (p - c) (+ E delta with ``anchors``) over each box (and the anchors'
+    tolerances), (N, K, m), and the enclosure of their residual r = A t - w there, (N, K, k)
+    (:func:`residual_enclosure`, :func:`anchors_residual`)."""
+    moved = Interval.point(tensions)
+    for axis in range(3):
+        moved = moved + Interval.point(rates[..., axis]) * enclosure.step[:, None, None, axis]
+    if anchors is None:
+        return moved, residual_enclosure(enclosure, wrenches, tensions, rates)
+    reach = up(_upper_row_sums(np.abs(anchors.rates).reshape(*anchors.rates.shape[:3], -1)) * anchors.tolerance)
+    moved = moved + Interval(-reach, reach)
+    return moved, residual_enclosure(anchors.nominal, wrenches, tensions, rates) + anchors_residual(enclosure, anchors, moved)
+
+
+def anchors_residual(enclosure: BoxEnclosure, anchors: AnchorErrors, tensions: Interval) -> Interval:
+    """(N, K, k) an enclosure of r(p, delta) - r(p, 0) over each box and every anchor error within
+    the tolerance, by the mean-value theorem in delta: sum_il [-(dA/dp_l)(B, Delta)_i t_i(B, Delta)
+    + A(B, Delta) E_il] delta_il, ``enclosure`` over the box and the tolerances, ``tensions`` (N, K,
+    m) t over both (:func:`inside`)."""
+    spread = Interval(np.array(-anchors.tolerance), np.array(anchors.tolerance))
+    total = None
+    for cable in range(anchors.rates.shape[3]):
+        for axis in range(3):
+            slope = enclosure.slopes[:, axis][:, None, :, cable]  # (N, 1, k): column i of dA/dp_l
+            term = (_tension_wrench(enclosure.structure, anchors.rates[..., cable, axis])
+                    - slope * tensions[..., cable:cable + 1]) * spread
+            total = term if total is None else total + term
+    return total
 
 
 def _perron(size: np.ndarray, rounds: int = 12) -> np.ndarray:

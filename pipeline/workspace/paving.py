@@ -130,7 +130,8 @@ def certify(problem: WorkspaceProblem, statics: list[tuple[BoxStatics, BoxStatic
             hi: np.ndarray, accelerations: np.ndarray | None = None) -> np.ndarray:
     """(N,) the verdict of each box [lo, hi] (N, 3): inside at every orientation for every robot
     within the tolerances, outside at one for the nominal robot (then for none within them).
-    ``statics``: (nominal, within the tolerances) per orientation of ``problem.orientations``;
+    ``statics``: (nominal, within the tolerances, within them but the anchors', the anchors'
+    tolerance) per orientation of ``problem.orientations``;
     ``accelerations`` (N, 2, 3): a platform moving through each box with its linear acceleration
     on the segment between the two (:func:`moving_wrenches`; None: the statics' own wrenches)."""
     centre = centres(lo, hi)
@@ -145,8 +146,8 @@ def certify(problem: WorkspaceProblem, statics: list[tuple[BoxStatics, BoxStatic
     return verdict
 
 
-def _certified(problem: WorkspaceProblem, box: BoxStatics, robust: BoxStatics, angles, lo, hi, centre,
-               moving: Interval | None) -> np.ndarray:
+def _certified(problem: WorkspaceProblem, box: BoxStatics, robust: BoxStatics, rest: BoxStatics, anchors: float, angles,
+               lo, hi, centre, moving: Interval | None) -> np.ndarray:
     state = problem.spec.state(problem.robot, centre, angles)
     structure = state.structure
     pinv, rank = state.wrench_pinv
@@ -169,7 +170,12 @@ def _certified(problem: WorkspaceProblem, box: BoxStatics, robust: BoxStatics, a
         tensions = capacity_margins(structure[rows], pinv[rows], rank[rows], projected[rows], [family], distribution=True)[1]
         inverse = _roomy_inverse(structure[rows], tensions, box, problem.limits.scale)
         rates = -np.einsum("nmk,nlkj,nKj->nKml", inverse, slopes[rows], tensions)  # A(c) D_l = -(dA/dp_l) t0
-        proven = certificates.inside(robust, within.rows(rows), held_by[rows], tensions, rates, inverse)
+        errors = None
+        if anchors:  # the tensions follow the anchors' errors to first order too: A(c) E_il = (dA/dp_l)(c)_i t0_i
+            designed = enclosure if rest is box else certificates.structure_enclosure(rest, lo, hi, centre)
+            errors = certificates.AnchorErrors(designed.rows(rows), np.einsum("njk,nlki,nKi->nKjil", inverse, slopes[rows],
+                                                                              tensions), anchors)
+        proven = certificates.inside(robust, within.rows(rows), held_by[rows], tensions, rates, inverse, errors)
         verdict[rows[proven]] = INSIDE
     rows = np.flatnonzero(~held & ~holds)
     if len(rows):  # the centre fails: the separating direction that holds best over the box, to first order
@@ -282,9 +288,12 @@ def _branch_and_prune(problem: WorkspaceProblem, tolerances: Tolerances, items: 
     chunks (``pipeline.workspace.parallel``: ``compute.n_jobs`` workers); past ``seconds`` the
     chunks not yet certified stay undecided. ``size``: each item's volume or length, for the log."""
     statics = []
+    rest = replace(tolerances, anchors=0.0)  # the tolerances the enclosures hold; the anchors' are followed to first order
     for angles in problem.orientations:
         nominal = box_statics(problem, angles)
-        statics.append((nominal, nominal if tolerances.nominal else box_statics(problem, angles, tolerances)))
+        statics.append((nominal, nominal, nominal, 0.0) if tolerances.nominal else
+                       (nominal, box_statics(problem, angles, tolerances),
+                        nominal if rest.nominal else box_statics(problem, angles, rest), tolerances.anchors))
     given = (problem, statics)
     kept: list[tuple] = []
     start, level = time.perf_counter(), 0
