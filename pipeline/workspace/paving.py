@@ -62,10 +62,13 @@ class Paving:
 
 def box_statics(problem: WorkspaceProblem, angles: np.ndarray, tolerances: Tolerances = NOMINAL) -> BoxStatics:
     """The certificates' data at one orientation (eq. 9's angles), for every robot within
-    ``tolerances``: enclosures of R b_i - a_i and R b_i, the required wrenches (each the hull of its
-    values at the corners of the mass and centre-of-mass box, where a wrench affine in each is
-    extreme) widened by ``WRENCH_RTOL`` of the terms that form them, the tension limits and the
-    cables' lengths."""
+    ``tolerances``: enclosures of R b_i - a_i and R b_i, the required wrenches widened by
+    ``WRENCH_RTOL`` of the terms that form them, the tension limits and the cables' lengths.
+    Within a mass and centre-of-mass tolerance each required wrench is required at every corner of
+    their box, each corner its own wrench (K corners x K rows): the wrench is affine in the mass
+    and in the centre of mass, so over the box it lies in the hull of its values at the corners,
+    and the wrenches a robot balances at a pose are a convex set: the corners suffice, each
+    with its own tensions (their box hull would lose how the mass moves force and moment together)."""
     robot, spec = problem.robot, problem.spec
     rotation = rotation_enclosure(*angles)
     def within(points: np.ndarray, tolerance: float) -> Interval:
@@ -90,7 +93,8 @@ def box_statics(problem: WorkspaceProblem, angles: np.ndarray, tolerances: Toler
     body = (rotation[None] * vertices[:, None, :]).sum(axis=-1)  # R v_k, (k, 3)
     faces = np.zeros((0, 3)) if robot.platform_shape is None else robot.platform_shape.normals
     normals = (rotation[None] * Interval.point(faces)[:, None, :]).sum(axis=-1)  # R n_f, (f, 3)
-    return BoxStatics(offsets, arms, tuple(robot.dofs), Interval(wrenches.min(axis=0) - radius, wrenches.max(axis=0) + radius),
+    wrenches = wrenches.reshape(-1, wrenches.shape[-1])  # (corners K, k)
+    return BoxStatics(offsets, arms, tuple(robot.dofs), Interval(wrenches - radius, wrenches + radius),
                       lower, upper, np.inf if robot.l_max is None else float(robot.l_max), robot.shortest_cable, anchors, body,
                       normals)
 
@@ -159,15 +163,24 @@ def _certified(problem: WorkspaceProblem, box: BoxStatics, robust: BoxStatics, r
     nominal, held_by = (per_box(box.wrenches), per_box(robust.wrenches)) if moving is None else (moving, moving)
     every = (nominal.lo + nominal.hi) / 2  # (N, K, k)
     family = Family("tension", box.lower, box.upper, np.full(len(box.lower), problem.limits.scale))
-    residual, projected = reachability(structure, pinv, every)
-    margin = capacity_margins(structure, pinv, rank, projected, [family])[0]["tension"]
-    held = (margin >= 0) & (residual.max(axis=1) <= problem.spec.tension.residual_rtol) & (rank == structure.shape[1])
+
+    def holding(wrenches: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Whether the centre holds every wrench, and the wrenches projected on A(c)'s range."""
+        residual, projected = reachability(structure, pinv, wrenches)
+        margin = capacity_margins(structure, pinv, rank, projected, [family])[0]["tension"]
+        return (margin >= 0) & (residual.max(axis=1) <= problem.spec.tension.residual_rtol) & (rank == structure.shape[1]), \
+            projected
+
+    held, projected = holding(every)
+    wanted = held_by.lo.shape == nominal.lo.shape  # else a mass or centre-of-mass tolerance: its corners' wrenches
+    held_in, projected_in = (held, projected) if wanted else holding((held_by.lo + held_by.hi) / 2)
     fails, holds = _corners(problem, box, angles, lo, hi, every)
     slopes, half = (enclosure.gradient.lo + enclosure.gradient.hi) / 2, (hi - lo) / 2  # dA/dp at the centre
     verdict = np.full(len(lo), UNDECIDED)
-    rows = np.flatnonzero(held & enclosure.regular & ~fails)
+    rows = np.flatnonzero(held_in & enclosure.regular & ~fails)
     if len(rows):  # the centre holds: the LP's tensions with the most room, moved to first order through the cables with room
-        tensions = capacity_margins(structure[rows], pinv[rows], rank[rows], projected[rows], [family], distribution=True)[1]
+        tensions = capacity_margins(structure[rows], pinv[rows], rank[rows], projected_in[rows], [family],
+                                    distribution=True)[1]
         inverse = _roomy_inverse(structure[rows], tensions, box, problem.limits.scale)
         rates = -np.einsum("nmk,nlkj,nKj->nKml", inverse, slopes[rows], tensions)  # A(c) D_l = -(dA/dp_l) t0
         errors = None
