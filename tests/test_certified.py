@@ -224,52 +224,73 @@ def test_the_residual_enclosure_holds_the_residual_at_random_points_and_is_of_se
 
 
 @pytest.mark.parametrize("rates", ["first order", "random"])
-def test_the_anchors_residual_holds_the_residual_of_every_robot_within_the_tolerance(make_cfg, rates):
-    """certificates.followed with anchor errors (the robust inside certificate's t and r) against
-    t = t0 + D s + E delta and r = A(p, a + delta) t - w computed from the law (u from each moved
-    anchor to the platform point, columns [u; R b x u]) for 1000 robots with anchors within 20 mm,
-    each at a random point of one of 100 boxes of a tilted robot, w = A(c) t0. With the first-order
-    rates (D and E through the pseudo-inverse, dA/dp by central differences) and with random ones
-    (then r is of first order in the errors: the anchors' term must hold it)."""
+@pytest.mark.parametrize("errors", ["anchors", "attachments", "both"])
+def test_the_errors_residual_holds_the_residual_of_every_robot_within_the_tolerances(make_cfg, errors, rates):
+    """certificates.followed with build errors (the robust inside certificate's t and r) against
+    t = t0 + D s + E delta and r = A(p, a + delta_a, b + delta_b) t - w computed from the law (u
+    from each moved anchor to the moved platform point p + R (b + delta_b), columns [u; R (b +
+    delta_b) x u]) for 10^5 robots built within 20 mm (anchors) or 10 mm (attachments), each at a
+    random point of one of 100 boxes of a tilted robot, w = A(c) t0. With the first-order rates
+    (D and E through the pseudo-inverse, dA/dp and dA/ddelta by central differences) and with
+    random ones (r then of first order in the errors: the errors' term must hold it)."""
     problem = _problem(make_cfg, ROBOTS["tilted payload"][0])
     robot, angles = problem.robot, tuple(problem.orientations[0])
-    rotation, tolerance, m = eq9_rotation(*angles), 0.02, robot.n_cables
+    rotation, m = eq9_rotation(*angles), robot.n_cables
+    tolerances = paving.Tolerances(anchors=0.0 if errors == "attachments" else 0.02,
+                                   attachments=0.0 if errors == "anchors" else 0.01)
     rng = np.random.default_rng(8)
     lo = rng.uniform([-1.4, -0.9, 0.3], [1.2, 0.7, 1.4], (100, 3))
     hi = lo + rng.uniform(0.005, 0.05, (100, 3))
     middle = lo + (hi - lo) / 2
 
-    def structure_at(points, anchors):  # (..., 3), (..., m, 3) -> (..., 6, m)
-        arms = robot.attachments @ rotation.T
+    def structure_at(points, anchors, attachments):  # (..., 3), (..., m, 3) twice -> (..., 6, m)
+        arms = attachments @ rotation.T
         vectors = points[..., None, :] + arms - anchors
         unit = vectors / np.linalg.norm(vectors, axis=-1, keepdims=True)
         return np.swapaxes(np.concatenate([unit, np.cross(arms, unit)], axis=-1), -1, -2)
 
-    designed = np.broadcast_to(robot.anchors, (100, m, 3))
-    assert np.allclose(structure_at(middle, designed), problem.spec.state(robot, middle, angles).structure, atol=1e-14)
-    at_centre = structure_at(middle, designed)
+    designed = (np.broadcast_to(robot.anchors, (100, m, 3)), np.broadcast_to(robot.attachments, (100, m, 3)))
+    assert np.allclose(structure_at(middle, *designed), problem.spec.state(robot, middle, angles).structure, atol=1e-14)
+    at_centre = structure_at(middle, *designed)
     tensions = rng.uniform(1.0, 10.0, (100, 1, m))
     wrenches = np.einsum("nkm,nKm->nKk", at_centre, tensions)
+    sizes = np.array([size for size in (tolerances.anchors, tolerances.attachments) if size])
+    count = 3 * m * len(sizes)  # the parameters, per cable and axis: anchors then attachments
     if rates == "random":
-        moving, errors = rng.normal(size=(100, 1, m, 3)), rng.normal(size=(100, 1, m, m, 3))
+        moving, following = rng.normal(size=(100, 1, m, 3)), rng.normal(size=(100, 1, m, count))
     else:
         h = 1e-6
-        slopes = np.stack([(structure_at(middle + h * e, designed) - structure_at(middle - h * e, designed)) / (2 * h)
-                           for e in np.eye(3)], axis=1)  # (100, 3, 6, m)
         inverse = np.linalg.pinv(at_centre)
+        slopes = np.stack([(structure_at(middle + h * e, *designed) - structure_at(middle - h * e, *designed)) / (2 * h)
+                           for e in np.eye(3)], axis=1)  # (100, 3, 6, m)
         moving = -np.einsum("nmk,nlkj,nKj->nKml", inverse, slopes, tensions)
-        errors = np.einsum("njk,nlki,nKi->nKjil", inverse, slopes, tensions)  # a_il moves a cable as p_l reversed
+        columns = []
+        for cable in range(m):
+            for axis in range(3):
+                for which, size in enumerate((tolerances.anchors, tolerances.attachments)):
+                    if size:
+                        step = np.zeros((m, 3))
+                        step[cable, axis] = h
+                        plus = [part + step if k == which else part for k, part in enumerate(designed)]
+                        minus = [part - step if k == which else part for k, part in enumerate(designed)]
+                        columns.append((structure_at(middle, *plus) - structure_at(middle, *minus)) / (2 * h))
+        following = -np.einsum("nmk,nPkj,nKj->nKmP", inverse, np.stack(columns, axis=1), tensions)
     nominal = certificates.structure_enclosure(paving.box_statics(problem, angles), lo, hi, middle)
-    within = certificates.structure_enclosure(paving.box_statics(problem, angles, paving.Tolerances(anchors=tolerance)),
-                                              lo, hi, middle)
-    moved, residual = certificates.followed(within, Interval.point(wrenches), tensions, moving,
-                                            certificates.AnchorErrors(nominal, errors, tolerance))
+    statics = paving.box_statics(problem, angles, tolerances)
+    within = certificates.structure_enclosure(statics, lo, hi, middle)
+    moves, arms, given = paving.build_errors(problem, angles, tolerances)
+    assert np.array_equal(given, np.tile(sizes, 3 * m))
+    moved, residual = certificates.followed(statics, within, Interval.point(wrenches), tensions, moving,
+                                            certificates.BuildErrors(nominal, following, moves, arms, given))
     points = lo[:, None] + rng.uniform(0, 1, (100, 1000, 3)) * (hi - lo)[:, None]
-    delta = tolerance * np.where(rng.uniform(size=(100, 1000, 1, 1)) < 0.3, rng.choice([-1.0, 1.0], (100, 1000, m, 3)),
-                                 rng.uniform(-1, 1, (100, 1000, m, 3)))
+    drawn = np.where(rng.uniform(size=(100, 1000, 1, 1, 1)) < 0.3, rng.choice([-1.0, 1.0], (100, 1000, m, 3, len(sizes))),
+                     rng.uniform(-1, 1, (100, 1000, m, 3, len(sizes)))) * sizes  # (.., cable, axis, kind)
     t = (tensions[:, None, 0] + np.einsum("nml,npl->npm", moving[:, 0], points - middle[:, None])
-         + np.einsum("nmil,npil->npm", errors[:, 0], delta))
-    exact = np.einsum("npkm,npm->npk", structure_at(points, robot.anchors + delta), t) - wrenches[:, None, 0]
+         + np.einsum("nmP,npP->npm", following[:, 0], drawn.reshape(100, 1000, -1)))
+    kinds = iter(range(len(sizes)))
+    built = [robot.anchors + drawn[..., next(kinds)] if tolerances.anchors else robot.anchors,
+             robot.attachments + drawn[..., next(kinds)] if tolerances.attachments else robot.attachments]
+    exact = np.einsum("npkm,npm->npk", structure_at(points, *built), t) - wrenches[:, None, 0]
     assert (moved.lo[:, 0, None] <= t).all() and (t <= moved.hi[:, 0, None]).all()
     assert (residual.lo[:, 0, None] <= exact).all() and (exact <= residual.hi[:, 0, None]).all()
 

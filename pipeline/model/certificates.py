@@ -84,7 +84,8 @@ class BoxEnclosure:
     (N, 3) of B - c, so that A(p) - A(c) lies in sum_l slopes_l step_l (the mean-value theorem,
     entry by entry) and in the second-order Taylor form of :meth:`times`, where a product of A(p)
     with a vector keeps the cables' cancellations to second order; ``structure`` (N, k, m) of
-    A(p) entry by entry; ``lengths`` (N, m) of the cables' lengths; ``regular`` (N,) whether no
+    A(p) entry by entry; ``unit`` (N, m, 3) of the cables' unit vectors u_i over the box; ``lengths``
+    (N, m) of the cables' lengths; ``regular`` (N,) whether no
     cable can collapse in the box (where one can, the structure's enclosures are not valid and
     only the lengths decide)."""
 
@@ -94,12 +95,13 @@ class BoxEnclosure:
     curvature: Interval
     step: Interval
     structure: Interval
+    unit: Interval
     lengths: Interval
     regular: np.ndarray
 
     def rows(self, index) -> BoxEnclosure:
         return BoxEnclosure(*(part[index] for part in (self.centre, self.gradient, self.slopes, self.curvature, self.step,
-                                                        self.structure, self.lengths)), self.regular[index])
+                                                        self.structure, self.unit, self.lengths)), self.regular[index])
 
     def products(self) -> list[Interval]:
         """(N, 3) each of ``PAIRS``' (p_a - c_a)(p_b - c_b) over the box, halved where a = b
@@ -129,20 +131,39 @@ class BoxEnclosure:
 
 
 @dataclass(frozen=True)
-class AnchorErrors:
-    """The anchors' build errors (each coordinate of each anchor within +-``tolerance``, m) followed
-    to first order by the tensions, as the positions are: ``nominal`` the enclosure of the robot
-    with its anchors as designed (any other tolerance kept), ``rates`` (N, K, m, m, 3) E, each
-    tension's motion per anchor coordinate a_il at the box's centre, A(c) E_il = -(dA/da_il)(c) t0.
-    A cable's vector p + R b_i - a_i moves with a_il as with p_l reversed, so dA/da_il is minus
-    column i of dA/dp_l."""
+class BuildErrors:
+    """Build errors followed by the tensions to first order, as the positions are (:func:`inside`):
+    P parameters delta_j, each within +-``tolerances``_j, each moving every cable's vector
+    d_i = p + R b_i - a_i by ``moves``_ji delta_j and its arm R b_i by ``arms``_ji delta_j ((P, m, 3)
+    enclosures: an anchor's coordinate a_il moves d_i by -e_l and no arm, an attachment's b_il moves
+    both by R e_l). ``nominal``: the enclosure of the robot as designed (any other tolerance kept);
+    ``rates`` (N, K, m, P): E_j, the tensions' motion per parameter at the box's centre,
+    A(c) E_j = -(dA/ddelta_j)(c) t0 (:func:`error_slopes`)."""
 
     nominal: BoxEnclosure
     rates: np.ndarray
-    tolerance: float
+    moves: Interval
+    arms: Interval
+    tolerances: np.ndarray
 
-    def rows(self, index) -> AnchorErrors:
-        return AnchorErrors(self.nominal.rows(index), self.rates[index], self.tolerance)
+    def rows(self, index) -> BuildErrors:
+        return BuildErrors(self.nominal.rows(index), self.rates[index], self.moves, self.arms, self.tolerances)
+
+
+def error_slopes(statics: BoxStatics, slopes: Interval, unit: Interval, moves: Interval, arms: Interval,
+                 parameter: int) -> Interval:
+    """(N, k, m) dA/ddelta_j from dA/dp_l (``slopes`` (N, 3, k, m)) and the unit vectors u_i
+    (``unit`` (N, m, 3)), over a box or at its centre: column i is sum_l moves_jil (dA/dp_l)_i
+    plus [0; arms_ji x u_i] (the arm's own motion), on the rows of the robot's freedoms."""
+    total = None
+    for axis in range(3):
+        term = slopes[:, axis] * moves[parameter, None, None, :, axis]
+        total = term if total is None else total + term
+    moment = cross(arms[parameter][None], unit)  # (N, m, 3)
+    zero = np.zeros(moment.shape)
+    rows = list(statics.rows)
+    return total + Interval(np.swapaxes(np.concatenate([zero, moment.lo], axis=-1), 1, 2)[:, rows],
+                            np.swapaxes(np.concatenate([zero, moment.hi], axis=-1), 1, 2)[:, rows])
 
 
 def structure_enclosure(statics: BoxStatics, lo: np.ndarray, hi: np.ndarray, centre: np.ndarray) -> BoxEnclosure:
@@ -172,7 +193,7 @@ def structure_enclosure(statics: BoxStatics, lo: np.ndarray, hi: np.ndarray, cen
     gradient = [_columns(statics, column) for column in _unit_slopes(unit_centre, reach)]
     curvature = [_columns(statics, column) for column in _unit_curvatures(unit, lengths)]
     return BoxEnclosure(_columns(statics, unit_centre), stack(gradient, axis=1), stack(slopes, axis=1),
-                        stack(curvature, axis=1), step, _columns(statics, unit), lengths, regular)
+                        stack(curvature, axis=1), step, _columns(statics, unit), unit, lengths, regular)
 
 
 def _directions(vectors: Interval, shortest: float) -> tuple[Interval, Interval, Interval]:
@@ -249,22 +270,22 @@ def _upper_row_sums(values: np.ndarray) -> np.ndarray:
 
 
 def inside(statics: BoxStatics, enclosure: BoxEnclosure, wrenches: Interval, tensions: np.ndarray, rates: np.ndarray,
-           right_inverse: np.ndarray, anchors: AnchorErrors | None = None) -> np.ndarray:
+           right_inverse: np.ndarray, errors: BuildErrors | None = None) -> np.ndarray:
     """(N,) whether every pose of each box is proven feasible: for every required wrench k (every
     wrench of its enclosure ``wrenches`` (N, K, k): ``statics.wrenches`` per box, or a moving
     platform's own), the tensions t0 + K e of the module's argument stay within the limits. ``tensions`` (N, K, m):
     t0 per box and wrench (any doubles; good ones have room to both limits), ``right_inverse``
-    (N, m, k): K with A(c) K close to I (the pseudo-inverse at the centre). With ``anchors`` (a
-    robot within build tolerances) the tensions also follow each anchor's error to first order,
-    t = t0 + D (p - c) + E delta + K e, and r(p, delta) is r(p, 0) (over ``anchors.nominal``) plus
-    sum_il (dr/da_il)(B, Delta) delta_il, dr/da_il = (dA/da_il) t + A E_il, zero at the centre:
-    the anchors' part of r is of second order, where the enclosure of A over the tolerances alone
-    leaves it of first order (:func:`anchors_residual`)."""
+    (N, m, k): K with A(c) K close to I (the pseudo-inverse at the centre). With ``errors`` (a
+    robot within build tolerances) the tensions also follow each error to first order,
+    t = t0 + D (p - c) + E delta + K e, and r(p, delta) is r(p, 0) (over ``errors.nominal``) plus
+    sum_j (dr/ddelta_j)(B, Delta) delta_j, dr/ddelta_j = (dA/ddelta_j) t + A E_j, zero at the centre:
+    the errors' part of r is of second order, where the enclosure of A over the tolerances alone
+    leaves it of first order (:func:`errors_residual`)."""
     n_rows = enclosure.centre.shape[1]
     size = (enclosure.times(right_inverse, _matmul) - np.eye(n_rows)).magnitude()  # |M|, M = A(B) K - I, (N, k, k)
     weights = _perron(size)  # (N, k) > 0: |M| contracts in the norm max_i |x_i| / v_i when (|M| v)_i < v_i
     contraction = up(_upper_row_sums(up(size * weights[:, None, :])) / weights).max(axis=-1)  # (N,)
-    moved, residual = followed(enclosure, wrenches, tensions, rates, anchors)
+    moved, residual = followed(statics, enclosure, wrenches, tensions, rates, errors)
     room = down(1.0 - contraction)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         scaled = up(residual.magnitude() / weights[:, None, :]).max(axis=-1)  # |r|_v, (N, K)
@@ -311,34 +332,35 @@ def residual_enclosure(enclosure: BoxEnclosure, wrenches: Interval, tensions: np
     return residual.intersect(mean_value)
 
 
-def followed(enclosure: BoxEnclosure, wrenches: Interval, tensions: np.ndarray, rates: np.ndarray,
-             anchors: AnchorErrors | None = None) -> tuple[Interval, Interval]:
-    """The tensions t0 + D (p - c) (+ E delta with ``anchors``) over each box (and the anchors'
+def followed(statics: BoxStatics, enclosure: BoxEnclosure, wrenches: Interval, tensions: np.ndarray, rates: np.ndarray,
+             errors: BuildErrors | None = None) -> tuple[Interval, Interval]:
+    """The tensions t0 + D (p - c) (+ E delta with ``errors``) over each box (and the errors'
     tolerances), (N, K, m), and the enclosure of their residual r = A t - w there, (N, K, k)
-    (:func:`residual_enclosure`, :func:`anchors_residual`)."""
+    (:func:`residual_enclosure`, :func:`errors_residual`)."""
     moved = Interval.point(tensions)
     for axis in range(3):
         moved = moved + Interval.point(rates[..., axis]) * enclosure.step[:, None, None, axis]
-    if anchors is None:
+    if errors is None:
         return moved, residual_enclosure(enclosure, wrenches, tensions, rates)
-    reach = up(_upper_row_sums(np.abs(anchors.rates).reshape(*anchors.rates.shape[:3], -1)) * anchors.tolerance)
+    reach = _upper_row_sums(up(np.abs(errors.rates) * errors.tolerances))  # sum_j |E_j| tolerance_j, (N, K, m)
     moved = moved + Interval(-reach, reach)
-    return moved, residual_enclosure(anchors.nominal, wrenches, tensions, rates) + anchors_residual(enclosure, anchors, moved)
+    return moved, residual_enclosure(errors.nominal, wrenches, tensions, rates) + errors_residual(statics, enclosure, errors,
+                                                                                                 moved)
 
 
-def anchors_residual(enclosure: BoxEnclosure, anchors: AnchorErrors, tensions: Interval) -> Interval:
-    """(N, K, k) an enclosure of r(p, delta) - r(p, 0) over each box and every anchor error within
-    the tolerance, by the mean-value theorem in delta: sum_il [-(dA/dp_l)(B, Delta)_i t_i(B, Delta)
-    + A(B, Delta) E_il] delta_il, ``enclosure`` over the box and the tolerances, ``tensions`` (N, K,
-    m) t over both (:func:`inside`)."""
-    spread = Interval(np.array(-anchors.tolerance), np.array(anchors.tolerance))
+def errors_residual(statics: BoxStatics, enclosure: BoxEnclosure, errors: BuildErrors, tensions: Interval) -> Interval:
+    """(N, K, k) an enclosure of r(p, delta) - r(p, 0) over each box and every error within the
+    tolerances, by the mean-value theorem in delta: sum_j [(dA/ddelta_j)(B, Delta) t(B, Delta)
+    + A(B, Delta) E_j] delta_j, ``enclosure`` over the box and the tolerances, ``tensions`` (N, K,
+    m) t over both (:func:`followed`)."""
     total = None
-    for cable in range(anchors.rates.shape[3]):
-        for axis in range(3):
-            slope = enclosure.slopes[:, axis][:, None, :, cable]  # (N, 1, k): column i of dA/dp_l
-            term = (_tension_wrench(enclosure.structure, anchors.rates[..., cable, axis])
-                    - slope * tensions[..., cable:cable + 1]) * spread
-            total = term if total is None else total + term
+    for parameter, tolerance in enumerate(errors.tolerances):
+        slope = error_slopes(statics, enclosure.slopes, enclosure.unit, errors.moves, errors.arms, parameter)  # (N, k, m)
+        term = _tension_wrench(enclosure.structure, errors.rates[..., parameter])
+        for cable in range(slope.shape[-1]):
+            term = term + slope[:, None, :, cable] * tensions[..., cable:cable + 1]
+        term = term * Interval(np.array(-tolerance), np.array(tolerance))
+        total = term if total is None else total + term
     return total
 
 

@@ -30,7 +30,7 @@ from omegaconf import DictConfig, OmegaConf
 
 from pipeline.model import certificates
 from pipeline.model.certificates import INSIDE, OUTSIDE, UNDECIDED, WRENCH_RTOL, BoxStatics
-from pipeline.model.intervals import Interval, rotation_enclosure
+from pipeline.model.intervals import Interval, rotation_enclosure, stack
 from pipeline.model.path import StraightMotion
 from pipeline.model.tensions import Family, capacity_margins, reachability
 from pipeline.workspace.compute import described_job, name_of
@@ -99,6 +99,32 @@ def box_statics(problem: WorkspaceProblem, angles: np.ndarray, tolerances: Toler
                       normals)
 
 
+def build_errors(problem: WorkspaceProblem, angles, tolerances: Tolerances) -> tuple[Interval, Interval, np.ndarray] | None:
+    """The build errors the tensions follow to first order (``certificates.BuildErrors``): every
+    coordinate of every anchor and attachment within its tolerance, as (moves, arms, tolerances):
+    an anchor's a_il moves the cable's vector by -e_l, an attachment's b_il moves it (unless the
+    cables run to the reference point) and the arm by R e_l. None without such tolerances."""
+    m = problem.robot.n_cables
+    rotation = rotation_enclosure(*angles)
+    zero = np.zeros((m, 3))
+    moves, arms, sizes = [], [], []
+    for cable in range(m):
+        for axis in range(3):
+            if tolerances.anchors:
+                moved = zero.copy()
+                moved[cable, axis] = -1.0
+                moves.append(Interval.point(moved))
+                arms.append(Interval.point(zero))
+                sizes.append(tolerances.anchors)
+            if tolerances.attachments:
+                lo, hi = zero.copy(), zero.copy()
+                lo[cable], hi[cable] = rotation.lo[:, axis], rotation.hi[:, axis]  # R e_l
+                moves.append(Interval.point(zero) if problem.spec.cable_direction == "centre" else Interval(lo, hi))
+                arms.append(Interval(lo, hi))
+                sizes.append(tolerances.attachments)
+    return (stack(moves, axis=0), stack(arms, axis=0), np.array(sizes)) if sizes else None
+
+
 def _radius(spec, tolerances: Tolerances, wrenches: np.ndarray) -> float:
     """How far the statics' rounding may have moved ``wrenches`` formed from ``spec``: ``WRENCH_RTOL``
     of the size of the terms that form them (the load's, the wrench set's, the motion's)."""
@@ -134,8 +160,8 @@ def certify(problem: WorkspaceProblem, statics: list[tuple[BoxStatics, BoxStatic
             hi: np.ndarray, accelerations: np.ndarray | None = None) -> np.ndarray:
     """(N,) the verdict of each box [lo, hi] (N, 3): inside at every orientation for every robot
     within the tolerances, outside at one for the nominal robot (then for none within them).
-    ``statics``: (nominal, within the tolerances, within them but the anchors', the anchors'
-    tolerance) per orientation of ``problem.orientations``;
+    ``statics``: (nominal, within the tolerances, within them but the anchors' and attachments',
+    those followed to first order: :func:`build_errors`) per orientation of ``problem.orientations``;
     ``accelerations`` (N, 2, 3): a platform moving through each box with its linear acceleration
     on the segment between the two (:func:`moving_wrenches`; None: the statics' own wrenches)."""
     centre = centres(lo, hi)
@@ -150,7 +176,7 @@ def certify(problem: WorkspaceProblem, statics: list[tuple[BoxStatics, BoxStatic
     return verdict
 
 
-def _certified(problem: WorkspaceProblem, box: BoxStatics, robust: BoxStatics, rest: BoxStatics, anchors: float, angles,
+def _certified(problem: WorkspaceProblem, box: BoxStatics, robust: BoxStatics, rest: BoxStatics, errors, angles,
                lo, hi, centre, moving: Interval | None) -> np.ndarray:
     state = problem.spec.state(problem.robot, centre, angles)
     structure = state.structure
@@ -183,12 +209,16 @@ def _certified(problem: WorkspaceProblem, box: BoxStatics, robust: BoxStatics, r
                                     distribution=True)[1]
         inverse = _roomy_inverse(structure[rows], tensions, box, problem.limits.scale)
         rates = -np.einsum("nmk,nlkj,nKj->nKml", inverse, slopes[rows], tensions)  # A(c) D_l = -(dA/dp_l) t0
-        errors = None
-        if anchors:  # the tensions follow the anchors' errors to first order too: A(c) E_il = (dA/dp_l)(c)_i t0_i
+        followed = None
+        if errors is not None:  # the tensions follow the build errors to first order too: A(c) E_j = -(dA/ddelta_j)(c) t0
+            moves, arms, sizes = errors
             designed = enclosure if rest is box else certificates.structure_enclosure(rest, lo, hi, centre)
-            errors = certificates.AnchorErrors(designed.rows(rows), np.einsum("njk,nlki,nKi->nKjil", inverse, slopes[rows],
-                                                                              tensions), anchors)
-        proven = certificates.inside(robust, within.rows(rows), held_by[rows], tensions, rates, inverse, errors)
+            unit = Interval.point(state.unit[rows])
+            slopes_j = [certificates.error_slopes(box, enclosure.gradient[rows], unit, moves, arms, j) for j in range(len(sizes))]
+            middle = np.stack([(part.lo + part.hi) / 2 for part in slopes_j], axis=1)  # (N, P, k, m)
+            followed = certificates.BuildErrors(designed.rows(rows), -np.einsum("nmk,nPkj,nKj->nKmP", inverse, middle, tensions),
+                                                moves, arms, sizes)
+        proven = certificates.inside(robust, within.rows(rows), held_by[rows], tensions, rates, inverse, followed)
         verdict[rows[proven]] = INSIDE
     rows = np.flatnonzero(~held & ~holds)
     if len(rows):  # the centre fails: the separating direction that holds best over the box, to first order
@@ -301,12 +331,12 @@ def _branch_and_prune(problem: WorkspaceProblem, tolerances: Tolerances, items: 
     chunks (``pipeline.workspace.parallel``: ``compute.n_jobs`` workers); past ``seconds`` the
     chunks not yet certified stay undecided. ``size``: each item's volume or length, for the log."""
     statics = []
-    rest = replace(tolerances, anchors=0.0)  # the tolerances the enclosures hold; the anchors' are followed to first order
+    rest = replace(tolerances, anchors=0.0, attachments=0.0)  # what the enclosures hold alone; the rest is followed
     for angles in problem.orientations:
         nominal = box_statics(problem, angles)
-        statics.append((nominal, nominal, nominal, 0.0) if tolerances.nominal else
-                       (nominal, box_statics(problem, angles, tolerances),
-                        nominal if rest.nominal else box_statics(problem, angles, rest), tolerances.anchors))
+        statics.append((nominal, nominal, nominal, None) if tolerances.nominal else
+                       (nominal, box_statics(problem, angles, tolerances), nominal if rest.nominal else
+                        box_statics(problem, angles, rest), build_errors(problem, angles, tolerances)))
     given = (problem, statics)
     kept: list[tuple] = []
     start, level = time.perf_counter(), 0
