@@ -499,6 +499,11 @@ REFUSALS = {  # overrides -> what the one line names
     ("certified.law=trapezoid",): "certified.law=trapezoid: the motion along certified.path's segments",  # no path
     ("certified.v_max=1",): "certified.v_max: the motion along certified.path's segments",
     ("certified.law=linear",): "certified.law",
+    # a box of orientations (certified.orientations=box)
+    ("certified.orientations=all",): "certified.orientations",
+    ("certified.orientations=box",): "certified.orientations=box: analysis=certified: orientation.total.bound is 0",
+    ("certified.orientations=box", "orientation.total={bound: 0.01, n: 1}", "certified.path=[[0,0,1],[0,0,2]]",
+     "certified.times=1"): "certified.orientations=box: analysis=certified: a moving platform's inertia turns",
     ("certified.path=[[0,0,1],[0,0,2]]", "certified.v_max=1"): "certified.v_max: a trapezoid's speed profile",
     ("certified.path=[[0,0,1],[0,0,2]]", "certified.law=trapezoid", "certified.v_max=1"):
         "certified.t_acc: certified.law=trapezoid needs v_max (m/s), t_acc and t_dec (s)",

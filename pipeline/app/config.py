@@ -556,7 +556,10 @@ class CertifiedConfig:
     every point or at none: at rest, or moving rest to rest along each segment, each piece with the
     accelerations it has, by ``law``: ``quintic`` with ``times`` (s per segment: one value, or one
     per segment), or ``trapezoid`` with ``v_max`` (m/s), ``t_acc`` and ``t_dec`` (s), the laws of
-    ``analysis=trajectory`` (``pipeline.app.paths.certified_motion``)."""
+    ``analysis=trajectory`` (``pipeline.app.paths.certified_motion``). ``orientations``: ``listed``,
+    each orientation of ``orientation.total``'s grid required (n angles per axis); ``box``, every
+    orientation of its box (within ``bound`` of the nominal angles), cut into n boxes per axis
+    (``pipeline.app.problem.orientation_cells``)."""
 
     depth: int = rule(lambda value: None if 0 <= value <= MAX_DEPTH else f"must be in [0, {MAX_DEPTH}]")
     time: float = rule(positive)
@@ -566,6 +569,7 @@ class CertifiedConfig:
     v_max: Optional[float] = rule(positive)
     t_acc: Optional[float] = rule(positive)
     t_dec: Optional[float] = rule(positive)
+    orientations: str = rule(lambda value: None if value in ("listed", "box") else "must be listed or box")
 
 
 def _path_error(value) -> str | None:

@@ -45,6 +45,7 @@ from pipeline.model.catalogue import Catalogue
 from pipeline.model.clearance import Obstacle, Polytope
 from pipeline.model.dynamics import Load, MotionSpec, inertia_tensor
 from pipeline.model.geometry import FREEDOMS, CableRobot, eq9_angles
+from pipeline.model.intervals import down, up
 from pipeline.model.pulleys import Pulleys
 from pipeline.model.sagging import MAX_CABLES, SaggingSpec
 from pipeline.model.motion import acceleration_set, cartesian_cube, extreme_points, velocity_set
@@ -349,6 +350,10 @@ def _certified(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
          "not certified yet; use robust.anchors, or no robot.platform.shape"),
         (cfg.robust.mass > cfg.robot.platform.mass + cfg.load.mass, f"robust.mass={cfg.robust.mass}",
          "a tolerance on the mass larger than the mass itself"),
+        (cfg.certified.orientations == "box" and cfg.orientation.total.bound == 0, "certified.orientations=box",
+         "orientation.total.bound is 0: no box of orientations; give its half-width (rad), or certified.orientations=listed"),
+        (cfg.certified.orientations == "box" and (spec.moves or moving), "certified.orientations=box",
+         "a moving platform's inertia turns with it over the box of orientations: not certified yet; prove the box at rest"),
     )
     for asked, key, why in refused:
         if asked:
@@ -377,7 +382,8 @@ def _paving_files(cfg: DictConfig, problem: WorkspaceProblem, grid: Grid | None,
 
     path = cfg.certified.path
     motion = None if path is None else certified_motion(cfg, np.asarray(OmegaConf.to_container(path), dtype=float))
-    return paving_files(cfg, problem, files, motion)
+    turns = orientation_cells(cfg.orientation) if cfg.certified.orientations == "box" else None
+    return paving_files(cfg, problem, files, motion, turns)
 
 
 @dataclass(frozen=True)
@@ -669,7 +675,8 @@ def build(cfg: DictConfig, catalogue: Catalogue | None) -> WorkspaceProblem:
                else f"analysis={cfg.analysis} is not")
         raise ConfigError(f"output.metrics=true: the tension factor and the largest wrenches are of a static pose "
                           f"under one load (analysis=statics without wrench.set); {why}")
-    return WorkspaceProblem(robot, orientation_set(given), spec, limits, criteria, cfg.model.margin_atol,
+    boxes = cfg.analysis == "certified" and cfg.certified.orientations == "box"
+    return WorkspaceProblem(robot, orientation_set(given, boxes), spec, limits, criteria, cfg.model.margin_atol,
                             cfg.output.cables, nominal=(float(given.psi), float(given.theta), float(given.phi)),
                             angles=name_of(given.convention) if robot.fixed_point else None,
                             metrics=bool(cfg.output.metrics), settings=settings)
@@ -898,13 +905,16 @@ def orientation_count(orientation: DictConfig) -> int:
     return 1 if total.n == 1 or total.bound == 0 else int(total.n) ** 3
 
 
-def orientation_set(orientation: DictConfig) -> np.ndarray:
+def orientation_set(orientation: DictConfig, boxes: bool = False) -> np.ndarray:
     """(k, 3) eq. (9) angles: the constant orientation, or the total-orientation grid around it,
-    each converted from ``orientation.convention`` (xyz: the same rotations, eq. 9's angles)."""
+    each converted from ``orientation.convention`` (xyz: the same rotations, eq. 9's angles); with
+    ``boxes`` the centres of :func:`orientation_cells` instead (``certified.orientations=box``)."""
     nominal = np.array([orientation.psi, orientation.theta, orientation.phi], dtype=float)
     total = orientation.total
     angles = nominal[None, :]
-    if orientation_count(orientation) > 1:
+    if boxes:
+        angles = np.array([cell[2] for cell in orientation_cells(orientation)])
+    elif orientation_count(orientation) > 1:
         offsets = np.linspace(-total.bound, total.bound, total.n)
         grid = cartesian_cube(offsets)
         order = np.argsort(np.abs(grid).sum(axis=1), kind="stable")  # nominal orientation first
@@ -912,6 +922,27 @@ def orientation_set(orientation: DictConfig) -> np.ndarray:
     if name_of(orientation.convention) == "xyz":
         return np.array([eq9_angles(*row) for row in angles])
     return angles
+
+
+def orientation_cells(orientation: DictConfig) -> list[tuple]:
+    """The total-orientation box, every orientation whose angles lie within ``total.bound`` (rad)
+    of the nominal ones (in ``orientation.convention``), cut into ``total.n`` boxes per angle
+    (``certified.orientations=box``: a paving proves a box of positions inside at every orientation
+    of every one, ``pipeline.workspace.paving.Turn``): (lo, hi, centre (3,) each, convention) per
+    box, the one nearest the nominal orientation first, as :func:`orientation_set` orders its grid.
+    Neighbours share their edges' doubles; the outer edges are rounded outward, so the boxes cover
+    the whole box of reals."""
+    nominal = np.array([orientation.psi, orientation.theta, orientation.phi], dtype=float)
+    total, convention = orientation.total, name_of(orientation.convention)
+    edges = nominal[:, None] + np.linspace(-total.bound, total.bound, int(total.n) + 1)[None]  # (3, n + 1)
+    edges[:, 0], edges[:, -1] = down(nominal - total.bound), up(nominal + total.bound)
+    cells = []
+    for index in itertools.product(range(int(total.n)), repeat=3):
+        lo = edges[np.arange(3), list(index)]
+        hi = edges[np.arange(3), [i + 1 for i in index]]
+        cells.append((lo, hi, np.clip(lo + (hi - lo) / 2, lo, hi), convention))
+    order = np.argsort([np.abs(cell[2] - nominal).sum() for cell in cells], kind="stable")
+    return [cells[i] for i in order]
 
 
 def load_spec(cfg: DictConfig) -> Load:

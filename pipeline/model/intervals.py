@@ -139,3 +139,58 @@ def rotation_enclosure(psi: float, theta: float, phi: float) -> Interval:
                    [-sb, cb * sa, cb * ca]]
         nearest = np.array([[float(value) for value in row] for row in entries])
     return Interval(down(nearest), up(nearest))
+def rotation_box_enclosure(lo, hi, convention: str = "zyx") -> tuple[Interval, Interval]:
+    """Enclosures of every rotation R whose angles (psi, theta, phi) lie in [lo, hi] (rad, each
+    (3,)), eq. (9)'s Rz(phi) Ry(theta) Rx(psi) (``zyx``) or CASPR's Rx(psi) Ry(theta) Rz(phi)
+    (``xyz``), and of its partial derivatives dR/dpsi, dR/dtheta, dR/dphi over the box: (3, 3) and
+    (3, 3, 3). Products of the elementary rotations' enclosures (:func:`_cos_sin`), which keep no
+    correlation between the factors' entries: wider than the set of rotations, never narrower."""
+    cos, sin = _cos_sin(np.asarray(lo, dtype=float), np.asarray(hi, dtype=float))
+    one, zero = Interval.point(1.0), Interval.point(0.0)
+    factors, rates = [], []
+    for k, (plain, turned) in enumerate((
+            (lambda c, s: [[one, zero, zero], [zero, c, -s], [zero, s, c]],
+             lambda c, s: [[zero, zero, zero], [zero, -s, -c], [zero, c, -s]]),
+            (lambda c, s: [[c, zero, s], [zero, one, zero], [-s, zero, c]],
+             lambda c, s: [[-s, zero, c], [zero, zero, zero], [-c, zero, -s]]),
+            (lambda c, s: [[c, -s, zero], [s, c, zero], [zero, zero, one]],
+             lambda c, s: [[-s, -c, zero], [c, -s, zero], [zero, zero, zero]]))):
+        c, s = cos[k], sin[k]
+        factors.append(_matrix(plain(c, s)))
+        rates.append(_matrix(turned(c, s)))
+    order = (2, 1, 0) if convention == "zyx" else (0, 1, 2)  # the angles' factors, left to right
+
+    def product(turned: int | None) -> Interval:
+        total = None
+        for k in order:
+            factor = rates[k] if k == turned else factors[k]
+            total = factor if total is None else (total[:, :, None] * factor[None, :, :]).sum(axis=1)
+        return total
+
+    return product(None), stack([product(k) for k in range(3)], axis=0)
+
+
+def _matrix(rows: list[list[Interval]]) -> Interval:
+    return stack([stack(row, axis=0) for row in rows], axis=0)
+
+
+def _cos_sin(lo: np.ndarray, hi: np.ndarray) -> tuple[Interval, Interval]:
+    """Enclosures (3,) of cos and sin over each [lo, hi] (rad): their values at both ends (mpmath
+    at 113 bits, each rounded to the nearest double and widened one neighbour each way, as
+    :func:`rotation_enclosure`), and +-1 where the interval holds a point where the function turns
+    (k pi for cos, pi/2 + k pi for sin; looked for 1e-9 rad beyond either end, so a turning point
+    within rounding of an end counts as inside)."""
+    import mpmath
+
+    with mpmath.workprec(113):
+        values = np.array([[[float(f(mpmath.mpf(float(v)))) for f in (mpmath.cos, mpmath.sin)] for v in bound]
+                           for bound in (lo, hi)])  # (2 ends, 3 angles, cos and sin)
+    low, high = down(values.min(axis=0)), up(values.max(axis=0))
+    found = []
+    for k, shift in enumerate((0.0, np.pi / 2)):  # cos turns at k pi (its value (-1)^k), sin at pi/2 + k pi
+        first, last = np.ceil((lo - shift - 1e-9) / np.pi), np.floor((hi - shift + 1e-9) / np.pi)
+        some = first <= last
+        top = some & ((first % 2 == 0) | (last > first))  # a turning point of value +1 inside
+        bottom = some & ((first % 2 != 0) | (last > first))  # one of value -1
+        found.append(Interval(np.where(bottom, -1.0, low[:, k]), np.where(top, 1.0, high[:, k])))
+    return found[0], found[1]

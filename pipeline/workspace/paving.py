@@ -30,7 +30,7 @@ from omegaconf import DictConfig, OmegaConf
 
 from pipeline.model import certificates
 from pipeline.model.certificates import INSIDE, OUTSIDE, UNDECIDED, WRENCH_RTOL, BoxStatics
-from pipeline.model.intervals import Interval, rotation_enclosure, stack
+from pipeline.model.intervals import Interval, cross, rotation_box_enclosure, rotation_enclosure, stack, up
 from pipeline.model.path import StraightMotion
 from pipeline.model.tensions import Family, capacity_margins, reachability
 from pipeline.workspace.compute import described_job, name_of
@@ -60,17 +60,33 @@ class Paving:
         return np.prod((self.hi - self.lo)[:, axes], axis=1)
 
 
-def box_statics(problem: WorkspaceProblem, angles: np.ndarray, tolerances: Tolerances = NOMINAL) -> BoxStatics:
-    """The certificates' data at one orientation (eq. 9's angles), for every robot within
-    ``tolerances``: enclosures of R b_i - a_i and R b_i, the required wrenches widened by
-    ``WRENCH_RTOL`` of the terms that form them, the tension limits and the cables' lengths.
+Turn = tuple  # (lo, hi, centre (3,) each, convention): a box of orientations and a point of it, angles in rad
+#               (``certified.orientations=box``, ``pipeline.app.problem.orientation_cells``)
+
+
+def rotations(angles, turn: Turn | None) -> tuple[Interval, Interval | None]:
+    """Enclosures of the rotation at eq. (9)'s ``angles``, or of every rotation of the box ``turn``
+    and of its partial derivatives (3, 3, 3) (``intervals.rotation_box_enclosure``)."""
+    if turn is None:
+        return rotation_enclosure(*angles), None
+    lo, hi, _, convention = turn
+    return rotation_box_enclosure(lo, hi, convention)
+
+
+def box_statics(problem: WorkspaceProblem, angles: np.ndarray, tolerances: Tolerances = NOMINAL,
+                turn: Turn | None = None) -> BoxStatics:
+    """The certificates' data at one orientation (eq. 9's angles), or over every orientation of
+    the box ``turn`` about it, for every robot within ``tolerances``: enclosures of R b_i - a_i
+    and R b_i, the required wrenches widened by ``WRENCH_RTOL`` of the terms that form them (over
+    a box of orientations also by the weight's moment as the centre of mass turns,
+    ((R - R(angles)) c) x m g, R over the box), the tension limits and the cables' lengths.
     Within a mass and centre-of-mass tolerance each required wrench is required at every corner of
-    their box, each corner its own wrench (K corners x K rows): the wrench is affine in the mass
+    their box, each corner its own wrench (corners x K rows): the wrench is affine in the mass
     and in the centre of mass, so over the box it lies in the hull of its values at the corners,
     and the wrenches a robot balances at a pose are a convex set: the corners suffice, each
     with its own tensions (their box hull would lose how the mass moves force and moment together)."""
     robot, spec = problem.robot, problem.spec
-    rotation = rotation_enclosure(*angles)
+    rotation = rotations(angles, turn)[0]
     def within(points: np.ndarray, tolerance: float) -> Interval:
         return Interval.point(points) + Interval(np.full(3, -tolerance), np.full(3, tolerance))
 
@@ -85,6 +101,17 @@ def box_statics(problem: WorkspaceProblem, angles: np.ndarray, tolerances: Toler
     wrenches = np.stack([np.asarray(corner.state(robot, centre, tuple(angles)).required_wrenches, dtype=float)
                          .reshape(-1, len(robot.dofs)) for corner in corners])  # (corners, K, k)
     radius = _radius(spec, tolerances, wrenches)
+    enclosed = Interval(wrenches - radius, wrenches + radius)
+    if turn is not None:  # the weight's moment about the reference point turns with the platform
+        turned = rotation - rotation_enclosure(*angles)  # R - R(angles) over the box, (3, 3)
+        weights = [Interval.point(-corner.load.mass * corner.load.gravity * np.asarray(robot.up, dtype=float))
+                   for corner in corners]
+        moments = [cross((turned * Interval.point(np.asarray(corner.load.com, dtype=float))[None]).sum(axis=-1), weight)
+                   for corner, weight in zip(corners, weights)]  # (3,) each
+        zero = np.zeros((len(corners), 3))
+        change = Interval(np.concatenate([zero, np.stack([m.lo for m in moments])], axis=1)[:, list(robot.dofs)],
+                          np.concatenate([zero, np.stack([m.hi for m in moments])], axis=1)[:, list(robot.dofs)])
+        enclosed = enclosed + change[:, None, :]
     m = robot.n_cables
     lower = np.broadcast_to(np.asarray(spec.tension.t_min, dtype=float), (m,)).copy()
     upper = np.broadcast_to(np.asarray(problem.limits.t_max, dtype=float), (m,)).copy()
@@ -93,20 +120,25 @@ def box_statics(problem: WorkspaceProblem, angles: np.ndarray, tolerances: Toler
     body = (rotation[None] * vertices[:, None, :]).sum(axis=-1)  # R v_k, (k, 3)
     faces = np.zeros((0, 3)) if robot.platform_shape is None else robot.platform_shape.normals
     normals = (rotation[None] * Interval.point(faces)[:, None, :]).sum(axis=-1)  # R n_f, (f, 3)
-    wrenches = wrenches.reshape(-1, wrenches.shape[-1])  # (corners K, k)
-    return BoxStatics(offsets, arms, tuple(robot.dofs), Interval(wrenches - radius, wrenches + radius),
+    k = wrenches.shape[-1]
+    return BoxStatics(offsets, arms, tuple(robot.dofs), Interval(enclosed.lo.reshape(-1, k), enclosed.hi.reshape(-1, k)),
                       lower, upper, np.inf if robot.l_max is None else float(robot.l_max), robot.shortest_cable, anchors, body,
                       normals)
 
 
-def build_errors(problem: WorkspaceProblem, angles, tolerances: Tolerances) -> tuple[Interval, Interval, np.ndarray] | None:
+def build_errors(problem: WorkspaceProblem, angles, tolerances: Tolerances,
+                 turn: Turn | None = None) -> tuple[Interval, Interval, np.ndarray] | None:
     """The build errors the tensions follow to first order (``certificates.BuildErrors``): every
-    coordinate of every anchor and attachment within its tolerance, as (moves, arms, tolerances):
-    an anchor's a_il moves the cable's vector by -e_l, an attachment's b_il moves it (unless the
-    cables run to the reference point) and the arm by R e_l. None without such tolerances."""
-    m = problem.robot.n_cables
-    rotation = rotation_enclosure(*angles)
+    coordinate of every anchor and attachment within its tolerance, and over a box of orientations
+    ``turn`` every angle within it of the box's centre, as (moves, arms, tolerances): an anchor's
+    a_il moves the cable's vector by -e_l, an attachment's b_il moves it (unless the cables run to
+    the reference point) and the arm by R e_l, an angle moves both by (dR/dangle) b_i, R and its
+    derivative enclosed over the box. None without either."""
+    robot = problem.robot
+    m = robot.n_cables
+    rotation, partials = rotations(angles, turn)
     zero = np.zeros((m, 3))
+    still = problem.spec.cable_direction == "centre"
     moves, arms, sizes = [], [], []
     for cable in range(m):
         for axis in range(3):
@@ -119,9 +151,18 @@ def build_errors(problem: WorkspaceProblem, angles, tolerances: Tolerances) -> t
             if tolerances.attachments:
                 lo, hi = zero.copy(), zero.copy()
                 lo[cable], hi[cable] = rotation.lo[:, axis], rotation.hi[:, axis]  # R e_l
-                moves.append(Interval.point(zero) if problem.spec.cable_direction == "centre" else Interval(lo, hi))
+                moves.append(Interval.point(zero) if still else Interval(lo, hi))
                 arms.append(Interval(lo, hi))
                 sizes.append(tolerances.attachments)
+    if turn is not None:
+        lo, hi, centre, _ = turn
+        attachments = Interval.point(robot.attachments) + Interval(np.full(3, -tolerances.attachments),
+                                                                   np.full(3, tolerances.attachments))
+        for axis in np.flatnonzero(hi > lo):
+            turned = (partials[axis][None] * attachments[:, None, :]).sum(axis=-1)  # (dR/dangle) b_i
+            moves.append(Interval.point(zero) if still else turned)
+            arms.append(turned)
+            sizes.append(float(up(np.maximum(hi[axis] - centre[axis], centre[axis] - lo[axis]))))
     return (stack(moves, axis=0), stack(arms, axis=0), np.array(sizes)) if sizes else None
 
 
@@ -198,8 +239,8 @@ def _certified(problem: WorkspaceProblem, box: BoxStatics, robust: BoxStatics, r
             projected
 
     held, projected = holding(every)
-    wanted = held_by.lo.shape == nominal.lo.shape  # else a mass or centre-of-mass tolerance: its corners' wrenches
-    held_in, projected_in = (held, projected) if wanted else holding((held_by.lo + held_by.hi) / 2)
+    same_wrenches = held_by.lo.shape == nominal.lo.shape  # else a mass or centre-of-mass tolerance: its corners' wrenches
+    held_in, projected_in = (held, projected) if same_wrenches else holding((held_by.lo + held_by.hi) / 2)
     fails, holds = _corners(problem, box, angles, lo, hi, every)
     slopes, half = (enclosure.gradient.lo + enclosure.gradient.hi) / 2, (hi - lo) / 2  # dA/dp at the centre
     verdict = np.full(len(lo), UNDECIDED)
@@ -268,20 +309,22 @@ def _corners(problem: WorkspaceProblem, box: BoxStatics, angles, lo: np.ndarray,
 
 
 def pave(problem: WorkspaceProblem, depth: int, seconds: float, compute: DictConfig,
-         tolerances: Tolerances = NOMINAL) -> tuple[Paving, dict]:
-    """Branch and prune from the robot's search box: the paving and how it ended."""
+         tolerances: Tolerances = NOMINAL, turns: list[Turn] | None = None) -> tuple[Paving, dict]:
+    """Branch and prune from the robot's search box: the paving and how it ended (``turns``: a box
+    of orientations about each of the problem's, :func:`_branch_and_prune`)."""
     robot = problem.robot
     axes = np.flatnonzero(robot.box_hi > robot.box_lo)
     boxes = np.concatenate([robot.box_lo, robot.box_hi])[None].astype(float)  # (B, 6): lo, hi
     found, verdict, level, ended = _branch_and_prune(
         problem, tolerances, boxes, lambda items: items, lambda items: _bisected(items, axes),
-        lambda items: np.prod((items[:, 3:] - items[:, :3])[:, axes], axis=1), depth, seconds, compute, "of the search box")
+        lambda items: np.prod((items[:, 3:] - items[:, :3])[:, axes], axis=1), depth, seconds, compute, "of the search box",
+        turns)
     return Paving(found[:, :3], found[:, 3:], verdict, level), ended
 
 
 def certify_path(problem: WorkspaceProblem, points: np.ndarray, depth: int, seconds: float, compute: DictConfig,
-                 tolerances: Tolerances = NOMINAL,
-                 motion: StraightMotion | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict]:
+                 tolerances: Tolerances = NOMINAL, motion: StraightMotion | None = None,
+                 turns: list[Turn] | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict]:
     """The straight segments between the way-points ``points`` (P, 3) in pieces, each proven
     feasible at every point or at none through the box that holds it (its ends' bounding box,
     widened by a few ulps so that it holds the exact segment, not only the rounded ends), an
@@ -319,24 +362,29 @@ def certify_path(problem: WorkspaceProblem, points: np.ndarray, depth: int, seco
     pieces = np.column_stack([np.arange(len(starts)), np.zeros(len(starts)), np.ones(len(starts))]).astype(float)
     return _branch_and_prune(problem, tolerances, pieces, bounds, halves,
                              lambda items: (items[:, 2] - items[:, 1]) * spans[items[:, 0].astype(int)],
-                             depth, seconds, compute, "of the path's length" if motion is None else "of the path's time")
+                             depth, seconds, compute, "of the path's length" if motion is None else "of the path's time",
+                             turns)
 
 
 def _branch_and_prune(problem: WorkspaceProblem, tolerances: Tolerances, items: np.ndarray, bounds, split, size,
-                      depth: int, seconds: float, compute: DictConfig, what: str):
+                      depth: int, seconds: float, compute: DictConfig, what: str, turns: list[Turn] | None = None):
     """Certify ``items`` (boxes or pieces of a path: ``bounds(items)`` their boxes (N, 6) [lo, hi], or
     (N, 12) with the ends of a moving platform's acceleration in each, :func:`_verdicts`)
     level by level, splitting the undecided ones (``split``), until ``depth`` levels or ``seconds``:
     every item kept, its verdict and level, and how it ended. A level's boxes are certified in
     chunks (``pipeline.workspace.parallel``: ``compute.n_jobs`` workers); past ``seconds`` the
-    chunks not yet certified stay undecided. ``size``: each item's volume or length, for the log."""
+    chunks not yet certified stay undecided. ``size``: each item's volume or length, for the log.
+    ``turns``: a box of orientations about each of ``problem.orientations`` (their centres), every
+    orientation of which a box is proven inside at (outside: at its centre); None: those alone."""
     statics = []
     rest = replace(tolerances, anchors=0.0, attachments=0.0)  # what the enclosures hold alone; the rest is followed
-    for angles in problem.orientations:
-        nominal = box_statics(problem, angles)
-        statics.append((nominal, nominal, nominal, None) if tolerances.nominal else
-                       (nominal, box_statics(problem, angles, tolerances), nominal if rest.nominal else
-                        box_statics(problem, angles, rest), build_errors(problem, angles, tolerances)))
+    for k, angles in enumerate(problem.orientations):
+        turn = None if turns is None else turns[k]
+        at = None if turn is None else (turn[2], turn[2], turn[2], turn[3])  # the box's centre, enclosed alike
+        nominal = box_statics(problem, angles, turn=at)
+        statics.append((nominal, nominal, nominal, None) if tolerances.nominal and turn is None else
+                       (nominal, box_statics(problem, angles, tolerances, turn), nominal if rest.nominal else
+                        box_statics(problem, angles, rest, at), build_errors(problem, angles, tolerances, turn)))
     given = (problem, statics)
     kept: list[tuple] = []
     start, level = time.perf_counter(), 0
@@ -385,13 +433,15 @@ def _bisected(boxes: np.ndarray, axes: np.ndarray) -> np.ndarray:
     return np.concatenate([lower, upper])
 
 
-def paving_files(cfg: DictConfig, problem: WorkspaceProblem, files, motion: StraightMotion | None = None) -> dict:
+def paving_files(cfg: DictConfig, problem: WorkspaceProblem, files, motion: StraightMotion | None = None,
+                 turns: list[Turn] | None = None) -> dict:
     """A certified job's boxes.parquet and summary (module doc), or with ``certified.path`` its
-    segments.parquet and summary (:func:`path_files`; ``motion``: the path's, None at rest)."""
+    segments.parquet and summary (:func:`path_files`; ``motion``: the path's, None at rest;
+    ``turns``: a box of orientations about each of the problem's, ``certified.orientations=box``)."""
     tolerances = Tolerances(**{key: float(value) for key, value in cfg.robust.items()})
     if cfg.certified.path is not None:
-        return path_files(cfg, problem, files, tolerances, motion)
-    paving, ended = pave(problem, int(cfg.certified.depth), float(cfg.certified.time), cfg.compute, tolerances)
+        return path_files(cfg, problem, files, tolerances, motion, turns)
+    paving, ended = pave(problem, int(cfg.certified.depth), float(cfg.certified.time), cfg.compute, tolerances, turns)
     robot = problem.robot
     axes = np.flatnonzero(robot.box_hi > robot.box_lo)
     volumes = paving.volumes(axes)
@@ -446,7 +496,7 @@ def _lost(problem: WorkspaceProblem, tolerances: Tolerances, paving: Paving, vol
 
 
 def path_files(cfg: DictConfig, problem: WorkspaceProblem, files, tolerances: Tolerances,
-               motion: StraightMotion | None) -> dict:
+               motion: StraightMotion | None, turns: list[Turn] | None = None) -> dict:
     """A certified path's segments.parquet (one row per piece: its segment, its parameters t0, t1
     and ends, where along the path it starts, its length, verdict and level) and summary: the path's
     length, the shares of it proven feasible, infeasible and undecided, ``path_certified`` (every
@@ -454,7 +504,7 @@ def path_files(cfg: DictConfig, problem: WorkspaceProblem, files, tolerances: To
     starts; NaN when none)."""
     points = np.asarray(OmegaConf.to_container(cfg.certified.path), dtype=float)
     pieces, verdict, level, ended = certify_path(problem, points, int(cfg.certified.depth), float(cfg.certified.time),
-                                                 cfg.compute, tolerances, motion)
+                                                 cfg.compute, tolerances, motion, turns)
     order = np.lexsort((pieces[:, 1], pieces[:, 0]))  # along the path
     pieces, verdict, level = pieces[order], verdict[order], level[order]
     segment = pieces[:, 0].astype(int)
