@@ -281,7 +281,9 @@ def test_the_errors_residual_holds_the_residual_of_every_robot_within_the_tolera
     moves, arms, given = paving.build_errors(problem, angles, tolerances)
     assert np.array_equal(given, np.tile(sizes, 3 * m))
     moved, residual = certificates.followed(statics, within, Interval.point(wrenches), tensions, moving,
-                                            certificates.BuildErrors(nominal, following, moves, arms, given))
+                                            certificates.BuildErrors(
+                                                nominal, certificates.structure_enclosure(statics, middle, middle, middle),
+                                                following, moves, arms, given))
     points = lo[:, None] + rng.uniform(0, 1, (100, 1000, 3)) * (hi - lo)[:, None]
     drawn = np.where(rng.uniform(size=(100, 1000, 1, 1, 1)) < 0.3, rng.choice([-1.0, 1.0], (100, 1000, m, 3, len(sizes))),
                      rng.uniform(-1, 1, (100, 1000, m, 3, len(sizes)))) * sizes  # (.., cable, axis, kind)

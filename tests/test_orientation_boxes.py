@@ -83,8 +83,9 @@ def _turned(angles: np.ndarray, convention: str) -> np.ndarray:
 
 
 @pytest.mark.parametrize("rates", ["first order", "random"])
-@pytest.mark.parametrize("convention", ["zyx", "xyz"])
-def test_the_followed_residual_holds_the_residual_at_every_orientation_of_the_box(make_cfg, convention, rates):
+@pytest.mark.parametrize("convention, bound, sizes", [("zyx", 0.05, (0.005, 0.05)), ("xyz", 0.05, (0.005, 0.05)),
+                                                     ("zyx", 0.005, (0.1, 0.3))])
+def test_the_followed_residual_holds_the_residual_at_every_orientation_of_the_box(make_cfg, convention, bound, sizes, rates):
     """certificates.followed over a box of orientations (+-0.05 rad about a tilted one) against
     t = t0 + D s + E delta and r = A(p, theta) t - w(theta) from the law (u from each anchor to
     p + R(theta) b_i, columns [u; R(theta) b_i x u]; w the weight of 30 kg and its moment about the
@@ -96,12 +97,12 @@ def test_the_followed_residual_holds_the_residual_at_every_orientation_of_the_bo
     overrides = [o for o in TURNING["tilted payload"][0] if not o.startswith(("orientation.", "load."))]
     cfg, problem = _problem(make_cfg, [*overrides, "load.mass=30", "load.com=[0.2,-0.1,0.3]", "orientation.psi=0.1",
                                        "orientation.theta=-0.08", "orientation.phi=0.25",
-                                       f"orientation.convention={convention}", "orientation.total={bound: 0.05, n: 1}"])
+                                       f"orientation.convention={convention}", f"orientation.total={{bound: {bound}, n: 1}}"])
     (low, high, middle_angles, _), = orientation_cells(cfg.orientation)
     robot, angles, m = problem.robot, problem.orientations[0], problem.robot.n_cables
     rng = np.random.default_rng(9)
     lo = rng.uniform([-1.4, -0.9, 0.3], [1.2, 0.7, 1.4], (100, 3))
-    hi = lo + rng.uniform(0.005, 0.05, (100, 3))
+    hi = lo + rng.uniform(*sizes, (100, 3))
     middle = lo + (hi - lo) / 2
 
     def structure_at(points, turned):  # (..., 3), (..., 3) angles -> (..., 6, m)
@@ -121,7 +122,7 @@ def test_the_followed_residual_holds_the_residual_at_every_orientation_of_the_bo
     assert np.allclose(wrench_at(middle_angles), problem.spec.state(robot, middle[:1], tuple(angles)).required_wrenches[0])
     tensions = rng.uniform(1.0, 150.0, (100, 1, m))
     if rates == "random":
-        moving, following = rng.normal(size=(100, 1, m, 3)), rng.normal(size=(100, 1, m, 3)) * 100
+        moving, following = rng.normal(size=(100, 1, m, 3)) * 100, rng.normal(size=(100, 1, m, 3)) * 100
     else:
         h = 1e-6
         inverse = np.linalg.pinv(at_centre)
@@ -137,10 +138,11 @@ def test_the_followed_residual_holds_the_residual_at_every_orientation_of_the_bo
     statics = paving.box_statics(problem, angles, turn=turn)
     within = certificates.structure_enclosure(statics, lo, hi, middle)
     moves, arms, given = paving.build_errors(problem, angles, paving.NOMINAL, turn)
-    assert np.allclose(given, 0.05) and (given >= high - middle_angles).all() and (given >= middle_angles - low).all()
+    assert np.allclose(given, bound) and (given >= high - middle_angles).all() and (given >= middle_angles - low).all()
     wrenches = Interval(np.broadcast_to(statics.wrenches.lo, (100, 1, 6)), np.broadcast_to(statics.wrenches.hi, (100, 1, 6)))
-    moved, residual = certificates.followed(statics, within, wrenches, tensions, moving,
-                                            certificates.BuildErrors(nominal, following, moves, arms, given))
+    errors = certificates.BuildErrors(nominal, certificates.structure_enclosure(statics, middle, middle, middle),
+                                      following, moves, arms, given)
+    moved, residual = certificates.followed(statics, within, wrenches, tensions, moving, errors)
     points = lo[:, None] + rng.uniform(0, 1, (100, 1000, 3)) * (hi - lo)[:, None]
     drawn = np.where(rng.uniform(size=(100, 1000, 1)) < 0.3, np.where(rng.uniform(size=(100, 1000, 3)) < 0.5, low, high),
                      rng.uniform(low, high, (100, 1000, 3)))
@@ -149,6 +151,13 @@ def test_the_followed_residual_holds_the_residual_at_every_orientation_of_the_bo
     exact = np.einsum("npkm,npm->npk", structure_at(points, drawn), t) - wrench_at(drawn)
     assert (moved.lo[:, 0, None] <= t).all() and (t <= moved.hi[:, 0, None]).all()
     assert (residual.lo[:, 0, None] <= exact).all() and (exact <= residual.hi[:, 0, None]).all()
+    # the angles' part alone, A(p, theta) t(p, theta) - A(p, theta_c) t(p, theta_c), against its own enclosure
+    reach = (np.abs(following) * given).sum(axis=-1)
+    part = certificates.errors_residual(statics, within, errors, moved, Interval(tensions - reach, tensions + reach), moving)
+    level = t - np.einsum("nmP,npP->npm", following[:, 0], drawn - middle_angles)
+    exact = (np.einsum("npkm,npm->npk", structure_at(points, drawn), t)
+             - np.einsum("npkm,npm->npk", structure_at(points, np.broadcast_to(middle_angles, drawn.shape)), level))
+    assert (part.lo[:, 0, None] <= exact).all() and (exact <= part.hi[:, 0, None]).all()
 
 
 IPANEMA_QUARTER = ["robot=points", f"robot.anchors={SPREAD_ANCHORS}",

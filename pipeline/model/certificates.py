@@ -137,17 +137,20 @@ class BuildErrors:
     d_i = p + R b_i - a_i by ``moves``_ji delta_j and its arm R b_i by ``arms``_ji delta_j ((P, m, 3)
     enclosures: an anchor's coordinate a_il moves d_i by -e_l and no arm, an attachment's b_il moves
     both by R e_l). ``nominal``: the enclosure of the robot as designed (any other tolerance kept);
-    ``rates`` (N, K, m, P): E_j, the tensions' motion per parameter at the box's centre,
-    A(c) E_j = -(dA/ddelta_j)(c) t0 (:func:`error_slopes`)."""
+    ``centre``: the enclosure over the tolerances at each box's centre point alone (a box of zero
+    width, :func:`errors_residual`); ``rates`` (N, K, m, P): E_j, the tensions' motion per parameter
+    at the box's centre, A(c) E_j = -(dA/ddelta_j)(c) t0 (:func:`error_slopes`)."""
 
     nominal: BoxEnclosure
+    centre: BoxEnclosure
     rates: np.ndarray
     moves: Interval
     arms: Interval
     tolerances: np.ndarray
 
     def rows(self, index) -> BuildErrors:
-        return BuildErrors(self.nominal.rows(index), self.rates[index], self.moves, self.arms, self.tolerances)
+        return BuildErrors(self.nominal.rows(index), self.centre.rows(index), self.rates[index], self.moves, self.arms,
+                           self.tolerances)
 
 
 def error_slopes(statics: BoxStatics, slopes: Interval, unit: Interval, moves: Interval, arms: Interval,
@@ -344,22 +347,49 @@ def followed(statics: BoxStatics, enclosure: BoxEnclosure, wrenches: Interval, t
         return moved, residual_enclosure(enclosure, wrenches, tensions, rates)
     reach = _upper_row_sums(up(np.abs(errors.rates) * errors.tolerances))  # sum_j |E_j| tolerance_j, (N, K, m)
     moved = moved + Interval(-reach, reach)
-    return moved, residual_enclosure(errors.nominal, wrenches, tensions, rates) + errors_residual(statics, enclosure, errors,
-                                                                                                 moved)
+    still = Interval(tensions, tensions) + Interval(-reach, reach)  # t at the centre point over the tolerances
+    return moved, residual_enclosure(errors.nominal, wrenches, tensions, rates) + errors_residual(
+        statics, enclosure, errors, moved, still, rates)
 
 
-def errors_residual(statics: BoxStatics, enclosure: BoxEnclosure, errors: BuildErrors, tensions: Interval) -> Interval:
+def errors_residual(statics: BoxStatics, enclosure: BoxEnclosure, errors: BuildErrors, tensions: Interval,
+                    still: Interval, rates: np.ndarray) -> Interval:
     """(N, K, k) an enclosure of r(p, delta) - r(p, 0) over each box and every error within the
-    tolerances, by the mean-value theorem in delta: sum_j [(dA/ddelta_j)(B, Delta) t(B, Delta)
-    + A(B, Delta) E_j] delta_j, ``enclosure`` over the box and the tolerances, ``tensions`` (N, K,
-    m) t over both (:func:`followed`)."""
+    tolerances, by the mean-value theorem in delta: sum_j g_j(p, xi) delta_j, g_j = dr/ddelta_j =
+    (dA/ddelta_j) t + A E_j (zero at the centre but for E's rounding), ``enclosure`` over the box
+    and the tolerances, ``tensions`` (N, K, m) t over both and ``still`` t at the centre point c
+    over the tolerances (:func:`followed`). Two enclosures of g_j, intersected: its range over
+    the box and the tolerances (of first order in the box's width), and its centred form
+    g_j(c, Delta) + sum_l (dg_j/dp_l)(B, Delta) (p_l - c_l), dg_j/dp_l = (d2A/ddelta_j dp_l) t
+    + (dA/ddelta_j) D_l + (dA/dp_l) E_j (``rates`` D (N, K, m, 3)), whose second part is of second
+    order in the box and the tolerances together; d2A/ddelta_j dp_l is :func:`error_slopes` of
+    the curvature d2A/dp_a dp_l and of du/dp_l (the moves and arms do not depend on p)."""
     total = None
+    slopes_u = _unit_slopes(enclosure.unit, enclosure.lengths)  # du/dp_l over the box and the tolerances
+    pair = {(a, b): k for k, (a, b) in enumerate(PAIRS)}
+    curvatures = [stack([enclosure.curvature[:, pair[min(a, l), max(a, l)]] for a in range(3)], axis=1) for l in range(3)]
+    centre = errors.centre
     for parameter, tolerance in enumerate(errors.tolerances):
         slope = error_slopes(statics, enclosure.slopes, enclosure.unit, errors.moves, errors.arms, parameter)  # (N, k, m)
-        term = _tension_wrench(enclosure.structure, errors.rates[..., parameter])
-        for cable in range(slope.shape[-1]):
-            term = term + slope[:, None, :, cable] * tensions[..., cable:cable + 1]
-        term = term * Interval(np.array(-tolerance), np.array(tolerance))
+        rate = errors.rates[..., parameter]
+        ranged = _tension_wrench(enclosure.structure, rate) + _times(slope, tensions)
+        at_centre = _tension_wrench(centre.structure, rate) + _times(
+            error_slopes(statics, centre.slopes, centre.unit, errors.moves, errors.arms, parameter), still)
+        for axis in range(3):
+            mixed = error_slopes(statics, curvatures[axis], slopes_u[axis], errors.moves, errors.arms, parameter)
+            term = (_times(mixed, tensions) + _tension_wrench(slope, rates[..., axis])
+                    + _tension_wrench(enclosure.slopes[:, axis], rate))
+            at_centre = at_centre + term * enclosure.step[:, None, None, axis]
+        term = ranged.intersect(at_centre) * Interval(np.array(-tolerance), np.array(tolerance))
+        total = term if total is None else total + term
+    return total
+
+
+def _times(structure: Interval, tensions: Interval) -> Interval:
+    """An interval A (N, k, m) times interval tensions (N, K, m): (N, K, k)."""
+    total = None
+    for cable in range(structure.shape[-1]):
+        term = structure[:, None, :, cable] * tensions[..., cable:cable + 1]
         total = term if total is None else total + term
     return total
 

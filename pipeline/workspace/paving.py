@@ -257,8 +257,9 @@ def _certified(problem: WorkspaceProblem, box: BoxStatics, robust: BoxStatics, r
             unit = Interval.point(state.unit[rows])
             slopes_j = [certificates.error_slopes(box, enclosure.gradient[rows], unit, moves, arms, j) for j in range(len(sizes))]
             middle = np.stack([(part.lo + part.hi) / 2 for part in slopes_j], axis=1)  # (N, P, k, m)
-            followed = certificates.BuildErrors(designed.rows(rows), -np.einsum("nmk,nPkj,nKj->nKmP", inverse, middle, tensions),
-                                                moves, arms, sizes)
+            at_centre = certificates.structure_enclosure(robust, centre[rows], centre[rows], centre[rows])
+            followed = certificates.BuildErrors(designed.rows(rows), at_centre,
+                                                -np.einsum("nmk,nPkj,nKj->nKmP", inverse, middle, tensions), moves, arms, sizes)
         proven = certificates.inside(robust, within.rows(rows), held_by[rows], tensions, rates, inverse, followed)
         verdict[rows[proven]] = INSIDE
     rows = np.flatnonzero(~held & ~holds)
