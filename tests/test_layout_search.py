@@ -3,6 +3,7 @@ symmetric optimum recovered, the quadrant family against IPAnema 1's published a
 layout study from a user's own folder (its best layout run again as a robot file)."""
 
 import itertools
+import re
 from dataclasses import replace
 
 import joblib
@@ -12,10 +13,11 @@ import pytest
 import yaml
 
 from conftest import command
-from pipeline.analyses.layout import (Box, LayoutSpec, best_trial, check_robot, cheapest_drive, drives, evaluate, placed,
-                                      prove_required, search_layouts)
+from pipeline.analyses.layout import (Box, LayoutSpec, best_trial, check_robot, cheapest_drive, designed, drives, evaluate,
+                                      placed, prove_required, search_layouts)
 from pipeline.app.problem import build_problem
 from pipeline.errors import ConfigError
+from pipeline.workspace.feasibility import feasible_flags
 from pipeline.workspace.kernel import evaluate_chunk
 from pipeline.workspace.verdict import classify
 
@@ -370,6 +372,9 @@ def test_the_cheapest_actuator_holds_the_required_box_and_no_cheaper_one_does(ma
     ({"anchors": {"lo": [0, 0, 0], "hi": [1, 1, 1]}, "objectives": ["actuator_cost"]}, "cost=None: objective actuator_cost"),
     ({"anchors": {"lo": [0, 0, 0], "hi": [1, 1, 1]}, "cost": "price_EUR"}, "cost=price_EUR: objective actuator_cost"),
     ({"anchors": {"lo": [0, 0, 0], "hi": [1, 1, 1]}, "catalogue": "m.csv"}, "catalogue=m.csv: read for objective"),
+    ({"anchors": {"lo": [0, 0, 0], "hi": [1, 1, 1]}, "frame_scale": [0.5, 1]}, "anchors_on: faces or edges"),
+    *[({"anchors": {"lo": [0, 0, 0], "hi": [1, 1, 1]}, "anchors_on": "edges", "frame_scale": scale},
+       re.escape(f"frame_scale={scale}: [lo, hi]")) for scale in ([0, 1], [0.5, 1.2], [0.9, 0.5], [float("nan"), 1], [0.5], [])],
 ])
 def test_a_layout_block_that_cannot_be_searched_is_refused(fields, message):
     spec = LayoutSpec(anchors=Box(**fields.pop("anchors")), **fields)
@@ -487,6 +492,8 @@ def test_a_cost_study_names_the_actuator_to_buy_in_its_robot_file(tmp_path, make
     ({"overrides": [*PLANAR[:3], "robot.attachments=[[0.1,0,0],[0,0,0],[0,0,0],[0,0,0]]", *PLANAR[4:]]},
      "the robot's attachments, which the search keeps, are not mirrored"),
     ({"layout": {"anchors": {"lo": [-1, -1, 0], "hi": [1, 1, 0]}, "budget": -1}}, "budget=-1"),
+    ({"layout": {**STUDY["layout"], "frame_scale": [0.5, 1]}}, "frame_scale=[0.5, 1.0]: sizes the frame whose faces"),
+    ({"layout": {**STUDY["layout"], "anchors_on": "edges", "frame_scale": "big"}}, "frame_scale"),
     ({"layout": {"anchors": {"lo": [-1, -1, 0], "hi": [1, 1, 0]}, "objectives": ["volume_m3"]}},
      "volume_m3: the grid has no volume"),
     ({"layout": {"anchors": {"lo": [-1, -1, 0], "hi": [1, 1, 0]}, "objectives": ["payload_kg"]}},
@@ -599,6 +606,59 @@ def test_a_search_on_the_frame_keeps_every_anchor_on_it(make_cfg, catalogue, on,
         assert (at_bounds >= held).all(), anchors
         assert np.allclose(anchors[1], [row["anchor2_x"], row["anchor2_y"], row["anchor2_z"]])
     np.testing.assert_array_equal(placed(spec, problem.robot, table.iloc[0].to_dict())[0], problem.robot.anchors)
+
+
+@pytest.mark.parametrize("on, held", [("edges", 2), ("faces", 1)])
+def test_a_frame_of_designed_size_holds_its_anchors_on_its_own_edges_and_faces(make_cfg, catalogue, on, held):
+    """frame_scale: every trial's anchors on the edges (faces) of its own frame, the installation box
+    4 x 3 x 2 m scaled by the trial's frame_x, frame_y, frame_z about its centre in x and y and its
+    floor z = 0 (written here from those words); trial 0 is IPAnema 1's own frame (sides 1.0); each
+    trial's count equals the registry's margins' for its anchors; the front trades frame for volume."""
+    problem, grid = build_problem(make_cfg(*IPANEMA_CASE, "robot.search.step=0.5"), catalogue)
+    positions = grid[0:len(grid)]
+    spec = LayoutSpec(anchors=Box([-2, -1.5, 0], [2, 1.5, 2]), symmetry="quadrants", anchors_on=on, budget=16,
+                      objectives=["volume_m3", "frame_m3"], sampler="nsga2", frame_scale=[0.5, 1.0])
+    spec.check_across("test")
+    table = search_layouts(spec, problem, positions, grid.cell_volume, n_jobs=2)
+    assert table.iloc[0][["frame_x", "frame_y", "frame_z"]].tolist() == [1.0, 1.0, 1.0]
+    assert table.iloc[0]["frame_m3"] == 24.0
+    for number, row in table.iterrows():
+        assert 0.5 <= row["frame_x"] <= 1 and 0.5 <= row["frame_y"] <= 1 and 0.5 <= row["frame_z"] <= 1
+        lo = np.array([-2 * row["frame_x"], -1.5 * row["frame_y"], 0.0])
+        hi = np.array([2 * row["frame_x"], 1.5 * row["frame_y"], 2 * row["frame_z"]])
+        anchors, _ = placed(spec, problem.robot, row.to_dict())
+        assert ((anchors >= lo - 1e-12) & (anchors <= hi + 1e-12)).all(), (anchors, lo, hi)
+        at_bounds = (np.isclose(anchors[:, None, :], np.stack([lo, hi])[None], rtol=0, atol=1e-12)).any(axis=1).sum(axis=1)
+        assert (at_bounds >= held).all(), anchors
+        if number < 4:
+            assert row["n_feasible"] == registry_count(moved(problem, anchors), positions)
+    front = table[table["pareto"]]
+    assert (front["frame_m3"] < 24.0 - 1e-9).any() and len(front) >= 2
+
+
+def test_a_frame_scaled_alike_on_every_side_scales_a_point_platforms_workspace(make_cfg, catalogue):
+    """The law a frame's size obeys: a point platform's cable directions, and so its verdict under
+    a force, do not change when its anchors and the point are scaled alike about one point. So the
+    pose P of the installation box's frame holds exactly when pivot + s (P - pivot) holds in the
+    frame of sides s (pivot: the box's centre in x and y, its floor in z). Random poses, both frames'
+    verdicts by the exact test; a frame grown from its centre (z too) fails it."""
+    spec = LayoutSpec(anchors=Box([-2, -1.5, 0], [2, 1.5, 2]), symmetry="quadrants", anchors_on="edges",
+                      frame_scale=[0.5, 1.0])
+    point = ["robot.attachments=[[0,0,0],[0,0,0],[0,0,0],[0,0,0],[0,0,0],[0,0,0],[0,0,0],[0,0,0]]", "robot.dofs=[x,y,z]",
+             "wrench.fx=1", "wrench.fz=-5", "robot.search.step=0.5"]
+    problem, _ = build_problem(make_cfg(*IPANEMA_CASE[:2], *IPANEMA_CASE[3:], *point), catalogue)
+    values = designed(spec, problem.robot)
+    rng = np.random.default_rng(7)
+    poses = rng.uniform([-1.9, -1.4, 0.1], [1.9, 1.4, 1.9], size=(3000, 3))
+    whole = feasible_flags(problem, poses)
+    assert 0.2 < whole.mean() < 0.8
+    pivot = np.array([0.0, 0.0, 0.0])
+    for s in (0.55, 0.8):
+        anchors, _ = placed(spec, problem.robot, {**values, "frame_x": s, "frame_y": s, "frame_z": s})
+        scaled = feasible_flags(moved(problem, anchors), pivot + s * (poses - pivot))
+        np.testing.assert_array_equal(scaled, whole)
+        about_centre = feasible_flags(moved(problem, anchors), np.array([0, 0, 1.0]) + s * (poses - [0, 0, 1.0]))
+        assert (about_centre != whole).sum() > 30
 
 
 def test_the_best_layouts_required_box_is_proven_where_the_certificates_speak(make_cfg, catalogue):

@@ -14,7 +14,9 @@ in fours, (-x, +y), (+x, +y), (+x, -y), (-x, -y) (IPAnema 1's order), and each f
 designed anchor in the quarter x, y >= 0 and one designed attachment, mirrored with it. With
 ``anchors_on: faces`` or ``edges`` the anchors stay on the installation box's faces (a frame's walls,
 ceiling and floor) or edges (its posts and beams): each designed anchor is a face or edge (a
-categorical variable) and a place on it. With ``refine`` the last share of the budget steps around
+categorical variable) and a place on it; with ``frame_scale`` the frame's size is designed too (each of its
+sides a share of the installation box's: :meth:`LayoutSpec.frame`), the anchors on the smaller frame's
+faces or edges. With ``refine`` the last share of the budget steps around
 the best trial so far (:class:`Steps`, a (1+1) evolution strategy): a sampler over many variables
 finds the region, the steps climb its ridge (on IPAnema 1's frame TPE alone found 10.58 m^3 in 400
 trials, with three quarters of them refining 10.94).
@@ -102,7 +104,9 @@ class LayoutSpec:
     sides) or ``edges`` (on its edges: a frame's posts and beams; a planar robot's: its corners);
     ``refine``: the share of the budget spent last around the best trial so far (:func:`nearby`);
     ``catalogue`` (a CSV; None: the shipped Table 1) and ``cost`` (its column that prices one
-    actuator) for the objective ``actuator_cost``."""
+    actuator) for the objective ``actuator_cost``; ``frame_scale`` ([lo, hi], with anchors on faces or
+    edges; None: the installation box is the frame): each side of the frame a variable share in
+    [lo, hi] of the installation box's side (:meth:`frame`)."""
 
     anchors: Box = field(default_factory=Box)
     attachments: Optional[Box] = None
@@ -117,6 +121,7 @@ class LayoutSpec:
     refine: float = 0.0
     catalogue: Optional[str] = None
     cost: Optional[str] = None
+    frame_scale: Optional[list[float]] = None
 
     def check_across(self, where: str) -> None:
         """ConfigError naming the first field that cannot be used."""
@@ -163,6 +168,14 @@ class LayoutSpec:
                               "that holds the required box by a column of the catalogue: give both, or neither")
         if self.catalogue is not None and self.cost is None:
             raise ConfigError(f"{where}.catalogue={self.catalogue}: read for objective actuator_cost only")
+        if self.frame_scale is not None:
+            scale = self.frame_scale
+            if len(scale) != 2 or not all(math.isfinite(v) for v in scale) or not 0 < scale[0] <= scale[1] <= 1:
+                raise ConfigError(f"{where}.frame_scale={scale}: [lo, hi], each side of the frame a share of the "
+                                  "installation box's, 0 < lo <= hi <= 1")
+            if self.anchors_on == "box":
+                raise ConfigError(f"{where}.frame_scale={scale}: sizes the frame whose faces or edges hold the anchors "
+                                  "(anchors_on: faces or edges); anchors anywhere in the box choose their frame already")
 
     def designed_cables(self, n_cables: int) -> range:
         """The cables whose points are variables (all; with quadrants the second of each four)."""
@@ -200,11 +213,35 @@ class LayoutSpec:
                 found.append((origin, spans))
         return found
 
+    def frame_axes(self) -> list[int]:
+        """The axes along which ``frame_scale`` sizes the frame (``frame_x``, ...): the installation
+        box's axes that are not flat."""
+        if self.frame_scale is None:
+            return []
+        return [axis for axis in range(3) if self.anchors.hi[axis] > self.anchors.lo[axis]]
+
+    def frame(self, up: np.ndarray, values: dict) -> tuple[np.ndarray, np.ndarray]:
+        """The frame of a trial's ``values`` as the point it is scaled about and its scale (3,) each:
+        a placed anchor q on the installation box's faces or edges moves to pivot + scale (q - pivot),
+        on the frame's. The frame stands where the box does: centred in it, and on its floor along
+        the robot's ``up`` when that is a coordinate axis (a frame on the ground grows upwards)."""
+        lo, hi = np.array(self.anchors.lo, dtype=float), np.array(self.anchors.hi, dtype=float)
+        pivot, scale = (lo + hi) / 2, np.ones(3)
+        vertical = np.flatnonzero(np.abs(up) == 1.0)
+        if len(vertical):
+            axis = int(vertical[0])
+            pivot[axis] = lo[axis] if up[axis] > 0 else hi[axis]
+        for axis in self.frame_axes():
+            scale[axis] = values[f"frame_{AXES[axis]}"]
+        return pivot, scale
+
     def ranges(self, n_cables: int = 4) -> dict[str, tuple[float, float]]:
         """Each continuous design variable's range, for every designed cable c: ``anchor{c}_{axis}``
         (m; with anchors on faces or edges ``anchor{c}_p1``, ``_p2`` in [0, 1], along the piece
-        :meth:`choices` picks), and ``attachment{c}_{axis}`` (m)."""
-        found = {}
+        :meth:`choices` picks), and ``attachment{c}_{axis}`` (m); with ``frame_scale`` the frame's
+        sides ``frame_{axis}`` (shares of the installation box's, :meth:`frame`)."""
+        found = {f"frame_{AXES[axis]}": (float(self.frame_scale[0]), float(self.frame_scale[1]))
+                 for axis in self.frame_axes()}
         lo, hi = self.anchor_box()
         width = max((spans.shape[1] for _, spans in self.pieces()), default=0) if self.anchors_on != "box" else 0
         for cable in self.designed_cables(n_cables):
@@ -274,9 +311,10 @@ def check_robot(spec: LayoutSpec, problem, grid) -> None:
 
 def placed(spec: LayoutSpec, robot, values: dict) -> tuple[np.ndarray, np.ndarray]:
     """The anchors and attachments (m, 3) of a trial's ``values`` (with quadrants, each designed
-    cable's points mirrored into its four)."""
+    cable's points mirrored into its four; with ``frame_scale`` on the trial's frame)."""
     anchors, attachments = robot.anchors.copy(), robot.attachments.copy()
     pieces = spec.pieces() if spec.anchors_on != "box" else []
+    pivot, scale = spec.frame(robot.up, values) if spec.frame_scale is not None else (np.zeros(3), np.ones(3))
     quadrants = spec.symmetry == "quadrants"
     for cable in range(robot.n_cables):
         designed = cable - cable % 4 + 1 if quadrants else cable
@@ -286,7 +324,7 @@ def placed(spec: LayoutSpec, robot, values: dict) -> tuple[np.ndarray, np.ndarra
         elif f"anchor{designed + 1}_piece" in values:
             origin, spans = pieces[int(values[f"anchor{designed + 1}_piece"])]
             along = [values[f"anchor{designed + 1}_p{k + 1}"] for k in range(spans.shape[1])]
-            anchors[cable] = (origin + spans @ np.asarray(along, dtype=float)) * sign
+            anchors[cable] = (pivot + scale * (origin + spans @ np.asarray(along, dtype=float) - pivot)) * sign
         if f"attachment{designed + 1}_x" in values:
             attachments[cable] = np.array([values[f"attachment{designed + 1}_{axis}"] for axis in AXES]) * sign
     return anchors, attachments
@@ -550,8 +588,9 @@ def _better(spec: LayoutSpec, numbers: dict, best: dict) -> bool:
 def designed(spec: LayoutSpec, robot) -> dict[str, float] | None:
     """The robot's own layout as the search's variables, when it is one of the space's layouts
     (inside the ranges, on the lattice, on a face or edge where the anchors must be, and with
-    quadrants mirror-symmetric); else None."""
-    ranges, values = spec.ranges(robot.n_cables), {}
+    quadrants mirror-symmetric), its frame the installation box; else None."""
+    ranges = spec.ranges(robot.n_cables)
+    values = {key: 1.0 for key in ranges if key.startswith("frame_")}
     for cable in spec.designed_cables(robot.n_cables):
         if spec.anchors_on == "box":
             values.update({f"anchor{cable + 1}_{axis}": float(robot.anchors[cable, k]) for k, axis in enumerate(AXES)})
