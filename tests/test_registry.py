@@ -373,3 +373,22 @@ def test_a_registered_criterion_the_fused_kernel_does_not_compile_sends_the_job_
     assert summary["kernel"] == "numpy" and "margin_force_floor" in points
     with pytest.raises(Exception, match="force_floor"):
         compute_workspace(make_cfg("robot=irpm6", "robot.search.step=1", "compute.kernel=fused"), catalogue)
+
+
+def test_no_criterion_is_spelled_in_more_than_three_product_modules():
+    """Issue 52: a criterion is referred to by the registry's constants, not by its name retyped
+    across the product (a renamed criterion would silently miss the modules that spell it). Every
+    string literal of every product module, read by Python's own parser (docstrings and comments
+    are not code); today the registry, the module of its family and one more at most."""
+    import ast
+    from pathlib import Path
+
+    import pipeline
+
+    spelled = {name: set() for name in REGISTRY}
+    for path in Path(pipeline.__file__).parent.rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Constant) and isinstance(node.value, str) and node.value in spelled:
+                spelled[node.value].add(str(path.relative_to(Path(pipeline.__file__).parent)))
+    crowded = {name: sorted(modules) for name, modules in spelled.items() if len(modules) > 3}
+    assert not crowded, crowded

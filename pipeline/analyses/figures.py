@@ -340,8 +340,8 @@ def timeseries(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out
     return written
 
 
-PATH_PANELS = (("tension", "cable tension (N)", None), ("torque", "motor load torque (N m)", "limit_torque"),
-               ("voltage", "motor voltage (V)", "limit_voltage"), ("theta_dot", "shaft speed (rad/s)", "limit_speed"))
+PATH_PANELS = (("tension", "cable tension (N)", None), (TORQUE, "motor load torque (N m)", "limit_torque"),
+               (VOLTAGE, "motor voltage (V)", "limit_voltage"), ("theta_dot", "shaft speed (rad/s)", "limit_speed"))
 
 
 def path_series(spec: FigureSpec, table: pd.DataFrame, results: StudyResults, out_dir: Path) -> list[Path]:

@@ -22,7 +22,7 @@ from pipeline.model.geometry import attached_points
 from pipeline.model.clearance import Polytope
 from pipeline.model.pulleys import pulley_exits
 from pipeline.workspace.boundary import boundary_mesh, verdict_field
-from pipeline.workspace.criteria import COLOURS, FEASIBLE_COLOUR
+from pipeline.workspace.criteria import CABLE_OBSTACLE, COLOURS, FEASIBLE_COLOUR
 from pipeline.app.results import write_text
 
 MAX_POINTS = 6000  # per panel: the page stays light with ~40 views
@@ -138,7 +138,7 @@ def robot_traces(robot, position: np.ndarray, rotation: np.ndarray) -> list[dict
 
 
 BOX_EDGES = [(a, b) for a in range(8) for b in range(a + 1, 8) if bin(a ^ b).count("1") == 1]  # of Polytope.box's corners
-OBSTACLE_COLOUR = COLOURS["cable_obstacle"]
+OBSTACLE_COLOUR = COLOURS[CABLE_OBSTACLE]
 
 
 

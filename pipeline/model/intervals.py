@@ -139,6 +139,8 @@ def rotation_enclosure(psi: float, theta: float, phi: float) -> Interval:
                    [-sb, cb * sa, cb * ca]]
         nearest = np.array([[float(value) for value in row] for row in entries])
     return Interval(down(nearest), up(nearest))
+
+
 def rotation_box_enclosure(lo, hi, convention: str = "zyx") -> tuple[Interval, Interval]:
     """Enclosures of every rotation R whose angles (psi, theta, phi) lie in [lo, hi] (rad, each
     (3,)), eq. (9)'s Rz(phi) Ry(theta) Rx(psi) (``zyx``) or CASPR's Rx(psi) Ry(theta) Rz(phi)

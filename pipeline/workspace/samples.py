@@ -98,7 +98,7 @@ def follow(cfg: DictConfig, problem: WorkspaceProblem) -> tuple[pd.DataFrame, di
     return table, summary
 
 
-DRIVE = ("theta_dot", "theta_ddot", "torque", "voltage", "current", "power")  # per cable, with an actuator
+DRIVE = ("theta_dot", "theta_ddot", criteria.TORQUE, criteria.VOLTAGE, "current", "power")  # per cable, with an actuator
 
 
 def drive_columns(state, act, columns: dict) -> dict:
@@ -128,8 +128,9 @@ def _drive_summary(table: pd.DataFrame, cables, held: np.ndarray) -> dict:
 
     power = table[[f"power_{c}" for c in cables]].to_numpy()
     energy = float(np.trapezoid(power.sum(axis=1), table["t"].to_numpy())) if held.all() else float("nan")
-    return {"shaft_speed_peak": peak("theta_dot"), "torque_peak_Nm": peak("torque"), "voltage_peak_V": peak("voltage"),
-            "current_peak_A": peak("current"), "power_peak_W": _peak(power, held), "energy_J": energy}
+    return {"shaft_speed_peak": peak("theta_dot"), "torque_peak_Nm": peak(criteria.TORQUE),
+            "voltage_peak_V": peak(criteria.VOLTAGE), "current_peak_A": peak("current"),
+            "power_peak_W": _peak(power, held), "energy_J": energy}
 
 
 def _peak(values: np.ndarray, held: np.ndarray) -> float:

@@ -31,7 +31,7 @@ __all__ = ["ANY", "COLOURS", "DYNAMICS", "GEOMETRY", "REGISTRY", "STATICS", "Cri
 # the papers' evidence): spelled here only
 ZERO_LENGTH, SINGULAR, UNREACHABLE, SLACK, TENSION_MAX = "zero_length", "singular", "unreachable", "slack", "tension_max"
 LENGTH, SPEED, TORQUE, ACCELERATION, VOLTAGE = "length", "speed", "torque", "acceleration", "voltage"
-CATENARY = "catenary"
+CATENARY, CABLE_OBSTACLE = "catenary", "cable_obstacle"
 
 
 def _dynamics(analysis: str, spec=None, robot=None) -> bool:
@@ -109,7 +109,7 @@ for criterion in (
               "surface (robot.platform.shape), or a smaller box",
               lambda analysis, spec, robot: robot.platform_shape is not None, certified=True,
               boxes=interference.cable_platform_boxes),
-    Criterion("cable_obstacle", interference.cable_obstacle, GEOMETRY, None, "#994F00",
+    Criterion(CABLE_OBSTACLE, interference.cable_obstacle, GEOMETRY, None, "#994F00",
               "anchors that route the cables around the obstacles, a smaller box, or obstacles moved",
               lambda analysis, spec, robot: bool(robot.obstacles), certified=True,
               boxes=interference.cable_obstacle_boxes),
