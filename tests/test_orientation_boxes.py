@@ -7,6 +7,8 @@ from __future__ import annotations
 from dataclasses import replace
 
 import mpmath
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
@@ -82,18 +84,13 @@ def _turned(angles: np.ndarray, convention: str) -> np.ndarray:
     return rz @ ry @ rx if convention == "zyx" else rx @ ry @ rz
 
 
-@pytest.mark.parametrize("rates", ["first order", "random"])
-@pytest.mark.parametrize("convention, bound, sizes", [("zyx", 0.05, (0.005, 0.05)), ("xyz", 0.05, (0.005, 0.05)),
-                                                     ("zyx", 0.005, (0.1, 0.3))])
-def test_the_followed_residual_holds_the_residual_at_every_orientation_of_the_box(make_cfg, convention, bound, sizes, rates):
-    """certificates.followed over a box of orientations (+-0.05 rad about a tilted one) against
-    t = t0 + D s + E delta and r = A(p, theta) t - w(theta) from the law (u from each anchor to
-    p + R(theta) b_i, columns [u; R(theta) b_i x u]; w the weight of 30 kg and its moment about the
-    reference point, (R(theta) c) x m g, c = [0.2, -0.1, 0.3] m) at 10^5 poses: a random point of
-    one of 100 boxes of positions at a random orientation of the box (a third at its corners).
-    With the first-order rates (D and E through the pseudo-inverse, dA/dp and dA/dtheta by central
-    differences) and with random ones (r then of first order in the angles: the errors' term must
-    hold it)."""
+def _angles_case(make_cfg, convention, bound, sizes, rates):
+    """A tilted robot with 30 kg at c = [0.2, -0.1, 0.3] m, its box of orientations (+-``bound``
+    rad about (0.1, -0.08, 0.25)) and 100 boxes of positions (sides drawn in ``sizes``), with the
+    certificates' data over them: t0, the rates D and E (``first order``: through the
+    pseudo-inverse, dA/dp and dA/dtheta by central differences; ``random``; or ``none``), and A and w
+    written from the law (u from each anchor to p + R(theta) b_i, columns [u; R(theta) b_i x u]; w
+    the weight and its moment about the reference point, (R(theta) c) x m g)."""
     overrides = [o for o in TURNING["tilted payload"][0] if not o.startswith(("orientation.", "load."))]
     cfg, problem = _problem(make_cfg, [*overrides, "load.mass=30", "load.com=[0.2,-0.1,0.3]", "orientation.psi=0.1",
                                        "orientation.theta=-0.08", "orientation.phi=0.25",
@@ -123,6 +120,8 @@ def test_the_followed_residual_holds_the_residual_at_every_orientation_of_the_bo
     tensions = rng.uniform(1.0, 150.0, (100, 1, m))
     if rates == "random":
         moving, following = rng.normal(size=(100, 1, m, 3)) * 100, rng.normal(size=(100, 1, m, 3)) * 100
+    elif rates == "none":  # t = t0 throughout: dg_j/dp_l is the mixed term (d2A/dtheta_j dp_l) t0 alone
+        moving, following = np.zeros((100, 1, m, 3)), np.zeros((100, 1, m, 3))
     else:
         h = 1e-6
         inverse = np.linalg.pinv(at_centre)
@@ -139,25 +138,73 @@ def test_the_followed_residual_holds_the_residual_at_every_orientation_of_the_bo
     within = certificates.structure_enclosure(statics, lo, hi, middle)
     moves, arms, given = paving.build_errors(problem, angles, paving.NOMINAL, turn)
     assert np.allclose(given, bound) and (given >= high - middle_angles).all() and (given >= middle_angles - low).all()
-    wrenches = Interval(np.broadcast_to(statics.wrenches.lo, (100, 1, 6)), np.broadcast_to(statics.wrenches.hi, (100, 1, 6)))
     errors = certificates.BuildErrors(nominal, certificates.structure_enclosure(statics, middle, middle, middle),
                                       following, moves, arms, given)
-    moved, residual = certificates.followed(statics, within, wrenches, tensions, moving, errors)
     points = lo[:, None] + rng.uniform(0, 1, (100, 1000, 3)) * (hi - lo)[:, None]
     drawn = np.where(rng.uniform(size=(100, 1000, 1)) < 0.3, np.where(rng.uniform(size=(100, 1000, 3)) < 0.5, low, high),
                      rng.uniform(low, high, (100, 1000, 3)))
-    t = (tensions[:, None, 0] + np.einsum("nml,npl->npm", moving[:, 0], points - middle[:, None])
-         + np.einsum("nmP,npP->npm", following[:, 0], drawn - middle_angles))
-    exact = np.einsum("npkm,npm->npk", structure_at(points, drawn), t) - wrench_at(drawn)
+    return SimpleNamespace(**locals())
+
+
+@pytest.mark.parametrize("rates", ["first order", "random"])
+@pytest.mark.parametrize("convention, bound, sizes", [("zyx", 0.05, (0.005, 0.05)), ("xyz", 0.05, (0.005, 0.05)),
+                                                     ("zyx", 0.005, (0.1, 0.3))])
+def test_the_followed_residual_holds_the_residual_at_every_orientation_of_the_box(make_cfg, convention, bound, sizes, rates):
+    """certificates.followed over a box of orientations (+-0.05 rad about a tilted one) against
+    t = t0 + D s + E delta and r = A(p, theta) t - w(theta) from the law (:func:`_angles_case`) at
+    10^5 poses: a random point of one of 100 boxes of positions at a random orientation of the box
+    (a third at its corners). With the first-order rates and with random ones (r then of first
+    order in the angles: the errors' term must hold it)."""
+    case = _angles_case(make_cfg, convention, bound, sizes, rates)
+    statics, points, drawn, middle = case.statics, case.points, case.drawn, case.middle
+    wrenches = Interval(np.broadcast_to(statics.wrenches.lo, (100, 1, 6)), np.broadcast_to(statics.wrenches.hi, (100, 1, 6)))
+    moved, residual = certificates.followed(statics, case.within, wrenches, case.tensions, case.moving, case.errors)
+    t = (case.tensions[:, None, 0] + np.einsum("nml,npl->npm", case.moving[:, 0], points - middle[:, None])
+         + np.einsum("nmP,npP->npm", case.following[:, 0], drawn - case.middle_angles))
+    exact = np.einsum("npkm,npm->npk", case.structure_at(points, drawn), t) - case.wrench_at(drawn)
     assert (moved.lo[:, 0, None] <= t).all() and (t <= moved.hi[:, 0, None]).all()
     assert (residual.lo[:, 0, None] <= exact).all() and (exact <= residual.hi[:, 0, None]).all()
     # the angles' part alone, A(p, theta) t(p, theta) - A(p, theta_c) t(p, theta_c), against its own enclosure
-    reach = (np.abs(following) * given).sum(axis=-1)
-    part = certificates.errors_residual(statics, within, errors, moved, Interval(tensions - reach, tensions + reach), moving)
-    level = t - np.einsum("nmP,npP->npm", following[:, 0], drawn - middle_angles)
-    exact = (np.einsum("npkm,npm->npk", structure_at(points, drawn), t)
-             - np.einsum("npkm,npm->npk", structure_at(points, np.broadcast_to(middle_angles, drawn.shape)), level))
+    reach = (np.abs(case.following) * case.given).sum(axis=-1)
+    part = certificates.errors_residual(statics, case.within, case.errors, moved,
+                                        Interval(case.tensions - reach, case.tensions + reach), case.moving)
+    level = t - np.einsum("nmP,npP->npm", case.following[:, 0], drawn - case.middle_angles)
+    exact = (np.einsum("npkm,npm->npk", case.structure_at(points, drawn), t)
+             - np.einsum("npkm,npm->npk", case.structure_at(points, np.broadcast_to(case.middle_angles, drawn.shape)), level))
     assert (part.lo[:, 0, None] <= exact).all() and (exact <= part.hi[:, 0, None]).all()
+
+
+@pytest.mark.parametrize("rates", ["first order", "random", "none"])
+@pytest.mark.parametrize("bound, sizes", [(0.05, (0.005, 0.05)), (0.005, (0.1, 0.3)), (0.001, (0.3, 0.6))])
+def test_each_enclosure_of_the_angles_gradient_holds_it_by_central_differences(make_cfg, bound, sizes, rates):
+    """Each of the two enclosures of g_j = dr/dtheta_j (certificates.error_gradients) on its own,
+    not only their intersection: its range over the box and its centred form must each hold g_j at
+    every drawn point and orientation, g_j by central differences (h = 1e-6 rad) of
+    r = A(p, theta) t(p, theta) from the law, t = t0 + D s + E (theta - theta_c). Wide boxes of
+    positions with narrow boxes of angles make the centred form's terms of the first order in the
+    box its width: the mixed term (d2A/dtheta_j dp_l) t, (dA/dtheta_j) D_l and (dA/dp_l) E_j each
+    carry a share of it (with D = E = 0 the mixed term all of it)."""
+    case = _angles_case(make_cfg, "zyx", bound, sizes, rates)
+    statics, points, drawn, middle = case.statics, case.points[:, :200], case.drawn[:, :200], case.middle
+    moved, _ = certificates.followed(statics, case.within, Interval.point(np.zeros((100, 1, 6))), case.tensions,
+                                     case.moving, case.errors)
+    reach = (np.abs(case.following) * case.given).sum(axis=-1)
+    still = Interval(case.tensions - reach, case.tensions + reach)
+    forms = list(certificates.error_gradients(statics, case.within, case.errors, moved, still, case.moving))
+    assert len(forms) == 3 and [tolerance for tolerance, _, _ in forms] == pytest.approx([bound] * 3)
+
+    def residual(turned):
+        t = (case.tensions[:, None, 0] + np.einsum("nml,npl->npm", case.moving[:, 0], points - middle[:, None])
+             + np.einsum("nmP,npP->npm", case.following[:, 0], turned - case.middle_angles))
+        return np.einsum("npkm,npm->npk", case.structure_at(points, turned), t)
+
+    h = 1e-6
+    for j, (_, ranged, centred) in enumerate(forms):
+        step = h * np.eye(3)[j]
+        gradient = (residual(drawn + step) - residual(drawn - step)) / (2 * h)  # (100, points, 6)
+        slack = 1e-6 * (1 + np.abs(gradient))  # the central difference's own error
+        for form in (ranged, centred):
+            assert (form.lo[:, 0, None] - slack <= gradient).all() and (gradient <= form.hi[:, 0, None] + slack).all()
 
 
 IPANEMA_QUARTER = ["robot=points", f"robot.anchors={SPREAD_ANCHORS}",

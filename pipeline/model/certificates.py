@@ -355,16 +355,27 @@ def followed(statics: BoxStatics, enclosure: BoxEnclosure, wrenches: Interval, t
 def errors_residual(statics: BoxStatics, enclosure: BoxEnclosure, errors: BuildErrors, tensions: Interval,
                     still: Interval, rates: np.ndarray) -> Interval:
     """(N, K, k) an enclosure of r(p, delta) - r(p, 0) over each box and every error within the
-    tolerances, by the mean-value theorem in delta: sum_j g_j(p, xi) delta_j, g_j = dr/ddelta_j =
-    (dA/ddelta_j) t + A E_j (zero at the centre but for E's rounding), ``enclosure`` over the box
-    and the tolerances, ``tensions`` (N, K, m) t over both and ``still`` t at the centre point c
-    over the tolerances (:func:`followed`). Two enclosures of g_j, intersected: its range over
+    tolerances, by the mean-value theorem in delta: sum_j g_j(p, xi) delta_j, g_j = dr/ddelta_j
+    enclosed twice by :func:`error_gradients`, the two enclosures intersected."""
+    total = None
+    for tolerance, ranged, centred in error_gradients(statics, enclosure, errors, tensions, still, rates):
+        term = ranged.intersect(centred) * Interval(np.array(-tolerance), np.array(tolerance))
+        total = term if total is None else total + term
+    return total
+
+
+def error_gradients(statics: BoxStatics, enclosure: BoxEnclosure, errors: BuildErrors, tensions: Interval,
+                    still: Interval, rates: np.ndarray):
+    """For each parameter j of the build errors, its tolerance and two enclosures (N, K, k) of
+    g_j = dr/ddelta_j = (dA/ddelta_j) t + A E_j over each box and every error within the
+    tolerances (zero at the centre but for E's rounding), one parameter at a time (a generator:
+    the memory of one): ``enclosure`` over the box and the tolerances, ``tensions`` (N, K, m) t over
+    both and ``still`` t at the centre point c over the tolerances (:func:`followed`). Its range over
     the box and the tolerances (of first order in the box's width), and its centred form
     g_j(c, Delta) + sum_l (dg_j/dp_l)(B, Delta) (p_l - c_l), dg_j/dp_l = (d2A/ddelta_j dp_l) t
     + (dA/ddelta_j) D_l + (dA/dp_l) E_j (``rates`` D (N, K, m, 3)), whose second part is of second
     order in the box and the tolerances together; d2A/ddelta_j dp_l is :func:`error_slopes` of
     the curvature d2A/dp_a dp_l and of du/dp_l (the moves and arms do not depend on p)."""
-    total = None
     slopes_u = _unit_slopes(enclosure.unit, enclosure.lengths)  # du/dp_l over the box and the tolerances
     pair = {(a, b): k for k, (a, b) in enumerate(PAIRS)}
     curvatures = [stack([enclosure.curvature[:, pair[min(a, l), max(a, l)]] for a in range(3)], axis=1) for l in range(3)]
@@ -373,16 +384,14 @@ def errors_residual(statics: BoxStatics, enclosure: BoxEnclosure, errors: BuildE
         slope = error_slopes(statics, enclosure.slopes, enclosure.unit, errors.moves, errors.arms, parameter)  # (N, k, m)
         rate = errors.rates[..., parameter]
         ranged = _tension_wrench(enclosure.structure, rate) + _times(slope, tensions)
-        at_centre = _tension_wrench(centre.structure, rate) + _times(
+        centred = _tension_wrench(centre.structure, rate) + _times(
             error_slopes(statics, centre.slopes, centre.unit, errors.moves, errors.arms, parameter), still)
         for axis in range(3):
             mixed = error_slopes(statics, curvatures[axis], slopes_u[axis], errors.moves, errors.arms, parameter)
             term = (_times(mixed, tensions) + _tension_wrench(slope, rates[..., axis])
                     + _tension_wrench(enclosure.slopes[:, axis], rate))
-            at_centre = at_centre + term * enclosure.step[:, None, None, axis]
-        term = ranged.intersect(at_centre) * Interval(np.array(-tolerance), np.array(tolerance))
-        total = term if total is None else total + term
-    return total
+            centred = centred + term * enclosure.step[:, None, None, axis]
+        yield tolerance, ranged, centred
 
 
 def _times(structure: Interval, tensions: Interval) -> Interval:
