@@ -10,6 +10,7 @@ of a fine grid inside the certified bracket."""
 
 import math
 from fractions import Fraction
+from types import SimpleNamespace
 
 import mpmath
 import numpy as np
@@ -223,16 +224,14 @@ def test_the_residual_enclosure_holds_the_residual_at_random_points_and_is_of_se
         assert np.median(widths[0] / widths[1]) > 60  # 10 at first order; above 100 where the third order shows
 
 
-@pytest.mark.parametrize("rates", ["first order", "random"])
-@pytest.mark.parametrize("errors", ["anchors", "attachments", "both"])
-def test_the_errors_residual_holds_the_residual_of_every_robot_within_the_tolerances(make_cfg, errors, rates):
-    """certificates.followed with build errors (the robust inside certificate's t and r) against
-    t = t0 + D s + E delta and r = A(p, a + delta_a, b + delta_b) t - w computed from the law (u
-    from each moved anchor to the moved platform point p + R (b + delta_b), columns [u; R (b +
-    delta_b) x u]) for 10^5 robots built within 20 mm (anchors) or 10 mm (attachments), each at a
-    random point of one of 100 boxes of a tilted robot, w = A(c) t0. With the first-order rates
-    (D and E through the pseudo-inverse, dA/dp and dA/ddelta by central differences) and with
-    random ones (r then of first order in the errors: the errors' term must hold it)."""
+def _errors_case(make_cfg, errors, rates, sizes=(0.005, 0.05), points=1000):
+    """A tilted robot built within 20 mm (anchors) and/or 10 mm (attachments), 100 boxes of
+    positions (sides drawn in ``sizes``) and the certificates' data over them: t0, w = A(c) t0, the
+    rates D and E (``first order``: through the pseudo-inverse, dA/dp and dA/ddelta by central
+    differences; ``random``; or ``none``), the structure matrix written from the law (u from each
+    moved anchor to the moved platform point p + R (b + delta_b), columns [u; R (b + delta_b) x u]),
+    and ``points`` random points of each box with a robot drawn within the tolerances at each (a
+    third at corners)."""
     problem = _problem(make_cfg, ROBOTS["tilted payload"][0])
     robot, angles = problem.robot, tuple(problem.orientations[0])
     rotation, m = eq9_rotation(*angles), robot.n_cables
@@ -240,7 +239,7 @@ def test_the_errors_residual_holds_the_residual_of_every_robot_within_the_tolera
                                    attachments=0.0 if errors == "anchors" else 0.01)
     rng = np.random.default_rng(8)
     lo = rng.uniform([-1.4, -0.9, 0.3], [1.2, 0.7, 1.4], (100, 3))
-    hi = lo + rng.uniform(0.005, 0.05, (100, 3))
+    hi = lo + rng.uniform(*sizes, (100, 3))
     middle = lo + (hi - lo) / 2
 
     def structure_at(points, anchors, attachments):  # (..., 3), (..., m, 3) twice -> (..., 6, m)
@@ -258,6 +257,8 @@ def test_the_errors_residual_holds_the_residual_of_every_robot_within_the_tolera
     count = 3 * m * len(sizes)  # the parameters, per cable and axis: anchors then attachments
     if rates == "random":
         moving, following = rng.normal(size=(100, 1, m, 3)), rng.normal(size=(100, 1, m, count))
+    elif rates == "none":  # t = t0 throughout: dg_j/dp_l is the mixed term (d2A/ddelta_j dp_l) t0 alone
+        moving, following = np.zeros((100, 1, m, 3)), np.zeros((100, 1, m, count))
     else:
         h = 1e-6
         inverse = np.linalg.pinv(at_centre)
@@ -280,21 +281,68 @@ def test_the_errors_residual_holds_the_residual_of_every_robot_within_the_tolera
     within = certificates.structure_enclosure(statics, lo, hi, middle)
     moves, arms, given = paving.build_errors(problem, angles, tolerances)
     assert np.array_equal(given, np.tile(sizes, 3 * m))
-    moved, residual = certificates.followed(statics, within, Interval.point(wrenches), tensions, moving,
-                                            certificates.BuildErrors(
-                                                nominal, certificates.structure_enclosure(statics, middle, middle, middle),
-                                                following, moves, arms, given))
-    points = lo[:, None] + rng.uniform(0, 1, (100, 1000, 3)) * (hi - lo)[:, None]
-    drawn = np.where(rng.uniform(size=(100, 1000, 1, 1, 1)) < 0.3, rng.choice([-1.0, 1.0], (100, 1000, m, 3, len(sizes))),
-                     rng.uniform(-1, 1, (100, 1000, m, 3, len(sizes)))) * sizes  # (.., cable, axis, kind)
-    t = (tensions[:, None, 0] + np.einsum("nml,npl->npm", moving[:, 0], points - middle[:, None])
-         + np.einsum("nmP,npP->npm", following[:, 0], drawn.reshape(100, 1000, -1)))
+    errors = certificates.BuildErrors(nominal, certificates.structure_enclosure(statics, middle, middle, middle),
+                                      following, moves, arms, given)
+    points = lo[:, None] + rng.uniform(0, 1, (100, points, 3)) * (hi - lo)[:, None]
+    drawn = np.where(rng.uniform(size=(100, points.shape[1], 1, 1, 1)) < 0.3,
+                     rng.choice([-1.0, 1.0], (100, points.shape[1], m, 3, len(sizes))),
+                     rng.uniform(-1, 1, (100, points.shape[1], m, 3, len(sizes)))) * sizes  # (.., cable, axis, kind)
     kinds = iter(range(len(sizes)))
     built = [robot.anchors + drawn[..., next(kinds)] if tolerances.anchors else robot.anchors,
              robot.attachments + drawn[..., next(kinds)] if tolerances.attachments else robot.attachments]
-    exact = np.einsum("npkm,npm->npk", structure_at(points, *built), t) - wrenches[:, None, 0]
+    return SimpleNamespace(**locals())
+
+
+@pytest.mark.parametrize("rates", ["first order", "random"])
+@pytest.mark.parametrize("errors", ["anchors", "attachments", "both"])
+def test_the_errors_residual_holds_the_residual_of_every_robot_within_the_tolerances(make_cfg, errors, rates):
+    """certificates.followed with build errors (the robust inside certificate's t and r) against
+    t = t0 + D s + E delta and r = A(p, a + delta_a, b + delta_b) t - w computed from the law
+    (:func:`_errors_case`) for 10^5 robots built within 20 mm (anchors) or 10 mm (attachments), each
+    at a random point of one of 100 boxes of a tilted robot, w = A(c) t0. With the first-order rates
+    and with random ones (r then of first order in the errors: the errors' term must hold it)."""
+    case = _errors_case(make_cfg, errors, rates)
+    moved, residual = certificates.followed(case.statics, case.within, Interval.point(case.wrenches), case.tensions,
+                                            case.moving, case.errors)
+    t = (case.tensions[:, None, 0] + np.einsum("nml,npl->npm", case.moving[:, 0], case.points - case.middle[:, None])
+         + np.einsum("nmP,npP->npm", case.following[:, 0], case.drawn.reshape(100, 1000, -1)))
+    exact = np.einsum("npkm,npm->npk", case.structure_at(case.points, *case.built), t) - case.wrenches[:, None, 0]
     assert (moved.lo[:, 0, None] <= t).all() and (t <= moved.hi[:, 0, None]).all()
     assert (residual.lo[:, 0, None] <= exact).all() and (exact <= residual.hi[:, 0, None]).all()
+
+
+@pytest.mark.parametrize("rates", ["first order", "random", "none"])
+@pytest.mark.parametrize("sizes", [(0.005, 0.05), (0.1, 0.3)])
+def test_each_enclosure_of_the_build_errors_gradient_holds_it_by_central_differences(make_cfg, sizes, rates):
+    """Each of the two enclosures of g_j = dr/ddelta_j (certificates.error_gradients: the range and
+    the centred form, each on its own) against central differences (h = 1e-7 m) of r = A(p, a +
+    delta_a, b + delta_b) t from the law, t = t0 + D s + E delta, for every anchor and attachment
+    coordinate j of 2 000 robots drawn within the tolerances, each at a point of one of 100 boxes;
+    with zero rates the centred form's spread over the box is its mixed term alone."""
+    case = _errors_case(make_cfg, "both", rates, sizes, points=20)
+    moved, _ = certificates.followed(case.statics, case.within, Interval.point(case.wrenches), case.tensions,
+                                     case.moving, case.errors)
+    reach = (np.abs(case.following) * case.given).sum(axis=-1)
+    still = Interval(case.tensions - reach, case.tensions + reach)
+    deltas = case.drawn.reshape(100, 20, -1)  # (.., P): per cable and axis, anchors then attachments
+
+    def residual(shift):
+        built = [case.robot.anchors + shift[..., 0], case.robot.attachments + shift[..., 1]]
+        t = (case.tensions[:, None, 0] + np.einsum("nml,npl->npm", case.moving[:, 0], case.points - case.middle[:, None])
+             + np.einsum("nmP,npP->npm", case.following[:, 0], shift.reshape(100, 20, -1)))
+        return np.einsum("npkm,npm->npk", case.structure_at(case.points, *built), t)
+
+    h, count = 1e-7, 0
+    for j, (tolerance, ranged, centred) in enumerate(certificates.error_gradients(
+            case.statics, case.within, case.errors, moved, still, case.moving)):
+        assert tolerance == (0.02, 0.01)[j % 2]
+        step = (h * np.eye(deltas.shape[-1])[j]).reshape(case.drawn.shape[2:])
+        gradient = (residual(case.drawn + step) - residual(case.drawn - step)) / (2 * h)  # (100, 20, 6)
+        slack = 1e-6 * (1 + np.abs(gradient))  # the central difference's own error
+        for form in (ranged, centred):
+            assert (form.lo[:, 0, None] - slack <= gradient).all() and (gradient <= form.hi[:, 0, None] + slack).all(), j
+        count += 1
+    assert count == deltas.shape[-1] == 48
 
 
 def test_structure_enclosure_of_a_point_contains_the_exact_matrix(make_cfg):
