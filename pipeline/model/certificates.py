@@ -154,15 +154,17 @@ class BuildErrors:
 
 
 def error_slopes(statics: BoxStatics, slopes: Interval, unit: Interval, moves: Interval, arms: Interval,
-                 parameter: int) -> Interval:
+                 parameter: int, cables=slice(None)) -> Interval:
     """(N, k, m) dA/ddelta_j from dA/dp_l (``slopes`` (N, 3, k, m)) and the unit vectors u_i
     (``unit`` (N, m, 3)), over a box or at its centre: column i is sum_l moves_jil (dA/dp_l)_i
-    plus [0; arms_ji x u_i] (the arm's own motion), on the rows of the robot's freedoms."""
+    plus [0; arms_ji x u_i] (the arm's own motion), on the rows of the robot's freedoms; only the
+    columns ``cables`` (an index of the cables: the others are zero where delta_j moves no more)."""
     total = None
+    moving, turning = moves[parameter][cables], arms[parameter][cables]  # (c, 3)
     for axis in range(3):
-        term = slopes[:, axis] * moves[parameter, None, None, :, axis]
+        term = slopes[:, axis][..., cables] * moving[None, None, :, axis]
         total = term if total is None else total + term
-    moment = cross(arms[parameter][None], unit)  # (N, m, 3)
+    moment = cross(turning[None], unit[:, cables])  # (N, c, 3)
     zero = np.zeros(moment.shape)
     rows = list(statics.rows)
     return total + Interval(np.swapaxes(np.concatenate([zero, moment.lo], axis=-1), 1, 2)[:, rows],
@@ -379,16 +381,21 @@ def error_gradients(statics: BoxStatics, enclosure: BoxEnclosure, errors: BuildE
     slopes_u = _unit_slopes(enclosure.unit, enclosure.lengths)  # du/dp_l over the box and the tolerances
     pair = {(a, b): k for k, (a, b) in enumerate(PAIRS)}
     curvatures = [stack([enclosure.curvature[:, pair[min(a, l), max(a, l)]] for a in range(3)], axis=1) for l in range(3)]
-    centre = errors.centre
+    centre, moves, arms = errors.centre, errors.moves, errors.arms
+    touched = ((moves.lo != 0) | (moves.hi != 0) | (arms.lo != 0) | (arms.hi != 0)).any(axis=-1)  # (P, m)
     for parameter, tolerance in enumerate(errors.tolerances):
-        slope = error_slopes(statics, enclosure.slopes, enclosure.unit, errors.moves, errors.arms, parameter)  # (N, k, m)
+        # an anchor's or attachment's coordinate moves one cable: dA/ddelta_j is that column alone
+        cables = np.flatnonzero(touched[parameter])
+        cables = cables if 0 < len(cables) < touched.shape[1] else slice(None)
+        slope = error_slopes(statics, enclosure.slopes, enclosure.unit, moves, arms, parameter, cables)  # (N, k, c)
         rate = errors.rates[..., parameter]
-        ranged = _tension_wrench(enclosure.structure, rate) + _times(slope, tensions)
+        moved = tensions[..., cables]
+        ranged = _tension_wrench(enclosure.structure, rate) + _times(slope, moved)
         centred = _tension_wrench(centre.structure, rate) + _times(
-            error_slopes(statics, centre.slopes, centre.unit, errors.moves, errors.arms, parameter), still)
+            error_slopes(statics, centre.slopes, centre.unit, moves, arms, parameter, cables), still[..., cables])
         for axis in range(3):
-            mixed = error_slopes(statics, curvatures[axis], slopes_u[axis], errors.moves, errors.arms, parameter)
-            term = (_times(mixed, tensions) + _tension_wrench(slope, rates[..., axis])
+            mixed = error_slopes(statics, curvatures[axis], slopes_u[axis], moves, arms, parameter, cables)
+            term = (_times(mixed, moved) + _tension_wrench(slope, rates[..., cables, axis])
                     + _tension_wrench(enclosure.slopes[:, axis], rate))
             centred = centred + term * enclosure.step[:, None, None, axis]
         yield tolerance, ranged, centred

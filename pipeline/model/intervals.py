@@ -68,10 +68,17 @@ class Interval:
         return _interval(other) - self
 
     def __mul__(self, other) -> Interval:
+        """The least and largest of the four products of the bounds; two where either factor is a
+        point (:meth:`point`: its bounds one array), the same doubles at half the work."""
         other = _interval(other)
-        products = np.stack(np.broadcast_arrays(self.lo * other.lo, self.lo * other.hi,
-                                                self.hi * other.lo, self.hi * other.hi))
-        return Interval(down(products.min(axis=0)), up(products.max(axis=0)))
+        if self.lo is self.hi:
+            self, other = other, self
+        if other.lo is other.hi:
+            low, high = self.lo * other.lo, self.hi * other.lo
+            return Interval(down(np.minimum(low, high)), up(np.maximum(low, high)))
+        products = (self.lo * other.lo, self.lo * other.hi, self.hi * other.lo, self.hi * other.hi)
+        return Interval(down(np.minimum(np.minimum(products[0], products[1]), np.minimum(products[2], products[3]))),
+                        up(np.maximum(np.maximum(products[0], products[1]), np.maximum(products[2], products[3]))))
 
     __rmul__ = __mul__
 
