@@ -433,6 +433,25 @@ def test_a_layout_study_from_a_users_folder_writes_a_robot_file_that_runs(tmp_pa
     assert pd.read_parquet(tmp_path / "again" / "summary.parquet")["n_feasible"].iloc[0] == best["n_feasible"]
 
 
+def test_a_frame_sized_by_the_study_is_in_its_robot_file(tmp_path):
+    """layout.frame_scale from a user's folder on the planar robot (its plane the x-y one, up +z):
+    the summary's frame_x, frame_y in [0.6, 1] and no frame_z (the plane is flat in z), each Pareto
+    layout's robot file with its four anchors on the sides of its own frame (the square of side
+    2 frame_x by 2 frame_y about the origin, written here from those words)."""
+    study = {**STUDY, "overrides": [*PLANAR[:2], "robot.anchors=[[-1,1,0],[1,1,0],[1,-1,0],[-1,-1,0]]", *PLANAR[3:],
+                                    "tension=feasible", "tension.t_min=1", "tension.t_max=10", "wrench.fy=-2"],
+             "layout": {**STUDY["layout"], "anchors_on": "faces", "frame_scale": [0.6, 1.0], "budget": 8}}
+    out, summary, best = run_study(tmp_path, study)
+    assert "frame_z" not in summary and summary["frame_x"].between(0.6, 1).all() and summary["frame_y"].between(0.6, 1).all()
+    assert summary.iloc[0][["frame_x", "frame_y"]].tolist() == [1.0, 1.0]  # the robot as given: its own square
+    for path in sorted((out / "layouts").glob("*.yaml")):
+        row = summary[summary["trial"] == int(path.stem[6:])].iloc[0]
+        anchors = np.array(yaml.safe_load(path.read_text())["anchors"])
+        half = np.array([row["frame_x"], row["frame_y"]])
+        assert (np.abs(anchors[:, :2]) <= half + 1e-12).all() and np.allclose(anchors[:, 2], 0)
+        assert np.isclose(np.abs(anchors[:, :2]), half, rtol=0, atol=1e-12).any(axis=1).all(), (anchors, half)
+
+
 def test_a_payload_study_counts_the_payload_at_load_com_on_top_of_load_mass(tmp_path, make_cfg, catalogue):
     """From the command line: objective payload_kg with the job's own 0.3 kg at an off-centre
     load.com; the best trial's payload is analysis=payload's least over the required box for the
