@@ -8,7 +8,9 @@ on five robots (spatial, tilted with an off-centre payload and a length limit, a
 orientations, a planar body with a wrench set, a planar point and a point in space); the volume
 of a fine grid inside the certified bracket."""
 
+import itertools
 import math
+from dataclasses import replace
 from fractions import Fraction
 from types import SimpleNamespace
 
@@ -26,6 +28,7 @@ from pipeline.model.geometry import rotation_matrix
 from pipeline.model.intervals import Interval, rotation_enclosure
 from pipeline.model.path import StraightMotion
 from pipeline.workspace import paving
+from pipeline.workspace.paving import Paving
 from pipeline.workspace.criteria import REGISTRY
 from pipeline.workspace.feasibility import null_space_verdicts
 from pipeline.workspace.kernel import evaluate_chunk
@@ -388,6 +391,11 @@ def test_no_pose_of_a_certified_box_contradicts_the_exact_test(make_cfg, name):
     assert (checked[INSIDE] >= -atol).all(), np.sort(checked[INSIDE])[:5]
     assert (checked[OUTSIDE] < atol).all(), np.sort(checked[OUTSIDE])[-5:]
     assert (checked[OUTSIDE] < -atol).mean() > 0.99  # (a corner may sit on the boundary of an outside box)
+    assert np.array_equal(found.at >= 0, found.verdict == OUTSIDE) and (found.at < len(problem.orientations)).all()
+    for k in np.unique(found.at[found.verdict == OUTSIDE]):  # each outside box infeasible at the orientation it names
+        named = Paving(found.lo, found.hi, np.where(found.at == k, OUTSIDE, UNDECIDED), found.depth, found.at)
+        at_k = replace(problem, orientations=problem.orientations[k][None])
+        assert (_min_margins(at_k, _drawn(named, problem, OUTSIDE, seed=int(k)))[:4000] < -atol).all(), k
 
 
 def _drawn(found, problem, verdict, seed: int = 4) -> np.ndarray:
@@ -500,6 +508,31 @@ def test_a_certified_job_writes_its_boxes_and_the_bracket(tmp_path):
     assert np.isclose(summary.inside_m3, boxes.volume[boxes.verdict == "inside"].sum())
     assert np.isclose(summary.undecided_pct, 100 * summary.undecided_m3 / summary.box_m3)
     assert "certified:" in done.stdout and "undecided" in done.stdout
+
+
+def test_an_outside_box_names_the_orientation_it_fails_at_in_the_users_convention(tmp_path):
+    """With an orientation set (CASPR's angles, xyz), boxes.parquet names, for each outside box, the
+    orientation it was proven infeasible at: its number and its angles as the job gives them (the
+    nominal +- 0.3 rad about z, written here), NaN for the other boxes; with one orientation no such
+    column."""
+    run = tmp_path / "run"
+    done = command(tmp_path, "pipeline", *PLANAR_BODY, "tension=feasible", "analysis=certified", "certified.depth=8",
+                   "orientation.convention=xyz", "orientation.total={bound: 0.3, n: 3}", f"hydra.run.dir={run}")
+    assert done.returncode == 0, done.stderr[-2000:]
+    boxes = pd.read_parquet(run / "boxes.parquet")
+    outside = boxes.verdict == "outside"
+    assert outside.any() and boxes.loc[~outside, ["outside_orientation", "outside_phi"]].isna().all().all()
+    named = boxes.loc[outside, ["outside_psi", "outside_theta", "outside_phi"]].to_numpy()
+    assert set(boxes.loc[outside, "outside_orientation"]) <= set(range(1, 28))
+    nominal = np.array([0.0, 0.0, 0.3])  # PLANAR_BODY's orientation.phi
+    grid = nominal + np.array(list(itertools.product([-0.3, 0.0, 0.3], repeat=3)))
+    assert all(np.isclose(grid, row, rtol=0, atol=1e-12).all(axis=1).any() for row in named)
+    first = boxes.loc[outside & (boxes.outside_orientation == 1), ["outside_psi", "outside_theta", "outside_phi"]]
+    assert np.allclose(first.to_numpy(), nominal)  # number 1: the nominal orientation
+    single = tmp_path / "single"
+    assert command(tmp_path, "pipeline", *PLANAR_BODY, "tension=feasible", "analysis=certified", "certified.depth=4",
+                   f"hydra.run.dir={single}").returncode == 0
+    assert "outside_orientation" not in pd.read_parquet(single / "boxes.parquet")
 
 
 def test_the_time_budget_leaves_the_rest_undecided(make_cfg):
@@ -864,7 +897,7 @@ def test_a_certified_path_agrees_with_the_exact_test_along_it(make_cfg, name):
     overrides, points, depth = PATHS[name]
     problem = _problem(make_cfg, overrides, "compute.n_jobs=1")
     points = np.asarray(points, dtype=float)
-    pieces, verdict, _, ended = paving.certify_path(problem, points, depth, 600.0,
+    pieces, verdict, _, _, ended = paving.certify_path(problem, points, depth, 600.0,
                                                     make_cfg(*overrides, "compute.n_jobs=1").compute)
     starts, ends = points[:-1], points[1:]
     segment = pieces[:, 0].astype(int)
@@ -939,7 +972,7 @@ def test_a_robust_path_proves_no_more_than_the_nominal_one(make_cfg):
     lengths = np.linalg.norm(np.diff(points, axis=0), axis=1)
 
     def inside_length(tolerances):
-        pieces, verdict, _, _ = paving.certify_path(problem, points, depth, 600.0, compute, tolerances)
+        pieces, verdict, _, _, _ = paving.certify_path(problem, points, depth, 600.0, compute, tolerances)
         rows = verdict == INSIDE
         return ((pieces[rows, 2] - pieces[rows, 1]) * lengths[pieces[rows, 0].astype(int)]).sum(), pieces[rows]
 
@@ -976,7 +1009,7 @@ def test_a_moving_path_agrees_with_the_exact_test_at_each_instant(make_cfg, name
     problem = _problem(make_cfg, overrides, "compute.n_jobs=1")
     points = np.asarray(points, dtype=float)
     durations = np.full(len(points) - 1, seconds)
-    pieces, verdict, _, _ = paving.certify_path(problem, points, depth, 600.0,
+    pieces, verdict, _, _, _ = paving.certify_path(problem, points, depth, 600.0,
                                                 make_cfg(*overrides, "compute.n_jobs=1").compute,
                                                 motion=StraightMotion.quintic(points, durations))
     assert (verdict == INSIDE).any() and (verdict == OUTSIDE).any()
@@ -1228,6 +1261,4 @@ def test_a_box_obstacles_bound_agrees_with_the_exact_clearance_on_small_boxes_ab
 
 def replace_criteria(problem, criterion):
     """The problem checking ``criterion`` and the zero-length gate only: the criterion's own boxes."""
-    from dataclasses import replace
-
     return replace(problem, criteria=tuple(name for name in problem.criteria if name in (criterion, "zero_length")))

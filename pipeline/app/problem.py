@@ -382,8 +382,9 @@ def _paving_files(cfg: DictConfig, problem: WorkspaceProblem, grid: Grid | None,
 
     path = cfg.certified.path
     motion = None if path is None else certified_motion(cfg, np.asarray(OmegaConf.to_container(path), dtype=float))
-    turns = orientation_cells(cfg.orientation) if cfg.certified.orientations == "box" else None
-    return paving_files(cfg, problem, files, motion, turns)
+    boxes = cfg.certified.orientations == "box"
+    turns = orientation_cells(cfg.orientation) if boxes else None
+    return paving_files(cfg, problem, files, motion, turns, given_angles(cfg.orientation, boxes))
 
 
 @dataclass(frozen=True)
@@ -906,9 +907,18 @@ def orientation_count(orientation: DictConfig) -> int:
 
 
 def orientation_set(orientation: DictConfig, boxes: bool = False) -> np.ndarray:
-    """(k, 3) eq. (9) angles: the constant orientation, or the total-orientation grid around it,
-    each converted from ``orientation.convention`` (xyz: the same rotations, eq. 9's angles); with
-    ``boxes`` the centres of :func:`orientation_cells` instead (``certified.orientations=box``)."""
+    """(k, 3) eq. (9) angles: :func:`given_angles` each converted from ``orientation.convention``
+    (xyz: the same rotations, eq. 9's angles)."""
+    angles = given_angles(orientation, boxes)
+    if name_of(orientation.convention) == "xyz":
+        return np.array([eq9_angles(*row) for row in angles])
+    return angles
+
+
+def given_angles(orientation: DictConfig, boxes: bool = False) -> np.ndarray:
+    """(k, 3) the job's orientations in ``orientation.convention``: the constant orientation, or
+    the total-orientation grid around it (the nominal first); with ``boxes`` the centres of
+    :func:`orientation_cells` instead (``certified.orientations=box``)."""
     nominal = np.array([orientation.psi, orientation.theta, orientation.phi], dtype=float)
     total = orientation.total
     angles = nominal[None, :]
@@ -919,8 +929,6 @@ def orientation_set(orientation: DictConfig, boxes: bool = False) -> np.ndarray:
         grid = cartesian_cube(offsets)
         order = np.argsort(np.abs(grid).sum(axis=1), kind="stable")  # nominal orientation first
         angles = nominal + grid[order]
-    if name_of(orientation.convention) == "xyz":
-        return np.array([eq9_angles(*row) for row in angles])
     return angles
 
 

@@ -48,12 +48,15 @@ VERDICTS = {INSIDE: "inside", OUTSIDE: "outside", UNDECIDED: "undecided"}
 
 @dataclass(frozen=True)
 class Paving:
-    """The boxes (lo, hi (B, 3), m), their verdicts (B,) and the level each was decided at (B,)."""
+    """The boxes (lo, hi (B, 3), m), their verdicts (B,), the level each was decided at (B,) and,
+    for an outside box, the orientation (an index of the problem's, -1 for the others) at which it
+    was proven infeasible."""
 
     lo: np.ndarray
     hi: np.ndarray
     verdict: np.ndarray
     depth: np.ndarray
+    at: np.ndarray
 
     def volumes(self, axes: np.ndarray) -> np.ndarray:
         """(B,) each box's volume along the searched axes (an area for a planar robot)."""
@@ -198,23 +201,25 @@ def centres(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
 
 
 def certify(problem: WorkspaceProblem, statics: list[tuple[BoxStatics, BoxStatics]], lo: np.ndarray,
-            hi: np.ndarray, accelerations: np.ndarray | None = None) -> np.ndarray:
+            hi: np.ndarray, accelerations: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(N,) the verdict of each box [lo, hi] (N, 3): inside at every orientation for every robot
-    within the tolerances, outside at one for the nominal robot (then for none within them).
+    within the tolerances, outside at one for the nominal robot (then for none within them); and
+    (N,) that orientation's index in ``problem.orientations`` (-1 where the box is not outside).
     ``statics``: (nominal, within the tolerances, within them but the anchors' and attachments',
     those followed to first order: :func:`build_errors`) per orientation of ``problem.orientations``;
     ``accelerations`` (N, 2, 3): a platform moving through each box with its linear acceleration
     on the segment between the two (:func:`moving_wrenches`; None: the statics' own wrenches)."""
     centre = centres(lo, hi)
-    verdict = np.full(len(lo), INSIDE)
-    for angles, boxes in zip(problem.orientations, statics):
+    verdict, at = np.full(len(lo), INSIDE), np.full(len(lo), -1)
+    for k, (angles, boxes) in enumerate(zip(problem.orientations, statics)):
         open_ = np.flatnonzero(verdict != OUTSIDE)
         if not len(open_):
             break
         moving = None if accelerations is None else moving_wrenches(problem, angles, accelerations[open_])
         found = _certified(problem, *boxes, tuple(angles), lo[open_], hi[open_], centre[open_], moving)
         verdict[open_] = np.where(found == OUTSIDE, OUTSIDE, np.minimum(verdict[open_], found))
-    return verdict
+        at[open_[found == OUTSIDE]] = k
+    return verdict, at
 
 
 def _certified(problem: WorkspaceProblem, box: BoxStatics, robust: BoxStatics, rest: BoxStatics, errors, angles,
@@ -316,21 +321,22 @@ def pave(problem: WorkspaceProblem, depth: int, seconds: float, compute: DictCon
     robot = problem.robot
     axes = np.flatnonzero(robot.box_hi > robot.box_lo)
     boxes = np.concatenate([robot.box_lo, robot.box_hi])[None].astype(float)  # (B, 6): lo, hi
-    found, verdict, level, ended = _branch_and_prune(
+    found, verdict, level, at, ended = _branch_and_prune(
         problem, tolerances, boxes, lambda items: items, lambda items: _bisected(items, axes),
         lambda items: np.prod((items[:, 3:] - items[:, :3])[:, axes], axis=1), depth, seconds, compute, "of the search box",
         turns)
-    return Paving(found[:, :3], found[:, 3:], verdict, level), ended
+    return Paving(found[:, :3], found[:, 3:], verdict, level, at), ended
 
 
 def certify_path(problem: WorkspaceProblem, points: np.ndarray, depth: int, seconds: float, compute: DictConfig,
                  tolerances: Tolerances = NOMINAL, motion: StraightMotion | None = None,
-                 turns: list[Turn] | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict]:
+                 turns: list[Turn] | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict]:
     """The straight segments between the way-points ``points`` (P, 3) in pieces, each proven
     feasible at every point or at none through the box that holds it (its ends' bounding box,
     widened by a few ulps so that it holds the exact segment, not only the rounded ends), an
-    undecided piece halved again: the pieces (N, 3) [segment, t0, t1], their verdicts, levels and
-    how it ended. At rest (``motion`` None) t is the share of the segment's length; with a
+    undecided piece halved again: the pieces (N, 3) [segment, t0, t1], their verdicts, levels,
+    outside orientations (:func:`certify`) and how it ended. At rest (``motion`` None) t is the
+    share of the segment's length; with a
     ``motion`` (``pipeline.model.path.StraightMotion``: quintic or trapezoid) the platform moves rest
     to rest along each segment, t = tau / T is the share of its duration, and each piece is proven
     with every acceleration it has there (:func:`moving_wrenches` over the motion's range of
@@ -372,9 +378,10 @@ def _branch_and_prune(problem: WorkspaceProblem, tolerances: Tolerances, items: 
     """Certify ``items`` (boxes or pieces of a path: ``bounds(items)`` their boxes (N, 6) [lo, hi], or
     (N, 12) with the ends of a moving platform's acceleration in each, :func:`_verdicts`)
     level by level, splitting the undecided ones (``split``), until ``depth`` levels or ``seconds``:
-    every item kept, its verdict and level, and how it ended. A level's boxes are certified in
-    chunks (``pipeline.workspace.parallel``: ``compute.n_jobs`` workers); past ``seconds`` the
-    chunks not yet certified stay undecided. ``size``: each item's volume or length, for the log.
+    every item kept, its verdict, level and outside orientation (:func:`certify`), and how it
+    ended. A level's boxes are certified in chunks (``pipeline.workspace.parallel``:
+    ``compute.n_jobs`` workers); past ``seconds`` the chunks not yet certified stay undecided.
+    ``size``: each item's volume or length, for the log.
     ``turns``: a box of orientations about each of ``problem.orientations`` (their centres), every
     orientation of which a box is proven inside at (outside: at its centre); None: those alone."""
     statics = []
@@ -391,18 +398,18 @@ def _branch_and_prune(problem: WorkspaceProblem, tolerances: Tolerances, items: 
     start, level = time.perf_counter(), 0
     total, decided = float(size(items).sum()), 0.0
     while True:
-        verdict = np.full(len(items), UNDECIDED)
+        verdict, at = np.full(len(items), UNDECIDED), np.full(len(items), -1)
         late = False
         for rows, part in iter_chunks(_verdicts, given, bounds(items), compute.n_jobs, name_of(compute.backend), CHUNK,
                                       compute.scheduler):
-            verdict[rows] = part["verdict"]
+            verdict[rows], at[rows] = part["verdict"], part["at"]
             if time.perf_counter() - start > seconds:
                 late = True  # the rest of the level stays undecided
                 break
         done = verdict != UNDECIDED
         last = late or level >= depth or not (~done).any()
         keep = done | last
-        kept.append((items[keep], verdict[keep], np.full(int(keep.sum()), level)))
+        kept.append((items[keep], verdict[keep], np.full(int(keep.sum()), level), at[keep]))
         decided += float(size(items[done]).sum())
         log.info("certified level %d: %d boxes, %.2f%% %s decided (%.1f s)", level, len(items),
                  100.0 * decided / total, what, time.perf_counter() - start)
@@ -411,8 +418,8 @@ def _branch_and_prune(problem: WorkspaceProblem, tolerances: Tolerances, items: 
             break
         items = split(items[~done])
         level += 1
-    found, verdict, levels = (np.concatenate(parts) for parts in zip(*kept))
-    return found, verdict, levels, {"stopped": stopped, "depth_reached": level, "seconds": time.perf_counter() - start}
+    found, verdict, levels, at = (np.concatenate(parts) for parts in zip(*kept))
+    return found, verdict, levels, at, {"stopped": stopped, "depth_reached": level, "seconds": time.perf_counter() - start}
 
 
 def _verdicts(given: tuple, boxes: np.ndarray) -> dict[str, np.ndarray]:
@@ -420,7 +427,22 @@ def _verdicts(given: tuple, boxes: np.ndarray) -> dict[str, np.ndarray]:
     each box's linear acceleration] for a moving platform."""
     problem, statics = given
     moving = boxes[:, 6:].reshape(-1, 2, 3) if boxes.shape[1] > 6 else None
-    return {"verdict": certify(problem, statics, boxes[:, :3], boxes[:, 3:6], moving)}
+    verdict, at = certify(problem, statics, boxes[:, :3], boxes[:, 3:6], moving)
+    return {"verdict": verdict, "at": at}
+
+
+def outside_columns(at: np.ndarray, given: np.ndarray | None, cfg: DictConfig) -> dict:
+    """With several orientations (a set, or boxes of them), the one each outside box or piece was
+    proven infeasible at: ``outside_orientation`` (its number, from 1, in the order of
+    ``given_angles``: the nominal first) and its angles ``outside_psi``, ``outside_theta``,
+    ``outside_phi`` (rad, in ``orientation.convention``; a box of orientations' centre); NaN for the
+    other boxes. None with one orientation (the job's own)."""
+    if given is None or len(given) < 2:
+        return {}
+    outside = at >= 0
+    angles = np.where(outside[:, None], given[np.maximum(at, 0)], np.nan)
+    return {"outside_orientation": np.where(outside, at + 1.0, np.nan),
+            **{f"outside_{name}": angles[:, k] for k, name in enumerate(("psi", "theta", "phi"))}}
 
 
 def _bisected(boxes: np.ndarray, axes: np.ndarray) -> np.ndarray:
@@ -435,13 +457,14 @@ def _bisected(boxes: np.ndarray, axes: np.ndarray) -> np.ndarray:
 
 
 def paving_files(cfg: DictConfig, problem: WorkspaceProblem, files, motion: StraightMotion | None = None,
-                 turns: list[Turn] | None = None) -> dict:
+                 turns: list[Turn] | None = None, given: np.ndarray | None = None) -> dict:
     """A certified job's boxes.parquet and summary (module doc), or with ``certified.path`` its
     segments.parquet and summary (:func:`path_files`; ``motion``: the path's, None at rest;
-    ``turns``: a box of orientations about each of the problem's, ``certified.orientations=box``)."""
+    ``turns``: a box of orientations about each of the problem's, ``certified.orientations=box``;
+    ``given``: the problem's orientations as the job gives them, ``pipeline.app.problem.given_angles``)."""
     tolerances = Tolerances(**{key: float(value) for key, value in cfg.robust.items()})
     if cfg.certified.path is not None:
-        return path_files(cfg, problem, files, tolerances, motion, turns)
+        return path_files(cfg, problem, files, tolerances, motion, turns, given)
     paving, ended = pave(problem, int(cfg.certified.depth), float(cfg.certified.time), cfg.compute, tolerances, turns)
     robot = problem.robot
     axes = np.flatnonzero(robot.box_hi > robot.box_lo)
@@ -454,7 +477,8 @@ def paving_files(cfg: DictConfig, problem: WorkspaceProblem, files, motion: Stra
                               **{f"hi_{a}": paving.hi[:, k] for k, a in enumerate("xyz")},
                               "verdict": pd.Categorical([VERDICTS[v] for v in paving.verdict],
                                                         categories=list(VERDICTS.values())),
-                              "depth": paving.depth, "volume": volumes, **lost.pop("columns", {})})
+                              "depth": paving.depth, "volume": volumes, **outside_columns(paving.at, given, cfg),
+                              **lost.pop("columns", {})})
         files.write("boxes", table)
     row = described_job(cfg, problem)
     counts = {name: int((paving.verdict == v).sum()) for v, name in VERDICTS.items()}
@@ -497,17 +521,18 @@ def _lost(problem: WorkspaceProblem, tolerances: Tolerances, paving: Paving, vol
 
 
 def path_files(cfg: DictConfig, problem: WorkspaceProblem, files, tolerances: Tolerances,
-               motion: StraightMotion | None, turns: list[Turn] | None = None) -> dict:
+               motion: StraightMotion | None, turns: list[Turn] | None = None, given: np.ndarray | None = None) -> dict:
     """A certified path's segments.parquet (one row per piece: its segment, its parameters t0, t1
     and ends, where along the path it starts, its length, verdict and level) and summary: the path's
     length, the shares of it proven feasible, infeasible and undecided, ``path_certified`` (every
     point proven) and ``first_outside_m`` (where along the path the first piece proven infeasible
-    starts; NaN when none)."""
+    starts; NaN when none); with several orientations, where a piece is outside, at which
+    (:func:`outside_columns`)."""
     points = np.asarray(OmegaConf.to_container(cfg.certified.path), dtype=float)
-    pieces, verdict, level, ended = certify_path(problem, points, int(cfg.certified.depth), float(cfg.certified.time),
-                                                 cfg.compute, tolerances, motion, turns)
+    pieces, verdict, level, at, ended = certify_path(problem, points, int(cfg.certified.depth), float(cfg.certified.time),
+                                                     cfg.compute, tolerances, motion, turns)
     order = np.lexsort((pieces[:, 1], pieces[:, 0]))  # along the path
-    pieces, verdict, level = pieces[order], verdict[order], level[order]
+    pieces, verdict, level, at = pieces[order], verdict[order], level[order], at[order]
     segment = pieces[:, 0].astype(int)
     starts, ends = points[:-1], points[1:]
     lengths = np.linalg.norm(ends - starts, axis=1)
@@ -528,7 +553,8 @@ def path_files(cfg: DictConfig, problem: WorkspaceProblem, files, tolerances: To
             "segment": segment + 1, "t0": pieces[:, 1], "t1": pieces[:, 2],
             **{f"start_{a}": first[:, k] for k, a in enumerate("xyz")}, **{f"end_{a}": last[:, k] for k, a in enumerate("xyz")},
             "from_m": from_m, "length_m": length, **timing,
-            "verdict": pd.Categorical([VERDICTS[v] for v in verdict], categories=list(VERDICTS.values())), "depth": level}))
+            "verdict": pd.Categorical([VERDICTS[v] for v in verdict], categories=list(VERDICTS.values())), "depth": level,
+            **outside_columns(at, given, cfg)}))
     total = float(lengths.sum())
     shares = {VERDICTS[v]: float(length[verdict == v].sum()) for v in VERDICTS}
     outside = np.flatnonzero(verdict == OUTSIDE)
