@@ -431,12 +431,12 @@ def _verdicts(given: tuple, boxes: np.ndarray) -> dict[str, np.ndarray]:
     return {"verdict": verdict, "at": at}
 
 
-def outside_columns(at: np.ndarray, given: np.ndarray | None, cfg: DictConfig) -> dict:
+def outside_columns(at: np.ndarray, given: np.ndarray | None) -> dict:
     """With several orientations (a set, or boxes of them), the one each outside box or piece was
     proven infeasible at: ``outside_orientation`` (its number, from 1, in the order of
     ``given_angles``: the nominal first) and its angles ``outside_psi``, ``outside_theta``,
     ``outside_phi`` (rad, in ``orientation.convention``; a box of orientations' centre); NaN for the
-    other boxes. None with one orientation (the job's own)."""
+    other boxes. No column with one orientation (the job's own)."""
     if given is None or len(given) < 2:
         return {}
     outside = at >= 0
@@ -477,7 +477,7 @@ def paving_files(cfg: DictConfig, problem: WorkspaceProblem, files, motion: Stra
                               **{f"hi_{a}": paving.hi[:, k] for k, a in enumerate("xyz")},
                               "verdict": pd.Categorical([VERDICTS[v] for v in paving.verdict],
                                                         categories=list(VERDICTS.values())),
-                              "depth": paving.depth, "volume": volumes, **outside_columns(paving.at, given, cfg),
+                              "depth": paving.depth, "volume": volumes, **outside_columns(paving.at, given),
                               **lost.pop("columns", {})})
         files.write("boxes", table)
     row = described_job(cfg, problem)
@@ -554,7 +554,7 @@ def path_files(cfg: DictConfig, problem: WorkspaceProblem, files, tolerances: To
             **{f"start_{a}": first[:, k] for k, a in enumerate("xyz")}, **{f"end_{a}": last[:, k] for k, a in enumerate("xyz")},
             "from_m": from_m, "length_m": length, **timing,
             "verdict": pd.Categorical([VERDICTS[v] for v in verdict], categories=list(VERDICTS.values())), "depth": level,
-            **outside_columns(at, given, cfg)}))
+            **outside_columns(at, given)}))
     total = float(lengths.sum())
     shares = {VERDICTS[v]: float(length[verdict == v].sum()) for v in VERDICTS}
     outside = np.flatnonzero(verdict == OUTSIDE)
