@@ -89,10 +89,10 @@ def margins_rates(problem, grid) -> tuple[float, float, float]:
 
 def kernel_rate(problem, grid) -> float:
     size = bounded_chunk_size(problem, 20_000)
-    evaluate_chunk(problem, grid[:][:size])  # warm-up
+    evaluate_chunk(problem, grid[:size])  # warm-up
     start = time.perf_counter()
     for begin in range(0, grid.n_points, size):
-        evaluate_chunk(problem, grid[:][begin:begin + size])
+        evaluate_chunk(problem, grid[begin:begin + size])
     return grid.n_points / (time.perf_counter() - start)
 
 
@@ -104,7 +104,7 @@ def profiled_share(problem, grid, names: tuple[str, ...]) -> float:
     size = bounded_chunk_size(problem, 20_000)
     profile.enable()
     for begin in range(0, grid.n_points, size):
-        evaluate_chunk(problem, grid[:][begin:begin + size])
+        evaluate_chunk(problem, grid[begin:begin + size])
     profile.disable()
     stats = pstats.Stats(profile).stats
     total = sum(row[2] for row in stats.values())  # every function's own time

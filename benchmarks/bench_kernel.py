@@ -28,6 +28,8 @@ import dataclasses  # noqa: E402
 import resource  # noqa: E402
 import time  # noqa: E402
 
+import numpy as np  # noqa: E402
+
 from hydra import compose, initialize_config_dir  # noqa: E402
 
 from pipeline.model.catalogue import load_catalogue  # noqa: E402
@@ -53,16 +55,17 @@ def composed(*overrides: str):
     return build_problem(cfg, load_catalogue())
 
 
-def serial_rate(problem, grid) -> float:
-    """Seconds for the whole grid in chunks, one process, after one warm-up chunk."""
+def serial_rate(problem, grid, repeat: int = 5) -> float:
+    """Seconds for the whole grid in chunks, one process, after one warm-up chunk: the median
+    of ``repeat`` passes (a pass of the fused kernels lasts milliseconds)."""
     size = bounded_chunk_size(problem, 20_000)
-    evaluate_chunk(problem, grid[:][:size])  # warm-up (imports, caches)
+    evaluate_chunk(problem, grid[:size])  # warm-up (imports, caches)
 
-    def serial():
+    def serial():  # each chunk's positions from the axes, as a job reads them (workspace.compute)
         for start in range(0, grid.n_points, size):
-            evaluate_chunk(problem, grid[:][start:start + size])
+            evaluate_chunk(problem, grid[start:start + size])
 
-    return timed(serial)
+    return float(np.median([timed(serial) for _ in range(repeat)]))
 
 
 def timed(function) -> float:

@@ -116,6 +116,56 @@ def test_random_robots_with_singular_poses_are_left_to_numpy(make_cfg, catalogue
     assert unsettled_total > 1000 and short_total > 1000  # both the fallback and the deflation ran
 
 
+def _stacked(result: dict) -> np.ndarray:
+    """A pose's margins and Jacobian rank as one row."""
+    return np.column_stack([result[key] for key in sorted(result)])
+
+
+def test_a_pose_s_margins_do_not_depend_on_the_block_it_is_computed_in(make_cfg, catalogue):
+    """The compiled CPR-WWA loop computes its full-rank poses ``BLOCK`` at a time (each a vector
+    lane) and the others after them, one after another, each deflated pose's inverse iteration
+    starting from the previous deflated pose's direction. Random 8-cable robots, cables 7 and 8
+    doubling 1 and 2 (J^T of full rank in general), their coordinates multiples of 1/64 (so
+    that at a pose where cable 4 has zero length J^T is one rank short: the deflated route).
+    Laws: a full-rank pose's margins are the same doubles in any block and at any place in it
+    (the poses reversed, turned by 37, alone, in a short last block); every pose's are the same
+    doubles when full-rank poses are inserted between them (they leave the deflated poses'
+    sequence alone); and all are numpy's."""
+    from pipeline.workspace.fused_loops import BLOCK
+
+    rng = np.random.default_rng(11)
+    problem, _ = build_problem(make_cfg("actuator=3", "grid.n=4"), catalogue)
+    on_grid = lambda values: np.round(values * 64) / 64  # noqa: E731
+    for _ in range(4):
+        anchors, attachments = on_grid(rng.uniform(-1.5, 1.5, (8, 3))), on_grid(rng.uniform(-0.1, 0.1, (8, 3)))
+        anchors[6:], attachments[6:] = anchors[:2], attachments[:2]
+        candidate = dataclasses.replace(problem, robot=dataclasses.replace(problem.robot, anchors=anchors,
+                                                                           attachments=attachments),
+                                        orientations=np.zeros((1, 3)))
+        n = 3 * BLOCK + 17
+        positions = on_grid(rng.uniform(-0.5, 0.5, (n, 3)))
+        positions[rng.choice(n, n // 8, replace=False)] = anchors[3] - attachments[3]
+        found, unsettled = fused.margins(candidate, positions, np.zeros(3))
+        rows, full = _stacked(found), (found["jacobian_rank"] == 6) & ~unsettled
+        assert full.sum() > n // 2 and ((found["jacobian_rank"] == 5) & ~unsettled).sum() >= n // 10
+        for order in (np.arange(n)[::-1], np.roll(np.arange(n), 37)):
+            again = _stacked(fused.margins(candidate, positions[order], np.zeros(3))[0])
+            np.testing.assert_array_equal(again[np.argsort(order)][full], rows[full])
+        for size in (1, BLOCK - 1, BLOCK, BLOCK + 1, 2 * BLOCK + 5):
+            part = _stacked(fused.margins(candidate, positions[:size], np.zeros(3))[0])
+            np.testing.assert_array_equal(part[full[:size]], rows[:size][full[:size]])
+        extra = on_grid(rng.uniform(-0.5, 0.5, (2 * BLOCK, 3)))
+        where = np.sort(rng.choice(n + 1, len(extra)))
+        widened = np.insert(positions, where, extra, axis=0)
+        kept = np.ones(len(widened), dtype=bool)
+        kept[where + np.arange(len(extra))] = False
+        more, left = fused.margins(candidate, widened, np.zeros(3))
+        assert (more["jacobian_rank"][~kept] == 6).all() and not left[~kept].any()
+        np.testing.assert_array_equal(_stacked(more)[kept], rows)
+        np.testing.assert_array_equal(left[kept], unsettled)
+        assert_same(candidate, *both_kernels(candidate, positions))
+
+
 def test_a_whole_job_writes_the_same_points_with_either_kernel(make_cfg, catalogue):
     """compute.kernel=numpy and =fused: the same verdicts, limiting criteria and counts."""
     tables = {}

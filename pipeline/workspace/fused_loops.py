@@ -13,6 +13,16 @@ CPR-WWA loop is compiled once for each number of rows of the pseudo-inverse (3 o
 constant): the compiler then sees every small loop's trip count and keeps the 6 x 6 algebra in
 registers, unrolled. The arithmetic is the same, in the same order (no fast-math), so the
 margins are the same to the last bit (benchmarks/LOG.md: what inlining saved).
+
+CPR-WWA's full-rank route (most poses) runs ``BLOCK`` poses at a time
+(:func:`_full_rank_blocks`): every array of the block holds its poses innermost, so that each
+step is one loop over the poses, which the compiler turns into vector instructions (a pose a
+lane; 64 poses: fewer and the compiler unrolls the loops whole, and vectorises none of them).
+Each lane does one pose's operations in the scalar loop's order, so the doubles are the same;
+the poses it does not settle go, in order, through the scalar loop :func:`_cpr_wwa`, whose
+deflated route's only memory from pose to pose (the last dropped direction) is left alone by
+full-rank poses. Twice as fast as the scalar loop over every pose (benchmarks/LOG.md,
+2026-11-30).
 """
 
 from __future__ import annotations
@@ -21,6 +31,7 @@ import numpy as np
 from numba import njit
 
 BAND = 2.0  # a gram ratio within this factor of rtol is left to numpy, as is a doubtful drop
+BLOCK = 64  # poses a block of the full-rank route holds, each a lane of the vector registers (_full_rank_blocks)
 DROPPED = 0.1  # |w^T J^T| / (rtol sigma_max) below which the SVD surely drops the direction w
 SHIFT = 1e-14  # mu / trace(G) of the inverse iteration
 
@@ -34,9 +45,10 @@ SIGNATURES = {  # name -> its one signature
 
 @njit(cache=True, inline="always")
 def _cpr_wwa(positions, anchors, arms, rate_axes, radius, rows, extremes, centre, half, loads, rtol,
-             limits, gains, t_max, l_max, out, rank, unsettled):
-    """The loop of :func:`cpr_wwa`, inlined there with ``rows`` a constant."""
-    n, m = positions.shape[0], anchors.shape[0]
+             limits, gains, t_max, l_max, out, rank, unsettled, poses):
+    """The loop of :func:`cpr_wwa` over the poses numbered ``poses`` (in order), inlined there
+    with ``rows`` a constant."""
+    m = anchors.shape[0]
     jac = np.empty((m, 6))
     deflated = np.empty((m, 6))
     lengths = np.empty(m)
@@ -56,7 +68,7 @@ def _cpr_wwa(positions, anchors, arms, rate_axes, radius, rows, extremes, centre
     _vertices(loads, rows, centre, half, corners, sizes)
     speed_limit, torque_limit, accel_limit, voltage_limit = limits[0], limits[1], limits[2], limits[3]
     g_v, l_v, load_gain = gains[0], gains[1], gains[2]  # load_gain = -S_v (ActuatorModel.load_gain)
-    for p in range(n):
+    for p in poses:
         for i in range(m):  # eqs. (1)-(19): J row i = [u_i, ((R b_i) x u_i) . E] / R_i
             lengths[i], ux, uy, uz = _cable(positions, p, anchors, arms, i, True)
             mx = arms[i, 1] * uz - arms[i, 2] * uy
@@ -315,18 +327,182 @@ def _drop_one(jac, gram, rows, m, rtol, factor, scale, w, warm, along, deflated,
     return True
 
 
-@njit(SIGNATURES["cpr_wwa"], cache=True, nogil=True)
+@njit(cache=True, inline="always")
+def _full_rank_blocks(positions, anchors, arms, rate_axes, radius, rows, extremes, centre, half, loads, rtol,
+                      limits, gains, t_max, l_max, out, rank, rest):
+    """The full-rank route of :func:`_cpr_wwa` over blocks of ``BLOCK`` poses, the poses of a
+    block innermost in every array (each pose a lane of the machine's vector registers: the
+    same operations in the same order as one pose at a time, so the same doubles); the other
+    poses' numbers into ``rest``, in order, and their count returned."""
+    n, m = positions.shape[0], anchors.shape[0]
+    lanes = BLOCK
+    at = np.empty((3, lanes))
+    jac = np.empty((m, rows if rows == 6 else 3, lanes))
+    lengths = np.empty((m, lanes))
+    gram = np.empty((rows, rows, lanes))
+    factor = np.empty((rows, rows, lanes))
+    scale = np.empty((rows, lanes))
+    solved = np.empty((rows, 4, lanes))
+    torque = np.empty((m, 4, lanes))
+    det = np.empty(lanes)
+    dead, full = np.empty(lanes, np.bool_), np.empty(lanes, np.bool_)
+    high, low = np.empty(lanes), np.empty(lanes)
+    worst = np.empty((6, lanes))  # speed, torque, acceleration, voltage, rating, length
+    inverse_radius = 1.0 / radius
+    speed_limit, torque_limit, accel_limit, voltage_limit = limits[0], limits[1], limits[2], limits[3]
+    g_v, l_v, load_gain = gains[0], gains[1], gains[2]
+    c0, c1, c2, h0, h1, h2 = centre[0], centre[1], centre[2], half[0], half[1], half[2]
+    count = 0
+    for start in range(0, n, lanes):
+        for b in range(lanes):  # a short last block repeats its last pose (not written)
+            p = min(start + b, n - 1)
+            at[0, b], at[1, b], at[2, b] = positions[p, 0], positions[p, 1], positions[p, 2]
+        for i in range(m):  # eqs. (1)-(19), as _cable and _cpr_wwa
+            ax, ay, az = arms[i, 0], arms[i, 1], arms[i, 2]
+            nx, ny, nz = anchors[i, 0], anchors[i, 1], anchors[i, 2]
+            r = inverse_radius[i]
+            for b in range(lanes):
+                vx, vy, vz = at[0, b] + ax - nx, at[1, b] + ay - ny, at[2, b] + az - nz
+                length = np.sqrt(vx * vx + vy * vy + vz * vz)
+                inverse = 1.0 / length if length > 0 else 0.0
+                ux, uy, uz = vx * inverse, vy * inverse, vz * inverse
+                lengths[i, b] = length
+                jac[i, 0, b], jac[i, 1, b], jac[i, 2, b] = ux * r, uy * r, uz * r
+                if rows == 6:
+                    mx = ay * uz - az * uy
+                    my = az * ux - ax * uz
+                    mz = ax * uy - ay * ux
+                    for q in range(3):
+                        jac[i, 3 + q, b] = (mx * rate_axes[0, q] + my * rate_axes[1, q] + mz * rate_axes[2, q]) * r
+        for r in range(rows):  # _gram
+            for s in range(r + 1):
+                for b in range(lanes):
+                    gram[r, s, b] = 0.0
+                for i in range(m):
+                    for b in range(lanes):
+                        gram[r, s, b] += jac[i, r, b] * jac[i, s, b]
+                for b in range(lanes):
+                    gram[s, r, b] = gram[r, s, b]
+        for i in range(rows):  # _scaled_cholesky
+            for b in range(lanes):
+                scale[i, b] = 1.0 / np.sqrt(gram[i, i, b]) if gram[i, i, b] > 0 else 1.0
+        for b in range(lanes):
+            det[b], dead[b] = 1.0, False
+        for j in range(rows):  # the pivot first, then its column below, as one pose at a time
+            for b in range(lanes):
+                total = gram[j, j, b] * scale[j, b] * scale[j, b]
+                for k in range(j):
+                    total -= factor[j, k, b] * factor[j, k, b]
+                dead[b] = dead[b] | (total <= 0.0)
+                det[b] *= total
+                factor[j, j, b] = 1.0 / np.sqrt(total)
+            for i in range(j + 1, rows):
+                for b in range(lanes):
+                    total = gram[i, j, b] * scale[i, b] * scale[j, b]
+                    for k in range(j):
+                        total -= factor[i, k, b] * factor[j, k, b]
+                    factor[i, j, b] = total * factor[j, j, b]
+        any_full = False
+        for b in range(lanes):  # the route's test, as _cpr_wwa's first branch
+            ratio = 0.0 if dead[b] else min(det[b], 1.0)
+            least, most = np.inf, 0.0
+            for r in range(rows):
+                least, most = min(least, gram[r, r, b]), max(most, gram[r, r, b])
+            lean = least / most if most > 0.0 else 0.0
+            full[b] = ratio >= BAND * rtol and lean >= BAND * rtol * rtol
+            any_full = any_full or full[b]
+        if any_full:
+            for k in range(4):  # _scaled_solve
+                for i in range(rows):
+                    for b in range(lanes):
+                        total = loads[i, k] * scale[i, b]
+                        for j in range(i):
+                            total -= factor[i, j, b] * solved[j, k, b]
+                        solved[i, k, b] = total * factor[i, i, b]
+                for i in range(rows - 1, -1, -1):
+                    for b in range(lanes):
+                        total = solved[i, k, b]
+                        for j in range(i + 1, rows):
+                            total -= factor[j, i, b] * solved[j, k, b]
+                        solved[i, k, b] = total * factor[i, i, b]
+                for i in range(rows):
+                    for b in range(lanes):
+                        solved[i, k, b] *= scale[i, b]
+            for i in range(m):  # eqs. (20), (31)
+                for k in range(4):
+                    for b in range(lanes):
+                        total = 0.0
+                        for r in range(rows):
+                            total += jac[i, r, b] * solved[r, k, b]
+                        torque[i, k, b] = total
+            for w in range(6):
+                for b in range(lanes):
+                    worst[w, b] = -np.inf
+            for i in range(m):
+                for b in range(lanes):
+                    high[b], low[b] = -np.inf, np.inf
+                for v in range(extremes.shape[0]):  # eq. (30)
+                    e0, e1, e2 = extremes[v, 0], extremes[v, 1], extremes[v, 2]
+                    for b in range(lanes):
+                        value = jac[i, 0, b] * e0 + jac[i, 1, b] * e1 + jac[i, 2, b] * e2
+                        high[b], low[b] = max(high[b], value), min(low[b], value)
+                for b in range(lanes):
+                    j0, j1, j2 = jac[i, 0, b], jac[i, 1, b], jac[i, 2, b]
+                    t0, t1, t2, t3 = torque[i, 0, b], torque[i, 1, b], torque[i, 2, b], torque[i, 3, b]
+                    worst[0, b] = max(worst[0, b], max(high[b], -low[b]))
+                    middle = 0.0 + j0 * c0 + j1 * c1 + j2 * c2
+                    spread = 0.0 + abs(j0) * h0 + abs(j1) * h1 + abs(j2) * h2
+                    t_middle = t3 + t0 * c0 + t1 * c1 + t2 * c2
+                    t_spread = 0.0 + abs(t0) * h0 + abs(t1) * h1 + abs(t2) * h2
+                    k0, k1, k2 = g_v * j0 + load_gain * t0, g_v * j1 + load_gain * t1, g_v * j2 + load_gain * t2
+                    v_middle = load_gain * t3 + k0 * c0 + k1 * c1 + k2 * c2
+                    v_spread = 0.0 + abs(k0) * h0 + abs(k1) * h1 + abs(k2) * h2
+                    worst[2, b] = max(worst[2, b], max(middle + spread, -(middle - spread)))
+                    worst[1, b] = max(worst[1, b], max(t_middle + t_spread, -(t_middle - t_spread)))
+                    worst[4, b] = max(worst[4, b], (t_middle + t_spread) / radius[i] / t_max[i])
+                    worst[3, b] = max(worst[3, b], max(l_v * high[b] + (v_middle + v_spread),
+                                                       -(l_v * low[b] + (v_middle - v_spread))))
+                    worst[5, b] = max(worst[5, b], lengths[i, b] / l_max)
+        for b in range(min(lanes, n - start)):
+            p = start + b
+            if not full[b]:
+                rest[count] = p
+                count += 1
+                continue
+            rank[p] = rows
+            out[p, 0] = 1.0 - worst[0, b] / speed_limit
+            out[p, 1] = 1.0 - worst[1, b] / torque_limit
+            out[p, 2] = 1.0 - worst[2, b] / accel_limit
+            out[p, 3] = 1.0 - worst[3, b] / voltage_limit
+            out[p, 4] = 1.0 - worst[4, b]
+            out[p, 5] = 1.0 - worst[5, b]
+            shortest = np.inf
+            for i in range(m):
+                shortest = min(shortest, lengths[i, b])
+            out[p, 6] = shortest
+            out[p, 7] = 0.0
+    return count
+
+
+# numpy's error model: a block's lanes left to the scalar loop may divide by zero (inf or NaN, never
+# written), where Python's would raise; the scalar loop tests its own divisors first
+@njit(SIGNATURES["cpr_wwa"], cache=True, nogil=True, error_model="numpy")
 def cpr_wwa(positions, anchors, arms, rate_axes, radius, rows, extremes, centre, half, loads, rtol,
             limits, gains, t_max, l_max, out, rank, unsettled):
     """Fill ``out`` (n, 8) with the margins of ``fused.CRITERIA`` (the last two columns: the
     shortest cable and the residual the margins come from), ``rank`` and ``unsettled``:
     :func:`_cpr_wwa` with its number of rows (3 or 6) as a constant."""
+    rest = np.empty(positions.shape[0], np.int64)
     if rows == 6:
+        count = _full_rank_blocks(positions, anchors, arms, rate_axes, radius, 6, extremes, centre, half, loads, rtol,
+                                  limits, gains, t_max, l_max, out, rank, rest)
         _cpr_wwa(positions, anchors, arms, rate_axes, radius, 6, extremes, centre, half, loads, rtol,
-                 limits, gains, t_max, l_max, out, rank, unsettled)
+                 limits, gains, t_max, l_max, out, rank, unsettled, rest[:count])
     elif rows == 3:
+        count = _full_rank_blocks(positions, anchors, arms, rate_axes, radius, 3, extremes, centre, half, loads, rtol,
+                                  limits, gains, t_max, l_max, out, rank, rest)
         _cpr_wwa(positions, anchors, arms, rate_axes, radius, 3, extremes, centre, half, loads, rtol,
-                 limits, gains, t_max, l_max, out, rank, unsettled)
+                 limits, gains, t_max, l_max, out, rank, unsettled, rest[:count])
     else:
         raise ValueError("the pseudo-inverse has 3 or 6 rows")
 
