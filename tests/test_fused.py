@@ -122,9 +122,9 @@ def _stacked(result: dict) -> np.ndarray:
 
 
 def test_a_pose_s_margins_do_not_depend_on_the_block_it_is_computed_in(make_cfg, catalogue):
-    """The compiled CPR-WWA loop computes its full-rank poses ``BLOCK`` at a time (each a vector
-    lane) and the others after them, one after another, each deflated pose's inverse iteration
-    starting from the previous deflated pose's direction. Random 8-cable robots, cables 7 and 8
+    """The compiled CPR-WWA loop computes ``BLOCK`` poses at a time (each a vector lane), the
+    deflated route's inverse iteration one pose after another, each starting from the previous
+    deflated pose's direction. Random 8-cable robots, cables 7 and 8
     doubling 1 and 2 (J^T of full rank in general), their coordinates multiples of 1/64 (so
     that at a pose where cable 4 has zero length J^T is one rank short: the deflated route).
     Laws: a full-rank pose's margins are the same doubles in any block and at any place in it

@@ -14,15 +14,16 @@ constant): the compiler then sees every small loop's trip count and keeps the 6 
 registers, unrolled. The arithmetic is the same, in the same order (no fast-math), so the
 margins are the same to the last bit (benchmarks/LOG.md: what inlining saved).
 
-CPR-WWA's full-rank route (most poses) runs ``BLOCK`` poses at a time
-(:func:`_full_rank_blocks`): every array of the block holds its poses innermost, so that each
-step is one loop over the poses, which the compiler turns into vector instructions (a pose a
-lane; 64 poses: fewer and the compiler unrolls the loops whole, and vectorises none of them).
-Each lane does one pose's operations in the scalar loop's order, so the doubles are the same;
-the poses it does not settle go, in order, through the scalar loop :func:`_cpr_wwa`, whose
-deflated route's only memory from pose to pose (the last dropped direction) is left alone by
-full-rank poses. Twice as fast as the scalar loop over every pose (benchmarks/LOG.md,
-2026-11-30).
+The CPR-WWA loop (:func:`_cpr_wwa`) takes ``BLOCK`` poses at a time: every array of a block
+holds its poses innermost, so that each step is one loop over the poses, which the compiler
+turns into vector instructions (a pose a lane; with fewer than 64 poses it unrolls the loops
+whole and vectorises none of them). Each lane does one pose's operations in one pose's order,
+so the doubles are those of a loop over single poses (the git history's): the geometry, G, its
+factor and the route's test, the full-rank solve and torques, then every settled pose's
+margins. Only the deflated route runs one pose at a time (its helpers take one pose's arrays), in
+the poses' order: its inverse iteration starts from the previous deflated pose's direction.
+Twice as fast as one pose at a time at full rank, 1.5 times on the deflated route
+(benchmarks/LOG.md, 2026-11-30).
 """
 
 from __future__ import annotations
@@ -31,9 +32,10 @@ import numpy as np
 from numba import njit
 
 BAND = 2.0  # a gram ratio within this factor of rtol is left to numpy, as is a doubtful drop
-BLOCK = 64  # poses a block of the full-rank route holds, each a lane of the vector registers (_full_rank_blocks)
+BLOCK = 64  # poses a block of the CPR-WWA loop holds, each a lane of the vector registers
 DROPPED = 0.1  # |w^T J^T| / (rtol sigma_max) below which the SVD surely drops the direction w
 SHIFT = 1e-14  # mu / trace(G) of the inverse iteration
+FULL, DEFLATED, UNSETTLED = 0, 1, 2  # a pose's route through the CPR-WWA loop
 
 _M, _V, _F = "f8[:, ::1]", "f8[::1]", "f8"  # a C-contiguous matrix, vector, a float
 SIGNATURES = {  # name -> its one signature
@@ -41,103 +43,6 @@ SIGNATURES = {  # name -> its one signature
                f"{_M}, i1[::1], b1[::1])",
     "statics": f"void({_M}, {_M}, {_M}, b1, b1, {_M}, {_F}, {_F}, {_V}, {_V}, {_F}, {_F}, {_M}, b1[::1])",
 }
-
-
-@njit(cache=True, inline="always")
-def _cpr_wwa(positions, anchors, arms, rate_axes, radius, rows, extremes, centre, half, loads, rtol,
-             limits, gains, t_max, l_max, out, rank, unsettled, poses):
-    """The loop of :func:`cpr_wwa` over the poses numbered ``poses`` (in order), inlined there
-    with ``rows`` a constant."""
-    m = anchors.shape[0]
-    jac = np.empty((m, 6))
-    deflated = np.empty((m, 6))
-    lengths = np.empty(m)
-    gram = np.empty((rows, rows))
-    factor = np.empty((rows, rows))
-    scale = np.empty(rows)
-    solved = np.empty((rows, 4))
-    w = np.empty(rows)
-    along = np.empty(m)
-    scratch = np.empty((rows, rows))  # G + mu I, then the completed matrix
-    iterate, step = np.empty((rows, 1)), np.empty((rows, 1))  # the inverse iteration
-    projected = np.empty(rows)  # G w
-    warm = np.bool_(False)  # w holds the previous pose's direction (a good start for the next)
-    inverse_radius = 1.0 / radius
-    torque = np.empty((m, 4))  # C (3 columns) and d of M = C a + d, per cable
-    corners, sizes = np.empty((8, 3)), np.empty(8)  # the acceleration box's corners and |F| there
-    _vertices(loads, rows, centre, half, corners, sizes)
-    speed_limit, torque_limit, accel_limit, voltage_limit = limits[0], limits[1], limits[2], limits[3]
-    g_v, l_v, load_gain = gains[0], gains[1], gains[2]  # load_gain = -S_v (ActuatorModel.load_gain)
-    for p in poses:
-        for i in range(m):  # eqs. (1)-(19): J row i = [u_i, ((R b_i) x u_i) . E] / R_i
-            lengths[i], ux, uy, uz = _cable(positions, p, anchors, arms, i, True)
-            mx = arms[i, 1] * uz - arms[i, 2] * uy
-            my = arms[i, 2] * ux - arms[i, 0] * uz
-            mz = arms[i, 0] * uy - arms[i, 1] * ux
-            r = inverse_radius[i]
-            jac[i, 0], jac[i, 1], jac[i, 2] = ux * r, uy * r, uz * r
-            for q in range(3):
-                jac[i, 3 + q] = (mx * rate_axes[0, q] + my * rate_axes[1, q] + mz * rate_axes[2, q]) * r
-        _gram(jac, rows, m, gram)
-        ratio = _scaled_cholesky(gram, rows, factor, scale)
-        source = jac
-        residual = 0.0  # |w . F| / |F|, the worst over the acceleration box's vertices
-        lean = _row_spread(gram, rows)
-        if ratio >= BAND * rtol and lean >= BAND * rtol * rtol:
-            _scaled_solve(factor, scale, loads, rows, solved)
-            rank[p] = rows
-        elif (ratio < rtol / BAND or lean < rtol * rtol / BAND) and _drop_one(
-                jac, gram, rows, m, rtol, factor, scale, w, warm, along, deflated, solved, loads, scratch, iterate,
-                step, projected):
-            source = deflated
-            rank[p] = rows - 1
-            warm = True
-            residual = _missed(w, loads, rows, corners, sizes)
-        else:
-            warm = False
-            unsettled[p] = True
-            for k in range(out.shape[1]):
-                out[p, k] = np.nan
-            continue
-        for i in range(m):  # eqs. (20), (31): M_i = C_i . a + d_i
-            for k in range(4):
-                total = 0.0
-                for r in range(rows):
-                    total += source[i, r] * solved[r, k]
-                torque[i, k] = total
-        worst_speed = worst_torque = worst_accel = worst_voltage = -np.inf
-        worst_rating = worst_length = -np.inf
-        for i in range(m):
-            high, low = -np.inf, np.inf
-            for v in range(extremes.shape[0]):  # eq. (30) on the extreme velocities
-                value = jac[i, 0] * extremes[v, 0] + jac[i, 1] * extremes[v, 1] + jac[i, 2] * extremes[v, 2]
-                high, low = max(high, value), min(low, value)
-            worst_speed = max(worst_speed, max(high, -low))
-            middle = spread = 0.0  # eq. (33): J a over the acceleration box
-            t_middle, t_spread = torque[i, 3], 0.0  # eq. (32): C a + d
-            v_middle, v_spread = load_gain * torque[i, 3], 0.0  # eq. (34): (G_v J - S_v C) a - S_v d
-            for k in range(3):
-                middle += jac[i, k] * centre[k]
-                spread += abs(jac[i, k]) * half[k]
-                t_middle += torque[i, k] * centre[k]
-                t_spread += abs(torque[i, k]) * half[k]
-                coefficient = g_v * jac[i, k] + load_gain * torque[i, k]
-                v_middle += coefficient * centre[k]
-                v_spread += abs(coefficient) * half[k]
-            worst_accel = max(worst_accel, max(middle + spread, -(middle - spread)))
-            worst_torque = max(worst_torque, max(t_middle + t_spread, -(t_middle - t_spread)))
-            worst_rating = max(worst_rating, (t_middle + t_spread) / radius[i] / t_max[i])
-            worst_voltage = max(worst_voltage, max(l_v * high + (v_middle + v_spread),
-                                                   -(l_v * low + (v_middle - v_spread))))
-            worst_length = max(worst_length, lengths[i] / l_max)
-        out[p, 0] = 1.0 - worst_speed / speed_limit
-        out[p, 1] = 1.0 - worst_torque / torque_limit
-        out[p, 2] = 1.0 - worst_accel / accel_limit
-        out[p, 3] = 1.0 - worst_voltage / voltage_limit
-        out[p, 4] = 1.0 - worst_rating
-        out[p, 5] = 1.0 - worst_length
-        out[p, 6] = _shortest(lengths, m)
-        out[p, 7] = residual
 
 
 @njit(cache=True, inline="always")
@@ -328,31 +233,37 @@ def _drop_one(jac, gram, rows, m, rtol, factor, scale, w, warm, along, deflated,
 
 
 @njit(cache=True, inline="always")
-def _full_rank_blocks(positions, anchors, arms, rate_axes, radius, rows, extremes, centre, half, loads, rtol,
-                      limits, gains, t_max, l_max, out, rank, rest):
-    """The full-rank route of :func:`_cpr_wwa` over blocks of ``BLOCK`` poses, the poses of a
-    block innermost in every array (each pose a lane of the machine's vector registers: the
-    same operations in the same order as one pose at a time, so the same doubles); the other
-    poses' numbers into ``rest``, in order, and their count returned."""
+def _cpr_wwa(positions, anchors, arms, rate_axes, radius, rows, extremes, centre, half, loads, rtol,
+             limits, gains, t_max, l_max, out, rank, unsettled):
+    """The loop of :func:`cpr_wwa`, inlined there with ``rows`` a constant: ``BLOCK`` poses at a
+    time, the poses of a block innermost in every array (each a lane of the vector registers,
+    with one pose's operations in one pose's order); the deflated route one pose at a time, in
+    order (the module docstrings)."""
     n, m = positions.shape[0], anchors.shape[0]
     lanes = BLOCK
     at = np.empty((3, lanes))
-    jac = np.empty((m, rows if rows == 6 else 3, lanes))
+    jac = np.empty((m, rows, lanes))
     lengths = np.empty((m, lanes))
     gram = np.empty((rows, rows, lanes))
     factor = np.empty((rows, rows, lanes))
     scale = np.empty((rows, lanes))
     solved = np.empty((rows, 4, lanes))
     torque = np.empty((m, 4, lanes))
-    det = np.empty(lanes)
-    dead, full = np.empty(lanes, np.bool_), np.empty(lanes, np.bool_)
+    det, ratio, lean, residual = np.empty(lanes), np.empty(lanes), np.empty(lanes), np.empty(lanes)
+    dead, route = np.empty(lanes, np.bool_), np.empty(lanes, np.int8)  # route: FULL, DEFLATED or UNSETTLED
     high, low = np.empty(lanes), np.empty(lanes)
     worst = np.empty((6, lanes))  # speed, torque, acceleration, voltage, rating, length
     inverse_radius = 1.0 / radius
     speed_limit, torque_limit, accel_limit, voltage_limit = limits[0], limits[1], limits[2], limits[3]
     g_v, l_v, load_gain = gains[0], gains[1], gains[2]
     c0, c1, c2, h0, h1, h2 = centre[0], centre[1], centre[2], half[0], half[1], half[2]
-    count = 0
+    one_jac, one_gram, deflated = np.empty((m, rows)), np.empty((rows, rows)), np.empty((m, rows))  # one pose's,
+    one_factor, one_scale, one_solved = np.empty((rows, rows)), np.empty(rows), np.empty((rows, 4))  # deflated
+    w, along, projected, scratch = np.empty(rows), np.empty(m), np.empty(rows), np.empty((rows, rows))
+    iterate, step = np.empty((rows, 1)), np.empty((rows, 1))  # the inverse iteration
+    warm = np.bool_(False)  # w holds the last deflated pose's direction (a good start for the next)
+    corners, sizes = np.empty((8, 3)), np.empty(8)  # the acceleration box's corners and |F| there
+    _vertices(loads, rows, centre, half, corners, sizes)
     for start in range(0, n, lanes):
         for b in range(lanes):  # a short last block repeats its last pose (not written)
             p = min(start + b, n - 1)
@@ -403,14 +314,15 @@ def _full_rank_blocks(positions, anchors, arms, rate_axes, radius, rows, extreme
                         total -= factor[i, k, b] * factor[j, k, b]
                     factor[i, j, b] = total * factor[j, j, b]
         any_full = False
-        for b in range(lanes):  # the route's test, as _cpr_wwa's first branch
-            ratio = 0.0 if dead[b] else min(det[b], 1.0)
+        for b in range(lanes):  # the full-rank route's test (the module docstring)
+            ratio[b] = 0.0 if dead[b] else min(det[b], 1.0)
             least, most = np.inf, 0.0
             for r in range(rows):
                 least, most = min(least, gram[r, r, b]), max(most, gram[r, r, b])
-            lean = least / most if most > 0.0 else 0.0
-            full[b] = ratio >= BAND * rtol and lean >= BAND * rtol * rtol
-            any_full = any_full or full[b]
+            lean[b] = least / most if most > 0.0 else 0.0
+            route[b] = FULL if ratio[b] >= BAND * rtol and lean[b] >= BAND * rtol * rtol else UNSETTLED
+            residual[b] = 0.0  # |w . F| / |F|, the worst over the acceleration box's vertices: 0 at full rank
+            any_full = any_full or route[b] == FULL
         if any_full:
             for k in range(4):  # _scaled_solve
                 for i in range(rows):
@@ -435,9 +347,32 @@ def _full_rank_blocks(positions, anchors, arms, rate_axes, radius, rows, extreme
                         for r in range(rows):
                             total += jac[i, r, b] * solved[r, k, b]
                         torque[i, k, b] = total
-            for w in range(6):
+        any_settled = any_full
+        for b in range(min(lanes, n - start)):  # the one-short route, pose after pose: each starts from w
+            if route[b] == FULL or not (ratio[b] < rtol / BAND or lean[b] < rtol * rtol / BAND):
+                continue
+            for i in range(m):
+                for r in range(rows):
+                    one_jac[i, r] = jac[i, r, b]
+            for r in range(rows):
+                for c in range(rows):
+                    one_gram[r, c] = gram[r, c, b]
+            if _drop_one(one_jac, one_gram, rows, m, rtol, one_factor, one_scale, w, warm, along, deflated,
+                         one_solved, loads, scratch, iterate, step, projected):
+                warm, route[b], any_settled = True, DEFLATED, True
+                residual[b] = _missed(w, loads, rows, corners, sizes)
+                for i in range(m):  # eqs. (20), (31) with J' for J
+                    for k in range(4):
+                        total = 0.0
+                        for r in range(rows):
+                            total += deflated[i, r] * one_solved[r, k]
+                        torque[i, k, b] = total
+            else:
+                warm = False
+        if any_settled:
+            for k in range(6):
                 for b in range(lanes):
-                    worst[w, b] = -np.inf
+                    worst[k, b] = -np.inf
             for i in range(m):
                 for b in range(lanes):
                     high[b], low[b] = -np.inf, np.inf
@@ -465,11 +400,12 @@ def _full_rank_blocks(positions, anchors, arms, rate_axes, radius, rows, extreme
                     worst[5, b] = max(worst[5, b], lengths[i, b] / l_max)
         for b in range(min(lanes, n - start)):
             p = start + b
-            if not full[b]:
-                rest[count] = p
-                count += 1
+            if route[b] == UNSETTLED:
+                unsettled[p] = True
+                for k in range(out.shape[1]):
+                    out[p, k] = np.nan
                 continue
-            rank[p] = rows
+            rank[p] = rows if route[b] == FULL else rows - 1
             out[p, 0] = 1.0 - worst[0, b] / speed_limit
             out[p, 1] = 1.0 - worst[1, b] / torque_limit
             out[p, 2] = 1.0 - worst[2, b] / accel_limit
@@ -480,29 +416,23 @@ def _full_rank_blocks(positions, anchors, arms, rate_axes, radius, rows, extreme
             for i in range(m):
                 shortest = min(shortest, lengths[i, b])
             out[p, 6] = shortest
-            out[p, 7] = 0.0
-    return count
+            out[p, 7] = residual[b]
 
 
-# numpy's error model: a block's lanes left to the scalar loop may divide by zero (inf or NaN, never
-# written), where Python's would raise; the scalar loop tests its own divisors first
+# numpy's error model: a block's lanes off the full-rank route (and a short block's repeated
+# pose) may divide by zero in its steps (inf or NaN, never written), where Python's would raise
 @njit(SIGNATURES["cpr_wwa"], cache=True, nogil=True, error_model="numpy")
 def cpr_wwa(positions, anchors, arms, rate_axes, radius, rows, extremes, centre, half, loads, rtol,
             limits, gains, t_max, l_max, out, rank, unsettled):
     """Fill ``out`` (n, 8) with the margins of ``fused.CRITERIA`` (the last two columns: the
     shortest cable and the residual the margins come from), ``rank`` and ``unsettled``:
     :func:`_cpr_wwa` with its number of rows (3 or 6) as a constant."""
-    rest = np.empty(positions.shape[0], np.int64)
     if rows == 6:
-        count = _full_rank_blocks(positions, anchors, arms, rate_axes, radius, 6, extremes, centre, half, loads, rtol,
-                                  limits, gains, t_max, l_max, out, rank, rest)
         _cpr_wwa(positions, anchors, arms, rate_axes, radius, 6, extremes, centre, half, loads, rtol,
-                 limits, gains, t_max, l_max, out, rank, unsettled, rest[:count])
+                 limits, gains, t_max, l_max, out, rank, unsettled)
     elif rows == 3:
-        count = _full_rank_blocks(positions, anchors, arms, rate_axes, radius, 3, extremes, centre, half, loads, rtol,
-                                  limits, gains, t_max, l_max, out, rank, rest)
         _cpr_wwa(positions, anchors, arms, rate_axes, radius, 3, extremes, centre, half, loads, rtol,
-                 limits, gains, t_max, l_max, out, rank, unsettled, rest[:count])
+                 limits, gains, t_max, l_max, out, rank, unsettled)
     else:
         raise ValueError("the pseudo-inverse has 3 or 6 rows")
 
