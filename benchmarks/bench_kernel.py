@@ -12,8 +12,9 @@ before timing. IRPM: statics on the paper's box
 (31 x 31 x 26 points), gamma = 15 deg. "1 core" rows run with one BLAS thread. Ratios are against
 the reference's poses/s measured here, in the same process. After the table, for each fused
 row, the share of its time in the compiled loop (a profile of one pass) and the kernel's rate
-without it: what bounds it. Peak memory is this process's maximum resident set size (workers
-not included).
+without it: what bounds it; for the full-rank CPR-WWA row, its flop rate and its share of this
+core's double-precision peak (a one-thread dgemm, same run). Peak memory is this process's
+maximum resident set size (workers not included).
 """
 
 from __future__ import annotations
@@ -66,6 +67,24 @@ def serial_rate(problem, grid, repeat: int = 5) -> float:
             evaluate_chunk(problem, grid[start:start + size])
 
     return float(np.median([timed(serial) for _ in range(repeat)]))
+
+
+def cpr_wwa_flops(problem) -> int:
+    """Floating-point operations of one full-rank pose in the compiled CPR-WWA loop, counted from
+    its source (docs/performance.md): each cable's geometry and row of J (46), the lower triangle
+    of G (21 entries, 2 m each), its scaled Cholesky factor (about 170), the solve for four
+    right-hand sides (4 x 2 x 36), the torques (2 x 4 x 6 a cable) and the criteria (7 a cable and
+    extreme velocity, 36 more a cable)."""
+    m, velocities = problem.robot.n_cables, len(problem.spec.velocity_extremes)
+    return m * 46 + 21 * 2 * m + 170 + 4 * 2 * 36 + m * 2 * 4 * 6 + m * (7 * velocities + 36)
+
+
+def dgemm_rate(n: int = 1200, repeat: int = 5) -> float:
+    """This core's double-precision peak as numpy's BLAS reaches it (one thread): flop/s of an
+    n x n matrix product, the median of ``repeat``."""
+    a, b = np.random.default_rng(0).random((2, n, n))
+    a @ b  # warm-up
+    return 2 * n**3 / float(np.median([timed(lambda: a @ b) for _ in range(repeat)]))
 
 
 def timed(function) -> float:
@@ -124,9 +143,16 @@ def main() -> None:
     for name, poses, secs in rows:
         rate = poses / secs
         print(f"{name:46s} {poses:9d} {secs:9.3f} {rate:11,.0f} {rate / reference:12,.0f}")
+    peak_flops = dgemm_rate()
     for (name, poses, secs), problem, grid, loop in loops:  # what bounds a fused kernel (a profile)
         share = profiled_share(problem, grid, (loop,))
         print(f"{name}: the compiled loop {share:.0%} of the time, the rest alone {poses / secs / (1 - share):,.0f} poses/s")
+        if loop == "cpr_wwa" and "zero" not in name:  # every pose full rank: the count above holds
+            flops = cpr_wwa_flops(problem)
+            kernel, alone = poses / secs * flops, poses / secs / share * flops
+            print(f"  {flops:,} flop a pose: the kernel {kernel / 1e9:.1f} GFLOP/s, {kernel / peak_flops:.0%} of this "
+                  f"core's dgemm ({peak_flops / 1e9:.1f} GFLOP/s, one thread); the loop {alone / 1e9:.1f} GFLOP/s, "
+                  f"{alone / peak_flops:.0%}")
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(f"peak resident memory of this process: {peak:.0f} MiB")
 
