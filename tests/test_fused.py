@@ -230,6 +230,30 @@ def test_irpm_statics_give_the_numpy_margins(overrides, make_cfg, catalogue):
     assert fused.margins(problem, grid[:], problem.orientation)[1].any()
 
 
+@pytest.mark.parametrize("overrides", [[], ["model.moment_arm=base", "model.cable_direction=centre", "orientation.psi=0.2"]])
+def test_a_pose_s_statics_margins_do_not_depend_on_the_block_it_is_computed_in(overrides, make_cfg, catalogue):
+    """The compiled statics loop computes ``BLOCK`` poses at a time (each a vector lane), with
+    no memory from pose to pose. Law: every pose's margins and its unsettled flag (a singular
+    or doubtful pose, left to numpy) are the same doubles in any block and at any place in it
+    (the IRPM paper's box reversed, turned by 37, cut short at sizes around a block's)."""
+    from pipeline.workspace.fused_loops import BLOCK
+
+    problem, grid = build_problem(make_cfg("robot=irpm6", "robot.gamma_deg=15", *overrides), catalogue)
+    positions = grid[:]
+    n = len(positions)
+    found, unsettled = fused.margins(problem, positions, problem.orientation)
+    rows = _stacked(found)
+    assert 0 < unsettled.sum() < n // 10
+    for order in (np.arange(n)[::-1], np.roll(np.arange(n), 37)):
+        again, left = fused.margins(problem, positions[order], problem.orientation)
+        np.testing.assert_array_equal(_stacked(again)[np.argsort(order)], rows)
+        np.testing.assert_array_equal(left[np.argsort(order)], unsettled)
+    for size in (1, BLOCK - 1, BLOCK, BLOCK + 1, 2 * BLOCK + 5):
+        part, left = fused.margins(problem, positions[:size], problem.orientation)
+        np.testing.assert_array_equal(_stacked(part), rows[:size])
+        np.testing.assert_array_equal(left, unsettled[:size])
+
+
 def test_a_points_robot_with_eight_cables_gives_the_numpy_statics_margins(make_cfg, catalogue):
     """Minimum-norm tensions of a redundant robot (8 cables: A A^T is 6 x 6, A^T y has 8 rows)."""
     anchors = [[0, 0, 3], [4, 0, 3], [4, 4, 3], [0, 4, 3], [0, 0, 0], [4, 0, 0], [4, 4, 0], [0, 4, 0]]

@@ -8,22 +8,19 @@ numba keys that cache by this file: the compiled code uses nothing but numpy and
 (``tests/test_jit.py`` checks the imports). The two entry points come last: numba compiles them
 where they are defined, so what they call must be defined before them.
 
-The helpers are inlined into the two loops (``inline="always"``, numba's own inlining) and the
+Both loops take ``BLOCK`` poses at a time: every array of a block holds its poses innermost,
+so that each step is one loop over the poses, which the compiler turns into vector
+instructions (a pose a lane; with fewer than 64 poses it unrolls the loops whole and vectorises
+none of them). The helpers are inlined (``inline="always"``, numba's own inlining) and the
 CPR-WWA loop is compiled once for each number of rows of the pseudo-inverse (3 or 6, a
-constant): the compiler then sees every small loop's trip count and keeps the 6 x 6 algebra in
-registers, unrolled. The arithmetic is the same, in the same order (no fast-math), so the
-margins are the same to the last bit (benchmarks/LOG.md: what inlining saved).
-
-The CPR-WWA loop (:func:`_cpr_wwa`) takes ``BLOCK`` poses at a time: every array of a block
-holds its poses innermost, so that each step is one loop over the poses, which the compiler
-turns into vector instructions (a pose a lane; with fewer than 64 poses it unrolls the loops
-whole and vectorises none of them). Each lane does one pose's operations in one pose's order,
-so the doubles are those of a loop over single poses (the git history's): the geometry, G, its
-factor and the route's test, the full-rank solve and torques, then every settled pose's
-margins. Only the deflated route runs one pose at a time (its helpers take one pose's arrays), in
-the poses' order: its inverse iteration starts from the previous deflated pose's direction.
-Twice as fast as one pose at a time at full rank, 1.5 times on the deflated route
-(benchmarks/LOG.md, 2026-11-30).
+constant), so the compiler sees every small loop's trip count. Each lane does one pose's
+operations in one pose's order (no fast-math), so the margins are the doubles of a loop over
+single poses (the git history's, tested bit for bit when the blocks came). In the CPR-WWA loop
+(:func:`_cpr_wwa`): the geometry, G, its factor and the route's test, the full-rank solve and
+torques, then every settled pose's margins; only the deflated route runs one pose at a time (its
+helpers take one pose's arrays), in the poses' order: its inverse iteration starts from the
+previous deflated pose's direction. Against one pose at a time: CPR-WWA x2.2 at full rank and
+x1.5 on the deflated route, the statics x3.4 (benchmarks/LOG.md, 2026-11-30).
 """
 
 from __future__ import annotations
@@ -32,7 +29,7 @@ import numpy as np
 from numba import njit
 
 BAND = 2.0  # a gram ratio within this factor of rtol is left to numpy, as is a doubtful drop
-BLOCK = 64  # poses a block of the CPR-WWA loop holds, each a lane of the vector registers
+BLOCK = 64  # poses a block of a loop holds, each a lane of the vector registers
 DROPPED = 0.1  # |w^T J^T| / (rtol sigma_max) below which the SVD surely drops the direction w
 SHIFT = 1e-14  # mu / trace(G) of the inverse iteration
 FULL, DEFLATED, UNSETTLED = 0, 1, 2  # a pose's route through the CPR-WWA loop
@@ -43,40 +40,6 @@ SIGNATURES = {  # name -> its one signature
                f"{_M}, i1[::1], b1[::1])",
     "statics": f"void({_M}, {_M}, {_M}, b1, b1, {_M}, {_F}, {_F}, {_V}, {_V}, {_F}, {_F}, {_M}, b1[::1])",
 }
-
-
-@njit(cache=True, inline="always")
-def _cable(positions, p, anchors, arms, i, to_attachment):
-    """Length and unit vector (0 for a zero length) of cable i at pose p, from its anchor to its
-    attachment point (eq. 1; ``arms``: R b_i) or, without ``to_attachment``, to the platform's
-    reference point; the operations in ``geometry.cable_vectors``' order."""
-    vx, vy, vz = positions[p, 0], positions[p, 1], positions[p, 2]
-    if to_attachment:
-        vx, vy, vz = vx + arms[i, 0], vy + arms[i, 1], vz + arms[i, 2]
-    vx, vy, vz = vx - anchors[i, 0], vy - anchors[i, 1], vz - anchors[i, 2]
-    length = np.sqrt(vx * vx + vy * vy + vz * vz)
-    inverse = 1.0 / length if length > 0 else 0.0
-    return length, vx * inverse, vy * inverse, vz * inverse
-
-
-@njit(cache=True, inline="always")
-def _row_spread(gram, rows):
-    """min / max of the diagonal of G: the squared length of the shortest row of J^T against
-    the longest; below rtol^2 the SVD drops the short row whatever the gram ratio says
-    (``pipeline.model.linalg.batched_pinv``)."""
-    low, high = np.inf, 0.0
-    for r in range(rows):
-        low, high = min(low, gram[r, r]), max(high, gram[r, r])
-    return low / high if high > 0.0 else 0.0
-
-
-@njit(cache=True, inline="always")
-def _shortest(lengths, m):
-    """The shortest of the m cable lengths (the ``zero_length`` gate's quantity)."""
-    shortest = np.inf
-    for i in range(m):
-        shortest = min(shortest, lengths[i])
-    return shortest
 
 
 @njit(cache=True, inline="always")
@@ -114,17 +77,6 @@ def _missed(w, loads, rows, corners, sizes):
             along = slope0 * corners[vertex, 0] + slope1 * corners[vertex, 1] + slope2 * corners[vertex, 2] + offset
             worst = max(worst, abs(along) / sizes[vertex])
     return worst
-
-
-@njit(cache=True, inline="always")
-def _gram(jac, rows, m, gram):
-    """G = J^T J over the first ``rows`` columns of J (m x 6)."""
-    for r in range(rows):
-        for s in range(r + 1):
-            total = 0.0
-            for i in range(m):
-                total += jac[i, r] * jac[i, s]
-            gram[r, s] = gram[s, r] = total
 
 
 @njit(cache=True, inline="always")
@@ -233,6 +185,80 @@ def _drop_one(jac, gram, rows, m, rtol, factor, scale, w, warm, along, deflated,
 
 
 @njit(cache=True, inline="always")
+def _block_factor(jac, rows, m, gram, factor, scale, det, dead):
+    """G = J^T J over the first ``rows`` columns of J and :func:`_scaled_cholesky` for a block of
+    poses (the last axis of every array; ``jac`` (m, rows, lanes)): G, the lower Cholesky factor
+    of D^-1 G D^-1 (its diagonal stored as 1 / L_jj) and D^-1, the product of the pivots ``det``
+    and ``dead`` where a pivot is not positive."""
+    lanes = BLOCK
+    for r in range(rows):  # G, each entry from 0 over the cables in order
+        for s in range(r + 1):
+            for b in range(lanes):
+                gram[r, s, b] = 0.0
+            for i in range(m):
+                for b in range(lanes):
+                    gram[r, s, b] += jac[i, r, b] * jac[i, s, b]
+            for b in range(lanes):
+                gram[s, r, b] = gram[r, s, b]
+    for i in range(rows):  # its scaled factor, as _scaled_cholesky
+        for b in range(lanes):
+            scale[i, b] = 1.0 / np.sqrt(gram[i, i, b]) if gram[i, i, b] > 0 else 1.0
+    for b in range(lanes):
+        det[b], dead[b] = 1.0, False
+    for j in range(rows):  # the pivot first, then its column below, as one pose at a time
+        for b in range(lanes):
+            total = gram[j, j, b] * scale[j, b] * scale[j, b]
+            for k in range(j):
+                total -= factor[j, k, b] * factor[j, k, b]
+            dead[b] = dead[b] | (total <= 0.0)
+            det[b] *= total
+            factor[j, j, b] = 1.0 / np.sqrt(total)
+        for i in range(j + 1, rows):
+            for b in range(lanes):
+                total = gram[i, j, b] * scale[i, b] * scale[j, b]
+                for k in range(j):
+                    total -= factor[i, k, b] * factor[j, k, b]
+                factor[i, j, b] = total * factor[j, j, b]
+
+
+@njit(cache=True, inline="always")
+def _block_ratios(gram, rows, det, dead, ratio, lean):
+    """Each pose's gram ratio det(D^-1 G D^-1) (0 where a pivot is not positive) and ``lean``,
+    min / max of the diagonal of G: the squared length of the shortest row of J^T against the
+    longest; below rtol^2 the SVD drops the short row whatever the gram ratio says
+    (``pipeline.model.linalg.batched_pinv``)."""
+    for b in range(BLOCK):
+        ratio[b] = 0.0 if dead[b] else min(det[b], 1.0)
+        least, most = np.inf, 0.0
+        for r in range(rows):
+            least, most = min(least, gram[r, r, b]), max(most, gram[r, r, b])
+        lean[b] = least / most if most > 0.0 else 0.0
+
+
+@njit(cache=True, inline="always")
+def _block_solve(factor, scale, loads, rows, columns, solved):
+    """:func:`_scaled_solve` for a block of poses: ``solved`` (rows, columns, lanes) = G^-1
+    ``loads`` (rows, columns)."""
+    lanes = BLOCK
+    for k in range(columns):
+        for i in range(rows):
+            for b in range(lanes):
+                total = loads[i, k] * scale[i, b]
+                for j in range(i):
+                    total -= factor[i, j, b] * solved[j, k, b]
+                solved[i, k, b] = total * factor[i, i, b]
+        for i in range(rows - 1, -1, -1):
+            for b in range(lanes):
+                total = solved[i, k, b]
+                for j in range(i + 1, rows):
+                    total -= factor[j, i, b] * solved[j, k, b]
+                solved[i, k, b] = total * factor[i, i, b]
+        for i in range(rows):
+            for b in range(lanes):
+                solved[i, k, b] *= scale[i, b]
+
+
+@njit(cache=True, inline="always")
 def _cpr_wwa(positions, anchors, arms, rate_axes, radius, rows, extremes, centre, half, loads, rtol,
              limits, gains, t_max, l_max, out, rank, unsettled):
     """The loop of :func:`cpr_wwa`, inlined there with ``rows`` a constant: ``BLOCK`` poses at a
@@ -268,7 +294,7 @@ def _cpr_wwa(positions, anchors, arms, rate_axes, radius, rows, extremes, centre
         for b in range(lanes):  # a short last block repeats its last pose (not written)
             p = min(start + b, n - 1)
             at[0, b], at[1, b], at[2, b] = positions[p, 0], positions[p, 1], positions[p, 2]
-        for i in range(m):  # eqs. (1)-(19), as _cable and _cpr_wwa
+        for i in range(m):  # eqs. (1)-(19): J row i = [u_i, ((R b_i) x u_i) . E] / R_i (u_i 0 for a zero length)
             ax, ay, az = arms[i, 0], arms[i, 1], arms[i, 2]
             nx, ny, nz = anchors[i, 0], anchors[i, 1], anchors[i, 2]
             r = inverse_radius[i]
@@ -285,61 +311,15 @@ def _cpr_wwa(positions, anchors, arms, rate_axes, radius, rows, extremes, centre
                     mz = ax * uy - ay * ux
                     for q in range(3):
                         jac[i, 3 + q, b] = (mx * rate_axes[0, q] + my * rate_axes[1, q] + mz * rate_axes[2, q]) * r
-        for r in range(rows):  # _gram
-            for s in range(r + 1):
-                for b in range(lanes):
-                    gram[r, s, b] = 0.0
-                for i in range(m):
-                    for b in range(lanes):
-                        gram[r, s, b] += jac[i, r, b] * jac[i, s, b]
-                for b in range(lanes):
-                    gram[s, r, b] = gram[r, s, b]
-        for i in range(rows):  # _scaled_cholesky
-            for b in range(lanes):
-                scale[i, b] = 1.0 / np.sqrt(gram[i, i, b]) if gram[i, i, b] > 0 else 1.0
-        for b in range(lanes):
-            det[b], dead[b] = 1.0, False
-        for j in range(rows):  # the pivot first, then its column below, as one pose at a time
-            for b in range(lanes):
-                total = gram[j, j, b] * scale[j, b] * scale[j, b]
-                for k in range(j):
-                    total -= factor[j, k, b] * factor[j, k, b]
-                dead[b] = dead[b] | (total <= 0.0)
-                det[b] *= total
-                factor[j, j, b] = 1.0 / np.sqrt(total)
-            for i in range(j + 1, rows):
-                for b in range(lanes):
-                    total = gram[i, j, b] * scale[i, b] * scale[j, b]
-                    for k in range(j):
-                        total -= factor[i, k, b] * factor[j, k, b]
-                    factor[i, j, b] = total * factor[j, j, b]
+        _block_factor(jac, rows, m, gram, factor, scale, det, dead)
         any_full = False
+        _block_ratios(gram, rows, det, dead, ratio, lean)
         for b in range(lanes):  # the full-rank route's test (the module docstring)
-            ratio[b] = 0.0 if dead[b] else min(det[b], 1.0)
-            least, most = np.inf, 0.0
-            for r in range(rows):
-                least, most = min(least, gram[r, r, b]), max(most, gram[r, r, b])
-            lean[b] = least / most if most > 0.0 else 0.0
             route[b] = FULL if ratio[b] >= BAND * rtol and lean[b] >= BAND * rtol * rtol else UNSETTLED
             residual[b] = 0.0  # |w . F| / |F|, the worst over the acceleration box's vertices: 0 at full rank
             any_full = any_full or route[b] == FULL
         if any_full:
-            for k in range(4):  # _scaled_solve
-                for i in range(rows):
-                    for b in range(lanes):
-                        total = loads[i, k] * scale[i, b]
-                        for j in range(i):
-                            total -= factor[i, j, b] * solved[j, k, b]
-                        solved[i, k, b] = total * factor[i, i, b]
-                for i in range(rows - 1, -1, -1):
-                    for b in range(lanes):
-                        total = solved[i, k, b]
-                        for j in range(i + 1, rows):
-                            total -= factor[j, i, b] * solved[j, k, b]
-                        solved[i, k, b] = total * factor[i, i, b]
-                for i in range(rows):
-                    for b in range(lanes):
-                        solved[i, k, b] *= scale[i, b]
+            _block_solve(factor, scale, loads, rows, 4, solved)
             for i in range(m):  # eqs. (20), (31)
                 for k in range(4):
                     for b in range(lanes):
@@ -437,50 +417,71 @@ def cpr_wwa(positions, anchors, arms, rate_axes, radius, rows, extremes, centre,
         raise ValueError("the pseudo-inverse has 3 or 6 rows")
 
 
-@njit(SIGNATURES["statics"], cache=True, nogil=True)
+@njit(SIGNATURES["statics"], cache=True, nogil=True, error_model="numpy")
 def statics(positions, anchors, arms, centre, base, wrench, rtol, singular_rtol, t_min, s_max, scale,
-             l_max, out, unsettled):
+            l_max, out, unsettled):
     """Fill ``out`` (n, 5) with the margins of ``fused.STATICS_CRITERIA`` (the last column: the
-    shortest cable, which its margin comes from) and ``unsettled``."""
+    shortest cable, which its margin comes from) and ``unsettled``: ``BLOCK`` poses at a time, as
+    :func:`_cpr_wwa` (numpy's error model for the same reason)."""
     n, m = positions.shape[0], anchors.shape[0]
-    six = np.int64(6)  # not the literal 6, which numba would compile its callees for once more
-    columns = np.empty((m, 6))  # A^T: row i = [u_i; a_i x u_i] (eq. 8)
-    lengths = np.empty(m)
-    gram = np.empty((6, 6))
-    factor = np.empty((6, 6))
-    scale_rows = np.empty(6)
-    solved = np.empty((6, 1))
-    for p in range(n):
-        for i in range(m):
-            lengths[i], ux, uy, uz = _cable(positions, p, anchors, arms, i, not centre)
+    lanes = BLOCK
+    at = np.empty((3, lanes))
+    columns = np.empty((m, 6, lanes))  # A^T: row i = [u_i; a_i x u_i] (eq. 8)
+    lengths = np.empty((m, lanes))
+    gram, factor = np.empty((6, 6, lanes)), np.empty((6, 6, lanes))
+    scale_rows, solved = np.empty((6, lanes)), np.empty((6, 1, lanes))
+    det, ratio, lean = np.empty(lanes), np.empty(lanes), np.empty(lanes)
+    dead = np.empty(lanes, np.bool_)
+    lowest, worst_rating, worst_length, shortest = np.empty(lanes), np.empty(lanes), np.empty(lanes), np.empty(lanes)
+    for start in range(0, n, lanes):
+        for b in range(lanes):  # a short last block repeats its last pose (not written)
+            p = min(start + b, n - 1)
+            at[0, b], at[1, b], at[2, b] = positions[p, 0], positions[p, 1], positions[p, 2]
+        for i in range(m):  # each cable from its anchor to its attachment point or (centre) the reference point
             ax, ay, az = arms[i, 0], arms[i, 1], arms[i, 2]
-            if base:  # moments about the base centre (eq. 9): a_i = r + R d_i
-                ax, ay, az = ax + positions[p, 0], ay + positions[p, 1], az + positions[p, 2]
-            columns[i, 0], columns[i, 1], columns[i, 2] = ux, uy, uz
-            columns[i, 3] = ay * uz - az * uy
-            columns[i, 4] = az * ux - ax * uz
-            columns[i, 5] = ax * uy - ay * ux
-        _gram(columns, six, m, gram)
-        ratio = _scaled_cholesky(gram, six, factor, scale_rows)
-        if ratio < BAND * rtol or _row_spread(gram, six) < BAND * rtol * rtol:  # singular or in doubt: numpy's SVD
-            unsettled[p] = True
-            for k in range(out.shape[1]):
-                out[p, k] = np.nan
-            continue
-        _scaled_solve(factor, scale_rows, wrench, six, solved)
-        lowest, worst_rating, worst_length = np.inf, -np.inf, -np.inf
+            nx, ny, nz = anchors[i, 0], anchors[i, 1], anchors[i, 2]
+            for b in range(lanes):
+                vx, vy, vz = at[0, b], at[1, b], at[2, b]
+                if not centre:
+                    vx, vy, vz = vx + ax, vy + ay, vz + az
+                vx, vy, vz = vx - nx, vy - ny, vz - nz
+                length = np.sqrt(vx * vx + vy * vy + vz * vz)
+                inverse = 1.0 / length if length > 0 else 0.0
+                ux, uy, uz = vx * inverse, vy * inverse, vz * inverse
+                lengths[i, b] = length
+                bx, by, bz = ax, ay, az
+                if base:  # moments about the base centre (eq. 9): a_i = r + R d_i
+                    bx, by, bz = bx + at[0, b], by + at[1, b], bz + at[2, b]
+                columns[i, 0, b], columns[i, 1, b], columns[i, 2, b] = ux, uy, uz
+                columns[i, 3, b] = by * uz - bz * uy
+                columns[i, 4, b] = bz * ux - bx * uz
+                columns[i, 5, b] = bx * uy - by * ux
+        _block_factor(columns, 6, m, gram, factor, scale_rows, det, dead)
+        _block_ratios(gram, 6, det, dead, ratio, lean)
+        _block_solve(factor, scale_rows, wrench, 6, 1, solved)
+        for b in range(lanes):
+            lowest[b], worst_rating[b], worst_length[b], shortest[b] = np.inf, -np.inf, -np.inf, np.inf
         for i in range(m):
-            tension = 0.0  # s = A^T (A A^T)^-1 f (eqs. 7, 10)
-            for r in range(6):
-                tension += columns[i, r] * solved[r, 0]
-            lowest = min(lowest, tension - t_min[i])
-            worst_rating = max(worst_rating, tension / s_max[i])
-            worst_length = max(worst_length, lengths[i] / l_max)
-        if ratio >= singular_rtol:
-            out[p, 0] = (ratio - singular_rtol) / (1.0 - singular_rtol)
-        else:
-            out[p, 0] = ratio / singular_rtol - 1.0
-        out[p, 1] = lowest / scale
-        out[p, 2] = 1.0 - worst_rating
-        out[p, 3] = 1.0 - worst_length
-        out[p, 4] = _shortest(lengths, m)
+            for b in range(lanes):
+                tension = 0.0  # s = A^T (A A^T)^-1 f (eqs. 7, 10)
+                for r in range(6):
+                    tension += columns[i, r, b] * solved[r, 0, b]
+                lowest[b] = min(lowest[b], tension - t_min[i])
+                worst_rating[b] = max(worst_rating[b], tension / s_max[i])
+                worst_length[b] = max(worst_length[b], lengths[i, b] / l_max)
+                shortest[b] = min(shortest[b], lengths[i, b])
+        for b in range(min(lanes, n - start)):
+            p = start + b
+            if ratio[b] < BAND * rtol or lean[b] < BAND * rtol * rtol:  # singular or in doubt: numpy's SVD
+                unsettled[p] = True
+                for k in range(out.shape[1]):
+                    out[p, k] = np.nan
+                continue
+            if ratio[b] >= singular_rtol:
+                out[p, 0] = (ratio[b] - singular_rtol) / (1.0 - singular_rtol)
+            else:
+                out[p, 0] = ratio[b] / singular_rtol - 1.0
+            out[p, 1] = lowest[b] / scale
+            out[p, 2] = 1.0 - worst_rating[b]
+            out[p, 3] = 1.0 - worst_length[b]
+            out[p, 4] = shortest[b]
