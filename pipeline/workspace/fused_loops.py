@@ -185,6 +185,15 @@ def _drop_one(jac, gram, rows, m, rtol, factor, scale, w, warm, along, deflated,
 
 
 @njit(cache=True, inline="always")
+def _unit(vx, vy, vz):
+    """Length and unit vector of (vx, vy, vz), the zero vector for a zero length (a cable from
+    its anchor, eq. 1: no direction when it has none)."""
+    length = np.sqrt(vx * vx + vy * vy + vz * vz)
+    inverse = 1.0 / length if length > 0 else 0.0
+    return length, vx * inverse, vy * inverse, vz * inverse
+
+
+@njit(cache=True, inline="always")
 def _block_factor(jac, rows, m, gram, factor, scale, det, dead):
     """G = J^T J over the first ``rows`` columns of J and :func:`_scaled_cholesky` for a block of
     poses (the last axis of every array; ``jac`` (m, rows, lanes)): G, the lower Cholesky factor
@@ -299,11 +308,7 @@ def _cpr_wwa(positions, anchors, arms, rate_axes, radius, rows, extremes, centre
             nx, ny, nz = anchors[i, 0], anchors[i, 1], anchors[i, 2]
             r = inverse_radius[i]
             for b in range(lanes):
-                vx, vy, vz = at[0, b] + ax - nx, at[1, b] + ay - ny, at[2, b] + az - nz
-                length = np.sqrt(vx * vx + vy * vy + vz * vz)
-                inverse = 1.0 / length if length > 0 else 0.0
-                ux, uy, uz = vx * inverse, vy * inverse, vz * inverse
-                lengths[i, b] = length
+                lengths[i, b], ux, uy, uz = _unit(at[0, b] + ax - nx, at[1, b] + ay - ny, at[2, b] + az - nz)
                 jac[i, 0, b], jac[i, 1, b], jac[i, 2, b] = ux * r, uy * r, uz * r
                 if rows == 6:
                     mx = ay * uz - az * uy
@@ -312,8 +317,8 @@ def _cpr_wwa(positions, anchors, arms, rate_axes, radius, rows, extremes, centre
                     for q in range(3):
                         jac[i, 3 + q, b] = (mx * rate_axes[0, q] + my * rate_axes[1, q] + mz * rate_axes[2, q]) * r
         _block_factor(jac, rows, m, gram, factor, scale, det, dead)
-        any_full = False
         _block_ratios(gram, rows, det, dead, ratio, lean)
+        any_full = False
         for b in range(lanes):  # the full-rank route's test (the module docstring)
             route[b] = FULL if ratio[b] >= BAND * rtol and lean[b] >= BAND * rtol * rtol else UNSETTLED
             residual[b] = 0.0  # |w . F| / |F|, the worst over the acceleration box's vertices: 0 at full rank
@@ -444,11 +449,7 @@ def statics(positions, anchors, arms, centre, base, wrench, rtol, singular_rtol,
                 vx, vy, vz = at[0, b], at[1, b], at[2, b]
                 if not centre:
                     vx, vy, vz = vx + ax, vy + ay, vz + az
-                vx, vy, vz = vx - nx, vy - ny, vz - nz
-                length = np.sqrt(vx * vx + vy * vy + vz * vz)
-                inverse = 1.0 / length if length > 0 else 0.0
-                ux, uy, uz = vx * inverse, vy * inverse, vz * inverse
-                lengths[i, b] = length
+                lengths[i, b], ux, uy, uz = _unit(vx - nx, vy - ny, vz - nz)
                 bx, by, bz = ax, ay, az
                 if base:  # moments about the base centre (eq. 9): a_i = r + R d_i
                     bx, by, bz = bx + at[0, b], by + at[1, b], bz + at[2, b]
