@@ -38,8 +38,16 @@ class Grid:
         start, stop, step = span.indices(self.n_points)
         if step != 1:
             raise ValueError("a grid is read in contiguous chunks")
-        i, j, k = np.unravel_index(np.arange(start, stop), [len(axis) for axis in self.axes])
-        return np.column_stack([self.axes[0][i], self.axes[1][j], self.axes[2][k]])
+        if start >= stop:
+            return np.empty((0, 3))
+        ny, nz = len(self.axes[1]), len(self.axes[2])
+        first, last = start // nz, -(-stop // nz)  # the (x, y) lines of z points the span touches
+        i, j = np.divmod(np.arange(first, last), ny)
+        lines = np.empty((last - first, nz, 3))  # a line is written whole: at most 2 nz points more than asked
+        lines[..., 0] = self.axes[0][i][:, None]
+        lines[..., 1] = self.axes[1][j][:, None]
+        lines[..., 2] = self.axes[2]
+        return lines.reshape(-1, 3)[start - first * nz:stop - first * nz]
 
 
 def box_grid(lo: np.ndarray, hi: np.ndarray, n: int, spacing: str = "linspace") -> Grid:
