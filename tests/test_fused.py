@@ -110,7 +110,7 @@ def test_random_robots_with_singular_poses_are_left_to_numpy(make_cfg, catalogue
         candidate = dataclasses.replace(problem, robot=robot, orientations=orientation[None, :])
         numpy_result, fused_result = both_kernels(candidate, positions)
         assert_same(candidate, numpy_result, fused_result)
-        direct, unsettled = fused.margins(candidate, positions, orientation)
+        direct, unsettled = fused.margins(candidate, positions, 0)
         unsettled_total += unsettled.sum()
         short_total += ((direct["jacobian_rank"] == 5) & ~unsettled).sum()
     assert unsettled_total > 1000 and short_total > 1000  # both the fallback and the deflation ran
@@ -145,21 +145,21 @@ def test_a_pose_s_margins_do_not_depend_on_the_block_it_is_computed_in(make_cfg,
         n = 3 * BLOCK + 17
         positions = on_grid(rng.uniform(-0.5, 0.5, (n, 3)))
         positions[rng.choice(n, n // 8, replace=False)] = anchors[3] - attachments[3]
-        found, unsettled = fused.margins(candidate, positions, np.zeros(3))
+        found, unsettled = fused.margins(candidate, positions, 0)
         rows, full = _stacked(found), (found["jacobian_rank"] == 6) & ~unsettled
         assert full.sum() > n // 2 and ((found["jacobian_rank"] == 5) & ~unsettled).sum() >= n // 10
         for order in (np.arange(n)[::-1], np.roll(np.arange(n), 37)):
-            again = _stacked(fused.margins(candidate, positions[order], np.zeros(3))[0])
+            again = _stacked(fused.margins(candidate, positions[order], 0)[0])
             np.testing.assert_array_equal(again[np.argsort(order)][full], rows[full])
         for size in (1, BLOCK - 1, BLOCK, BLOCK + 1, 2 * BLOCK + 5):
-            part = _stacked(fused.margins(candidate, positions[:size], np.zeros(3))[0])
+            part = _stacked(fused.margins(candidate, positions[:size], 0)[0])
             np.testing.assert_array_equal(part[full[:size]], rows[:size][full[:size]])
         extra = on_grid(rng.uniform(-0.5, 0.5, (2 * BLOCK, 3)))
         where = np.sort(rng.choice(n + 1, len(extra)))
         widened = np.insert(positions, where, extra, axis=0)
         kept = np.ones(len(widened), dtype=bool)
         kept[where + np.arange(len(extra))] = False
-        more, left = fused.margins(candidate, widened, np.zeros(3))
+        more, left = fused.margins(candidate, widened, 0)
         assert (more["jacobian_rank"][~kept] == 6).all() and not left[~kept].any()
         np.testing.assert_array_equal(_stacked(more)[kept], rows)
         np.testing.assert_array_equal(left[kept], unsettled)
@@ -227,7 +227,7 @@ def test_irpm_statics_give_the_numpy_margins(overrides, make_cfg, catalogue):
     numpy_result, fused_result = both_kernels(problem, grid[:])
     assert_same(problem, numpy_result, fused_result)
     assert (numpy_result["margin_singular"] < 0).any() and (numpy_result["margin_slack"] > 0).any()
-    assert fused.margins(problem, grid[:], problem.orientation)[1].any()
+    assert fused.margins(problem, grid[:], 0)[1].any()
 
 
 @pytest.mark.parametrize("overrides", [[], ["model.moment_arm=base", "model.cable_direction=centre", "orientation.psi=0.2"]])
@@ -241,15 +241,15 @@ def test_a_pose_s_statics_margins_do_not_depend_on_the_block_it_is_computed_in(o
     problem, grid = build_problem(make_cfg("robot=irpm6", "robot.gamma_deg=15", *overrides), catalogue)
     positions = grid[:]
     n = len(positions)
-    found, unsettled = fused.margins(problem, positions, problem.orientation)
+    found, unsettled = fused.margins(problem, positions, 0)
     rows = _stacked(found)
     assert 0 < unsettled.sum() < n // 10
     for order in (np.arange(n)[::-1], np.roll(np.arange(n), 37)):
-        again, left = fused.margins(problem, positions[order], problem.orientation)
+        again, left = fused.margins(problem, positions[order], 0)
         np.testing.assert_array_equal(_stacked(again)[np.argsort(order)], rows)
         np.testing.assert_array_equal(left[np.argsort(order)], unsettled)
     for size in (1, BLOCK - 1, BLOCK, BLOCK + 1, 2 * BLOCK + 5):
-        part, left = fused.margins(problem, positions[:size], problem.orientation)
+        part, left = fused.margins(problem, positions[:size], 0)
         np.testing.assert_array_equal(_stacked(part), rows[:size])
         np.testing.assert_array_equal(left, unsettled[:size])
 

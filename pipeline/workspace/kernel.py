@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -61,6 +62,14 @@ class WorkspaceProblem:
             return [(rows, orientation) for orientation in self.orientations]
         return [(np.zeros_like(rows), rotation_matrices(rows, self.angles))]
 
+    @cached_property
+    def fused_arguments(self) -> tuple[tuple, ...]:
+        """The compiled kernel's arguments the positions do not change, one tuple per orientation
+        of the set (:func:`pipeline.workspace.fused.arguments`), built once a process."""
+        from pipeline.workspace import fused
+
+        return fused.arguments(self)
+
 
 def evaluate_chunk(problem: WorkspaceProblem, rows: np.ndarray) -> dict[str, np.ndarray]:
     """Margins ``margin_<criterion>`` (n,), the worst over the orientation set (also the
@@ -72,7 +81,7 @@ def evaluate_chunk(problem: WorkspaceProblem, rows: np.ndarray) -> dict[str, np.
     result = {}
     for number, (positions, orientation) in enumerate(problem.poses(rows)):
         if problem.fused:
-            part = _fused(problem, positions, orientation)
+            part = _fused(problem, positions, orientation, number)
         else:
             part = _criteria(problem, positions, orientation, number == 0)
         worse = {key: part[margin] < result[margin] for key, margin in AT_THE_WORST.items() if key in result}
@@ -135,12 +144,13 @@ def _limiting_vertex(problem: WorkspaceProblem, positions: np.ndarray, orientati
     return {"limiting_wrench": vertex, "limiting_wrench_margin": worst}
 
 
-def _fused(problem: WorkspaceProblem, positions: np.ndarray, orientation) -> dict:
-    """:func:`_criteria` by the compiled kernel, numpy for the poses it leaves unsettled and for
-    the criteria that read the geometry alone (the same code in either kernel)."""
+def _fused(problem: WorkspaceProblem, positions: np.ndarray, orientation, number: int) -> dict:
+    """:func:`_criteria` by the compiled kernel at the set's orientation ``number``, numpy for the
+    poses it leaves unsettled and for the criteria that read the geometry alone (the same code in
+    either kernel)."""
     from pipeline.workspace import fused
 
-    result, unsettled = fused.margins(problem, positions, orientation)
+    result, unsettled = fused.margins(problem, positions, number)
     geometric = [name for name in problem.criteria if REGISTRY[name].reads == GEOMETRY]
     if geometric:
         state = PoseGeometry(problem.robot, positions, orientation)
