@@ -116,7 +116,7 @@ def test_each_compiled_function_has_one_specialisation():
     read_only.setflags(write=False)
     with pytest.raises(TypeError, match="No matching definition"):
         fused_loops.statics(read_only, np.zeros((6, 3)), np.zeros((6, 3)), False, False, np.zeros((6, 1)),
-                            1e-9, 1e-9, np.zeros(6), np.zeros(6), 1.0, np.inf, np.empty((1, 4)), np.zeros(1, dtype=bool))
+                            1e-9, 1e-9, np.zeros(6), np.zeros(6), 1.0, np.inf, 1e-9, np.empty((1, 4)), np.zeros(1, dtype=bool))
 
 
 def test_a_compile_is_announced_only_where_numba_has_no_cache_of_the_module(tmp_path, monkeypatch, caplog):

@@ -50,10 +50,8 @@ from pipeline.model.geometry import euler_rate_axes, rotation_matrix
 from pipeline.model.jit import compiled_loops
 from pipeline.workspace.criteria import (ACCELERATION, LENGTH, SINGULAR, SLACK, SPEED, TENSION_MAX, TORQUE,
                                          UNREACHABLE, VOLTAGE, ZERO_LENGTH)
-from pipeline.workspace.criteria.geometry import zero_length_margin
 
-CRITERIA = (SPEED, TORQUE, ACCELERATION, VOLTAGE, TENSION_MAX, LENGTH, ZERO_LENGTH,
-            UNREACHABLE)  # columns of cpr_wwa (the last two: the quantities their margins come from)
+CRITERIA = (SPEED, TORQUE, ACCELERATION, VOLTAGE, TENSION_MAX, LENGTH, ZERO_LENGTH, UNREACHABLE)  # columns of cpr_wwa
 STATICS_CRITERIA = (SINGULAR, SLACK, TENSION_MAX, LENGTH, ZERO_LENGTH)  # columns of statics
 COMPILED = {"cpr_wwa": CRITERIA, "statics": STATICS_CRITERIA}  # by the spec's kind: what each kernel evaluates
 LOOPS = "pipeline.workspace.fused_loops"  # the compiled loops, and the constants named above
@@ -85,7 +83,7 @@ def _statics_arguments(problem, orientation) -> tuple:
             float(spec.rank_rtol), float(lim.rank_rtol),
             np.array(np.broadcast_to(spec.tension.t_min, (m,)), dtype=float),  # writable copies
             np.array(np.broadcast_to(lim.t_max, (m,)), dtype=float), float(lim.scale),
-            np.inf if robot.l_max is None else float(robot.l_max))
+            np.inf if robot.l_max is None else float(robot.l_max), float(robot.shortest_cable))
 
 
 def _statics_margins(problem, positions: np.ndarray, constants: tuple):
@@ -93,7 +91,6 @@ def _statics_margins(problem, positions: np.ndarray, constants: tuple):
     out = np.empty((n, len(STATICS_CRITERIA)))
     unsettled = np.zeros(n, dtype=np.bool_)
     compiled_loops(LOOPS).statics(positions, *constants, out, unsettled)
-    out[:, 4] = zero_length_margin(out[:, 4], problem.robot.shortest_cable)
     return {f"margin_{name}": out[:, STATICS_CRITERIA.index(name)]
             for name in problem.criteria if name in STATICS_CRITERIA}, unsettled
 
@@ -114,7 +111,8 @@ def _cpr_wwa_arguments(problem, orientation) -> tuple:
             float(spec.rank_rtol),
             np.array([act.speed_limit, act.torque_limit, act.accel_limit, act.voltage_limit], dtype=float),
             np.array([act.G_v, act.L_v, act.load_gain], dtype=float), t_max,
-            np.inf if robot.l_max is None else float(robot.l_max))
+            np.inf if robot.l_max is None else float(robot.l_max), float(robot.shortest_cable),
+            float(spec.tension.pinv_residual))
 
 
 def _cpr_wwa_margins(problem, positions: np.ndarray, constants: tuple):
@@ -123,8 +121,6 @@ def _cpr_wwa_margins(problem, positions: np.ndarray, constants: tuple):
     rank = np.zeros(n, dtype=np.int8)
     unsettled = np.zeros(n, dtype=np.bool_)
     compiled_loops(LOOPS).cpr_wwa(positions, *constants, out, rank, unsettled)
-    out[:, 6] = zero_length_margin(out[:, 6], problem.robot.shortest_cable)
-    out[:, 7] = 1.0 - out[:, 7] / problem.spec.tension.pinv_residual
     result = {f"margin_{name}": out[:, CRITERIA.index(name)] for name in problem.criteria if name in CRITERIA}
     result["jacobian_rank"] = rank
     return result, unsettled

@@ -37,8 +37,8 @@ FULL, DEFLATED, UNSETTLED = 0, 1, 2  # a pose's route through the CPR-WWA loop
 _M, _V, _F = "f8[:, ::1]", "f8[::1]", "f8"  # a C-contiguous matrix, vector, a float
 SIGNATURES = {  # name -> its one signature
     "cpr_wwa": f"void({_M}, {_M}, {_M}, {_M}, {_V}, i8, {_M}, {_V}, {_V}, {_M}, {_F}, {_V}, {_V}, {_V}, {_F}, "
-               f"{_M}, i1[::1], b1[::1])",
-    "statics": f"void({_M}, {_M}, {_M}, b1, b1, {_M}, {_F}, {_F}, {_V}, {_V}, {_F}, {_F}, {_M}, b1[::1])",
+               f"{_F}, {_F}, {_M}, i1[::1], b1[::1])",
+    "statics": f"void({_M}, {_M}, {_M}, b1, b1, {_M}, {_F}, {_F}, {_V}, {_V}, {_F}, {_F}, {_F}, {_M}, b1[::1])",
 }
 
 
@@ -194,6 +194,14 @@ def _unit(vx, vy, vz):
 
 
 @njit(cache=True, inline="always")
+def _zero_length(shortest, tol):
+    """The zero-length gate's margin min(1, l_min / tol - 1) from a pose's shortest cable
+    (``criteria.geometry.zero_length``; NaN stays NaN, as numpy's minimum)."""
+    value = shortest / tol - 1.0
+    return 1.0 if value > 1.0 else value
+
+
+@njit(cache=True, inline="always")
 def _block_factor(jac, rows, m, gram, factor, scale, det, dead):
     """G = J^T J over the first ``rows`` columns of J and :func:`_scaled_cholesky` for a block of
     poses (the last axis of every array; ``jac`` (m, rows, lanes)): G, the lower Cholesky factor
@@ -269,7 +277,7 @@ def _block_solve(factor, scale, loads, rows, columns, solved):
 
 @njit(cache=True, inline="always")
 def _cpr_wwa(positions, anchors, arms, rate_axes, radius, rows, extremes, centre, half, loads, rtol,
-             limits, gains, t_max, l_max, out, rank, unsettled):
+             limits, gains, t_max, l_max, shortest_tol, residual_limit, out, rank, unsettled):
     """The loop of :func:`cpr_wwa`, inlined there with ``rows`` a constant: ``BLOCK`` poses at a
     time, the poses of a block innermost in every array (each a lane of the vector registers,
     with one pose's operations in one pose's order); the deflated route one pose at a time, in
@@ -400,34 +408,33 @@ def _cpr_wwa(positions, anchors, arms, rate_axes, radius, rows, extremes, centre
             shortest = np.inf
             for i in range(m):
                 shortest = min(shortest, lengths[i, b])
-            out[p, 6] = shortest
-            out[p, 7] = residual[b]
+            out[p, 6] = _zero_length(shortest, shortest_tol)
+            out[p, 7] = 1.0 - residual[b] / residual_limit
 
 
 # numpy's error model: a block's lanes off the full-rank route (and a short block's repeated
 # pose) may divide by zero in its steps (inf or NaN, never written), where Python's would raise
 @njit(SIGNATURES["cpr_wwa"], cache=True, nogil=True, error_model="numpy")
 def cpr_wwa(positions, anchors, arms, rate_axes, radius, rows, extremes, centre, half, loads, rtol,
-            limits, gains, t_max, l_max, out, rank, unsettled):
-    """Fill ``out`` (n, 8) with the margins of ``fused.CRITERIA`` (the last two columns: the
-    shortest cable and the residual the margins come from), ``rank`` and ``unsettled``:
-    :func:`_cpr_wwa` with its number of rows (3 or 6) as a constant."""
+            limits, gains, t_max, l_max, shortest_tol, residual_limit, out, rank, unsettled):
+    """Fill ``out`` (n, 8) with the margins of ``fused.CRITERIA`` (the zero-length gate's from a
+    cable shorter than ``shortest_tol``, the unreachable gate's from the share ``residual_limit``),
+    ``rank`` and ``unsettled``: :func:`_cpr_wwa` with its number of rows (3 or 6) as a constant."""
     if rows == 6:
         _cpr_wwa(positions, anchors, arms, rate_axes, radius, 6, extremes, centre, half, loads, rtol,
-                 limits, gains, t_max, l_max, out, rank, unsettled)
+                 limits, gains, t_max, l_max, shortest_tol, residual_limit, out, rank, unsettled)
     elif rows == 3:
         _cpr_wwa(positions, anchors, arms, rate_axes, radius, 3, extremes, centre, half, loads, rtol,
-                 limits, gains, t_max, l_max, out, rank, unsettled)
+                 limits, gains, t_max, l_max, shortest_tol, residual_limit, out, rank, unsettled)
     else:
         raise ValueError("the pseudo-inverse has 3 or 6 rows")
 
 
 @njit(SIGNATURES["statics"], cache=True, nogil=True, error_model="numpy")
 def statics(positions, anchors, arms, centre, base, wrench, rtol, singular_rtol, t_min, s_max, scale,
-            l_max, out, unsettled):
-    """Fill ``out`` (n, 5) with the margins of ``fused.STATICS_CRITERIA`` (the last column: the
-    shortest cable, which its margin comes from) and ``unsettled``: ``BLOCK`` poses at a time, as
-    :func:`_cpr_wwa` (numpy's error model for the same reason)."""
+            l_max, shortest_tol, out, unsettled):
+    """Fill ``out`` (n, 5) with the margins of ``fused.STATICS_CRITERIA`` and ``unsettled``:
+    ``BLOCK`` poses at a time, as :func:`_cpr_wwa` (numpy's error model for the same reason)."""
     n, m = positions.shape[0], anchors.shape[0]
     lanes = BLOCK
     at = np.empty((3, lanes))
@@ -485,4 +492,4 @@ def statics(positions, anchors, arms, centre, base, wrench, rtol, singular_rtol,
             out[p, 1] = lowest[b] / scale
             out[p, 2] = 1.0 - worst_rating[b]
             out[p, 3] = 1.0 - worst_length[b]
-            out[p, 4] = shortest[b]
+            out[p, 4] = _zero_length(shortest[b], shortest_tol)

@@ -15,12 +15,7 @@ def zero_length(state, limits) -> np.ndarray:
     structure matrix no column for it, and no tension there means anything. Margin
     min(1, l_min / tol - 1): 1 at every pose a grid normally holds, -1 for an exactly collapsed
     cable, so such a pose is infeasible whatever the other margins say (a gate)."""
-    return zero_length_margin(state.lengths.min(axis=1), state.robot.shortest_cable)
-
-
-def zero_length_margin(shortest: np.ndarray, tol: float) -> np.ndarray:
-    """The margin of :func:`zero_length` from each pose's shortest cable (m)."""
-    return np.minimum(1.0, shortest / tol - 1.0)
+    return np.minimum(1.0, state.lengths.min(axis=1) / state.robot.shortest_cable - 1.0)
 
 
 def singular(st: PoseStatics, lim: StaticLimits) -> np.ndarray:
