@@ -88,7 +88,7 @@ def test_a_dense_grid_without_n_vel_is_announced_with_the_key_to_change(caplog):
 
 def test_the_build_of_the_compiled_loops_is_not_counted_in_the_first_chunk(make_cfg, catalogue, monkeypatch,
                                                                             caplog):
-    """The first fused job on a machine builds the loops (about 30 s): a job loads them before
+    """The first fused job on a machine builds the loops (about 45 s): a job loads them before
     its progress clock starts, so no line promises minutes for a job about to end."""
     clock = Clock()
     loaded = fused.compiled_loops
@@ -127,7 +127,7 @@ def test_a_job_holds_its_chunks_not_its_grid(make_cfg, catalogue):
 
 def test_a_large_table_kept_whole_is_announced_with_its_memory(make_cfg, catalogue, caplog, monkeypatch):
     """Whatever this machine's numba cache holds: without it the estimate would add the first
-    compile (30 s) and announce the job for its time (the order of the tests decided it)."""
+    compile (45 s) and announce the job for its time (the order of the tests decided it)."""
     from pipeline.model import jit
 
     monkeypatch.setattr(jit, "compile_seconds", lambda name: 0.0)
@@ -180,7 +180,7 @@ def test_a_job_that_will_compile_numbas_loops_says_so_in_its_estimate(caplog, mo
     fused_job = replace(build_problem(dense, job.catalogue)[0], fused=True)
     with caplog.at_level(logging.WARNING, logger="pipeline"):
         announce_cost(dense, fused_job, 350 ** 3, 2)
-    assert "about 30 s, once per machine" in caplog.records[0].getMessage()
+    assert "about 45 s, once per machine" in caplog.records[0].getMessage()
 
 
 def test_the_cost_models_estimate_stands_until_the_rate_is_measured_without_the_first_step(caplog):

@@ -17,10 +17,10 @@ constant), so the compiler sees every small loop's trip count. Each lane does on
 operations in one pose's order (no fast-math), so the margins are the doubles of a loop over
 single poses (the git history's, tested bit for bit when the blocks came). In the CPR-WWA loop
 (:func:`_cpr_wwa`): the geometry, G, its factor and the route's test, the full-rank solve and
-torques, then every settled pose's margins; only the deflated route runs one pose at a time (its
-helpers take one pose's arrays), in the poses' order: its inverse iteration starts from the
-previous deflated pose's direction. Against one pose at a time: CPR-WWA x2.2 at full rank and
-x1.5 on the deflated route, the statics x3.4 (benchmarks/LOG.md, 2026-11-30).
+torques, the deflated route's (:func:`_block_drop_one`, every lane's inverse iteration from the
+same start, so a pose's margins depend on that pose alone), then every settled pose's margins.
+Against one pose at a time: CPR-WWA x2.2 at full rank, x1.6-1.7 on the deflated route, the
+statics x3.4 (benchmarks/LOG.md, 2026-11-30).
 """
 
 from __future__ import annotations
@@ -60,131 +60,6 @@ def _vertices(loads, rows, centre, half, corners, sizes):
 
 
 @njit(cache=True, inline="always")
-def _missed(w, loads, rows, corners, sizes):
-    """The share of F = C a + d (``loads``: C and d) that J^T cannot reach when its range lacks
-    only the unit direction w, |w . F| / |F|, the worst over the 8 corners of the acceleration
-    box (:func:`_vertices`; 0 for a zero F): the ``unreachable`` margin's residual under the
-    minimum-norm model. w . F = (w^T C) a + w^T d: one product with C and d per pose."""
-    slope0 = slope1 = slope2 = offset = 0.0
-    for r in range(rows):
-        slope0 += w[r] * loads[r, 0]
-        slope1 += w[r] * loads[r, 1]
-        slope2 += w[r] * loads[r, 2]
-        offset += w[r] * loads[r, 3]
-    worst = 0.0
-    for vertex in range(8):
-        if sizes[vertex] > 0.0:
-            along = slope0 * corners[vertex, 0] + slope1 * corners[vertex, 1] + slope2 * corners[vertex, 2] + offset
-            worst = max(worst, abs(along) / sizes[vertex])
-    return worst
-
-
-@njit(cache=True, inline="always")
-def _scaled_cholesky(gram, rows, factor, scale):
-    """Lower Cholesky factor L of D^-1 G D^-1 into ``factor``, its diagonal stored as 1 / L_jj,
-    with D^-1 = ``scale`` (1 / sqrt of diag G, 1 where 0); returns det(D^-1 G D^-1), the gram
-    ratio in [0, 1] (0 when a pivot is not positive). Reciprocals: no division per entry."""
-    for i in range(rows):
-        scale[i] = 1.0 / np.sqrt(gram[i, i]) if gram[i, i] > 0 else 1.0
-    det = 1.0
-    for j in range(rows):
-        for i in range(j, rows):
-            total = gram[i, j] * scale[i] * scale[j]
-            for k in range(j):
-                total -= factor[i, k] * factor[j, k]
-            if i == j:
-                if total <= 0.0:
-                    return 0.0
-                det *= total
-                factor[j, j] = 1.0 / np.sqrt(total)
-            else:
-                factor[i, j] = total * factor[j, j]
-    return min(det, 1.0)
-
-
-@njit(cache=True, inline="always")
-def _scaled_solve(factor, scale, loads, rows, solved):
-    """``solved`` = G^-1 ``loads`` (rows x k) from the factor and scale of :func:`_scaled_cholesky`."""
-    for k in range(loads.shape[1]):
-        for i in range(rows):  # forward: L y = D^-1 b
-            total = loads[i, k] * scale[i]
-            for j in range(i):
-                total -= factor[i, j] * solved[j, k]
-            solved[i, k] = total * factor[i, i]
-        for i in range(rows - 1, -1, -1):  # backward: L^T x = y, then D^-1 x
-            total = solved[i, k]
-            for j in range(i + 1, rows):
-                total -= factor[j, i] * solved[j, k]
-            solved[i, k] = total * factor[i, i]
-        for i in range(rows):
-            solved[i, k] *= scale[i]
-
-
-@njit(cache=True, inline="always")
-def _drop_one(jac, gram, rows, m, rtol, factor, scale, w, warm, along, deflated, solved, loads, scratch,
-              iterate, step, projected):
-    """The one-short route of the module docstring: ``deflated`` J', ``w`` and ``solved`` =
-    (J'^T J' + s^2 w w^T)^-1 ``loads``; False when the SVD's choice is in doubt. ``warm``: ``w``
-    holds the previous pose's direction, one step from it is tried first."""
-    trace = 0.0
-    for r in range(rows):
-        trace += gram[r, r]
-    if not trace > 0.0:
-        return False
-    for r in range(rows):
-        for c in range(rows):
-            scratch[r, c] = gram[r, c]
-        scratch[r, r] += SHIFT * trace
-    if _scaled_cholesky(scratch, rows, factor, scale) <= 0.0:
-        return False
-    bound = DROPPED * rtol * np.sqrt(trace / rows) / BAND
-    found = False
-    for attempt in range(2):
-        if attempt == 0 and not warm:
-            continue
-        for r in range(rows):
-            iterate[r, 0] = w[r] if attempt == 0 else 1.0 + r / max(rows - 1, 1)  # any start not orthogonal to w
-        for _ in range(1 if attempt == 0 else 2):
-            _scaled_solve(factor, scale, iterate, rows, step)
-            norm = 0.0
-            for r in range(rows):
-                norm += step[r, 0] * step[r, 0]
-            norm = 1.0 / np.sqrt(norm)
-            for r in range(rows):
-                w[r] = iterate[r, 0] = step[r, 0] * norm
-        size = 0.0
-        for i in range(m):
-            total = 0.0
-            for r in range(rows):
-                total += w[r] * jac[i, r]
-            along[i] = total
-            size += total * total
-        if np.sqrt(size) <= bound:
-            found = True
-            break
-    if not found:
-        return False
-    for i in range(m):
-        for r in range(rows):
-            deflated[i, r] = jac[i, r] - along[i] * w[r]
-    curvature = 0.0  # w^T G w
-    for r in range(rows):
-        total = 0.0
-        for c in range(rows):
-            total += gram[r, c] * w[c]
-        projected[r] = total
-        curvature += w[r] * total
-    for r in range(rows):  # J'^T J' = (I - w w^T) G (I - w w^T), plus s^2 w w^T
-        for c in range(rows):
-            scratch[r, c] = (gram[r, c] - w[r] * projected[c] - projected[r] * w[c]
-                             + (curvature + trace / rows) * w[r] * w[c])
-    if _scaled_cholesky(scratch, rows, factor, scale) < BAND * rtol:
-        return False
-    _scaled_solve(factor, scale, loads, rows, solved)
-    return True
-
-
-@njit(cache=True, inline="always")
 def _unit(vx, vy, vz):
     """Length and unit vector of (vx, vy, vz), the zero vector for a zero length (a cable from
     its anchor, eq. 1: no direction when it has none)."""
@@ -202,27 +77,18 @@ def _zero_length(shortest, tol):
 
 
 @njit(cache=True, inline="always")
-def _block_factor(jac, rows, m, gram, factor, scale, det, dead):
-    """G = J^T J over the first ``rows`` columns of J and :func:`_scaled_cholesky` for a block of
-    poses (the last axis of every array; ``jac`` (m, rows, lanes)): G, the lower Cholesky factor
-    of D^-1 G D^-1 (its diagonal stored as 1 / L_jj) and D^-1, the product of the pivots ``det``
-    and ``dead`` where a pivot is not positive."""
+def _block_cholesky(gram, rows, factor, scale, det, dead):
+    """The lower Cholesky factor of D^-1 G D^-1 for a block of poses (the last axis of every
+    array), its diagonal stored as 1 / L_jj (reciprocals: no division per entry), D^-1 =
+    ``scale`` (1 / sqrt of diag G, 1 where 0), the product of the pivots ``det`` (the gram ratio,
+    where none is ``dead``: not positive)."""
     lanes = BLOCK
-    for r in range(rows):  # G, each entry from 0 over the cables in order
-        for s in range(r + 1):
-            for b in range(lanes):
-                gram[r, s, b] = 0.0
-            for i in range(m):
-                for b in range(lanes):
-                    gram[r, s, b] += jac[i, r, b] * jac[i, s, b]
-            for b in range(lanes):
-                gram[s, r, b] = gram[r, s, b]
-    for i in range(rows):  # its scaled factor, as _scaled_cholesky
+    for i in range(rows):
         for b in range(lanes):
             scale[i, b] = 1.0 / np.sqrt(gram[i, i, b]) if gram[i, i, b] > 0 else 1.0
     for b in range(lanes):
         det[b], dead[b] = 1.0, False
-    for j in range(rows):  # the pivot first, then its column below, as one pose at a time
+    for j in range(rows):  # the pivot first, then its column below
         for b in range(lanes):
             total = gram[j, j, b] * scale[j, b] * scale[j, b]
             for k in range(j):
@@ -236,6 +102,23 @@ def _block_factor(jac, rows, m, gram, factor, scale, det, dead):
                 for k in range(j):
                     total -= factor[i, k, b] * factor[j, k, b]
                 factor[i, j, b] = total * factor[j, j, b]
+
+
+@njit(cache=True, inline="always")
+def _block_factor(jac, rows, m, gram, factor, scale, det, dead):
+    """G = J^T J over the first ``rows`` columns of J (``jac`` (m, rows, lanes)) for a block of
+    poses, and its :func:`_block_cholesky`."""
+    lanes = BLOCK
+    for r in range(rows):  # G, each entry from 0 over the cables in order
+        for s in range(r + 1):
+            for b in range(lanes):
+                gram[r, s, b] = 0.0
+            for i in range(m):
+                for b in range(lanes):
+                    gram[r, s, b] += jac[i, r, b] * jac[i, s, b]
+            for b in range(lanes):
+                gram[s, r, b] = gram[r, s, b]
+    _block_cholesky(gram, rows, factor, scale, det, dead)
 
 
 @njit(cache=True, inline="always")
@@ -276,12 +159,132 @@ def _block_solve(factor, scale, loads, rows, columns, solved):
 
 
 @njit(cache=True, inline="always")
+def _block_solve_lanes(factor, scale, rhs, rows, solved):
+    """:func:`_block_solve` of one right-hand side per pose: ``solved`` (rows, lanes) = G^-1
+    ``rhs`` (rows, lanes)."""
+    lanes = BLOCK
+    for i in range(rows):  # forward: L y = D^-1 b
+        for b in range(lanes):
+            total = rhs[i, b] * scale[i, b]
+            for j in range(i):
+                total -= factor[i, j, b] * solved[j, b]
+            solved[i, b] = total * factor[i, i, b]
+    for i in range(rows - 1, -1, -1):  # backward: L^T x = y, then D^-1 x
+        for b in range(lanes):
+            total = solved[i, b]
+            for j in range(i + 1, rows):
+                total -= factor[j, i, b] * solved[j, b]
+            solved[i, b] = total * factor[i, i, b]
+    for i in range(rows):
+        for b in range(lanes):
+            solved[i, b] *= scale[i, b]
+
+
+@njit(cache=True, inline="always")
+def _block_drop_one(jac, gram, rows, m, rtol, short, loads, corners, sizes, shifted, factor, scale, det, dead,
+                    lane, w, step, along, deflated, projected, solved, torque, residual):
+    """The one-short route of the module docstring for the poses of a block marked ``short``,
+    which stay marked where it settles them: w from two steps of inverse iteration on G + mu I
+    (from a start not orthogonal to it), J' = J - (J w) w^T into ``deflated``, (J'^T J' + s^2 w
+    w^T)^-1 ``loads`` into ``solved``, the torques J' solved into ``torque`` and |w . F| / |F|,
+    the worst over the acceleration box's corners (``corners``, |F| there: ``sizes``), into
+    ``residual``. ``lane`` (5, lanes): scratch, the trace, the bound on |w^T J^T|, a norm, its
+    size and w^T G w."""
+    lanes = BLOCK
+    trace, bound, norm, size, curvature = lane[0], lane[1], lane[2], lane[3], lane[4]
+    for b in range(lanes):
+        trace[b] = 0.0
+    for r in range(rows):
+        for b in range(lanes):
+            trace[b] += gram[r, r, b]
+    for r in range(rows):
+        for c in range(rows):
+            for b in range(lanes):
+                shifted[r, c, b] = gram[r, c, b]
+        for b in range(lanes):
+            shifted[r, r, b] += SHIFT * trace[b]
+    _block_cholesky(shifted, rows, factor, scale, det, dead)
+    for b in range(lanes):
+        short[b] = short[b] and trace[b] > 0.0 and not dead[b] and min(det[b], 1.0) > 0.0
+        bound[b] = DROPPED * rtol * np.sqrt(trace[b] / rows) / BAND
+    for r in range(rows):
+        for b in range(lanes):
+            w[r, b] = 1.0 + r / max(rows - 1, 1)  # any start not orthogonal to w
+    for _ in range(2):
+        _block_solve_lanes(factor, scale, w, rows, step)
+        for b in range(lanes):
+            norm[b] = 0.0
+        for r in range(rows):
+            for b in range(lanes):
+                norm[b] += step[r, b] * step[r, b]
+        for b in range(lanes):
+            norm[b] = 1.0 / np.sqrt(norm[b])
+        for r in range(rows):
+            for b in range(lanes):
+                w[r, b] = step[r, b] * norm[b]
+    for b in range(lanes):
+        size[b] = 0.0
+    for i in range(m):
+        for b in range(lanes):
+            total = 0.0
+            for r in range(rows):
+                total += w[r, b] * jac[i, r, b]
+            along[i, b] = total
+            size[b] += total * total
+    for b in range(lanes):
+        short[b] = short[b] and np.sqrt(size[b]) <= bound[b]
+    for i in range(m):
+        for r in range(rows):
+            for b in range(lanes):
+                deflated[i, r, b] = jac[i, r, b] - along[i, b] * w[r, b]
+    for b in range(lanes):
+        curvature[b] = 0.0  # w^T G w
+    for r in range(rows):
+        for b in range(lanes):
+            total = 0.0
+            for c in range(rows):
+                total += gram[r, c, b] * w[c, b]
+            projected[r, b] = total
+            curvature[b] += w[r, b] * total
+    for r in range(rows):  # J'^T J' = (I - w w^T) G (I - w w^T), plus s^2 w w^T
+        for c in range(rows):
+            for b in range(lanes):
+                shifted[r, c, b] = (gram[r, c, b] - w[r, b] * projected[c, b] - projected[r, b] * w[c, b]
+                                    + (curvature[b] + trace[b] / rows) * w[r, b] * w[c, b])
+    _block_cholesky(shifted, rows, factor, scale, det, dead)
+    for b in range(lanes):  # the completed matrix must pass the full-rank test
+        short[b] = short[b] and (0.0 if dead[b] else min(det[b], 1.0)) >= BAND * rtol
+    _block_solve(factor, scale, loads, rows, 4, solved)
+    for i in range(m):  # eqs. (20), (31) with J' for J
+        for k in range(4):
+            for b in range(lanes):
+                total = 0.0
+                for r in range(rows):
+                    total += deflated[i, r, b] * solved[r, k, b]
+                if short[b]:
+                    torque[i, k, b] = total
+    for b in range(lanes):  # w . F = (w^T C) a + w^T d
+        slope0 = slope1 = slope2 = offset = 0.0
+        for r in range(rows):
+            slope0 += w[r, b] * loads[r, 0]
+            slope1 += w[r, b] * loads[r, 1]
+            slope2 += w[r, b] * loads[r, 2]
+            offset += w[r, b] * loads[r, 3]
+        worst = 0.0
+        for vertex in range(8):
+            if sizes[vertex] > 0.0:
+                along_f = slope0 * corners[vertex, 0] + slope1 * corners[vertex, 1] + slope2 * corners[vertex, 2] + offset
+                worst = max(worst, abs(along_f) / sizes[vertex])
+        if short[b]:
+            residual[b] = worst
+
+
+@njit(cache=True, inline="always")
 def _cpr_wwa(positions, anchors, arms, rate_axes, radius, rows, extremes, centre, half, loads, rtol,
              limits, gains, t_max, l_max, shortest_tol, residual_limit, out, rank, unsettled):
     """The loop of :func:`cpr_wwa`, inlined there with ``rows`` a constant: ``BLOCK`` poses at a
     time, the poses of a block innermost in every array (each a lane of the vector registers,
-    with one pose's operations in one pose's order); the deflated route one pose at a time, in
-    order (the module docstrings)."""
+    with one pose's operations in one pose's order), on either route (the module docstrings)."""
     n, m = positions.shape[0], anchors.shape[0]
     lanes = BLOCK
     at = np.empty((3, lanes))
@@ -300,11 +303,9 @@ def _cpr_wwa(positions, anchors, arms, rate_axes, radius, rows, extremes, centre
     speed_limit, torque_limit, accel_limit, voltage_limit = limits[0], limits[1], limits[2], limits[3]
     g_v, l_v, load_gain = gains[0], gains[1], gains[2]
     c0, c1, c2, h0, h1, h2 = centre[0], centre[1], centre[2], half[0], half[1], half[2]
-    one_jac, one_gram, deflated = np.empty((m, rows)), np.empty((rows, rows)), np.empty((m, rows))  # one pose's,
-    one_factor, one_scale, one_solved = np.empty((rows, rows)), np.empty(rows), np.empty((rows, 4))  # deflated
-    w, along, projected, scratch = np.empty(rows), np.empty(m), np.empty(rows), np.empty((rows, rows))
-    iterate, step = np.empty((rows, 1)), np.empty((rows, 1))  # the inverse iteration
-    warm = np.bool_(False)  # w holds the last deflated pose's direction (a good start for the next)
+    short, shifted, lane = np.empty(lanes, np.bool_), np.empty((rows, rows, lanes)), np.empty((5, lanes))  # the
+    w, step, along = np.empty((rows, lanes)), np.empty((rows, lanes)), np.empty((m, lanes))  # one-short route's
+    deflated, projected = np.empty((m, rows, lanes)), np.empty((rows, lanes))
     corners, sizes = np.empty((8, 3)), np.empty(8)  # the acceleration box's corners and |F| there
     _vertices(loads, rows, centre, half, corners, sizes)
     for start in range(0, n, lanes):
@@ -340,28 +341,17 @@ def _cpr_wwa(positions, anchors, arms, rate_axes, radius, rows, extremes, centre
                         for r in range(rows):
                             total += jac[i, r, b] * solved[r, k, b]
                         torque[i, k, b] = total
+        any_short = False
+        for b in range(lanes):  # the one-short route's test (the module docstring)
+            short[b] = route[b] != FULL and (ratio[b] < rtol / BAND or lean[b] < rtol * rtol / BAND)
+            any_short = any_short or short[b]
+        if any_short:
+            _block_drop_one(jac, gram, rows, m, rtol, short, loads, corners, sizes, shifted, factor, scale, det, dead,
+                            lane, w, step, along, deflated, projected, solved, torque, residual)
         any_settled = any_full
-        for b in range(min(lanes, n - start)):  # the one-short route, pose after pose: each starts from w
-            if route[b] == FULL or not (ratio[b] < rtol / BAND or lean[b] < rtol * rtol / BAND):
-                continue
-            for i in range(m):
-                for r in range(rows):
-                    one_jac[i, r] = jac[i, r, b]
-            for r in range(rows):
-                for c in range(rows):
-                    one_gram[r, c] = gram[r, c, b]
-            if _drop_one(one_jac, one_gram, rows, m, rtol, one_factor, one_scale, w, warm, along, deflated,
-                         one_solved, loads, scratch, iterate, step, projected):
-                warm, route[b], any_settled = True, DEFLATED, True
-                residual[b] = _missed(w, loads, rows, corners, sizes)
-                for i in range(m):  # eqs. (20), (31) with J' for J
-                    for k in range(4):
-                        total = 0.0
-                        for r in range(rows):
-                            total += deflated[i, r] * one_solved[r, k]
-                        torque[i, k, b] = total
-            else:
-                warm = False
+        for b in range(lanes):
+            if short[b]:
+                route[b], any_settled = DEFLATED, True
         if any_settled:
             for k in range(6):
                 for b in range(lanes):
