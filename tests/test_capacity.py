@@ -176,35 +176,6 @@ def test_a_pose_the_lp_cannot_solve_keeps_its_hyperplane_shifting_margins(monkey
         capacity_margins(structure, pinv, rank, projected, families, distribution=True)
 
 
-def test_remembered_pinv_is_batched_pinv_and_never_serves_another_stack(monkeypatch):
-    """The line simulations' cache (pipeline.model.linalg.remembered_pinv): the same arrays for
-    the same stack, read-only; another stack (one value changed) its own; nothing kept past
-    the byte budget."""
-    from pipeline.model import linalg
-
-    rng = np.random.default_rng(5)
-    stack = np.transpose(rng.normal(size=(500, 8, 6)), (0, 2, 1))  # a view, as J^T is
-    stack[::7, 5] = stack[::7, 4]  # one rank short: the SVD route
-    first = linalg.remembered_pinv(stack, 1e-9)
-    expected = linalg.batched_pinv(stack, 1e-9)
-    for got, want in zip(first, expected):
-        np.testing.assert_array_equal(got, want)  # bit for bit, for the layout given
-        assert not got.flags.writeable
-    contiguous = linalg.remembered_pinv(np.ascontiguousarray(stack), 1e-9)
-    assert contiguous[0] is not first[0]  # another layout: computed, not taken
-    again = linalg.remembered_pinv(np.transpose(np.transpose(stack, (0, 2, 1)).copy(), (0, 2, 1)), 1e-9)
-    assert again[0] is first[0] and again[1] is first[1]
-    changed = stack.copy()
-    changed[123, 2, 3] += 1e-12
-    other = linalg.remembered_pinv(changed, 1e-9)
-    np.testing.assert_array_equal(other[0], linalg.batched_pinv(changed, 1e-9)[0])
-    assert not np.array_equal(other[0], first[0])
-    assert linalg.remembered_pinv(stack, 1e-3)[0] is not first[0]  # another tolerance
-    monkeypatch.setattr(linalg, "REMEMBERED_BYTES", stack.nbytes)  # less than input + result
-    fresh = rng.normal(size=(500, 6, 8))
-    assert linalg.remembered_pinv(fresh, 1e-9)[0] is not linalg.remembered_pinv(fresh, 1e-9)[0]
-
-
 @pytest.mark.parametrize("rows", [1, 2])
 def test_one_and_two_freedom_platforms_give_the_lp_margins(rows):
     """A platform of one freedom (robot.dofs=[z] or [rz]: one row, the normals are +-1 from the

@@ -11,9 +11,6 @@ which drops singular values at or below ``rtol * sigma_max``.
 
 from __future__ import annotations
 
-import hashlib
-from collections import OrderedDict
-
 import numpy as np
 
 
@@ -54,32 +51,3 @@ def svd_pinv(matrices: np.ndarray, rtol: float) -> tuple[np.ndarray, np.ndarray]
     keep = sigma > rtol * sigma[:, :1]
     inverse = np.divide(1.0, sigma, out=np.zeros_like(sigma), where=keep)
     return np.einsum("nki,nk,njk->nij", vt, inverse, u), keep.sum(axis=1)
-
-
-REMEMBERED_BYTES = 128 * 2**20  # inputs and results :func:`remembered_pinv` keeps, at most
-_remembered: OrderedDict[bytes, tuple[np.ndarray, np.ndarray, np.ndarray]] = OrderedDict()
-
-
-def remembered_pinv(matrices: np.ndarray, rtol: float) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`batched_pinv`, remembered for the stacks a process meets again (least recently
-    used dropped first, at most ``REMEMBERED_BYTES``): the straight-line simulations of one
-    robot, orientation and reading sample the same poses for every actuator, so
-    ``evidence_cpr8``'s 120 jobs have 4 distinct stacks of 26 388 matrices. A stack is found by
-    its digest and compared in full before its result is used. The pseudo-inverse is computed
-    from ``matrices`` as given, not from a contiguous copy: the memory layout can change einsum's
-    order of summation, hence the last bits, so it is part of the key. The arrays are read-only."""
-    stored = np.array(matrices, order="C")  # hashed, and kept for the comparison
-    digest = hashlib.blake2b(stored, digest_size=16)
-    digest.update(repr((matrices.shape, matrices.strides, float(rtol))).encode())
-    key = digest.digest()
-    kept = _remembered.get(key)
-    if kept is not None and np.array_equal(kept[0], stored):
-        _remembered.move_to_end(key)
-        return kept[1], kept[2]
-    pinv, rank = batched_pinv(matrices, rtol)
-    for array in (stored, pinv, rank):
-        array.flags.writeable = False
-    _remembered[key] = stored, pinv, rank
-    while sum(sum(a.nbytes for a in entry) for entry in _remembered.values()) > REMEMBERED_BYTES:
-        _remembered.popitem(last=False)  # a stack larger than the budget is not kept at all
-    return pinv, rank
