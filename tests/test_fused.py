@@ -121,6 +121,26 @@ def _stacked(result: dict) -> np.ndarray:
     return np.column_stack([result[key] for key in sorted(result)])
 
 
+def _same_in_any_block(problem, positions: np.ndarray) -> tuple[dict, np.ndarray]:
+    """The compiled kernel's margins and unsettled flags of ``positions``, having asserted the
+    block law: every pose's are the same doubles with the poses reversed, turned by 37, and cut
+    short at sizes around a block's."""
+    from pipeline.workspace.fused_loops import BLOCK
+
+    n = len(positions)
+    found, unsettled = fused.margins(problem, positions, 0)
+    rows = _stacked(found)
+    for order in (np.arange(n)[::-1], np.roll(np.arange(n), 37)):
+        again, left = fused.margins(problem, positions[order], 0)
+        np.testing.assert_array_equal(_stacked(again)[np.argsort(order)], rows)
+        np.testing.assert_array_equal(left[np.argsort(order)], unsettled)
+    for size in (1, BLOCK - 1, BLOCK, BLOCK + 1, 2 * BLOCK + 5):
+        part, left = fused.margins(problem, positions[:size], 0)
+        np.testing.assert_array_equal(_stacked(part), rows[:size])
+        np.testing.assert_array_equal(left, unsettled[:size])
+    return found, unsettled
+
+
 def test_a_pose_s_margins_do_not_depend_on_the_block_it_is_computed_in(make_cfg, catalogue):
     """The compiled CPR-WWA loop computes ``BLOCK`` poses at a time (each a vector lane) on
     either route, the deflated route's inverse iteration from the same start in every lane.
@@ -144,18 +164,10 @@ def test_a_pose_s_margins_do_not_depend_on_the_block_it_is_computed_in(make_cfg,
         n = 3 * BLOCK + 17
         positions = on_grid(rng.uniform(-0.5, 0.5, (n, 3)))
         positions[rng.choice(n, n // 8, replace=False)] = anchors[3] - attachments[3]
-        found, unsettled = fused.margins(candidate, positions, 0)
+        found, unsettled = _same_in_any_block(candidate, positions)
         rows = _stacked(found)
         assert ((found["jacobian_rank"] == 6) & ~unsettled).sum() > n // 2
         assert ((found["jacobian_rank"] == 5) & ~unsettled).sum() >= n // 10
-        for order in (np.arange(n)[::-1], np.roll(np.arange(n), 37)):
-            again, left = fused.margins(candidate, positions[order], 0)
-            np.testing.assert_array_equal(_stacked(again)[np.argsort(order)], rows)
-            np.testing.assert_array_equal(left[np.argsort(order)], unsettled)
-        for size in (1, BLOCK - 1, BLOCK, BLOCK + 1, 2 * BLOCK + 5):
-            part, left = fused.margins(candidate, positions[:size], 0)
-            np.testing.assert_array_equal(_stacked(part), rows[:size])
-            np.testing.assert_array_equal(left, unsettled[:size])
         extra = on_grid(rng.uniform(-0.5, 0.5, (2 * BLOCK, 3)))
         where = np.sort(rng.choice(n + 1, len(extra)))
         widened = np.insert(positions, where, extra, axis=0)
@@ -238,22 +250,11 @@ def test_a_pose_s_statics_margins_do_not_depend_on_the_block_it_is_computed_in(o
     no memory from pose to pose. Law: every pose's margins and its unsettled flag (a singular
     or doubtful pose, left to numpy) are the same doubles in any block and at any place in it
     (the IRPM paper's box reversed, turned by 37, cut short at sizes around a block's)."""
-    from pipeline.workspace.fused_loops import BLOCK
-
     problem, grid = build_problem(make_cfg("robot=irpm6", "robot.gamma_deg=15", *overrides), catalogue)
     positions = grid[:]
     n = len(positions)
-    found, unsettled = fused.margins(problem, positions, 0)
-    rows = _stacked(found)
+    unsettled = _same_in_any_block(problem, positions)[1]
     assert 0 < unsettled.sum() < n // 10
-    for order in (np.arange(n)[::-1], np.roll(np.arange(n), 37)):
-        again, left = fused.margins(problem, positions[order], 0)
-        np.testing.assert_array_equal(_stacked(again)[np.argsort(order)], rows)
-        np.testing.assert_array_equal(left[np.argsort(order)], unsettled)
-    for size in (1, BLOCK - 1, BLOCK, BLOCK + 1, 2 * BLOCK + 5):
-        part, left = fused.margins(problem, positions[:size], 0)
-        np.testing.assert_array_equal(_stacked(part), rows[:size])
-        np.testing.assert_array_equal(left, unsettled[:size])
 
 
 def test_a_points_robot_with_eight_cables_gives_the_numpy_statics_margins(make_cfg, catalogue):
