@@ -64,6 +64,9 @@ ROW = "1,a,300,48,4700,0.6,0.0945,0.095,0,0.369,3579,30,0.6,0.08\n"
         (HEADER + ROW.replace("300", "1_0e"), "row 2, column power_W: '1_0e' is not a number"),
         (HEADER + ROW.replace("300", "nan"), "row 2, column power_W: 'nan' is not a number"),
         (HEADER + ROW.replace("300", "-inf"), "row 2, column power_W: '-inf' is not a number"),
+        (HEADER + ROW.replace(",30,", ",1e-300,"), "column gear_ratio: 1e-300 must be >= 0.001 and at most 100000"),
+        (HEADER + ROW.replace(",30,", ",1e300,"), "column gear_ratio: 1e+300 must be >= 0.001 and at most 100000"),
+        (HEADER + ROW.replace(",0.08", ",80"), "column winch_radius_m: 80 must be > 0 and at most 10"),  # mm?
     ],
 )
 def test_malformed_catalogue_names_row_and_column(tmp_path, text, expected):

@@ -118,6 +118,14 @@ CASES = [
     ("pipeline", ["model.rank_rtol=5"], "model.rank_rtol=5"),
     ("pipeline", ["robot.lower_anchor_drop=inf"], "robot.lower_anchor_drop=inf"),
     ("pipeline", ["motion.v_max=inf"], "motion.v_max=inf"),
+    ("pipeline", ["motion.v_max=1e300"], "motion.v_max=1e+300: must be in [1e-06, 1000] m/s"),  # margins inf
+    ("pipeline", ["motion.v_max=5e-324"], "motion.v_max=5e-324: must be in [1e-06, 1000] m/s"),  # a zero grid step
+    ("pipeline", ["motion.t_acc=1e-300"], "motion.t_acc=1e-300: the carrier would accelerate at v_max / t_acc = 1.3e+300"),
+    ("pipeline", ["analysis=lines", "motion.t_dec=1e-5"], "motion.t_dec=1e-05: the carrier would accelerate"),
+    ("pipeline", ["analysis=lines", "motion.t_acc=1e5"], "the 72 lines take 4.35e+06 samples of 0.01 s"),
+    ("pipeline", ["analysis=lines", "motion.t_acc=1e300"], "the 72 lines take 1.37e+154 samples"),
+    ("pipeline", ["model.acceleration_set=colon", "motion.t_acc=0.001"],
+     "model.acceleration_set=colon: 1301 accelerations per axis"),  # 2.2e9 of them: killed for memory before
     ("pipeline", ["load.mass=inf"], "load.mass=inf"),
     ("pipeline", ["load.external=[0,0,nan,0,0,0]"], "load.external"),
     ("pipeline", ["robot=irpm6", "wrench.fx=nan"], "wrench.fx=nan"),
@@ -188,7 +196,11 @@ CASES = [
      "robot.search.step=5.0: no grid point in the search box"),
     ("pipeline", ["-m", "actuator=range(0,10000)", "load.mass=range(1,10001)"],
      "-m: 1e+08 jobs (actuator: 10000 x load.mass: 10000); at most 100000"),
-    ("pipeline", ["drive.gear_ratio=1e308"], "drive.gear_ratio=1e+308: must be > 0 and at most 1e+05"),
+    ("pipeline", ["drive.gear_ratio=1e308"], "drive.gear_ratio=1e+308: must be >= 0.001 and at most 100000"),
+    ("pipeline", ["drive.gear_ratio=1e-300"], "drive.gear_ratio=1e-300: must be >= 0.001"),  # 1/0 in eq. 22
+    ("pipeline", ["load.gravity=1e300"], "load.gravity=1e+300: must be in [0, 10000] m/s^2"),  # margins inf
+    ("pipeline", ["load.com=[1e300,0,0]"], "load.com=[1e+300, 0.0, 0.0]: every value must be at most 10000"),
+    ("pipeline", ["grid.n_vel=1"], "grid.n_vel=1: must be >= 2"),  # no velocity inside the sphere of eq. 26
     ("pipeline.study", ["no_such_study"], "study 'no_such_study' not found"),
     ("pipeline.study", ["actuator_choice", "catalogue=text.csv"], "row 2, column voltage_V: '48 V'"),
     ("pipeline.study", ["actuator_choice", "catalogue=dup.csv"], "row 3, column id: duplicate id 1"),

@@ -121,7 +121,8 @@ def test_help_lists_the_choices_and_every_key_with_its_meaning(tmp_path):
     page = done.stdout
     assert "  robot: cpr8, irpm6, points (or your own robot/NAME.yaml with --config-dir DIR)" in page
     assert "schema" not in page.split("keys of this composition")[0]  # no internal names
-    assert "motion: Trapezoidal reference motion: V_cmax (m/s), t_acc and t_dec (s)." in " ".join(page.split())
+    assert ("motion: Trapezoidal reference motion: V_cmax (m/s, from 1e-6 to 1e3), t_acc and t_dec (s); the accelerations "
+            "V_cmax / t_acc and V_cmax / t_dec at most 1e4 m/s^2.") in " ".join(page.split())
     assert "  motion.v_max = 1.3" in page and "  actuator = 1" in page
     assert "``" not in page and ":func:" not in page
     irpm = run(tmp_path, "--help", "robot=irpm6", "robot.gamma_deg=30").stdout

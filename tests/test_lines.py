@@ -1,6 +1,8 @@
 """Straight-line simulation experiments (section 3.1.3, Figs. 4b, 5b, 6): the trapezoidal
 profile, line O''-F'', the power balance, and the agreement with the CPR-WWA grid."""
 
+import re
+
 import numpy as np
 import pytest
 
@@ -31,6 +33,25 @@ def test_trapezoid_reaches_the_end_at_rest_with_the_paper_accelerations(distance
     assert set(np.round(np.unique(p.a), 6)) <= {round(1.3 / 1.82, 6), 0.0, round(-1.3 / 1.82, 6)}
     np.testing.assert_allclose(np.gradient(p.s, p.t)[5:-5], p.v[5:-5], atol=2e-3)
     assert np.trapezoid(p.v, p.t) == pytest.approx(distance, rel=1e-4)
+
+
+@pytest.mark.parametrize("overrides", [(), ("grid.n=5", "motion.t_acc=0.7", "motion.t_dec=2.9")])
+def test_the_lines_samples_are_counted_exactly_before_any_is_made(lines, make_cfg, catalogue, monkeypatch, overrides):
+    """``check_samples`` counts each line's samples from its profile without sampling it: a bound
+    of exactly the samples the simulation makes passes, one fewer is refused (square and
+    asymmetric accelerations, lines of equal and of different lengths)."""
+    import pipeline.workspace.lines as module
+    from pipeline.app.problem import build_grid
+    from pipeline.errors import ConfigError
+
+    cfg = make_cfg("analysis=lines", *overrides)
+    made = len(lines(*overrides)[0])
+    grid = build_grid(cfg, build_problem(cfg, catalogue)[0].robot)
+    monkeypatch.setattr(module, "MAX_SAMPLES", made)
+    module.check_samples(cfg.motion, grid)
+    monkeypatch.setattr(module, "MAX_SAMPLES", made - 1)
+    with pytest.raises(ConfigError, match=re.escape(f"take {made:.3g} samples")):
+        module.check_samples(cfg.motion, grid)
 
 
 def line_of(samples, number=0):

@@ -129,6 +129,16 @@ def test_the_trapezoidal_law_is_the_papers_profile_along_each_segment_and_sample
         trapezoidal(np.vstack([full[:1], full[:1]]), 1.0, 0.5, 0.5)
 
 
+def test_a_speed_too_large_for_a_double_squared_gives_the_triangle_of_its_accelerations():
+    """v_max = 1e200 m/s reached in 1e200 s: 1 m/s^2 up and down, a profile v_max never limits; over
+    d = 2.25 m the triangle peaks at sqrt(d) = 1.5 m/s after 1.5 s and stops at 3 s (d = a T^2 / 4),
+    where v_max^2 alone would overflow a double."""
+    profile = trapezoid(2.25, 1e200, 1e200, 1e200, 0.01)
+    assert profile.t[-1] == pytest.approx(3.0, rel=1e-12) and profile.v.max() == pytest.approx(1.5, rel=1e-12)
+    np.testing.assert_allclose(profile.s, np.where(profile.t < 1.5, profile.t**2 / 2, 2.25 - (3 - profile.t) ** 2 / 2),
+                               atol=1e-12)
+
+
 @pytest.mark.parametrize("convention", ["zyx", "xyz"])
 def test_angular_velocity_and_acceleration_against_finite_differences_of_the_rotations(convention):
     """omega = axial(R' R^T) and alpha = omega' by central differences of the path's rotations
@@ -439,6 +449,14 @@ BAD = [  # (overrides, what the one line names)
     (["trajectory.points=[[0,0,1],[0,1,1]]", "trajectory.times=1", "trajectory.dt=0"], "trajectory.dt"),
     (["trajectory.points=[[0,0,1],[0,1,1]]", "trajectory.times=1000", "trajectory.dt=1e-6"], "trajectory.dt"),
     (["trajectory.points=[[0,0,1],[0,1,1]]", "trajectory.times=20000", "trajectory.dt=0.01"], "1,000,000"),
+    (["trajectory.points=[[0,0,1],[0,1,1]]", "trajectory.times=1e300"], "1e+302 samples"),  # counted in floats
+    (["trajectory.points=[[0,0,1],[0,1,1]]", "trajectory.times=1", "trajectory.dt=1e-300"], "trajectory.dt=1e-300"),
+    (["trajectory.points=[[0,0,1],[0,1,1]]", "trajectory.law=trapezoid", "trajectory.v_max=1e300", "trajectory.t_acc=1",
+      "trajectory.t_dec=1"], "trajectory.v_max=1e+300: the trapezoid accelerates at"),
+    (["trajectory.points=[[0,0,1],[0,1,1]]", "trajectory.law=trapezoid", "trajectory.v_max=1e-300",
+      "trajectory.t_acc=1e300", "trajectory.t_dec=1e300"], "v_max / t_acc = 0"),
+    (["trajectory.points=[[0,0,1],[0,1,1]]", "trajectory.law=trapezoid", "trajectory.v_max=5e-324",
+      "trajectory.t_acc=1", "trajectory.t_dec=1"], "inf samples"),
     (["trajectory.points=[[0,0,1],[0,1,1]]", "trajectory.times=2", "compute.max_poses=100"], "compute.max_poses=100"),
     (["trajectory.points=[[0,0,1],[0,1,1]]", "trajectory.times=1", "trajectory.law=straight"], "trajectory.law"),
     (["trajectory.points=[[0,0,1],[0,1,1]]", "trajectory.times=1", "trajectory.name=tour"], "trajectory.name"),

@@ -22,6 +22,7 @@ from omegaconf import MISSING, DictConfig, ListConfig, OmegaConf
 from omegaconf.errors import MissingMandatoryValue, OmegaConfBaseException
 
 from pipeline.errors import ConfigError, one_line, text_number
+from pipeline.model.catalogue import GEAR_RATIOS, WINCH_RADIUS
 
 INF = float("inf")
 JOBLIB_BACKENDS = ("loky", "threading", "multiprocessing", "sequential", "dask")
@@ -58,6 +59,7 @@ def sag_share(value):
 # and well inside the range where the LP solver's coefficients stay finite (HiGHS reads 1e20 as
 # infinite), so a mistyped exponent is one line rather than a solver failure.
 MAX_FORCE = 1e9
+MAX_REACH = 1e4  # m: a centre of mass or a way-point past any cable robot's frame, a unit typed wrong
 MAX_MASS = 1e8
 
 
@@ -203,7 +205,7 @@ class CarrierConfig:
 
 @dataclass
 class PlatformConfig:
-    """The robot's own moving platform: its mass (kg) and centre of mass (m, platform frame).
+    """The robot's own moving platform: its mass (kg) and centre of mass (m, platform frame, at most 1e4).
     With the payload (``load.*``) it is the mass m of eq. (31) and the weight every analysis
     balances (CPR-8: the paper's carrier with its load, 2 kg; IRPM: 0, as its paper puts the
     weight in f_ext; a robot of points: 0 unless its file gives one). ``shape``: its body, which
@@ -214,7 +216,7 @@ class PlatformConfig:
     them (null: not given; the natural frequency of criterion ``stiffness`` needs it)."""
 
     mass: float = rule(mass_kg)
-    com: list[float] = rule(vector(3, "x y z, m, platform frame"))
+    com: list[float] = rule(vector(3, "x y z, m, platform frame", MAX_REACH))
     shape: Any = MISSING
     inertia: Any = MISSING
 
@@ -405,20 +407,35 @@ class GridConfig:
     ``spacing``: linspace puts them on both faces (step (d - 2 d_e) / (N - 1)), centred at the N
     cell centres. ``n_vel``: N of the velocity grid of eqs. (23)-(25); null ties it to ``n`` as
     in the paper (6 for robots without ``grid.n``). Set it for dense position grids: n_vel = n =
-    40 would test 33 371 velocities per pose."""
+    40 would test 33 371 velocities per pose; at least 2 (N = 1 leaves the cube's 8 corners, all
+    outside |v| <= V_cmax of eq. 26)."""
 
     n: int = rule(at_least(2))
-    n_vel: Optional[int] = rule(at_least(1))
+    n_vel: Optional[int] = rule(at_least(2))
     spacing: Spacing = MISSING
+
+
+MAX_ACCELERATION = 1e4  # m/s^2, rad/s^2 and rad/s: past any cable robot's, a unit typed wrong
+SPEEDS = (1e-6, 1e3)  # m/s: a carrier's top speed between a micrometre a second and a kilometre a second
 
 
 @dataclass
 class MotionConfig:
-    """Trapezoidal reference motion: V_cmax (m/s), t_acc and t_dec (s)."""
+    """Trapezoidal reference motion: V_cmax (m/s, from 1e-6 to 1e3), t_acc and t_dec (s); the
+    accelerations V_cmax / t_acc and V_cmax / t_dec at most 1e4 m/s^2."""
 
-    v_max: float = rule(positive)
+    v_max: float = rule(lambda v: None if SPEEDS[0] <= v <= SPEEDS[1] else
+                        f"must be in [{SPEEDS[0]:g}, {SPEEDS[1]:g}] m/s (past either end, a unit typed wrong)")
     t_acc: float = rule(positive)
     t_dec: float = rule(positive)
+
+    @staticmethod
+    def check_fields(motion: DictConfig) -> None:
+        present = set(motion.keys())  # a node of another analysis may hold some of them only
+        for key in ("t_acc", "t_dec"):
+            if {"v_max", key} <= present and motion.v_max / motion[key] > MAX_ACCELERATION:
+                raise ConfigError(f"motion.{key}={motion[key]:g}: the carrier would accelerate at v_max / {key} = "
+                                  f"{motion.v_max / motion[key]:.3g} m/s^2, more than {MAX_ACCELERATION:g}")
 
 
 @dataclass
@@ -427,23 +444,27 @@ class LoadConfig:
     eq. (31)) and centre of mass (m, platform frame); the gravitational acceleration g (m/s^2,
     along -up of the robot) and a constant external wrench [f_x f_y f_z M_x M_y M_z] (N, N m)
     the cables must also balance: the weight of platform and payload, its moment and the
-    external wrench enter every analysis. Masses are bounded at 1e8 kg and forces at 1e9 N
-    (N m): far past any cable robot, where a mistyped exponent would reach the LP solver."""
+    external wrench enter every analysis. Masses are bounded at 1e8 kg, forces at 1e9 N (N m),
+    the centre of mass at 1e4 m and gravity at 1e4 m/s^2: far past any cable robot, where a
+    mistyped exponent would reach the LP solver."""
 
     mass: float = rule(mass_kg)
-    gravity: float = rule(non_negative)
-    com: list[float] = rule(vector(3, "x y z, m, platform frame"))
+    gravity: float = rule(lambda v: None if 0 <= v <= MAX_ACCELERATION else
+                          f"must be in [0, {MAX_ACCELERATION:g}] m/s^2 (past any planet's, a unit typed wrong)")
+    com: list[float] = rule(vector(3, "x y z, m, platform frame", MAX_REACH))
     external: list[float] = rule(vector(6, "fx fy fz mx my mz", MAX_FORCE))
 
 
 @dataclass
 class DriveConfig:
     """Design overrides of the catalogue's drive train, for every cable: winch radius R_i (m, at
-    most 10) and gear ratio N_V (at most 1e5: past any gearbox, where the drive's constants of
-    eq. 22 would overflow). null keeps each actuator's catalogue value."""
+    most 10) and gear ratio N_V (1e-3 to 1e5: past any gearbox, where the drive's constants of
+    eq. 22 would overflow or divide by zero). null keeps each actuator's catalogue value."""
 
-    winch_radius: Optional[float] = rule(lambda v: None if 0 < v <= 10 else "must be > 0 and at most 10 m")
-    gear_ratio: Optional[float] = rule(lambda v: None if 0 < v <= 1e5 else "must be > 0 and at most 1e+05")
+    winch_radius: Optional[float] = rule(lambda v: None if 0 < v <= WINCH_RADIUS else
+                                         f"must be > 0 and at most {WINCH_RADIUS:g} m")
+    gear_ratio: Optional[float] = rule(lambda v: None if GEAR_RATIOS[0] <= v <= GEAR_RATIOS[1] else
+                                       f"must be >= {GEAR_RATIOS[0]:g} and at most {GEAR_RATIOS[1]:g}")
 
 
 @dataclass
@@ -451,9 +472,6 @@ class ChoiceConfig:
     """CPR-ACM (section 4): an actuator is accepted when its feasible share x(i_a) >= required_pct."""
 
     required_pct: float = rule(lambda v: None if 0 < v <= 100 else "must be in (0, 100]")
-
-
-MAX_ACCELERATION = 1e4  # m/s^2, rad/s^2 and rad/s: past any cable robot's, a unit typed wrong
 
 
 @dataclass
@@ -579,7 +597,7 @@ def _path_error(value) -> str | None:
     if points is None or len(points) < 2:
         return "at least two way-points [[x, y, z], [x, y, z], ...] (m)"
     for number, point in enumerate(points, 1):
-        broken = vector(3, "x, y, z, m", 1e4)(point) if isinstance(point, (list, ListConfig)) else "needs 3 values"
+        broken = vector(3, "x, y, z, m", MAX_REACH)(point) if isinstance(point, (list, ListConfig)) else "needs 3 values"
         if broken:
             return f"way-point {number}: {broken}"
     for number in range(1, len(points)):

@@ -32,11 +32,11 @@ from pipeline.app.config import MAX_ACCELERATION
 from pipeline.app.xmlfiles import parse_xml
 from pipeline.errors import ConfigError
 from pipeline.model.geometry import CableRobot
-from pipeline.model.path import Path, Samples, StraightMotion, durations, hermite, rest_to_rest, spline, trapezoidal
+from pipeline.model.path import (MAX_SAMPLES, Path, Samples, StraightMotion, durations, hermite, rest_to_rest, spline,
+                                 trapezoidal)
 
 DEFAULT_DT = 0.01  # s between samples, when neither trajectory.dt nor a CASPR file gives one
 MAX_WAY_POINTS = 1_000_000
-MAX_SAMPLES = 1_000_000  # the samples table is built whole (about 0.5 GB at 64 columns): a path's largest
 MAX_COORDINATE = 1e6  # m or rad: past any cable robot's workspace, a unit typed wrong
 TIMED = ("quintic", "spline")  # the laws that take each segment's duration
 SPEEDS = ("v_max", "t_acc", "t_dec")  # the keys of the trapezoidal law
@@ -57,7 +57,7 @@ def path_samples(cfg: DictConfig, robot: CableRobot) -> Samples:
         path, step = (_from_file(node, law, robot, cfg.orientation) if node.file is not None
                       else (_from_points(node, law, robot, cfg.orientation), None))
     dt = float(node.dt) if node.dt is not None else (step or DEFAULT_DT)
-    count = int(path.counts(dt).sum())
+    count = float(path.counts(dt).sum())
     if count > min(cfg.compute.max_poses, MAX_SAMPLES):
         bound = (f"compute.max_poses={cfg.compute.max_poses}" if cfg.compute.max_poses < MAX_SAMPLES else
                  f"{MAX_SAMPLES:,} (a path's samples are held whole: about 0.5 kB each)")
@@ -82,8 +82,13 @@ def _from_points(node: DictConfig, law: str, robot: CableRobot, orientation: Dic
         missing = [key for key in SPEEDS if node[key] is None]
         if missing:
             raise ConfigError(f"trajectory.{missing[0]}: law trapezoid needs v_max (m/s), t_acc and t_dec (s)")
+        v_max, t_acc, t_dec = (float(node[key]) for key in SPEEDS)
+        if not all(0 < rate <= MAX_ACCELERATION for rate in (v_max / t_acc, v_max / t_dec)):
+            raise ConfigError(f"trajectory.v_max={v_max:g}: the trapezoid accelerates at v_max / t_acc = {v_max / t_acc:.3g} "
+                              f"and decelerates at v_max / t_dec = {v_max / t_dec:.3g} m/s^2; each must be > 0 and at "
+                              f"most {MAX_ACCELERATION:g} (a unit typed wrong, or t_acc, t_dec too short or too long)")
         try:
-            return trapezoidal(points, float(node.v_max), float(node.t_acc), float(node.t_dec))
+            return trapezoidal(points, v_max, t_acc, t_dec)
         except ValueError as exc:
             raise ConfigError(f"trajectory.points: {exc}") from None
     _no_speeds(node, law)

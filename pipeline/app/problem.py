@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import importlib.util
 import itertools
+import math
 from dataclasses import dataclass, fields, replace
 from typing import Callable
 
@@ -151,6 +152,12 @@ def _cpr_wwa(cfg: DictConfig, catalogue: Catalogue, robot: CableRobot):
                           "minimum-norm torques, which may push; set tension.model=feasible")
     actuator = actuator_model(catalogue.row(cfg.actuator), cfg.drive.winch_radius, cfg.drive.gear_ratio,
                               model.xi_in_torque_limit)
+    if name_of(model.acceleration_set) == "colon":  # MATLAB's -V/t_dec : V/t_acc, step 1 m/s^2, per axis
+        per_axis = math.ceil(cfg.motion.v_max / cfg.motion.t_acc + 1e-12 - -cfg.motion.v_max / cfg.motion.t_dec)  # numpy's count
+        if per_axis**3 > MAX_SET_VERTICES:
+            raise ConfigError(f"model.acceleration_set=colon: {per_axis} accelerations per axis at motion.v_max="
+                              f"{cfg.motion.v_max:g}, t_acc={cfg.motion.t_acc:g}, t_dec={cfg.motion.t_dec:g}, {per_axis**3:,} "
+                              f"in all; at most {MAX_SET_VERTICES} (the corners decide the same box)")
     velocities = velocity_set(cfg.motion.v_max, n_vel, name_of(model.velocity_boundary))
     motion = MotionSpec(
         velocities=velocities,
@@ -628,6 +635,10 @@ def validate(cfg: DictConfig, catalogue: Catalogue | None,
             follows = "straight lines" if cfg.analysis == "lines" else "its path"
             raise ConfigError(f"{key}: analysis={cfg.analysis} follows {follows}; the connected reach and the mesh are "
                               "of a grid analysis (cpr_wwa, statics, payload)")
+    if cfg.analysis == "lines":
+        from pipeline.workspace.lines import check_samples  # pandas: only this analysis needs it
+
+        check_samples(cfg.motion, build_grid(cfg, problem.robot))
     if cfg.workspace.home is not None:
         home_node(build_grid(cfg, problem.robot), cfg.workspace.home)
     if cfg.output.mesh:

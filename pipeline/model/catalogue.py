@@ -23,20 +23,22 @@ if TYPE_CHECKING:
 
 TABLE1 = resources.files("pipeline") / "data" / "actuators_table1.csv"
 
-# column -> (lower bound, bound is inclusive); every numeric column must be finite
-NUMERIC_COLUMNS: dict[str, tuple[float, bool]] = {
-    "power_W": (0.0, False),
-    "voltage_V": (0.0, False),
-    "speed_rpm": (0.0, False),
-    "torque_Nm": (0.0, False),
-    "back_emf_V_per_rad_s": (0.0, False),
-    "torque_constant_Nm_per_A": (0.0, False),
-    "viscous_friction_Nm_per_rad_s": (0.0, True),
-    "resistance_ohm": (0.0, False),
-    "inertia_g_cm2": (0.0, False),
-    "gear_ratio": (0.0, False),
-    "efficiency": (0.0, False),
-    "winch_radius_m": (0.0, False),
+GEAR_RATIOS = (1e-3, 1e5)  # past any gearbox, where the drive's constants of eq. 22 overflow or divide by zero
+WINCH_RADIUS = 10.0  # m, the largest winch radius
+# column -> (lower bound, bound is inclusive, upper bound, inclusive); every numeric column must be finite
+NUMERIC_COLUMNS: dict[str, tuple[float, bool, float]] = {
+    "power_W": (0.0, False, math.inf),
+    "voltage_V": (0.0, False, math.inf),
+    "speed_rpm": (0.0, False, math.inf),
+    "torque_Nm": (0.0, False, math.inf),
+    "back_emf_V_per_rad_s": (0.0, False, math.inf),
+    "torque_constant_Nm_per_A": (0.0, False, math.inf),
+    "viscous_friction_Nm_per_rad_s": (0.0, True, math.inf),
+    "resistance_ohm": (0.0, False, math.inf),
+    "inertia_g_cm2": (0.0, False, math.inf),
+    "gear_ratio": (GEAR_RATIOS[0], True, GEAR_RATIOS[1]),
+    "efficiency": (0.0, False, math.inf),  # at most 1: FRACTIONS
+    "winch_radius_m": (0.0, False, WINCH_RADIUS),
 }
 FRACTIONS = ("efficiency",)  # dimensionless, in (0, 1]
 # column -> physical quantity its name starts with (the rest of the name is the unit)
@@ -130,9 +132,9 @@ def _number(text: str, number: int, column: str, source) -> float:
     value = as_number(text)
     if not math.isfinite(value):
         raise ConfigError(f"catalogue={source}: row {number}, column {column}: {text!r} is not a number")
-    bound, inclusive = NUMERIC_COLUMNS[column]
-    if value < bound or (value == bound and not inclusive):
-        rule = ">= 0" if inclusive else "> 0"
+    low, inclusive, high = NUMERIC_COLUMNS[column]
+    if value < low or (value == low and not inclusive) or value > high:
+        rule = f"{'>=' if inclusive else '>'} {low:g}" + (f" and at most {high:g}" if high < math.inf else "")
         raise ConfigError(f"catalogue={source}: row {number}, column {column}: {value:g} must be {rule}")
     if column in FRACTIONS and value > 1:
         raise ConfigError(f"catalogue={source}: row {number}, column {column}: {value:g} must "

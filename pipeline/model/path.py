@@ -39,6 +39,7 @@ from pipeline.model.geometry import elementary_rotations, rotation_matrices
 
 COORDINATES = ("x", "y", "z", "psi", "theta", "phi")  # q's columns (the angles in orientation.convention)
 MIN_STEPS = 10  # steps a piece is sampled in, at least, whatever trajectory.dt
+MAX_SAMPLES = 1_000_000  # the samples table is built whole (about 0.5 GB at 64 columns): a path's largest
 
 
 @dataclass(frozen=True)
@@ -70,7 +71,8 @@ def trapezoid_phases(distance: float, v_max: float, t_acc: float, t_dec: float) 
     decelerate at v_max / t_dec (section 3, assumption 1). A segment too short to reach v_max
     gets the triangular profile with the same accelerations and a lower peak speed."""
     acc, dec = v_max / t_acc, v_max / t_dec
-    ramps = v_max**2 / (2 * acc) + v_max**2 / (2 * dec)
+    with np.errstate(over="ignore"):  # v_max past 1e154 m/s: ramps too long for a double, the triangle
+        ramps = float(np.float64(v_max) ** 2 / (2 * acc) + np.float64(v_max) ** 2 / (2 * dec))
     if distance >= ramps:
         peak, cruise = v_max, (distance - ramps) / v_max
     else:
@@ -129,14 +131,15 @@ class Path:
     def counts(self, dt: float) -> np.ndarray:
         """(P,) samples per piece: both ends, at most ``dt`` apart, and at least ``MIN_STEPS``
         steps a piece (a piece shorter than ``dt`` is still sampled inside, where its acceleration
-        peaks: a rest-to-rest quintic is at rest at both ends)."""
+        peaks: a rest-to-rest quintic is at rest at both ends). Floats, exact integers up to 2^53:
+        a path of 1e300 s counts its samples without overflowing before the caller bounds them."""
         spans = np.diff(self.breaks)
-        return np.maximum(np.ceil(spans / dt - 1e-9), MIN_STEPS).astype(np.int64) + 1
+        return np.maximum(np.ceil(spans / dt - 1e-9), MIN_STEPS) + 1
 
     def sample(self, dt: float) -> Samples:
         """Every piece at equal steps of at most ``dt`` (s), both ends included (module doc), in
         time order; value and derivatives by Horner's scheme, exact for the polynomials."""
-        counts = self.counts(dt)
+        counts = self.counts(dt).astype(np.int64)
         piece = np.repeat(np.arange(len(counts)), counts)
         index = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
         spans = np.diff(self.breaks)

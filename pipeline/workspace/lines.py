@@ -13,6 +13,7 @@ sample of its x-line and of its y-line within half a grid step of it satisfies e
 from __future__ import annotations
 
 import logging
+import math
 
 import numpy as np
 import pandas as pd
@@ -22,7 +23,8 @@ from pipeline.model.dynamics import SampleDynamics
 from pipeline.workspace import criteria
 from pipeline.workspace.grid import Grid
 from pipeline.workspace.kernel import WorkspaceProblem
-from pipeline.model.path import trapezoid
+from pipeline.errors import ConfigError
+from pipeline.model.path import MAX_SAMPLES, trapezoid, trapezoid_phases
 from pipeline.workspace.trajectory import inverse_dynamics
 from pipeline.workspace.verdict import classify
 from pipeline.workspace.compute import grid_workspace
@@ -55,10 +57,10 @@ def simulate_lines(cfg: DictConfig, problem: WorkspaceProblem, grid: Grid,
     the smallest margin along line O''-F'' (``line0_margin_*``: Fig. 6's verdict per limit);
     ``problem`` and ``grid``: CPR-WWA's (``pipeline.app.problem.build_problem``); ``sweep_pays``:
     as :func:`pipeline.workspace.compute.grid_workspace`."""
-    points, summary = grid_workspace(cfg, problem, grid, sweep_pays=sweep_pays)
     lines = _lines(grid[:])
     v_max, t_acc, t_dec = cfg.motion.v_max, cfg.motion.t_acc, cfg.motion.t_dec
     profiles = [trapezoid(float(np.linalg.norm(end - start)), v_max, t_acc, t_dec, DT) for _, start, end in lines]
+    points, summary = grid_workspace(cfg, problem, grid, sweep_pays=sweep_pays)
     counts = [len(profile.t) for profile in profiles]
     origins = np.repeat([start for _, start, _ in lines], counts, axis=0)  # each sample's line: start, direction
     directions = np.repeat([(end - start) / np.linalg.norm(end - start) for _, start, end in lines], counts, axis=0)
@@ -99,6 +101,18 @@ def simulate_lines(cfg: DictConfig, problem: WorkspaceProblem, grid: Grid,
     )
     summary["volume_m3"] = summary["n_feasible"] * grid.cell_volume
     return samples, points, summary
+
+
+def check_samples(motion: DictConfig, grid: Grid) -> None:
+    """ConfigError when the lines through ``grid`` at the motion ``motion`` (``cfg.motion``)
+    would take more than MAX_SAMPLES samples (each line's profile counted, not sampled)."""
+    lengths, lines = np.unique([np.linalg.norm(end - start) for _, start, end in _lines(grid[:])], return_counts=True)
+    count = sum(int(n) * (math.ceil(trapezoid_phases(float(length), motion.v_max, motion.t_acc, motion.t_dec).total / DT) + 1)
+                for length, n in zip(lengths, lines))
+    if count > MAX_SAMPLES:
+        raise ConfigError(f"motion: v_max={motion.v_max:g} m/s, t_acc={motion.t_acc:g} s, t_dec={motion.t_dec:g} s: the "
+                          f"{lines.sum()} lines take {count:.3g} samples of {DT:g} s, more than {MAX_SAMPLES:,}; a faster "
+                          "motion or a coarser grid")
 
 
 def _lines(positions: np.ndarray) -> list[tuple[str, np.ndarray, np.ndarray]]:
