@@ -62,7 +62,7 @@ from pipeline.app.config import MAX_FORCE, MAX_MASS
 from pipeline.app.resources import CONF_DIR
 from pipeline.app.results import code_version, write_text
 from pipeline.app.xmlfiles import parse_xml
-from pipeline.model.dynamics import inertia_tensor
+from pipeline.model.dynamics import inertia_fault, inertia_tensor
 
 SHIPPED_ROBOTS = tuple(sorted(p.stem for p in (CONF_DIR / "robot").glob("*.yaml")))
 
@@ -221,8 +221,8 @@ def _inertia(link, mass: float, where: str) -> list[float] | None:
     """The link's ``<inertia>`` about its centre of mass as ``robot.platform.inertia`` [Ixx, Iyy,
     Izz, Ixy, Ixz, Iyz] (CASPR's matrix [[Ixx, Ixy, Ixz], [Ixy, Iyy, Iyz], [Ixz, Iyz, Izz]]; one
     given about the joint, ref="joint", moved to the centre by parallel axes); None without one
-    or without a mass (a planar model's may give Izz alone). ConfigError for one with a negative
-    principal moment."""
+    or without a mass (a planar model's may give Izz alone). ConfigError for one no rigid body has
+    (:func:`pipeline.model.dynamics.inertia_fault`)."""
     node = link.find("physical/inertia")
     if node is None or not mass > 0:
         return None
@@ -232,9 +232,9 @@ def _inertia(link, mass: float, where: str) -> list[float] | None:
         matrix = matrix - mass * (com @ com * np.eye(3) - np.outer(com, com))
     elif node.get("ref") != "com":
         raise ConfigError(f"{where}: <inertia ref={node.get('ref')!r}>: com or joint")
-    if not np.linalg.eigvalsh(matrix)[0] >= -1e-12 * max(1.0, float(np.abs(matrix).max())):
-        raise ConfigError(f"{where}: <inertia> about the centre of mass {matrix.round(12).tolist()} has a negative "
-                          "principal moment (kg m^2)")
+    fault = inertia_fault(matrix)
+    if fault:
+        raise ConfigError(f"{where}: <inertia> about the centre of mass {matrix.round(12).tolist()} {fault}")
     return [float(matrix[0, 0]), float(matrix[1, 1]), float(matrix[2, 2]), float(matrix[0, 1]), float(matrix[0, 2]),
             float(matrix[1, 2])]
 

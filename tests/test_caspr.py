@@ -462,4 +462,4 @@ def test_an_inertia_about_the_joint_moves_to_the_centre_of_mass(tmp_path):
     np.testing.assert_allclose(written, [*np.diag(expected), expected[0, 1], expected[0, 2], expected[1, 2]], rtol=1e-12)
     flat = BODIES.replace("<Izz>1.1</Izz>", "<Izz>-1.1</Izz>")
     done = _write(tmp_path / "bad", bodies=flat) if (tmp_path / "bad").mkdir() is None else None
-    assert done.returncode == 2 and "has a negative principal moment (kg m^2)" in done.stderr
+    assert done.returncode == 2 and "has a negative principal moment (-1.1 kg m^2)" in done.stderr

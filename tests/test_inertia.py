@@ -119,3 +119,33 @@ def test_the_reversed_inertial_force_is_far_outside_these_tolerances(make_cfg, c
                                       right, a)[0]).max() < 1e-8
         force = newton_residual(problem.robot, mass, problem.spec.load.com, position, problem.orientation, reversed_, a)[0]
         np.testing.assert_allclose(force, -2 * mass * a, atol=1e-8)
+
+
+def test_every_rigid_body_of_point_masses_has_an_inertia_the_check_accepts_and_no_other():
+    """The inertia of a body of point masses about its centre of mass, sum m (|r|^2 I - r r^T),
+    is accepted for random bodies (a rod, a flat plate at the triangle's equality, clouds);
+    moments past the triangle inequality by more than its 1 % tolerance, or negative, are not,
+    except a planar platform's Izz alone."""
+    from pipeline.model.dynamics import inertia_fault, inertia_tensor
+
+    rng = np.random.default_rng(7)
+
+    def body(points, masses):
+        r = points - np.average(points, axis=0, weights=masses)
+        return np.einsum("k,kij->ij", masses, np.einsum("ki,ki->k", r, r)[:, None, None] * np.eye(3)
+                         - np.einsum("ki,kj->kij", r, r))
+
+    rod = np.array([[0.0, 0.0, -1.0], [0.0, 0.0, 1.0]])
+    plate = rng.normal(size=(50, 3)) * [1.0, 2.0, 0.0]
+    for points in (rod, plate, *(rng.normal(size=(n, 3)) * rng.uniform(0.01, 5, 3) for n in (3, 4, 10, 200))):
+        masses = rng.uniform(0.1, 3.0, len(points))
+        turned = body(points, masses)
+        assert inertia_fault(turned) is None, np.linalg.eigvalsh(turned)
+    flat = body(plate, np.ones(len(plate)))
+    assert abs(np.trace(flat) - 2 * flat[2, 2]) < 1e-9 * flat[2, 2]  # a plate: Izz = Ixx + Iyy exactly
+    assert "the largest more than the sum" in inertia_fault(inertia_tensor(1.0, 1.0, 2.03))
+    assert "the largest more than the sum" in inertia_fault(inertia_tensor(0.0, 0.2, 0.05, xy=0.0, yz=0.01))
+    assert inertia_fault(inertia_tensor(1.0, 1.0, 2.0 * 1.0099)) is None  # within the printed values' rounding
+    assert inertia_fault(inertia_tensor(0.0, 0.0, 0.05)) is None  # a planar platform's Izz alone
+    assert "negative principal moment" in inertia_fault(inertia_tensor(1.0, 1.0, 1.0, xy=1.5))
+    assert inertia_fault(inertia_tensor(1.0, np.inf, 1.0)) == "must be finite"

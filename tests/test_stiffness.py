@@ -147,7 +147,9 @@ REQUIRED = "+criteria.stiffness={translational: 1000, rotational: 10, frequency:
     (["analysis=statics", "robot.cable_ea=1e5", "robot.platform.mass=3",
       "+criteria.stiffness={translational: 0, rotational: 0, frequency: 5}"], "frequency needs the platform's inertia"),
     (["analysis=statics", "robot.platform.mass=3", "robot.platform.inertia=[1, 1, -1]"],
-     "robot.platform.inertia=[1, 1, -1]: must be finite with no negative principal moment"),
+     "robot.platform.inertia=[1, 1, -1]: has a negative principal moment"),
+    (["analysis=statics", "robot.platform.mass=3", "robot.platform.inertia=[1e300, 1, 1]"],  # no rigid body's
+     "robot.platform.inertia=[1e+300, 1, 1]: has principal moments 1, 1, 1e+300 kg m^2, the largest more than"),
     (["analysis=statics", "robot.cable_ea=1e5", "robot.platform.mass=3", "robot.platform.inertia=[0, 0, 0.05]",
       "+criteria.stiffness={translational: 0, rotational: 0, frequency: 5}"], "gives no inertia about a freedom"),
     (["robot=irpm6", "robot.platform.inertia=[1, 1, 1]"], "a platform with an inertia needs its mass"),

@@ -44,7 +44,7 @@ from pipeline.errors import ConfigError
 from pipeline.model.actuators import ActuatorModel, actuator_model, rest_tension_cap
 from pipeline.model.catalogue import Catalogue
 from pipeline.model.clearance import Obstacle, Polytope
-from pipeline.model.dynamics import Load, MotionSpec, inertia_tensor
+from pipeline.model.dynamics import Load, MotionSpec, inertia_fault, inertia_tensor
 from pipeline.model.geometry import FREEDOMS, CableRobot, eq9_angles
 from pipeline.model.intervals import down, up
 from pipeline.model.pulleys import Pulleys
@@ -987,16 +987,18 @@ def load_spec(cfg: DictConfig) -> Load:
 
 def platform_inertia(value, mass: float) -> np.ndarray:
     """``robot.platform.inertia``: [Ixx, Iyy, Izz] or [Ixx, Iyy, Izz, Ixy, Ixz, Iyz], kg m^2, about
-    the platform's centre of mass (platform frame), as a (3, 3) matrix: positive semi-definite (a
-    planar platform's may be Izz alone), of a platform with a mass."""
+    the platform's centre of mass (platform frame), as a (3, 3) matrix: a rigid body's
+    (:func:`pipeline.model.dynamics.inertia_fault`; a planar platform's may be Izz alone), of a
+    platform with a mass."""
     key = "robot.platform.inertia"
     if not (isinstance(value, list) and len(value) in (3, 6)
             and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)):
         raise ConfigError(f"{key}={value}: [Ixx, Iyy, Izz] or [Ixx, Iyy, Izz, Ixy, Ixz, Iyz] (kg m^2, about the "
                           "platform's centre of mass)")
     matrix = inertia_tensor(*value)
-    if not (np.isfinite(matrix).all() and np.linalg.eigvalsh(matrix)[0] >= 0):
-        raise ConfigError(f"{key}={value}: must be finite with no negative principal moment (kg m^2)")
+    fault = inertia_fault(matrix)
+    if fault:
+        raise ConfigError(f"{key}={value}: {fault}")
     if not mass > 0:
         raise ConfigError(f"{key}={value}: a platform with an inertia needs its mass (robot.platform.mass > 0)")
     return matrix

@@ -43,6 +43,27 @@ def inertia_tensor(xx: float, yy: float, zz: float, xy: float = 0.0, xz: float =
     return np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]], dtype=float)
 
 
+TRIANGLE_RTOL = 0.01  # of the largest moment: a thin plate's printed moments, rounded, may break I_z <= I_x + I_y by that
+
+
+def inertia_fault(matrix: np.ndarray) -> str | None:
+    """Why ``matrix`` (3, 3, kg m^2) cannot be a rigid body's inertia about its centre of mass, None
+    when it can: finite, its principal moments I_1 <= I_2 <= I_3 >= 0 (to 1e-12 of the largest
+    entry) and I_3 <= I_1 + I_2 (in principal axes I_1 + I_2 - I_3 = 2 sum m z^2 >= 0; to
+    TRIANGLE_RTOL of I_3), except a planar platform's Izz alone (every other entry 0), whose
+    turn about z is all that is read."""
+    if not np.isfinite(matrix).all():
+        return "must be finite"
+    moments = np.linalg.eigvalsh(matrix)
+    if not moments[0] >= -1e-12 * max(1.0, float(np.abs(matrix).max())):
+        return f"has a negative principal moment ({moments[0]:.6g} kg m^2)"
+    planar = not np.any(matrix.ravel()[:8])
+    if not planar and moments[2] > (moments[0] + moments[1]) + TRIANGLE_RTOL * moments[2]:
+        return (f"has principal moments {', '.join(f'{m:.6g}' for m in moments)} kg m^2, the largest more than the sum "
+                "of the other two: no rigid body has them (a planar platform: Izz alone)")
+    return None
+
+
 REFERENCE_SET = 12  # the velocities evaluated per pose at the paper's N = 6: the 12 extremes of eq. (23)'s 93
 # A pose's work grows by this share of the paper's for each velocity evaluated beyond REFERENCE_SET
 # (benchmarks/LOG.md, 2026-11-26: 936 extremes at grid.n_vel=60 cost 3.9x the paper's pose under the
