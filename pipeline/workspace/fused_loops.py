@@ -136,32 +136,21 @@ def _block_ratios(gram, rows, det, dead, ratio, lean):
 
 
 @njit(cache=True, inline="always")
-def _block_solve(factor, scale, loads, rows, columns, solved):
-    """:func:`_scaled_solve` for a block of poses: ``solved`` (rows, columns, lanes) = G^-1
-    ``loads`` (rows, columns)."""
-    lanes = BLOCK
+def _block_solve(factor, scale, loads, rows, columns, solved, rhs):
+    """:func:`_block_solve_lanes` of right-hand sides every pose of a block shares: ``solved``
+    (rows, columns, lanes) = G^-1 ``loads`` (rows, columns), each column copied into the lanes
+    of the scratch ``rhs`` (rows, lanes) first."""
     for k in range(columns):
         for i in range(rows):
-            for b in range(lanes):
-                total = loads[i, k] * scale[i, b]
-                for j in range(i):
-                    total -= factor[i, j, b] * solved[j, k, b]
-                solved[i, k, b] = total * factor[i, i, b]
-        for i in range(rows - 1, -1, -1):
-            for b in range(lanes):
-                total = solved[i, k, b]
-                for j in range(i + 1, rows):
-                    total -= factor[j, i, b] * solved[j, k, b]
-                solved[i, k, b] = total * factor[i, i, b]
-        for i in range(rows):
-            for b in range(lanes):
-                solved[i, k, b] *= scale[i, b]
+            for b in range(BLOCK):
+                rhs[i, b] = loads[i, k]
+        _block_solve_lanes(factor, scale, rhs, rows, solved[:, k, :])
 
 
 @njit(cache=True, inline="always")
 def _block_solve_lanes(factor, scale, rhs, rows, solved):
-    """:func:`_block_solve` of one right-hand side per pose: ``solved`` (rows, lanes) = G^-1
-    ``rhs`` (rows, lanes)."""
+    """G^-1 ``rhs`` (rows, lanes) into ``solved`` (rows, lanes), one right-hand side per pose,
+    from :func:`_block_cholesky`'s factor of D^-1 G D^-1: x = D^-1 (L L^T)^-1 D^-1 b."""
     lanes = BLOCK
     for i in range(rows):  # forward: L y = D^-1 b
         for b in range(lanes):
@@ -254,7 +243,7 @@ def _block_drop_one(jac, gram, rows, m, rtol, short, loads, corners, sizes, shif
     _block_cholesky(shifted, rows, factor, scale, det, dead)
     for b in range(lanes):  # the completed matrix must pass the full-rank test
         short[b] = short[b] and (0.0 if dead[b] else min(det[b], 1.0)) >= BAND * rtol
-    _block_solve(factor, scale, loads, rows, 4, solved)
+    _block_solve(factor, scale, loads, rows, 4, solved, step)  # step: scratch once w is found
     for i in range(m):  # eqs. (20), (31) with J' for J
         for k in range(4):
             for b in range(lanes):
@@ -293,7 +282,7 @@ def _cpr_wwa(positions, anchors, arms, rate_axes, radius, rows, extremes, centre
     gram = np.empty((rows, rows, lanes))
     factor = np.empty((rows, rows, lanes))
     scale = np.empty((rows, lanes))
-    solved = np.empty((rows, 4, lanes))
+    solved, rhs = np.empty((rows, 4, lanes)), np.empty((rows, lanes))
     torque = np.empty((m, 4, lanes))
     det, ratio, lean, residual = np.empty(lanes), np.empty(lanes), np.empty(lanes), np.empty(lanes)
     dead, route = np.empty(lanes, np.bool_), np.empty(lanes, np.int8)  # route: FULL, DEFLATED or UNSETTLED
@@ -333,7 +322,7 @@ def _cpr_wwa(positions, anchors, arms, rate_axes, radius, rows, extremes, centre
             residual[b] = 0.0  # |w . F| / |F|, the worst over the acceleration box's vertices: 0 at full rank
             any_full = any_full or route[b] == FULL
         if any_full:
-            _block_solve(factor, scale, loads, rows, 4, solved)
+            _block_solve(factor, scale, loads, rows, 4, solved, rhs)
             for i in range(m):  # eqs. (20), (31)
                 for k in range(4):
                     for b in range(lanes):
@@ -431,7 +420,7 @@ def statics(positions, anchors, arms, centre, base, wrench, rtol, singular_rtol,
     columns = np.empty((m, 6, lanes))  # A^T: row i = [u_i; a_i x u_i] (eq. 8)
     lengths = np.empty((m, lanes))
     gram, factor = np.empty((6, 6, lanes)), np.empty((6, 6, lanes))
-    scale_rows, solved = np.empty((6, lanes)), np.empty((6, 1, lanes))
+    scale_rows, solved, rhs = np.empty((6, lanes)), np.empty((6, 1, lanes)), np.empty((6, lanes))
     det, ratio, lean = np.empty(lanes), np.empty(lanes), np.empty(lanes)
     dead = np.empty(lanes, np.bool_)
     lowest, worst_rating, worst_length, shortest = np.empty(lanes), np.empty(lanes), np.empty(lanes), np.empty(lanes)
@@ -456,7 +445,7 @@ def statics(positions, anchors, arms, centre, base, wrench, rtol, singular_rtol,
                 columns[i, 5, b] = bx * uy - by * ux
         _block_factor(columns, 6, m, gram, factor, scale_rows, det, dead)
         _block_ratios(gram, 6, det, dead, ratio, lean)
-        _block_solve(factor, scale_rows, wrench, 6, 1, solved)
+        _block_solve(factor, scale_rows, wrench, 6, 1, solved, rhs)
         for b in range(lanes):
             lowest[b], worst_rating[b], worst_length[b], shortest[b] = np.inf, -np.inf, -np.inf, np.inf
         for i in range(m):
