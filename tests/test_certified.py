@@ -560,6 +560,7 @@ REFUSALS = {  # overrides -> what the one line names
     ("robot.search.lo=null", "robot.search.hi=null"): "robot.search",
     ("robust.anchors=-0.01",): "robust.anchors",
     ("robust.com=nan",): "robust.com",
+    ("robust.anchors=1e300",): "robust.anchors=1e+300: must be in [0, 10000] m",  # numpy's overflow warning before
     ("robust.mass=2",): "robust.mass=2",  # more than the load's mass (massless here)
     ("robot.platform.mass=1", "robust.mass=0.1", "platform_motion.acceleration=[[1,0,0,0,0,0]]"): "robust.mass",
     ("certified.path=[[0,0,1]]",): "certified.path",
@@ -593,7 +594,9 @@ REFUSALS = {  # overrides -> what the one line names
     ("certified.path=[[0,0,1],[0,0,2]]", "certified.law=trapezoid", "certified.v_max=1", "certified.t_acc=1",
      "certified.t_dec=1", "certified.times=1"): "certified.times: law trapezoid times each segment",
     ("certified.path=[[0,0,1],[0,0,2]]", "certified.law=trapezoid", "certified.v_max=1", "certified.t_acc=1e-6",
-     "certified.t_dec=1"): "certified.t_acc: segment 1 accelerates at 1e+06 m/s^2",
+     "certified.t_dec=1"): "certified.t_acc=1e-06: v_max / t_acc = 1e+06 m/s^2 at v_max=1 m/s; must be > 0 and at most",
+    ("certified.path=[[0,0,1],[0,0,2]]", "certified.law=trapezoid", "certified.v_max=1e-300", "certified.t_acc=1",
+     "certified.t_dec=1e300"): "certified.t_dec=1e+300: v_max / t_dec = 0 m/s^2",  # a division by zero before
     ("certified.path=[[0,0,1],[0,0,2]]", "certified.law=trapezoid", "certified.v_max=1", "certified.t_acc=0",
      "certified.t_dec=1"): "certified.t_acc",
     ("robot.platform.mass=1", "certified.path=[[0,0,1],[0,0,2]]", "certified.law=trapezoid", "certified.v_max=1",

@@ -452,9 +452,9 @@ BAD = [  # (overrides, what the one line names)
     (["trajectory.points=[[0,0,1],[0,1,1]]", "trajectory.times=1e300"], "1e+302 samples"),  # counted in floats
     (["trajectory.points=[[0,0,1],[0,1,1]]", "trajectory.times=1", "trajectory.dt=1e-300"], "trajectory.dt=1e-300"),
     (["trajectory.points=[[0,0,1],[0,1,1]]", "trajectory.law=trapezoid", "trajectory.v_max=1e300", "trajectory.t_acc=1",
-      "trajectory.t_dec=1"], "trajectory.v_max=1e+300: the trapezoid accelerates at"),
+      "trajectory.t_dec=1"], "trajectory.t_acc=1: v_max / t_acc = 1e+300 m/s^2"),
     (["trajectory.points=[[0,0,1],[0,1,1]]", "trajectory.law=trapezoid", "trajectory.v_max=1e-300",
-      "trajectory.t_acc=1e300", "trajectory.t_dec=1e300"], "v_max / t_acc = 0"),
+      "trajectory.t_acc=1e300", "trajectory.t_dec=1e300"], "trajectory.t_acc=1e+300: v_max / t_acc = 0 m/s^2"),
     (["trajectory.points=[[0,0,1],[0,1,1]]", "trajectory.law=trapezoid", "trajectory.v_max=5e-324",
       "trajectory.t_acc=1", "trajectory.t_dec=1"], "inf samples"),
     (["trajectory.points=[[0,0,1],[0,1,1]]", "trajectory.times=2", "compute.max_poses=100"], "compute.max_poses=100"),

@@ -51,6 +51,10 @@ def finite(value):
     return None if abs(value) < INF else "must be finite"
 
 
+def reach(value):
+    return None if 0 <= value <= MAX_REACH else f"must be in [0, {MAX_REACH:g}] m"
+
+
 def sag_share(value):
     return None if 0 < value <= 0.1 else "must be in (0, 0.1]: the sag a cable may take, a share of its chord"
 
@@ -613,12 +617,12 @@ MAX_DEPTH = 40  # levels of bisection: 2^40 boxes, past any memory
 class RobustConfig:
     """``analysis=certified``: build tolerances, each the half-width of a box around the nominal
     value on every coordinate (m; kg for ``mass``): a box is inside when every pose in it is feasible
-    for every robot within them (``pipeline.workspace.paving``)."""
+    for every robot within them (``pipeline.workspace.paving``); lengths at most 1e4 m."""
 
-    anchors: float = rule(non_negative)
-    attachments: float = rule(non_negative)
+    anchors: float = rule(reach)
+    attachments: float = rule(reach)
     mass: float = rule(non_negative)
-    com: float = rule(non_negative)
+    com: float = rule(reach)
 
 
 @dataclass

@@ -79,16 +79,8 @@ def _from_points(node: DictConfig, law: str, robot: CableRobot, orientation: Dic
         if node.times is not None:
             raise ConfigError(f"trajectory.times={_shown(node.times)}: law trapezoid times each segment by its "
                               "length and trajectory.v_max, t_acc, t_dec; times are for law quintic or spline")
-        missing = [key for key in SPEEDS if node[key] is None]
-        if missing:
-            raise ConfigError(f"trajectory.{missing[0]}: law trapezoid needs v_max (m/s), t_acc and t_dec (s)")
-        v_max, t_acc, t_dec = (float(node[key]) for key in SPEEDS)
-        if not all(0 < rate <= MAX_ACCELERATION for rate in (v_max / t_acc, v_max / t_dec)):
-            raise ConfigError(f"trajectory.v_max={v_max:g}: the trapezoid accelerates at v_max / t_acc = {v_max / t_acc:.3g} "
-                              f"and decelerates at v_max / t_dec = {v_max / t_dec:.3g} m/s^2; each must be > 0 and at "
-                              f"most {MAX_ACCELERATION:g} (a unit typed wrong, or t_acc, t_dec too short or too long)")
         try:
-            return trapezoidal(points, v_max, t_acc, t_dec)
+            return trapezoidal(points, *_speeds(node, "trajectory"))
         except ValueError as exc:
             raise ConfigError(f"trajectory.points: {exc}") from None
     _no_speeds(node, law)
@@ -313,6 +305,21 @@ def _number(value) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool)
 
 
+def _speeds(node: DictConfig, key: str) -> tuple[float, float, float]:
+    """A trapezoid's v_max, t_acc and t_dec (``key``: trajectory or certified), each given, with
+    v_max / t_acc and v_max / t_dec in (0, MAX_ACCELERATION] (1e-300 m/s over 1e300 s is 0)."""
+    missing = [name for name in SPEEDS if node[name] is None]
+    if missing:
+        raise ConfigError(f"{key}.{missing[0]}: {key}.law=trapezoid needs v_max (m/s), t_acc and t_dec (s)")
+    v_max, t_acc, t_dec = (float(node[name]) for name in SPEEDS)
+    for name, time in (("t_acc", t_acc), ("t_dec", t_dec)):
+        if not 0 < v_max / time <= MAX_ACCELERATION:
+            raise ConfigError(f"{key}.{name}={time:g}: v_max / {name} = {v_max / time:.3g} m/s^2 at v_max={v_max:g} m/s; "
+                              f"must be > 0 and at most {MAX_ACCELERATION:g} (a unit typed wrong, or {name} too short or "
+                              "too long)")
+    return v_max, t_acc, t_dec
+
+
 def certified_motion(cfg: DictConfig, points: np.ndarray) -> StraightMotion | None:
     """``certified.path``'s motion (``analysis=certified``): None at rest (law quintic without
     ``times``), else the law of ``certified.law``; ConfigError naming the key for a key of the
@@ -331,10 +338,7 @@ def certified_motion(cfg: DictConfig, points: np.ndarray) -> StraightMotion | No
         if node.times is not None:
             raise ConfigError("certified.times: law trapezoid times each segment by certified.v_max, t_acc and t_dec; "
                               "leave certified.times null")
-        missing = [key for key in SPEEDS if node[key] is None]
-        if missing:
-            raise ConfigError(f"certified.{missing[0]}: certified.law=trapezoid needs v_max (m/s), t_acc and t_dec (s)")
-        motion = StraightMotion.trapezoid(points, float(node.v_max), float(node.t_acc), float(node.t_dec))
+        motion = StraightMotion.trapezoid(points, *_speeds(node, "certified"))
         key = "certified.t_acc"
     peaks = motion.peaks()
     if not peaks.max() <= MAX_ACCELERATION:
