@@ -91,8 +91,9 @@ def test_heavier_cables_lose_more_poses_and_the_minimum_norm_model_checks_them_t
 @pytest.mark.parametrize("overrides, message", [
     (["robot.cable_mass=0", "+criteria.sag={ratio: 0.01}"], "robot.cable_mass=0: must be > 0 (kg/m"),
     (["robot.cable_mass=nan", "+criteria.sag={ratio: 0.01}"], "robot.cable_mass=nan: must be finite"),
-    (["robot.cable_mass=0.05", "+criteria.sag={ratio: nan}"], "criteria.sag.ratio=nan: must be in (0, 0.05]"),
-    (["robot.cable_mass=0.05", "+criteria.sag={ratio: 0.2}"], "criteria.sag.ratio=0.2: must be in (0, 0.05]"),
+    (["robot.cable_mass=0.05", "+criteria.sag={ratio: nan}"], "criteria.sag.ratio=nan: must be in [1e-6, 0.05]"),
+    (["robot.cable_mass=0.05", "+criteria.sag={ratio: 0.2}"], "criteria.sag.ratio=0.2: must be in [1e-6, 0.05]"),
+    (["robot.cable_mass=0.05", "+criteria.sag={ratio: 1e-300}"], "criteria.sag.ratio=1e-300: must be in [1e-6"),  # an LP error
     (["+criteria.sag={ratio: 0.01}"], "criteria.sag: analysis=cpr_wwa does not check it"),
     (["analysis=payload", "robot.cable_mass=0.05", "+criteria.sag={ratio: 0.01}"],
      "criteria.sag: analysis=payload does not check it"),
@@ -193,9 +194,11 @@ def test_the_rules_verdicts_are_an_lps_with_their_tensions_as_floors(make_cfg, c
 
 
 @pytest.mark.parametrize("overrides, message", [
-    (["+criteria.cable_contraction={share: 0.02}"], "criteria.cable_contraction.share=0.02: must be in (0, 0.01]"),
+    (["+criteria.cable_contraction={share: 0.02}"], "criteria.cable_contraction.share=0.02: must be in [1e-12, 0.01]"),
+    (["+criteria.cable_contraction={share: 1e-300}"], "criteria.cable_contraction.share=1e-300: must be in [1e-12"),
     (["+criteria.cable_frequency={hz: 0}"], "criteria.cable_frequency.hz=0: must be > 0"),
     (["+criteria.cable_frequency={hz: nan}"], "criteria.cable_frequency.hz=nan: must be > 0"),
+    (["+criteria.cable_frequency={hz: 1e300}"], "criteria.cable_frequency.hz=1e+300: must be > 0 and at most"),  # 39.6 % held it
     (["robot.catenary=0.02", "tension=feasible", "analysis=statics", "+criteria.cable_frequency={hz: 3}"],
      "criteria.cable_frequency: analysis=statics does not check it"),
 ])

@@ -83,6 +83,12 @@ class Family:
     upper: np.ndarray
     scale: np.ndarray
 
+    def __post_init__(self):
+        """+inf below or -inf above would read as no side at all (the LP rows keep finite sides
+        only): a criterion whose bound overflows must say so, not pass every pose."""
+        if np.any(np.asarray(self.lower) == np.inf) or np.any(np.asarray(self.upper) == -np.inf):
+            raise ValueError(f"criterion {self.name}: a tension bound of +inf below or -inf above")
+
     def at(self, poses: np.ndarray, n: int) -> Family:
         """This family at ``poses`` of the n: arrays with a pose axis are indexed, others kept."""
         def pick(values):

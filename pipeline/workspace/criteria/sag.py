@@ -30,19 +30,26 @@ from __future__ import annotations
 import numpy as np
 
 
+# Each key's smallest (largest) value keeps the least tension it asks for finite and below 1e17 N
+# for any cable the robot keys allow (100 kg/m, 1e4 m, gravity 1e4 m/s^2): beyond, the LPs'
+# bounds overflow and a pose's verdict is no longer the rule's.
+
+
 def ratio(value) -> str | None:
     """The rule of the key: the sag allowed, a share of the chord."""
-    return None if 0 < value <= 0.05 else "must be in (0, 0.05]: the parabolic rule holds for small sag only"
+    return None if 1e-6 <= value <= 0.05 else ("must be in [1e-6, 0.05]: the parabolic rule holds for small sag only, "
+                                               "and no hanging cable is straighter")
 
 
 def share(value) -> str | None:
     """The rule of ``cable_contraction``'s key: the cable allowed beyond the chord, a share of it."""
-    return None if 0 < value <= 0.01 else "must be in (0, 0.01]: the parabolic rule holds for small sag only"
+    return None if 1e-12 <= value <= 0.01 else ("must be in [1e-12, 0.01]: the parabolic rule holds for small sag only, "
+                                                "and no hanging cable is straighter")
 
 
 def hertz(value) -> str | None:
     """The rule of ``cable_frequency``'s key: the least first natural frequency, Hz."""
-    return None if 0 < value < np.inf else "must be > 0 and finite (Hz)"
+    return None if 0 < value <= 1e3 else "must be > 0 and at most 1000 (Hz)"
 
 
 def sag(state, limits, ratio: float) -> np.ndarray:
