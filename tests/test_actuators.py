@@ -47,7 +47,7 @@ ROW = "1,a,300,48,4700,0.6,0.0945,0.095,0,0.369,3579,30,0.6,0.08\n"
     "text, expected",
     [
         (HEADER.replace(",efficiency", "") + ROW, "missing column(s) efficiency"),
-        (HEADER + ROW.replace("3579", "-3579"), "row 2, column inertia_g_cm2: -3579 must be > 0"),
+        (HEADER + ROW.replace("3579", "-3579"), "row 2, column inertia_g_cm2: -3579 must be >= 0.001 and at most 1e+12"),
         (HEADER + ROW.replace("0.369", "abc"), "row 2, column resistance_ohm: 'abc' is not a number"),
         (HEADER + ROW + ROW, "row 3, column id: duplicate id 1"),
         (HEADER + ROW.replace("1,a", "x,a"), "row 2, column id: 'x' is not an integer"),
@@ -66,7 +66,11 @@ ROW = "1,a,300,48,4700,0.6,0.0945,0.095,0,0.369,3579,30,0.6,0.08\n"
         (HEADER + ROW.replace("300", "-inf"), "row 2, column power_W: '-inf' is not a number"),
         (HEADER + ROW.replace(",30,", ",1e-300,"), "column gear_ratio: 1e-300 must be >= 0.001 and at most 100000"),
         (HEADER + ROW.replace(",30,", ",1e300,"), "column gear_ratio: 1e+300 must be >= 0.001 and at most 100000"),
-        (HEADER + ROW.replace(",0.08", ",80"), "column winch_radius_m: 80 must be > 0 and at most 10"),  # mm?
+        (HEADER + ROW.replace(",0.08", ",80"), "column winch_radius_m: 80 must be >= 0.0001 and at most 10"),  # mm?
+        (HEADER + ROW.replace(",0.6,0.08", ",1e-300,0.08"), "column efficiency: 1e-300 must be >= 0.001"),  # LP failed
+        (HEADER + ROW.replace(",0.369,", ",1e-300,"), "column resistance_ohm: 1e-300 must be >= 1e-06"),  # model error
+        (HEADER + ROW.replace(",48,", ",1e300,"), "column voltage_V: 1e+300 must be >= 0.1 and at most 100000"),
+        (HEADER + ROW.replace(",0.6,0.0945", ",1e-12,0.0945"), "column torque_Nm: 1e-12 must be >= 0.0001"),
     ],
 )
 def test_malformed_catalogue_names_row_and_column(tmp_path, text, expected):

@@ -109,7 +109,7 @@ CASES = [
     ("pipeline", ["catalogue=truncated.parquet"], "catalogue=truncated.parquet"),
     ("pipeline", ["catalogue=inertia.csv"], "row 2, column inertia_g_cm2"),
     ("pipeline", ["catalogue=empty.csv"], "catalogue=empty.csv"),
-    ("pipeline", ["catalogue=percent.csv"], "column efficiency: 85 must be a fraction in (0, 1]"),
+    ("pipeline", ["catalogue=percent.csv"], "column efficiency: 85 must be a fraction in [0.001, 1]"),
     ("pipeline", ["orientation.psi=nan"], "orientation.psi=nan: must be finite"),
     ("pipeline", ["orientation.total.bound=inf"], "orientation.total.bound=inf: must be >= 0 and finite"),
     ("pipeline", ["drive.winch_radius=inf"], "drive.winch_radius=inf"),

@@ -143,7 +143,7 @@ def test_user_catalogue_of_20_synthetic_actuators(choice_run):
     [
         (lambda t: t.drop(columns="efficiency"), "missing column(s) efficiency"),
         (lambda t: t.assign(inertia_g_cm2=t["inertia_g_cm2"].where(t["id"] != 3, -181)),
-         "row 4, column inertia_g_cm2: -181 must be > 0"),
+         "row 4, column inertia_g_cm2: -181 must be >= 0.001 and at most 1e+12"),
         (lambda t: t.astype({"resistance_ohm": str}).assign(
             resistance_ohm=lambda d: d["resistance_ohm"].where(d["id"] != 2, "1.1 ohm")),
          "row 3, column resistance_ohm: '1.1 ohm' is not a number"),

@@ -22,7 +22,7 @@ from omegaconf import MISSING, DictConfig, ListConfig, OmegaConf
 from omegaconf.errors import MissingMandatoryValue, OmegaConfBaseException
 
 from pipeline.errors import ConfigError, one_line, text_number
-from pipeline.model.catalogue import GEAR_RATIOS, WINCH_RADIUS
+from pipeline.model.catalogue import GEAR_RATIOS, WINCH_RADII
 
 INF = float("inf")
 JOBLIB_BACKENDS = ("loky", "threading", "multiprocessing", "sequential", "dask")
@@ -461,12 +461,12 @@ class LoadConfig:
 
 @dataclass
 class DriveConfig:
-    """Design overrides of the catalogue's drive train, for every cable: winch radius R_i (m, at
-    most 10) and gear ratio N_V (1e-3 to 1e5: past any gearbox, where the drive's constants of
+    """Design overrides of the catalogue's drive train, for every cable: winch radius R_i (m, 1e-4
+    to 10) and gear ratio N_V (1e-3 to 1e5: past any gearbox, where the drive's constants of
     eq. 22 would overflow or divide by zero). null keeps each actuator's catalogue value."""
 
-    winch_radius: Optional[float] = rule(lambda v: None if 0 < v <= WINCH_RADIUS else
-                                         f"must be > 0 and at most {WINCH_RADIUS:g} m")
+    winch_radius: Optional[float] = rule(lambda v: None if WINCH_RADII[0] <= v <= WINCH_RADII[1] else
+                                         f"must be >= {WINCH_RADII[0]:g} and at most {WINCH_RADII[1]:g} m")
     gear_ratio: Optional[float] = rule(lambda v: None if GEAR_RATIOS[0] <= v <= GEAR_RATIOS[1] else
                                        f"must be >= {GEAR_RATIOS[0]:g} and at most {GEAR_RATIOS[1]:g}")
 

@@ -24,21 +24,23 @@ if TYPE_CHECKING:
 TABLE1 = resources.files("pipeline") / "data" / "actuators_table1.csv"
 
 GEAR_RATIOS = (1e-3, 1e5)  # past any gearbox, where the drive's constants of eq. 22 overflow or divide by zero
-WINCH_RADIUS = 10.0  # m, the largest winch radius
-# column -> (lower bound, bound is inclusive, upper bound, inclusive); every numeric column must be finite
+WINCH_RADII = (1e-4, 10.0)  # m: a tenth of a millimetre to 10 m
+# column -> (smallest value, it included, largest value): past either end no catalogue motor, a
+# unit typed wrong, and the drive's constants (eq. 22) and the LPs' bounds leave what a double and
+# HiGHS (1e20 is its infinity) carry; every numeric column must be finite
 NUMERIC_COLUMNS: dict[str, tuple[float, bool, float]] = {
-    "power_W": (0.0, False, math.inf),
-    "voltage_V": (0.0, False, math.inf),
-    "speed_rpm": (0.0, False, math.inf),
-    "torque_Nm": (0.0, False, math.inf),
-    "back_emf_V_per_rad_s": (0.0, False, math.inf),
-    "torque_constant_Nm_per_A": (0.0, False, math.inf),
-    "viscous_friction_Nm_per_rad_s": (0.0, True, math.inf),
-    "resistance_ohm": (0.0, False, math.inf),
-    "inertia_g_cm2": (0.0, False, math.inf),
+    "power_W": (1e-3, True, 1e7),
+    "voltage_V": (0.1, True, 1e5),
+    "speed_rpm": (1.0, True, 1e6),
+    "torque_Nm": (1e-4, True, 1e6),
+    "back_emf_V_per_rad_s": (1e-6, True, 1e3),
+    "torque_constant_Nm_per_A": (1e-6, True, 1e3),
+    "viscous_friction_Nm_per_rad_s": (0.0, True, 1e3),
+    "resistance_ohm": (1e-6, True, 1e6),
+    "inertia_g_cm2": (1e-3, True, 1e12),
     "gear_ratio": (GEAR_RATIOS[0], True, GEAR_RATIOS[1]),
-    "efficiency": (0.0, False, math.inf),  # at most 1: FRACTIONS
-    "winch_radius_m": (0.0, False, WINCH_RADIUS),
+    "efficiency": (1e-3, True, 1.0),  # FRACTIONS
+    "winch_radius_m": (WINCH_RADII[0], True, WINCH_RADII[1]),
 }
 FRACTIONS = ("efficiency",)  # dimensionless, in (0, 1]
 # column -> physical quantity its name starts with (the rest of the name is the unit)
@@ -133,12 +135,12 @@ def _number(text: str, number: int, column: str, source) -> float:
     if not math.isfinite(value):
         raise ConfigError(f"catalogue={source}: row {number}, column {column}: {text!r} is not a number")
     low, inclusive, high = NUMERIC_COLUMNS[column]
-    if value < low or (value == low and not inclusive) or value > high:
-        rule = f"{'>=' if inclusive else '>'} {low:g}" + (f" and at most {high:g}" if high < math.inf else "")
-        raise ConfigError(f"catalogue={source}: row {number}, column {column}: {value:g} must be {rule}")
     if column in FRACTIONS and value > 1:
         raise ConfigError(f"catalogue={source}: row {number}, column {column}: {value:g} must "
-                          "be a fraction in (0, 1] (per cent? divide by 100)")
+                          f"be a fraction in [{low:g}, 1] (per cent? divide by 100)")
+    if value < low or (value == low and not inclusive) or value > high:
+        raise ConfigError(f"catalogue={source}: row {number}, column {column}: {value:g} must be "
+                          f"{'>=' if inclusive else '>'} {low:g} and at most {high:g}")
     return value
 
 
