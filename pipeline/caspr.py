@@ -360,7 +360,13 @@ def _one_line(text: str) -> str:
 
 
 def checked_target(out: Path, force: bool) -> Path:
-    """``out`` if the importer may write it, else ConfigError saying why and what to do."""
+    """``out`` if the importer may write it, else ConfigError saying why and what to do: a
+    ``.yaml`` file in a folder named ``robot`` (the config group ``--config-dir`` holds), its name
+    a robot's (letters, digits, _ and -), not a shipped robot's, outside the package, new unless
+    ``force``."""
+    if out.suffix != ".yaml" or out.parent.name != "robot" or not re.fullmatch(r"[A-Za-z0-9_-]+", out.stem):
+        raise ConfigError(f"--out={out}: a robot file DIR/robot/NAME.yaml (NAME of letters, digits, _ and -), which "
+                          "python -m pipeline --config-dir DIR robot=NAME then runs")
     if out.stem in SHIPPED_ROBOTS:
         raise ConfigError(f"--out={out}: robot={out.stem} is a shipped robot, which this file would hide "
                           f"under --config-dir; choose another name (shipped: {', '.join(SHIPPED_ROBOTS)})")

@@ -281,7 +281,11 @@ def test_the_importer_writes_only_a_new_file_of_the_users(tmp_path):
     package = run(tmp_path, "pipeline.caspr", "demo_cables.xml", "--out", str(inside))
     assert package.returncode == 2 and "inside the package's own configs" in package.stderr
     assert not inside.exists()
-    for done in (again, shipped, package):
+    outside = [run(tmp_path, "pipeline.caspr", "demo_cables.xml", "--out", str(tmp_path / where))
+               for where in ("etc/demo.yaml", "mine/robot/demo.yml", "mine/robot/de mo.yaml")]  # unrunnable names
+    assert all(done.returncode == 2 and "a robot file DIR/robot/NAME.yaml" in done.stderr for done in outside)
+    assert not (tmp_path / "etc").exists() and not (tmp_path / "mine" / "robot" / "demo.yml").exists()
+    for done in (again, shipped, package, *outside):
         assert len(done.stderr.strip().splitlines()) == 1
 
 
