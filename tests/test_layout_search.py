@@ -382,6 +382,16 @@ def test_a_layout_block_that_cannot_be_searched_is_refused(fields, message):
         spec.check_across("study")
 
 
+@pytest.mark.parametrize("seed", [-1, 2**32])
+def test_a_seed_the_samplers_cannot_take_is_refused_with_the_blocks_rules(seed):
+    """A seed outside numpy's and Optuna's [0, 2^32 - 1] ended in Optuna's ValueError after the
+    study had started; the block's declared rule refuses it when the file is read."""
+    from pipeline.app.config import check_declared
+
+    with pytest.raises(ConfigError, match=re.escape(f"seed={seed}: must be an integer in [0, 2^32 - 1]")):
+        check_declared(LayoutSpec(anchors=Box(lo=[0, 0, 0], hi=[1, 1, 1]), seed=seed), "study", "layout: ")
+
+
 STUDY = {
     "title": "My frame", "source": "mine",
     "overrides": [*PLANAR[:-3], "tension=feasible", "tension.t_min=1", "tension.t_max=10", "wrench.fy=-2"],

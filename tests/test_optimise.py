@@ -36,6 +36,7 @@ GOOD = {"variables": "{actuator: catalogue, drive.winch_radius: {low: 0.03, high
     (f"  variables: {GOOD['variables']}\n  budget: 0", "optimise.budget=0: must be in [1, 10000]"),
     (f"  variables: {GOOD['variables']}\n  budget: -5", "optimise.budget=-5: must be in [1, 10000]"),
     (f"  variables: {GOOD['variables']}\n  sampler: grid", "optimise.sampler='grid': must be one of nsga2, tpe"),
+    (f"  variables: {GOOD['variables']}\n  seed: -1", "seed=-1: must be an integer in [0, 2"),  # Optuna's ValueError
 ])
 def test_a_bad_optimise_block_is_refused_when_the_study_is_loaded(tmp_path, body, message):
     (tmp_path / "bad.yaml").write_text(STUDY.format(body=body))

@@ -49,6 +49,7 @@ from typing import Optional
 import numpy as np
 import pandas as pd
 
+from pipeline.app.config import rule, sampler_seed
 from pipeline.errors import ConfigError, require
 
 log = logging.getLogger("pipeline.study")
@@ -115,7 +116,7 @@ class LayoutSpec:
     objectives: list[str] = field(default_factory=lambda: ["volume_m3"])
     required: Optional[Box] = None
     budget: int = 200
-    seed: int = 0
+    seed: int = rule(sampler_seed, default=0)
     sampler: str = "tpe"
     anchors_on: str = "box"
     refine: float = 0.0

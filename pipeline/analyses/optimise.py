@@ -22,6 +22,7 @@ import numpy as np
 import pandas as pd
 from omegaconf import OmegaConf
 
+from pipeline.app.config import rule, sampler_seed
 from pipeline.model.catalogue import NUMERIC_COLUMNS, Catalogue, as_number
 from pipeline.errors import ConfigError, require
 
@@ -93,7 +94,7 @@ class OptimiseSpec:
     variables: dict[str, Any] = field(default_factory=dict)
     objectives: list[str] = field(default_factory=lambda: ["feasible_pct", "motor_torque_demand_Nm"])
     budget: int = 200
-    seed: int = 0
+    seed: int = rule(sampler_seed, default=0)
     sampler: str = "nsga2"
 
     def check_across(self, where: str) -> None:

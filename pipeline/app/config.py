@@ -51,6 +51,10 @@ def finite(value):
     return None if abs(value) < INF else "must be finite"
 
 
+def sampler_seed(value):
+    return None if isinstance(value, int) and 0 <= value < 2**32 else "must be an integer in [0, 2^32 - 1] (a sampler's seed)"
+
+
 def reach(value):
     return None if 0 <= value <= MAX_REACH else f"must be in [0, {MAX_REACH:g}] m"
 
