@@ -561,6 +561,7 @@ REFUSALS = {  # overrides -> what the one line names
     ("robust.anchors=-0.01",): "robust.anchors",
     ("robust.com=nan",): "robust.com",
     ("robust.anchors=1e300",): "robust.anchors=1e+300: must be in [0, 10000] m",  # numpy's overflow warning before
+    ("orientation.total={bound: 0.1, n: 11}",): "orientation.total.n=11: analysis=certified: every box is proven at each",
     ("robust.mass=2",): "robust.mass=2",  # more than the load's mass (massless here)
     ("robot.platform.mass=1", "robust.mass=0.1", "platform_motion.acceleration=[[1,0,0,0,0,0]]"): "robust.mass",
     ("certified.path=[[0,0,1]]",): "certified.path",

@@ -322,6 +322,9 @@ def _path_files(cfg: DictConfig, problem: WorkspaceProblem, grid: Grid | None, f
     return path_files(cfg, problem, files)
 
 
+MAX_CERTIFIED_ORIENTATIONS = 1000  # n = 10: 32 s at depth 4 for IPAnema 1 (n = 20: 80 s, 3 GB at n = 100 after 10 min)
+
+
 def _certified(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
     """The statics' spec and limits over boxes of positions (``pipeline.workspace.paving``):
     refuses in one line what the certificates cannot bound yet or a paving does not write. A
@@ -361,6 +364,9 @@ def _certified(cfg: DictConfig, catalogue: Catalogue | None, robot: CableRobot):
          "orientation.total.bound is 0: no box of orientations; give its half-width (rad), or certified.orientations=listed"),
         (cfg.certified.orientations == "box" and (spec.moves or moving), "certified.orientations=box",
          "a moving platform's inertia turns with it over the box of orientations: not certified yet; prove the box at rest"),
+        (orientation_count(cfg.orientation) > MAX_CERTIFIED_ORIENTATIONS, f"orientation.total.n={cfg.orientation.total.n}",
+         f"every box is proven at each of the n^3 = {orientation_count(cfg.orientation):,} orientations (or boxes of "
+         f"them), at most {MAX_CERTIFIED_ORIENTATIONS} (n <= 10): a level's work grows with them past certified.time"),
     )
     for asked, key, why in refused:
         if asked:
