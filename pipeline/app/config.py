@@ -55,10 +55,6 @@ def sampler_seed(value):
     return None if isinstance(value, int) and 0 <= value < 2**32 else "must be an integer in [0, 2^32 - 1] (a sampler's seed)"
 
 
-def reach(value):
-    return None if 0 <= value <= MAX_REACH else f"must be in [0, {MAX_REACH:g}] m"
-
-
 def sag_share(value):
     return None if 0 < value <= 0.1 else "must be in (0, 0.1]: the sag a cable may take, a share of its chord"
 
@@ -69,6 +65,10 @@ def sag_share(value):
 MAX_FORCE = 1e9
 MAX_REACH = 1e4  # m: a centre of mass or a way-point past any cable robot's frame, a unit typed wrong
 MAX_MASS = 1e8
+
+
+def reach(value):
+    return None if 0 <= value <= MAX_REACH else f"must be in [0, {MAX_REACH:g}] m"
 
 
 def force(value):
