@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from pipeline.model import crossings, faces, jit, nullspace
+from pipeline.model import crossings, faces, jit, nullspace, rounding
 from pipeline.workspace import fused_loops
 
 MODULE = """
@@ -72,8 +72,9 @@ SPECIALISATIONS = """
 import numba, sys
 sys.path.insert(0, sys.argv[1])
 from conftest import make_cfg, compute_workspace
-from pipeline.model import crossings, faces, nullspace
+from pipeline.model import crossings, faces, nullspace, rounding
 from pipeline.model.catalogue import load_catalogue
+from pipeline.model.intervals import Interval
 from pipeline.app.problem import build_problem
 from pipeline.workspace import fused_loops
 from pipeline.workspace.feasibility import feasible_flags
@@ -90,7 +91,8 @@ for overrides in (["compute.kernel=fused", "grid.n=4"], ["compute.kernel=fused",
     compute_workspace(make(*overrides), catalogue)
 problem, grid = build_problem(make("robot=irpm6", "tension=feasible", "robot.search.step=2"), catalogue)
 feasible_flags(problem, grid[0:len(grid)])
-for module in (fused_loops, crossings, faces, nullspace):
+(Interval.point([1.0, 2.0]) * Interval.point(3.0)).sqrt()
+for module in (fused_loops, crossings, faces, nullspace, rounding):
     for name, value in sorted(vars(module).items()):
         if isinstance(value, numba.core.registry.CPUDispatcher):
             print(module.__name__, name, len(value.signatures))
@@ -108,7 +110,7 @@ def test_each_compiled_function_has_one_specialisation():
     counts = dict(line.rsplit(" ", 1) for line in done.stdout.splitlines())
     assert len(counts) >= 10 and set(counts.values()) <= {"0", "1"}, counts
     for entry in ("fused_loops cpr_wwa", "fused_loops statics", "crossings least_margins", "faces least_norm",
-                  "nullspace pulling_verdicts"):
+                  "nullspace pulling_verdicts", "rounding below", "rounding above"):
         assert counts[f"pipeline.workspace.{entry}" if entry.startswith("fused") else f"pipeline.model.{entry}"] == "1"
     import numpy as np
 
@@ -146,7 +148,8 @@ def test_a_compile_is_announced_only_where_numba_has_no_cache_of_the_module(tmp_
 
 @pytest.mark.parametrize("module, exports", [(fused_loops, {"cpr_wwa", "statics"}),
                                              (crossings, {"least_margins", "largest_wrenches"}),
-                                             (faces, {"least_norm"}), (nullspace, {"pulling_verdicts"})])
+                                             (faces, {"least_norm"}), (nullspace, {"pulling_verdicts"}),
+                                             (rounding, {"below", "above"})])
 def test_the_compiled_loops_use_nothing_but_their_own_text(module, exports):
     """numba keys its cache of a module's functions by the module's file: the compiled code may use
     numpy, numba and the module's own names only (any other value is an argument), else a

@@ -4,11 +4,11 @@ An :class:`Interval` is two arrays ``lo <= hi`` that enclose a set of real numbe
 operation returns an enclosure of every result its operands' members can give. Sound by
 directed rounding done after the fact: IEEE 754 rounds +, -, *, / and sqrt correctly (to the
 nearest double), so the exact result lies between the computed double's two neighbours, and each
-bound is moved one neighbour outward (``np.nextafter``) after every operation. Nothing here
-depends on the processor's rounding mode, and an operation costs a few numpy passes: fast enough
-to enclose the structure matrices of 10^5 boxes of poses per second (python-flint's arb balls
-would be exact to more digits but a Python call per number; the certificates need enclosures
-tight to the box's width, not to the last bit).
+bound is moved one neighbour outward (``np.nextafter``'s, computed by ``pipeline.model.rounding``)
+after every operation. Nothing here depends on the processor's rounding mode, and an operation
+costs a few numpy passes: fast enough to enclose the structure matrices of 10^5 boxes of poses
+per second (python-flint's arb balls would be exact to more digits but a Python call per number;
+the certificates need enclosures tight to the box's width, not to the last bit).
 
 The one transcendental input, the platform's rotation, is enclosed by :func:`rotation_enclosure`
 from mpmath at 113 bits, rounded to doubles and widened the same way.
@@ -20,15 +20,30 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pipeline.model.jit import compiled_loops
+
 
 def down(values: np.ndarray) -> np.ndarray:
     """The next double below each value: a lower bound of the exact value it rounds."""
-    return np.nextafter(values, -np.inf)
+    return _next(values, "below")
 
 
 def up(values: np.ndarray) -> np.ndarray:
     """The next double above each value: an upper bound of the exact value it rounds."""
-    return np.nextafter(values, np.inf)
+    return _next(values, "above")
+
+
+def _next(values, direction: str) -> np.ndarray:
+    """``np.nextafter(values, -+inf)`` bit for bit, by ``pipeline.model.rounding``'s compiled
+    ``direction`` over the values' bit patterns (a numpy scalar for a scalar)."""
+    given = np.asarray(values, dtype=np.float64)
+    bits = np.ascontiguousarray(given).reshape(-1).view(np.int64)
+    if not bits.flags.writeable:  # the compiled signature takes writable arrays
+        bits = bits.copy()
+    out = np.empty(given.shape, np.int64)
+    getattr(compiled_loops("pipeline.model.rounding"), direction)(bits, out.reshape(-1))
+    result = out.view(np.float64)
+    return result[()] if result.ndim == 0 else result
 
 
 @dataclass(frozen=True)

@@ -42,7 +42,7 @@ log = logging.getLogger(__name__)
 # numba's first compile of each loops module on a machine (docs/performance.md; benchmarks/LOG.md, 2026-11-26;
 # the fused loops' with their blocks of poses 2026-11-30, with the deflated route in blocks 45 s)
 COMPILE_S = {"pipeline.workspace.fused_loops": 45.0, "pipeline.model.crossings": 9.0, "pipeline.model.faces": 2.5,
-             "pipeline.model.nullspace": 4.0}
+             "pipeline.model.nullspace": 4.0, "pipeline.model.rounding": 1.0}
 
 
 def compile_seconds(name: str) -> float:
