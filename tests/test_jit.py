@@ -110,7 +110,7 @@ def test_each_compiled_function_has_one_specialisation():
     counts = dict(line.rsplit(" ", 1) for line in done.stdout.splitlines())
     assert len(counts) >= 10 and set(counts.values()) <= {"0", "1"}, counts
     for entry in ("fused_loops cpr_wwa", "fused_loops statics", "crossings least_margins", "faces least_norm",
-                  "nullspace pulling_verdicts", "rounding below", "rounding above"):
+                  "nullspace pulling_verdicts", "rounding step"):
         assert counts[f"pipeline.workspace.{entry}" if entry.startswith("fused") else f"pipeline.model.{entry}"] == "1"
     import numpy as np
 
@@ -149,7 +149,7 @@ def test_a_compile_is_announced_only_where_numba_has_no_cache_of_the_module(tmp_
 @pytest.mark.parametrize("module, exports", [(fused_loops, {"cpr_wwa", "statics"}),
                                              (crossings, {"least_margins", "largest_wrenches"}),
                                              (faces, {"least_norm"}), (nullspace, {"pulling_verdicts"}),
-                                             (rounding, {"below", "above"})])
+                                             (rounding, {"step"})])
 def test_the_compiled_loops_use_nothing_but_their_own_text(module, exports):
     """numba keys its cache of a module's functions by the module's file: the compiled code may use
     numpy, numba and the module's own names only (any other value is an argument), else a

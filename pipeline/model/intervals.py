@@ -25,23 +25,23 @@ from pipeline.model.jit import compiled_loops
 
 def down(values: np.ndarray) -> np.ndarray:
     """The next double below each value: a lower bound of the exact value it rounds."""
-    return _next(values, "below")
+    return _next(values, False)
 
 
 def up(values: np.ndarray) -> np.ndarray:
     """The next double above each value: an upper bound of the exact value it rounds."""
-    return _next(values, "above")
+    return _next(values, True)
 
 
-def _next(values, direction: str) -> np.ndarray:
-    """``np.nextafter(values, -+inf)`` bit for bit, by ``pipeline.model.rounding``'s compiled
-    ``direction`` over the values' bit patterns (a numpy scalar for a scalar)."""
+def _next(values, upward: bool) -> np.ndarray:
+    """``np.nextafter(values, +-inf)`` bit for bit, by ``pipeline.model.rounding.step`` over the
+    values' bit patterns (a numpy scalar for a scalar)."""
     given = np.asarray(values, dtype=np.float64)
     bits = np.ascontiguousarray(given).reshape(-1).view(np.int64)
     if not bits.flags.writeable:  # the compiled signature takes writable arrays
         bits = bits.copy()
     out = np.empty(given.shape, np.int64)
-    getattr(compiled_loops("pipeline.model.rounding"), direction)(bits, out.reshape(-1))
+    compiled_loops("pipeline.model.rounding").step(bits, out.reshape(-1), upward)
     result = out.view(np.float64)
     return result[()] if result.ndim == 0 else result
 

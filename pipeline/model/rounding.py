@@ -19,34 +19,21 @@ POS_INF = 0x7FF0000000000000  # +inf's pattern; a larger magnitude is a NaN
 NEG_INF = -0x10000000000000  # -inf's pattern, as a signed integer
 NEG_ZERO = -0x8000000000000000
 NEG_TINY = -0x7FFFFFFFFFFFFFFF  # -5e-324
-SIGNATURES = {"below": "void(i8[::1], i8[::1])", "above": "void(i8[::1], i8[::1])"}
+SIGNATURES = {"step": "void(i8[::1], i8[::1], b1)"}
 
 
-@njit(SIGNATURES["below"], cache=True, nogil=True)
-def below(bits, out):
-    """out[i]: the pattern of the next double below the one of pattern bits[i]."""
+@njit(SIGNATURES["step"], cache=True, nogil=True)
+def step(bits, out, upward):
+    """out[i]: the pattern of the next double above (``upward``) or below the one of pattern
+    bits[i]."""
+    stays = POS_INF if upward else NEG_INF
     for i in range(bits.size):
         b = bits[i]
-        if (b & MAGNITUDE) > POS_INF or b == NEG_INF:
-            out[i] = b
-        elif b == 0:
-            out[i] = NEG_TINY
-        elif b > 0:
-            out[i] = b - 1
-        else:
-            out[i] = b + 1
-
-
-@njit(SIGNATURES["above"], cache=True, nogil=True)
-def above(bits, out):
-    """out[i]: the pattern of the next double above the one of pattern bits[i]."""
-    for i in range(bits.size):
-        b = bits[i]
-        if (b & MAGNITUDE) > POS_INF or b == POS_INF:
+        if (b & MAGNITUDE) > POS_INF or b == stays:
             out[i] = b
         elif b == 0 or b == NEG_ZERO:
-            out[i] = 1
-        elif b > 0:
+            out[i] = 1 if upward else NEG_TINY
+        elif (b > 0) == upward:  # away from zero
             out[i] = b + 1
         else:
             out[i] = b - 1
