@@ -120,8 +120,8 @@ CASES = [
     ("pipeline", ["motion.v_max=inf"], "motion.v_max=inf"),
     ("pipeline", ["motion.v_max=1e300"], "motion.v_max=1e+300: must be in [1e-06, 1000] m/s"),  # margins inf
     ("pipeline", ["motion.v_max=5e-324"], "motion.v_max=5e-324: must be in [1e-06, 1000] m/s"),  # a zero grid step
-    ("pipeline", ["motion.t_acc=1e-300"], "motion.t_acc=1e-300: the carrier would accelerate at v_max / t_acc = 1.3e+300"),
-    ("pipeline", ["analysis=lines", "motion.t_dec=1e-5"], "motion.t_dec=1e-05: the carrier would accelerate"),
+    ("pipeline", ["motion.t_acc=1e-300"], "motion.t_acc=1e-300: v_max / t_acc = 1.3e+300 m/s^2 at v_max=1.3 m/s"),
+    ("pipeline", ["analysis=lines", "motion.t_dec=1e-5"], "motion.t_dec=1e-05: v_max / t_dec = 1.3e+05 m/s^2"),
     ("pipeline", ["analysis=lines", "motion.t_acc=1e5"], "the 72 lines take 4.35e+06 samples of 0.01 s"),
     ("pipeline", ["analysis=lines", "motion.t_acc=1e300"], "the 72 lines take 1.37e+154 samples"),
     ("pipeline", ["model.acceleration_set=colon", "motion.t_acc=0.001"],

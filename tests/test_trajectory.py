@@ -440,7 +440,7 @@ BAD = [  # (overrides, what the one line names)
     (["trajectory.points=[[0,0,1],[0,1,1]]", "trajectory.times=1e-200"], "trajectory.times: the path accelerates at inf"),
     (["trajectory.points=[[0,0,1],[0,1,1]]", "trajectory.times=0.001"], "trajectory.times: the path accelerates at 5.7"),
     (["trajectory.points=[[0,0,1],[0,1,1]]", "trajectory.times=1", "trajectory.v_max=1"], "trajectory.v_max"),
-    (["trajectory.points=[[0,0,1],[0,1,1]]", "trajectory.law=trapezoid"], "trajectory.v_max"),
+    (["trajectory.points=[[0,0,1],[0,1,1]]", "trajectory.law=trapezoid"], "error: trajectory.v_max: trajectory.law=trap"),
     (["trajectory.points=[[0,0,1],[0,1,1]]", "trajectory.law=trapezoid", "trajectory.v_max=1", "trajectory.t_acc=1",
       "trajectory.t_dec=1", "trajectory.times=1"], "trajectory.times"),
     (["trajectory.points=[[0,0,1,0,0,0],[0,0,1,0.5,0,0]]", "trajectory.law=trapezoid", "trajectory.v_max=1",

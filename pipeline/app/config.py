@@ -427,6 +427,24 @@ MAX_ACCELERATION = 1e4  # m/s^2, rad/s^2 and rad/s: past any cable robot's, a un
 SPEEDS = (1e-6, 1e3)  # m/s: a carrier's top speed between a micrometre a second and a kilometre a second
 
 
+TRAPEZOID_KEYS = ("v_max", "t_acc", "t_dec")  # a trapezoidal speed profile's (motion, trajectory, certified)
+
+
+def trapezoid_speeds(node: DictConfig, key: str) -> tuple[float, float, float]:
+    """A trapezoid's v_max, t_acc and t_dec (``key``: motion, trajectory or certified), each given,
+    with v_max / t_acc and v_max / t_dec in (0, MAX_ACCELERATION] (1e-300 m/s over 1e300 s is 0)."""
+    missing = [name for name in TRAPEZOID_KEYS if node[name] is None]
+    if missing:
+        raise ConfigError(f"{key}.{missing[0]}: {key}.law=trapezoid needs v_max (m/s), t_acc and t_dec (s)")
+    v_max, t_acc, t_dec = (float(node[name]) for name in TRAPEZOID_KEYS)
+    for name, time in (("t_acc", t_acc), ("t_dec", t_dec)):
+        if not 0 < v_max / time <= MAX_ACCELERATION:
+            raise ConfigError(f"{key}.{name}={time:g}: v_max / {name} = {v_max / time:.3g} m/s^2 at v_max={v_max:g} m/s; "
+                              f"must be > 0 and at most {MAX_ACCELERATION:g} (a unit typed wrong, or {name} too short or "
+                              "too long)")
+    return v_max, t_acc, t_dec
+
+
 @dataclass
 class MotionConfig:
     """Trapezoidal reference motion: V_cmax (m/s, from 1e-6 to 1e3), t_acc and t_dec (s); the
@@ -439,11 +457,8 @@ class MotionConfig:
 
     @staticmethod
     def check_fields(motion: DictConfig) -> None:
-        present = set(motion.keys())  # a node of another analysis may hold some of them only
-        for key in ("t_acc", "t_dec"):
-            if {"v_max", key} <= present and motion.v_max / motion[key] > MAX_ACCELERATION:
-                raise ConfigError(f"motion.{key}={motion[key]:g}: the carrier would accelerate at v_max / {key} = "
-                                  f"{motion.v_max / motion[key]:.3g} m/s^2, more than {MAX_ACCELERATION:g}")
+        if set(TRAPEZOID_KEYS) <= set(motion.keys()):  # a node of another analysis may hold some of them only
+            trapezoid_speeds(motion, "motion")
 
 
 @dataclass

@@ -28,7 +28,7 @@ from pathlib import Path as FilePath
 import numpy as np
 from omegaconf import DictConfig, OmegaConf
 
-from pipeline.app.config import MAX_ACCELERATION
+from pipeline.app.config import MAX_ACCELERATION, TRAPEZOID_KEYS, trapezoid_speeds
 from pipeline.app.xmlfiles import parse_xml
 from pipeline.errors import ConfigError
 from pipeline.model.geometry import CableRobot
@@ -39,7 +39,6 @@ DEFAULT_DT = 0.01  # s between samples, when neither trajectory.dt nor a CASPR f
 MAX_WAY_POINTS = 1_000_000
 MAX_COORDINATE = 1e6  # m or rad: past any cable robot's workspace, a unit typed wrong
 TIMED = ("quintic", "spline")  # the laws that take each segment's duration
-SPEEDS = ("v_max", "t_acc", "t_dec")  # the keys of the trapezoidal law
 
 
 def path_samples(cfg: DictConfig, robot: CableRobot) -> Samples:
@@ -79,8 +78,9 @@ def _from_points(node: DictConfig, law: str, robot: CableRobot, orientation: Dic
         if node.times is not None:
             raise ConfigError(f"trajectory.times={_shown(node.times)}: law trapezoid times each segment by its "
                               "length and trajectory.v_max, t_acc, t_dec; times are for law quintic or spline")
+        speeds = trapezoid_speeds(node, "trajectory")
         try:
-            return trapezoidal(points, *_speeds(node, "trajectory"))
+            return trapezoidal(points, *speeds)
         except ValueError as exc:
             raise ConfigError(f"trajectory.points: {exc}") from None
     _no_speeds(node, law)
@@ -203,7 +203,7 @@ def _timed(law: str, points: np.ndarray, durations: np.ndarray) -> Path:
 
 
 def _no_speeds(node: DictConfig, law: str) -> None:
-    given = [key for key in SPEEDS if node[key] is not None]
+    given = [key for key in TRAPEZOID_KEYS if node[key] is not None]
     if given:
         raise ConfigError(f"trajectory.{given[0]}={node[given[0]]}: the trapezoidal law's; law {law} times the "
                           "segments by trajectory.times or the file's times")
@@ -305,27 +305,12 @@ def _number(value) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool)
 
 
-def _speeds(node: DictConfig, key: str) -> tuple[float, float, float]:
-    """A trapezoid's v_max, t_acc and t_dec (``key``: trajectory or certified), each given, with
-    v_max / t_acc and v_max / t_dec in (0, MAX_ACCELERATION] (1e-300 m/s over 1e300 s is 0)."""
-    missing = [name for name in SPEEDS if node[name] is None]
-    if missing:
-        raise ConfigError(f"{key}.{missing[0]}: {key}.law=trapezoid needs v_max (m/s), t_acc and t_dec (s)")
-    v_max, t_acc, t_dec = (float(node[name]) for name in SPEEDS)
-    for name, time in (("t_acc", t_acc), ("t_dec", t_dec)):
-        if not 0 < v_max / time <= MAX_ACCELERATION:
-            raise ConfigError(f"{key}.{name}={time:g}: v_max / {name} = {v_max / time:.3g} m/s^2 at v_max={v_max:g} m/s; "
-                              f"must be > 0 and at most {MAX_ACCELERATION:g} (a unit typed wrong, or {name} too short or "
-                              "too long)")
-    return v_max, t_acc, t_dec
-
-
 def certified_motion(cfg: DictConfig, points: np.ndarray) -> StraightMotion | None:
     """``certified.path``'s motion (``analysis=certified``): None at rest (law quintic without
     ``times``), else the law of ``certified.law``; ConfigError naming the key for a key of the
     other law, one missing, or an acceleration past MAX_ACCELERATION."""
     node = cfg.certified
-    given = [key for key in SPEEDS if node[key] is not None]
+    given = [key for key in TRAPEZOID_KEYS if node[key] is not None]
     if node.law == "quintic":
         if given:
             raise ConfigError(f"certified.{given[0]}: a trapezoid's speed profile; set certified.law=trapezoid "
@@ -338,7 +323,7 @@ def certified_motion(cfg: DictConfig, points: np.ndarray) -> StraightMotion | No
         if node.times is not None:
             raise ConfigError("certified.times: law trapezoid times each segment by certified.v_max, t_acc and t_dec; "
                               "leave certified.times null")
-        motion = StraightMotion.trapezoid(points, *_speeds(node, "certified"))
+        motion = StraightMotion.trapezoid(points, *trapezoid_speeds(node, "certified"))
         key = "certified.t_acc"
     peaks = motion.peaks()
     if not peaks.max() <= MAX_ACCELERATION:
